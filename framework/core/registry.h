@@ -1,0 +1,107 @@
+#pragma once
+/// Registries of named types, filled by one line at the end of each type's
+/// file:
+///
+///     SPEC2FAB_REGISTER(NodeRegistry, StratumNode, "stratum");
+///
+/// A registered type provides a constructor taking (const Properties&, Args...)
+/// and a `static TypeDoc doc()` that `spec2fab list --verbose` prints. There is
+/// no central list of types to edit.
+
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/properties.h"
+#include "core/strings.h"
+
+namespace spec2fab {
+
+/// One property of a registered type, as documented to users.
+struct PropertyDoc {
+  std::string name;
+  std::string type;           ///< e.g. "number (mm)", "parameter", "node"
+  std::string default_value;  ///< "required" when there is none
+  std::string meaning;
+};
+
+/// What a registered type does, its properties and a JSON example.
+struct TypeDoc {
+  std::string summary;
+  std::vector<PropertyDoc> properties;
+  std::string example;  ///< a JSON snippet that builds this type
+};
+
+template <class Base, class... Args>
+class Registry {
+ public:
+  using Factory = std::function<std::unique_ptr<Base>(const Properties&, Args...)>;
+  struct Entry {
+    Factory factory;
+    TypeDoc doc;
+  };
+
+  static Registry& instance() {
+    static Registry registry;
+    return registry;
+  }
+
+  bool add(std::string name, Factory factory, TypeDoc doc) {
+    entries_.emplace(std::move(name), Entry{std::move(factory), std::move(doc)});
+    return true;
+  }
+
+  bool contains(std::string_view name) const { return entries_.count(std::string(name)) > 0; }
+
+  std::vector<std::string> names() const {
+    std::vector<std::string> out;
+    for (const auto& [name, entry] : entries_) out.push_back(name);
+    return out;
+  }
+
+  const Entry& entry(std::string_view name) const { return entries_.at(std::string(name)); }
+
+  /// Builds the type named by `properties[type_key]`; an unknown name is an
+  /// InputError that lists the known ones.
+  std::unique_ptr<Base> create(const Properties& properties, std::string_view kind,
+                               Args... args, std::string_view type_key = "type") const {
+    const std::string name = properties.get<std::string>(type_key);
+    return create_named(name, properties, kind, std::forward<Args>(args)..., type_key);
+  }
+
+  std::unique_ptr<Base> create_named(const std::string& name, const Properties& properties,
+                                     std::string_view kind, Args... args,
+                                     std::string_view type_key = "type") const {
+    const auto found = entries_.find(name);
+    if (found == entries_.end()) {
+      properties.fail(type_key, "unknown " + std::string(kind) + " '" + name + "'" +
+                                    did_you_mean(name, names()) + " (known: " + join(names()) +
+                                    ")");
+    }
+    return found->second.factory(properties, std::forward<Args>(args)...);
+  }
+
+ private:
+  std::map<std::string, Entry, std::less<>> entries_;
+};
+
+}  // namespace spec2fab
+
+#define SPEC2FAB_CONCAT_INNER(a, b) a##b
+#define SPEC2FAB_CONCAT(a, b) SPEC2FAB_CONCAT_INNER(a, b)
+
+/// Registers `Type` in `RegistryType` under `name`. Use once, at namespace scope
+/// in the type's .cpp file.
+#define SPEC2FAB_REGISTER(RegistryType, Type, name)                                       \
+  namespace {                                                                             \
+  [[maybe_unused]] const bool SPEC2FAB_CONCAT(registered_, __LINE__) =                    \
+      RegistryType::instance().add(                                                       \
+          name,                                                                           \
+          [](const ::spec2fab::Properties& properties, auto&&... args) {                  \
+            return std::make_unique<Type>(properties, std::forward<decltype(args)>(args)...); \
+          },                                                                              \
+          Type::doc());                                                                   \
+  }

@@ -1,0 +1,23 @@
+#pragma once
+/// Small string helpers used to make error messages helpful.
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace spec2fab {
+
+/// Levenshtein distance between two strings (case-sensitive).
+int edit_distance(std::string_view a, std::string_view b);
+
+/// The candidate closest to `word` if it is close enough to be a likely typo,
+/// otherwise an empty string.
+std::string closest_match(std::string_view word, const std::vector<std::string>& candidates);
+
+/// " did you mean 'x'?" when a close candidate exists, else "".
+std::string did_you_mean(std::string_view word, const std::vector<std::string>& candidates);
+
+/// "a, b, c" — for listing valid choices in a message.
+std::string join(const std::vector<std::string>& items, std::string_view separator = ", ");
+
+}  // namespace spec2fab

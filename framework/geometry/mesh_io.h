@@ -1,0 +1,23 @@
+#pragma once
+/// Mesh files in and out, through Assimp: OBJ (with texture coordinates),
+/// STL (ASCII and binary), PLY and OFF.
+
+#include <filesystem>
+
+#include "geometry/mesh.h"
+
+namespace spec2fab {
+
+/// Loads every triangle of every mesh in the file (node transforms applied),
+/// scales it by `scale_to_mm` (1 for files in mm), welds vertices that share a
+/// position exactly, and keeps per-corner uvs when the file has them.
+/// Throws InputError ("file: cannot read mesh: reason") when the file is
+/// missing, unreadable or holds no triangles. Does not check topology: see
+/// mesh_check.h.
+Mesh load_mesh(const std::filesystem::path& file, double scale_to_mm = 1.0);
+
+/// Writes a mesh (format from the extension: .obj, .stl, .ply) — used to make
+/// datasets and test fixtures.
+void save_mesh(const Mesh& mesh, const std::filesystem::path& file);
+
+}  // namespace spec2fab

@@ -1,0 +1,60 @@
+#pragma once
+/// A narrow-band acceleration structure over a Solid (OpenVDB): for a query
+/// point it answers inside/outside everywhere, and depth below the surface and
+/// surface (u,v) within a band around it, at a cost independent of the
+/// triangle count.
+///
+/// Built with OpenVDB's meshToVolume, which gives a level set and, for every
+/// voxel of the band, the index of the closest triangle. A query looks up the
+/// triangle of its nearest voxel and projects exactly onto it
+/// (Solid::closest_point_on_triangle), so depth and (u,v) are exact whenever
+/// that triangle is the closest one; otherwise the depth error is below one
+/// voxel diagonal. Beyond the band the sign comes from the level set.
+
+#include <memory>
+
+#include "geometry/mesh.h"
+
+namespace spec2fab {
+
+class Solid;
+
+struct SurfaceSample {
+  bool inside = false;
+  bool near_surface = false;  ///< within the band: depth_mm and uv are valid
+  double depth_mm = 0;        ///< distance below the surface (≥ 0 inside); beyond the band: the band width
+  Vec2 uv = Vec2::Zero();
+};
+
+class SurfaceField {
+ public:
+  SurfaceField(const Solid& solid, double voxel_mm, double interior_band_mm,
+               double exterior_band_mm);
+  ~SurfaceField();
+  SurfaceField(const SurfaceField&) = delete;
+  SurfaceField& operator=(const SurfaceField&) = delete;
+
+  double voxel_mm() const;
+  double interior_band_mm() const;
+  /// Number of active (band) voxels, for memory reports.
+  long long band_voxels() const;
+
+  /// Per-thread query object (it caches tree paths); cheap to create.
+  class Sampler {
+   public:
+    explicit Sampler(const SurfaceField& field);
+    ~Sampler();
+    Sampler(Sampler&&) noexcept;
+    SurfaceSample sample(const Vec3& point);
+
+   private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+  };
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace spec2fab
