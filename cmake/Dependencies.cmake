@@ -17,3 +17,13 @@ endif()
 if(SPEC2FAB_BUILD_BENCHMARKS)
   find_package(benchmark REQUIRED)
 endif()
+
+# OpenCV: Debian splits it per module and ships the CMake config only with the
+# all-modules libopencv-dev, so the three modules we use are found directly.
+find_path(OpenCV_INCLUDE_DIR opencv2/core.hpp PATH_SUFFIXES opencv4 REQUIRED)
+add_library(spec2fab_opencv INTERFACE)
+target_include_directories(spec2fab_opencv SYSTEM INTERFACE ${OpenCV_INCLUDE_DIR})
+foreach(module core imgproc imgcodecs)
+  find_library(OpenCV_${module}_LIBRARY opencv_${module} REQUIRED)
+  target_link_libraries(spec2fab_opencv INTERFACE ${OpenCV_${module}_LIBRARY})
+endforeach()

@@ -33,14 +33,23 @@ Parameter Parameter::choice(double value, std::vector<double> choices,
                             std::vector<std::string> labels, bool free) {
   Parameter p;
   p.kind_ = ParameterKind::choice;
-  p.choices_ = std::move(choices);
-  p.labels_ = std::move(labels);
-  p.labels_.resize(p.choices_.size());
-  p.lower_ = p.choices_.empty() ? 0 : *std::min_element(p.choices_.begin(), p.choices_.end());
-  p.upper_ = p.choices_.empty() ? 0 : *std::max_element(p.choices_.begin(), p.choices_.end());
+  labels.resize(choices.size());
+  p.lower_ = choices.empty() ? 0 : *std::min_element(choices.begin(), choices.end());
+  p.upper_ = choices.empty() ? 0 : *std::max_element(choices.begin(), choices.end());
+  p.choice_set_ = std::make_shared<const ChoiceSet>(ChoiceSet{std::move(choices), std::move(labels)});
   p.free_ = free;
   p.value_ = p.nearest_admissible(value);
   return p;
+}
+
+const std::vector<double>& Parameter::choices() const {
+  static const std::vector<double> none;
+  return choice_set_ ? choice_set_->values : none;
+}
+
+const std::vector<std::string>& Parameter::labels() const {
+  static const std::vector<std::string> none;
+  return choice_set_ ? choice_set_->labels : none;
 }
 
 long long Parameter::cardinality() const {
@@ -50,19 +59,20 @@ long long Parameter::cardinality() const {
     case ParameterKind::discrete:
       return static_cast<long long>(std::floor((upper_ - lower_) / step_ + 1e-9)) + 1;
     case ParameterKind::choice:
-      return static_cast<long long>(choices_.size());
+      return static_cast<long long>(choices().size());
   }
   return 0;
 }
 
 double Parameter::admissible(long long index) const {
-  if (kind_ == ParameterKind::choice) return choices_.at(static_cast<size_t>(index));
+  if (kind_ == ParameterKind::choice) return choices().at(static_cast<size_t>(index));
   return lower_ + static_cast<double>(index) * step_;
 }
 
 long long Parameter::index() const {
   if (kind_ == ParameterKind::choice) {
-    return std::find(choices_.begin(), choices_.end(), value_) - choices_.begin();
+    const auto& values = choices();
+    return std::find(values.begin(), values.end(), value_) - values.begin();
   }
   if (kind_ == ParameterKind::discrete) return std::llround((value_ - lower_) / step_);
   return 0;
@@ -78,9 +88,10 @@ double Parameter::nearest_admissible(double x) const {
       return admissible(k);
     }
     case ParameterKind::choice: {
-      if (choices_.empty()) return x;
-      double best = choices_.front();
-      for (double c : choices_) {
+      const auto& values = choices();
+      if (values.empty()) return x;
+      double best = values.front();
+      for (double c : values) {
         if (std::abs(c - x) < std::abs(best - x)) best = c;
       }
       return best;
@@ -92,7 +103,8 @@ double Parameter::nearest_admissible(double x) const {
 std::string Parameter::label() const {
   if (kind_ != ParameterKind::choice) return {};
   const long long i = index();
-  return i < static_cast<long long>(labels_.size()) ? labels_[static_cast<size_t>(i)] : "";
+  const auto& names = labels();
+  return i < static_cast<long long>(names.size()) ? names[static_cast<size_t>(i)] : "";
 }
 
 Parameter read_numeric_parameter(const Properties& properties, const std::string& key,

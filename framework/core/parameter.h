@@ -5,6 +5,7 @@
 /// lower + k·step), or a choice (one of a list of values, e.g. material ids,
 /// with labels for people). It is free (a tuner may change it) or fixed.
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -29,8 +30,8 @@ class Parameter {
   double lower() const { return lower_; }
   double upper() const { return upper_; }
   double step() const { return step_; }  ///< 0 for continuous parameters
-  const std::vector<double>& choices() const { return choices_; }
-  const std::vector<std::string>& labels() const { return labels_; }
+  const std::vector<double>& choices() const;
+  const std::vector<std::string>& labels() const;
   bool is_free() const { return free_; }
   void set_free(bool free) { free_ = free; }
 
@@ -50,8 +51,13 @@ class Parameter {
  private:
   ParameterKind kind_ = ParameterKind::continuous;
   double value_ = 0, lower_ = 0, upper_ = 0, step_ = 0;
-  std::vector<double> choices_;
-  std::vector<std::string> labels_;
+  // Shared, because a tree may hold tens of thousands of copies of one choice
+  // list (a material choice per column).
+  struct ChoiceSet {
+    std::vector<double> values;
+    std::vector<std::string> labels;
+  };
+  std::shared_ptr<const ChoiceSet> choice_set_;
   bool free_ = false;
 };
 

@@ -114,14 +114,24 @@ struct Converter<std::array<E, N>> {
 };
 
 template <class T>
+struct ArrayLength {
+  static constexpr size_t value = 0;
+};
+template <class E, size_t N>
+struct ArrayLength<std::array<E, N>> {
+  static constexpr size_t value = N;
+};
+
+template <class T>
 std::string expectation() {
   if constexpr (std::is_same_v<T, std::vector<double>>) return "an array of numbers";
   else if constexpr (std::is_same_v<T, std::vector<int>>) return "an array of integers";
   else if constexpr (std::is_same_v<T, std::vector<std::string>>) return "an array of strings";
-  else if constexpr (std::is_same_v<T, std::array<double, 2>>) return "an array of 2 numbers";
-  else if constexpr (std::is_same_v<T, std::array<double, 3>>) return "an array of 3 numbers";
-  else if constexpr (std::is_same_v<T, std::array<int, 2>>) return "an array of 2 integers";
-  else if constexpr (std::is_same_v<T, std::array<int, 3>>) return "an array of 3 integers";
+  else if constexpr (ArrayLength<T>::value > 0) {
+    const bool integers = std::is_same_v<typename T::value_type, int>;
+    return "an array of " + std::to_string(ArrayLength<T>::value) +
+           (integers ? " integers" : " numbers");
+  }
   else return Converter<T>::expected;
 }
 
@@ -220,6 +230,7 @@ template std::vector<int> Properties::get<std::vector<int>>(std::string_view) co
 template std::vector<std::string> Properties::get<std::vector<std::string>>(std::string_view) const;
 template std::array<double, 2> Properties::get<std::array<double, 2>>(std::string_view) const;
 template std::array<double, 3> Properties::get<std::array<double, 3>>(std::string_view) const;
+template std::array<double, 4> Properties::get<std::array<double, 4>>(std::string_view) const;
 template std::array<int, 2> Properties::get<std::array<int, 2>>(std::string_view) const;
 template std::array<int, 3> Properties::get<std::array<int, 3>>(std::string_view) const;
 

@@ -2,6 +2,7 @@
 /// A triangle mesh in millimetres, with shared vertices (welded by position)
 /// and optional per-corner texture coordinates.
 
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>

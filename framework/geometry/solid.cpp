@@ -1,1 +1,225 @@
-// placeholder, filled in shortly
+#include "geometry/solid.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+
+#include <Eigen/Geometry>
+
+#include "core/error.h"
+#include "geometry/mesh_check.h"
+#include "geometry/solid_impl.h"
+#include "geometry/surface_field.h"
+
+namespace spec2fab {
+
+namespace {
+
+// One Embree device for the process: creating one starts its thread pool.
+RTCDevice embree_device() {
+  static RTCDevice device = [] {
+    RTCDevice d = rtcNewDevice(nullptr);
+    if (d == nullptr) throw std::runtime_error("cannot create an Embree device");
+    return d;
+  }();
+  return device;
+}
+
+double angle_between(const Vec3& u, const Vec3& v) {
+  return std::atan2(u.cross(v).norm(), u.dot(v));
+}
+
+// Face, edge and vertex pseudo-normals for a closed, manifold, consistently
+// oriented mesh.
+std::vector<TriangleRecord> make_records(const Mesh& mesh) {
+  const size_t n = mesh.triangles.size();
+  std::vector<TriangleRecord> records(n);
+  std::vector<Vec3> face_normal(n);
+  std::vector<Vec3> vertex_normal(mesh.vertices.size(), Vec3::Zero());
+  for (size_t t = 0; t < n; ++t) {
+    const auto& tri = mesh.triangles[t];
+    const Vec3 p[3] = {mesh.vertices[tri[0]], mesh.vertices[tri[1]], mesh.vertices[tri[2]]};
+    face_normal[t] = (p[1] - p[0]).cross(p[2] - p[0]).normalized();
+    for (int k = 0; k < 3; ++k) {
+      const double angle = angle_between(p[(k + 1) % 3] - p[k], p[(k + 2) % 3] - p[k]);
+      vertex_normal[tri[k]] += angle * face_normal[t];
+    }
+    records[t].set_corners(p[0], p[1], p[2]);
+  }
+
+  // Edge pseudo-normal: the sum of the two faces' normals. Pair the half-edges
+  // (a→b in one triangle, b→a in its neighbour) by sorting.
+  struct HalfEdge {
+    std::uint64_t key;
+    std::uint32_t triangle, edge;
+  };
+  std::vector<HalfEdge> half_edges;
+  half_edges.reserve(3 * n);
+  for (size_t t = 0; t < n; ++t) {
+    for (std::uint32_t k = 0; k < 3; ++k) {
+      const auto a = static_cast<std::uint64_t>(mesh.triangles[t][k]);
+      const auto b = static_cast<std::uint64_t>(mesh.triangles[t][(k + 1) % 3]);
+      half_edges.push_back({(std::min(a, b) << 32) | std::max(a, b), std::uint32_t(t), k});
+    }
+  }
+  std::sort(half_edges.begin(), half_edges.end(),
+            [](const HalfEdge& x, const HalfEdge& y) { return x.key < y.key; });
+  for (size_t i = 0; i + 1 < half_edges.size(); i += 2) {
+    const HalfEdge& e = half_edges[i];
+    const HalfEdge& f = half_edges[i + 1];
+    const Vec3 normal = face_normal[e.triangle] + face_normal[f.triangle];
+    records[e.triangle].pseudo_normal[kEdgeAB - 1 + e.edge] = normal.cast<float>();
+    records[f.triangle].pseudo_normal[kEdgeAB - 1 + f.edge] = normal.cast<float>();
+  }
+  for (size_t t = 0; t < n; ++t)
+    for (int k = 0; k < 3; ++k)
+      records[t].pseudo_normal[kVertexA - 1 + k] = vertex_normal[mesh.triangles[t][k]].cast<float>();
+  return records;
+}
+
+RTCScene make_scene(const Mesh& mesh) {
+  RTCDevice device = embree_device();
+  RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
+      geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+      mesh.vertices.size()));
+  auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+      geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
+      mesh.triangles.size()));
+  if (vertices == nullptr || indices == nullptr) {
+    rtcReleaseGeometry(geometry);
+    throw std::runtime_error("Embree: cannot allocate geometry buffers");
+  }
+  for (size_t i = 0; i < mesh.vertices.size(); ++i)
+    for (int k = 0; k < 3; ++k) vertices[3 * i + k] = static_cast<float>(mesh.vertices[i][k]);
+  for (size_t t = 0; t < mesh.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) indices[3 * t + k] = static_cast<unsigned>(mesh.triangles[t][k]);
+  rtcCommitGeometry(geometry);
+
+  RTCScene scene = rtcNewScene(device);
+  rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
+  rtcAttachGeometry(scene, geometry);
+  rtcReleaseGeometry(geometry);
+  rtcCommitScene(scene);
+  if (const RTCError error = rtcGetDeviceError(device); error != RTC_ERROR_NONE) {
+    rtcReleaseScene(scene);
+    throw std::runtime_error("Embree: cannot build the scene (error " +
+                             std::to_string(static_cast<int>(error)) + ")");
+  }
+  return scene;
+}
+
+const Mesh& checked(Mesh& mesh, UvSource source, int axis) {
+  require_closed_manifold(mesh);
+  if (source == UvSource::mesh && !mesh.has_uv())
+    throw InputError(mesh.name +
+                     ": uv source 'mesh' needs texture coordinates, and the mesh has none; name a "
+                     "projection (planar, cylindrical, spherical)");
+  if (mesh.has_uv() && mesh.corner_uv.size() != 3 * mesh.triangles.size())
+    throw InputError(mesh.name + ": corrupt mesh: " + std::to_string(mesh.corner_uv.size()) +
+                     " corner uvs for " + std::to_string(mesh.triangles.size()) + " triangles");
+  if (axis < 0 || axis > 2)
+    throw InputError(mesh.name + ": uv axis " + std::to_string(axis) + " is not 0, 1 or 2");
+  return mesh;
+}
+
+// The best candidate so far of a closest-point query, for Embree's callback.
+struct ClosestQuery {
+  const TriangleRecord* triangles;
+  Vec3 point;
+  double best_distance_sq;
+  int best_triangle;
+  float slack;  // covers the float rounding of Embree's copy of the point and bounds
+};
+
+bool closest_point_callback(RTCPointQueryFunctionArguments* args) {
+  auto* query = static_cast<ClosestQuery*>(args->userPtr);
+  const int t = static_cast<int>(args->primID);
+  const TriangleProjection hit = project_onto_triangle(query->triangles[t], query->point);
+  const double distance_sq = squared_distance_to(hit, query->point);
+  if (distance_sq >= query->best_distance_sq) return false;
+  query->best_distance_sq = distance_sq;
+  query->best_triangle = t;
+  args->query->radius = static_cast<float>(std::sqrt(distance_sq)) + query->slack;
+  return true;
+}
+
+}  // namespace
+
+Solid::Impl::Impl(Mesh m, UvSource source, int axis)
+    : mesh(std::move(m)),
+      bounds(checked(mesh, source, axis).bounds()),
+      volume(mesh.signed_volume()),
+      uv_source(source),
+      projection(source, axis, bounds),
+      triangles(make_records(mesh)),
+      scene(make_scene(mesh)) {}
+
+Solid::Impl::~Impl() {
+  field.reset();
+  if (scene != nullptr) rtcReleaseScene(scene);
+}
+
+Solid::Solid(Mesh mesh, UvSource uv_source, int uv_axis)
+    : impl_(std::make_unique<Impl>(std::move(mesh), uv_source, uv_axis)) {}
+
+Solid::~Solid() = default;
+
+const Mesh& Solid::mesh() const { return impl_->mesh; }
+const Bounds& Solid::bounds() const { return impl_->bounds; }
+double Solid::volume() const { return impl_->volume; }
+UvSource Solid::uv_source() const { return impl_->uv_source; }
+
+SurfacePoint Solid::closest_point(const Vec3& point) const {
+  const Impl& impl = *impl_;
+  const float magnitude = static_cast<float>(point.cwiseAbs().maxCoeff() +
+                                             impl.bounds.upper.cwiseAbs().maxCoeff() +
+                                             impl.bounds.lower.cwiseAbs().maxCoeff());
+  ClosestQuery query{impl.triangles.data(), point, std::numeric_limits<double>::infinity(), -1,
+                     4 * std::numeric_limits<float>::epsilon() * magnitude};
+  RTCPointQuery rtc_query;
+  rtc_query.x = static_cast<float>(point.x());
+  rtc_query.y = static_cast<float>(point.y());
+  rtc_query.z = static_cast<float>(point.z());
+  rtc_query.time = 0;
+  rtc_query.radius = std::numeric_limits<float>::infinity();
+  RTCPointQueryContext context;
+  rtcInitPointQueryContext(&context);
+  rtcPointQuery(impl.scene, &rtc_query, &context, closest_point_callback, &query);
+  return impl.on_triangle(query.best_triangle, point);
+}
+
+double Solid::signed_distance(const Vec3& point) const { return closest_point(point).signed_distance; }
+
+SurfacePoint Solid::closest_point_on_triangle(int triangle, const Vec3& point) const {
+  if (triangle < 0 || triangle >= static_cast<int>(impl_->triangles.size()))
+    throw std::out_of_range("Solid::closest_point_on_triangle: no triangle " +
+                            std::to_string(triangle));
+  return impl_->on_triangle(triangle, point);
+}
+
+double Solid::default_field_voxel() const { return impl_->bounds.size().maxCoeff() / 256; }
+
+const SurfaceField& Solid::field(double interior_band_mm, double voxel_mm) const {
+  Impl& impl = *impl_;
+  if (!(voxel_mm > 0)) voxel_mm = default_field_voxel();
+  interior_band_mm = std::max(interior_band_mm, 0.0);
+  if (impl.field && impl.field_band_mm >= interior_band_mm && impl.field_voxel_mm <= voxel_mm)
+    return *impl.field;
+  // Never narrower or coarser than what earlier callers were given.
+  if (impl.field) {
+    interior_band_mm = std::max(interior_band_mm, impl.field_band_mm);
+    voxel_mm = std::min(voxel_mm, impl.field_voxel_mm);
+  }
+  impl.field.reset();
+  impl.field = std::make_unique<SurfaceField>(*this, voxel_mm, interior_band_mm, 2 * voxel_mm);
+  impl.field_band_mm = interior_band_mm;
+  impl.field_voxel_mm = voxel_mm;
+  return *impl.field;
+}
+
+}  // namespace spec2fab

@@ -58,6 +58,7 @@ class Solid {
   double default_field_voxel() const;
 
  private:
+  friend class SurfaceField;  // its hot path projects onto triangles inline
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

@@ -1,1 +1,183 @@
-// placeholder, filled in shortly
+#include "geometry/surface_field.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <mutex>
+#include <stdexcept>
+#include <vector>
+
+#include <openvdb/openvdb.h>
+#include <openvdb/tools/MeshToVolume.h>
+#include <openvdb/tools/SignedFloodFill.h>
+#include <openvdb/util/NullInterrupter.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "geometry/solid_impl.h"
+
+namespace spec2fab {
+
+namespace {
+
+void initialize_openvdb() {
+  static std::once_flag once;
+  std::call_once(once, [] { openvdb::initialize(); });
+}
+
+// One Int32 tree answers a query with a single lookup. An active (band) voxel
+// holds ±((closest triangle << 2 | sign code) + 1), negative when its centre is
+// inside; an inactive voxel or tile holds -1 inside and +1 outside. The sign
+// code says whether the whole cell around the centre lies on one side of the
+// surface (the centre is farther from it than half a cell diagonal), so that
+// the sign there needs no pseudo-normal.
+constexpr int kSignUnsure = 0, kSignInside = 1, kSignOutside = 2;
+constexpr openvdb::Int32 kInside = -1, kOutside = 1;
+
+// Unregistered accessor: creating one allocates nothing, and the tree never
+// changes once built.
+using CellAccessor = openvdb::tree::ValueAccessor<const openvdb::Int32Tree, false>;
+
+// Rounds to the nearest integer without data-dependent branches.
+inline int nearest_int(double x) {
+  const double shifted = x + 0.5;
+  const int i = static_cast<int>(shifted);
+  return i - (shifted < i);
+}
+
+}  // namespace
+
+struct SurfaceField::Impl {
+  const Solid::Impl* solid = nullptr;
+  double voxel_mm = 0, inverse_voxel = 0;
+  double interior_band_mm = 0;
+  openvdb::Int32Grid::Ptr cells;  // encoded as above
+};
+
+namespace {
+
+// Re-encodes meshToVolume's closest-triangle indices with the level set's sign,
+// then floods the sign into the cells beyond the band.
+void encode_cells(openvdb::Int32Tree& cells, const openvdb::FloatTree& distance, double voxel_mm) {
+  std::vector<openvdb::Int32Tree::LeafNodeType*> leaves;
+  cells.getNodes(leaves);
+  const float half_diagonal = float(0.5 * std::sqrt(3.0) * voxel_mm);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves.size()), [&](const auto& range) {
+    openvdb::tree::ValueAccessor<const openvdb::FloatTree, false> phi(distance);
+    for (size_t i = range.begin(); i != range.end(); ++i) {
+      for (auto voxel = leaves[i]->beginValueOn(); voxel; ++voxel) {
+        const openvdb::Int32 triangle = *voxel;
+        const float value = phi.getValue(voxel.getCoord());
+        if (triangle < 0) {
+          voxel.setValue(value < 0 ? kInside : kOutside);
+          voxel.setValueOff();
+          continue;
+        }
+        const int code = value < -half_diagonal  ? kSignInside
+                         : value > half_diagonal ? kSignOutside
+                                                 : kSignUnsure;
+        const openvdb::Int32 encoded = ((triangle << 2) | code) + 1;
+        voxel.setValue(value < 0 ? -encoded : encoded);
+      }
+    }
+  });
+  cells.root().setBackground(kOutside, /*updateChildNodes=*/false);
+  openvdb::tools::signedFloodFillWithValues(cells, kOutside, kInside);
+}
+
+}  // namespace
+
+SurfaceField::SurfaceField(const Solid& solid, double voxel_mm, double interior_band_mm,
+                           double exterior_band_mm)
+    : impl_(std::make_unique<Impl>()) {
+  if (!(voxel_mm > 0) || !std::isfinite(voxel_mm))
+    throw std::invalid_argument("SurfaceField: voxel size must be positive");
+  initialize_openvdb();
+  const Solid::Impl& s = *solid.impl_;
+  if (s.triangles.size() >= (size_t(1) << 28))
+    throw std::length_error("SurfaceField: more than 2^28 triangles");
+  Impl& f = *impl_;
+  f.solid = &s;
+  f.voxel_mm = voxel_mm;
+  f.inverse_voxel = 1 / voxel_mm;
+  f.interior_band_mm = std::max(interior_band_mm, 0.0);
+
+  // Index space: voxel (i,j,k) is centred on (i,j,k)·voxel_mm.
+  std::vector<openvdb::Vec3s> points(s.mesh.vertices.size());
+  for (size_t i = 0; i < points.size(); ++i) {
+    const Vec3 p = s.mesh.vertices[i] * f.inverse_voxel;
+    points[i] = openvdb::Vec3s(float(p.x()), float(p.y()), float(p.z()));
+  }
+  std::vector<openvdb::Vec3I> polygons(s.mesh.triangles.size());
+  for (size_t t = 0; t < polygons.size(); ++t) {
+    const auto& tri = s.mesh.triangles[t];
+    polygons[t] = openvdb::Vec3I(unsigned(tri[0]), unsigned(tri[1]), unsigned(tri[2]));
+  }
+  openvdb::tools::QuadAndTriangleDataAdapter<openvdb::Vec3s, openvdb::Vec3I> adapter(points,
+                                                                                      polygons);
+  auto transform = openvdb::math::Transform::createLinearTransform(voxel_mm);
+
+  // A query's nearest voxel centre is up to half a diagonal (< 1 voxel) deeper
+  // than the query, hence the extra voxel on each band.
+  const float interior_voxels = float(std::ceil(f.interior_band_mm * f.inverse_voxel) + 1);
+  const float exterior_voxels =
+      float(std::ceil(std::max(exterior_band_mm, 0.0) * f.inverse_voxel) + 1);
+  f.cells = openvdb::Int32Grid::create(openvdb::Int32(openvdb::util::INVALID_IDX));
+  openvdb::util::NullInterrupter interrupter;
+  // Renormalisation would smooth the distances near the surface; the sign
+  // codes want them exact.
+  const openvdb::FloatGrid::Ptr distance = openvdb::tools::meshToVolume<openvdb::FloatGrid>(
+      interrupter, adapter, *transform, exterior_voxels, interior_voxels,
+      openvdb::tools::DISABLE_RENORMALIZATION, f.cells.get());
+  encode_cells(f.cells->tree(), distance->constTree(), voxel_mm);
+}
+
+SurfaceField::~SurfaceField() = default;
+
+double SurfaceField::voxel_mm() const { return impl_->voxel_mm; }
+double SurfaceField::interior_band_mm() const { return impl_->interior_band_mm; }
+long long SurfaceField::band_voxels() const {
+  return static_cast<long long>(impl_->cells->activeVoxelCount());
+}
+
+struct SurfaceField::Sampler::Impl {
+  const SurfaceField::Impl* field;
+  CellAccessor cells;
+  explicit Impl(const SurfaceField::Impl& f) : field(&f), cells(f.cells->constTree()) {}
+};
+
+SurfaceField::Sampler::Sampler(const SurfaceField& field)
+    : impl_(std::make_unique<Impl>(*field.impl_)) {}
+SurfaceField::Sampler::~Sampler() = default;
+SurfaceField::Sampler::Sampler(Sampler&&) noexcept = default;
+
+SurfaceSample SurfaceField::Sampler::sample(const Vec3& point) {
+  Impl& s = *impl_;
+  const SurfaceField::Impl& f = *s.field;
+  const Vec3 x = point * f.inverse_voxel;
+  const openvdb::Coord ijk(nearest_int(x.x()), nearest_int(x.y()), nearest_int(x.z()));
+
+  SurfaceSample result;
+  openvdb::Int32 cell = kOutside;
+  if (!s.cells.probeValue(ijk, cell)) {
+    result.inside = cell < 0;
+    result.depth_mm = f.interior_band_mm;
+    return result;
+  }
+  const int decoded = std::abs(cell) - 1;
+  const int triangle = decoded >> 2;
+  const Solid::Impl& solid = *f.solid;
+  const TriangleRecord& record = solid.triangles[triangle];
+  const TriangleProjection hit = project_onto_triangle(record, point);
+  double signed_distance = signed_distance_to(record, hit, point);
+  const int sign = decoded & 3;
+  if (sign != kSignUnsure && (sign == kSignInside) != (signed_distance < 0))
+    signed_distance = -signed_distance;
+  result.inside = signed_distance < 0;
+  result.near_surface = true;
+  result.depth_mm = -signed_distance;
+  result.uv = solid.uv_at(triangle, hit);
+  return result;
+}
+
+}  // namespace spec2fab

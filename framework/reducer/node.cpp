@@ -1,1 +1,96 @@
-// placeholder, filled in shortly
+#include "reducer/node.h"
+
+#include "core/strings.h"
+
+namespace spec2fab {
+
+NodePtr build_node(const Properties& properties, const NodeContext& context) {
+  return NodeRegistry::instance().create(properties, "node", context);
+}
+
+ReducerNode::ReducerNode(const ReducerNode& other) : role_(other.role_) {
+  children_.reserve(other.children_.size());
+  for (const NodePtr& child : other.children_) children_.push_back(child->clone());
+}
+
+void ReducerNode::bind(const FrameDomain& incoming, BindContext& context) {
+  for (NodePtr& child : children_) child->bind(incoming, context);
+}
+
+Parameter read_material_parameter(const Properties& properties, const std::string& key,
+                                  const NodeContext& context) {
+  const MaterialPalette& palette = context.palette;
+  auto choice_over = [&](const std::vector<std::string>& names, const std::string& value,
+                         const std::string& where, bool free) {
+    std::vector<double> ids;
+    for (const std::string& name : names) ids.push_back(palette.id(name, where));
+    return Parameter::choice(palette.id(value, where), std::move(ids), names, free);
+  };
+  if (!properties.peek(key).is_object()) {
+    const std::string name = properties.get<std::string>(key);
+    return choice_over({name}, name, properties.where(key), false);
+  }
+  const Properties spec = properties.object(key);
+  const std::string value = spec.get<std::string>("value");
+  std::vector<std::string> names;
+  if (spec.peek("choices").is_string()) {
+    if (spec.get<std::string>("choices") != "all") spec.fail("choices", "expected an array of material names or \"all\"");
+    names = palette.names();
+  } else {
+    names = spec.get<std::vector<std::string>>("choices");
+  }
+  if (names.empty()) spec.fail("choices", "no materials to choose from");
+  if (std::find(names.begin(), names.end(), value) == names.end()) {
+    spec.fail("value", "'" + value + "' is not among the choices (" + join(names) + ")");
+  }
+  return choice_over(names, value, spec.where("choices"), spec.get<bool>("free", true));
+}
+
+nlohmann::json material_parameter_to_json(const Parameter& parameter,
+                                          const MaterialPalette& palette) {
+  const std::string name = palette.name(static_cast<MaterialId>(parameter.value()));
+  if (!parameter.is_free()) return name;
+  return {{"value", name}, {"choices", parameter.labels()}};
+}
+
+std::vector<NodePtr> read_repeated_children(const Properties& properties, size_t count,
+                                            const NodeContext& context) {
+  const bool has_template = properties.has("child");
+  const bool has_list = properties.has("children");
+  if (has_template == has_list) {
+    properties.fail("give either \"child\" (one node for every cell) or \"children\" (" +
+                    std::to_string(count) + " nodes)");
+  }
+  std::vector<NodePtr> children;
+  children.reserve(count);
+  if (has_template) {
+    NodePtr prototype = build_node(properties.object("child"), context);
+    for (size_t i = 1; i < count; ++i) children.push_back(prototype->clone());
+    children.push_back(std::move(prototype));
+    return children;
+  }
+  const std::vector<Properties> list = properties.objects("children");
+  if (list.size() != count) {
+    properties.fail("children", "expected " + std::to_string(count) + " nodes, got " +
+                                    std::to_string(list.size()));
+  }
+  for (const Properties& child : list) children.push_back(build_node(child, context));
+  return children;
+}
+
+void repeated_children_to_json(const std::vector<NodePtr>& children,
+                               const MaterialPalette& palette, nlohmann::json& out) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const NodePtr& child : children) list.push_back(child->to_json(palette));
+  const bool all_same =
+      !list.empty() && std::all_of(list.begin(), list.end(), [&](const nlohmann::json& j) {
+        return j == list.front();
+      });
+  if (all_same) {
+    out["child"] = list.front();
+  } else {
+    out["children"] = std::move(list);
+  }
+}
+
+}  // namespace spec2fab

@@ -1,1 +1,129 @@
-// placeholder
+#include "commands.h"
+
+#include <cstdio>
+#include <iostream>
+#include <map>
+
+#include "core/error.h"
+#include "core/strings.h"
+#include "materials/material_library.h"
+#include "materials/printer_profile.h"
+#include "reducer/node.h"
+#include "reducer/reducer_tree.h"
+#include "spec/translator.h"
+
+namespace spec2fab::cli {
+
+namespace fs = std::filesystem;
+
+int run_command(const RunArguments& arguments) {
+  RunOptions options;
+  options.out = arguments.out;
+  options.threads = arguments.threads;
+  options.seed = arguments.seed;
+  const fs::path folder = run_experiment(arguments.experiment, options);
+  std::cout << "wrote " << folder.string() << "/ (result.json, tree.json, preview/)\n";
+  return 0;
+}
+
+int validate_command(const fs::path& experiment) {
+  const PreparedExperiment prepared = prepare_experiment(experiment);
+  const Experiment& e = *prepared.experiment;
+  std::cout << experiment.string() << ": ok\n"
+            << "  name:       " << e.name() << "\n"
+            << "  geometry:   " << e.geometry_spec().mesh.string() << " ("
+            << e.solid().mesh().triangles.size() << " triangles, " << e.solid().volume()
+            << " mm^3, uv " << to_string(e.solid().uv_source()) << ")\n"
+            << "  printer:    " << e.printer().name << " (" << join(e.palette().names()) << ")\n"
+            << "  translator: " << prepared.translator->summary() << "\n";
+  return 0;
+}
+
+namespace {
+
+template <class RegistryType>
+void print_registry(const char* heading, const RegistryType& registry, bool verbose) {
+  std::cout << heading << ":\n";
+  for (const std::string& name : registry.names()) {
+    const TypeDoc& doc = registry.entry(name).doc;
+    if (!verbose) {
+      const std::string first_sentence = doc.summary.substr(0, doc.summary.find(". ") + 1);
+      std::printf("  %-12s %s\n", name.c_str(), first_sentence.c_str());
+      continue;
+    }
+    std::cout << "\n  " << name << "\n    " << doc.summary << "\n    properties:\n";
+    for (const PropertyDoc& p : doc.properties) {
+      std::printf("      %-14s %-34s default %-12s %s\n", p.name.c_str(), p.type.c_str(),
+                  p.default_value.c_str(), p.meaning.c_str());
+    }
+    std::cout << "    example: " << doc.example << "\n";
+  }
+  std::cout << "\n";
+}
+
+std::vector<fs::path> json_files(const fs::path& folder) {
+  std::vector<fs::path> files;
+  if (fs::is_directory(folder)) {
+    for (const auto& entry : fs::directory_iterator(folder)) {
+      if (entry.path().extension() == ".json") files.push_back(entry.path());
+    }
+  }
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+void print_materials(const fs::path& datasets, bool verbose) {
+  std::cout << "materials (" << (datasets / "materials").string() << "):\n";
+  for (const fs::path& file : json_files(datasets / "materials")) {
+    const MaterialLibrary library = MaterialLibrary::load(file);
+    std::cout << "  " << file.filename().string() << ":\n";
+    for (const std::string& name : library.names()) {
+      const Material& m = library.get(name);
+      std::printf("    %-16s %-12s %s\n", name.c_str(), m.kind.c_str(), m.description.c_str());
+      if (verbose) {
+        const Rgb& sa = m.absorption_per_mm.value;
+        const Rgb& ss = m.reduced_scattering_per_mm.value;
+        std::printf("      sigma_a [%.4g %.4g %.4g]/mm  sigma_s' [%.4g %.4g %.4g]/mm  n %.3g  "
+                    "E %.3g Pa  nu %.3g  rho %.4g kg/m^3\n",
+                    sa[0], sa[1], sa[2], ss[0], ss[1], ss[2], m.refractive_index.value,
+                    m.youngs_modulus_pa.value, m.poisson_ratio.value, m.density_kg_m3.value);
+      }
+    }
+  }
+  std::cout << "\n";
+}
+
+void print_printers(const fs::path& datasets, bool verbose) {
+  std::cout << "printers (" << (datasets / "printers").string() << "):\n";
+  for (const fs::path& file : json_files(datasets / "printers")) {
+    const PrinterProfile p = PrinterProfile::load(file);
+    std::printf("  %-22s %s, %gx%g dpi, %g mm layers, materials: %s\n",
+                file.filename().string().c_str(), p.name.c_str(), p.dpi[0], p.dpi[1], p.layer_mm,
+                join(p.model_materials).c_str());
+    if (verbose) {
+      std::printf("      build volume %g x %g x %g mm; support: %s\n", p.build_volume_mm[0],
+                  p.build_volume_mm[1], p.build_volume_mm[2],
+                  p.support_material.empty() ? "none" : p.support_material.c_str());
+    }
+  }
+  std::cout << "\n";
+}
+
+}  // namespace
+
+int list_command(const std::string& kind, bool verbose, const fs::path& datasets) {
+  static const std::vector<std::string> kinds = {"node", "translator", "material", "printer"};
+  std::string k = kind;
+  if (!k.empty() && k.back() == 's') k.pop_back();  // "nodes" works too
+  if (!k.empty() && std::find(kinds.begin(), kinds.end(), k) == kinds.end()) {
+    throw InputError("list: unknown kind '" + kind + "'" + did_you_mean(k, kinds) +
+                     " (known: " + join(kinds) + ")");
+  }
+  if (k.empty() || k == "node") print_registry("nodes", NodeRegistry::instance(), verbose);
+  if (k.empty() || k == "translator") print_registry("translators", TranslatorRegistry::instance(), verbose);
+  if (k.empty() || k == "material") print_materials(datasets, verbose);
+  if (k.empty() || k == "printer") print_printers(datasets, verbose);
+  return 0;
+}
+
+}  // namespace spec2fab::cli

@@ -1,1 +1,93 @@
-// placeholder, filled in shortly
+// Column geometry node: a grid of na × nb columns over the two lateral axes of
+// the incoming frame; each column has its own child.
+
+#include <cmath>
+
+#include "reducer/node.h"
+
+namespace spec2fab {
+namespace {
+
+class ColumnNode final : public ClonableNode<ColumnNode, GeometryNode> {
+ public:
+  ColumnNode(const Properties& properties, const NodeContext& context) {
+    counts_ = properties.get<std::array<int, 2>>("count");
+    if (counts_[0] < 1 || counts_[1] < 1) properties.fail("count", "column counts must be >= 1");
+    if (static_cast<long long>(counts_[0]) * counts_[1] > 16'000'000) {
+      properties.fail("count", "more than 16 million columns");
+    }
+    if (properties.has("domain")) {
+      const auto domain = properties.get<std::array<double, 4>>("domain");
+      lower_ = {domain[0], domain[1]};
+      upper_ = {domain[2], domain[3]};
+      if (!(upper_[0] > lower_[0] && upper_[1] > lower_[1])) {
+        properties.fail("domain", "expected [a_min, b_min, a_max, b_max] with max > min");
+      }
+      explicit_domain_ = true;
+    }
+    children_ = read_repeated_children(properties, static_cast<size_t>(counts_[0]) * counts_[1], context);
+  }
+
+  std::string type_name() const override { return "column"; }
+
+  void bind(const FrameDomain& incoming, BindContext& context) override {
+    if (!explicit_domain_) {
+      lower_ = {incoming.box.min().x(), incoming.box.min().y()};
+      upper_ = {incoming.box.max().x(), incoming.box.max().y()};
+    }
+    for (int k = 0; k < 2; ++k) {
+      cell_[k] = (upper_[k] - lower_[k]) / counts_[k];
+      inverse_cell_[k] = 1.0 / cell_[k];
+    }
+    FrameDomain cell;
+    cell.kind = FrameDomain::Kind::column;
+    cell.box = Eigen::AlignedBox3d(Vec3(0, 0, incoming.box.min().z()),
+                                   Vec3(cell_[0], cell_[1], incoming.box.max().z()));
+    for (NodePtr& child : children_) child->bind(cell, context);
+  }
+
+  Route route(const QueryPoint& /*point*/, const LocalFrame& frame) const override {
+    const int i = cell_index(frame.a, 0);
+    const int j = cell_index(frame.b, 1);
+    return {i + counts_[0] * j,
+            {frame.a - (lower_[0] + i * cell_[0]), frame.b - (lower_[1] + j * cell_[1]), frame.w}};
+  }
+
+  nlohmann::json to_json(const MaterialPalette& palette) const override {
+    nlohmann::json out = {{"type", type_name()}, {"count", counts_}};
+    if (explicit_domain_) out["domain"] = {lower_[0], lower_[1], upper_[0], upper_[1]};
+    repeated_children_to_json(children_, palette, out);
+    return out;
+  }
+
+  static TypeDoc doc() {
+    return {"Geometry node: a grid of columns over the two lateral axes (a, b) of the "
+            "incoming frame — texture pixels over a Stratum's (u, v), or columns over the "
+            "world's x and y. Child (i, j) is number i + count[0]·j; its frame is relative to "
+            "the column's corner. Points outside the domain go to the nearest edge column.",
+            {{"count", "[na, nb]", "required", "columns along a and b"},
+             {"domain", "[a_min, b_min, a_max, b_max]", "the incoming frame's extent",
+              "area the grid covers"},
+             {"child", "node", "-", "one node copied into every column"},
+             {"children", "array of nodes", "-", "one node per column, na·nb of them"}},
+            R"({"type": "column", "count": [4, 2], "child": {"type": "layered", "material": )"
+            R"("VeroCyan"}})"};
+  }
+
+ private:
+  int cell_index(double x, int axis) const {
+    const int i = static_cast<int>(std::floor((x - lower_[axis]) * inverse_cell_[axis]));
+    return std::clamp(i, 0, counts_[axis] - 1);
+  }
+
+  std::array<int, 2> counts_{1, 1};
+  std::array<double, 2> lower_{0, 0}, upper_{1, 1};
+  bool explicit_domain_ = false;
+  // Derived at bind time.
+  std::array<double, 2> cell_{1, 1}, inverse_cell_{1, 1};
+};
+
+}  // namespace
+}  // namespace spec2fab
+
+SPEC2FAB_REGISTER(spec2fab::NodeRegistry, spec2fab::ColumnNode, "column")

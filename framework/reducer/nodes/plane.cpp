@@ -1,1 +1,91 @@
-// placeholder, filled in shortly
+// Plane geometry node: the plane w = offset + slope_a·(a − a0) + slope_b·(b − b0)
+// splits the incoming frame into two half-spaces ("below", "above").
+
+#include "reducer/nodes/height_cut.h"
+
+namespace spec2fab {
+namespace {
+
+class PlaneNode final : public ClonableNode<PlaneNode, GeometryNode> {
+ public:
+  PlaneNode(const Properties& properties, const NodeContext& context)
+      : cut_(properties, context, children_),
+        offset_mm_(read_numeric_parameter(properties, "offset_mm", 0, -1e5, 1e5)),
+        slope_a_(read_numeric_parameter(properties, "slope_a", 0, -1e3, 1e3)),
+        slope_b_(read_numeric_parameter(properties, "slope_b", 0, -1e3, 1e3)) {
+    if (properties.has("center")) {
+      const auto center = properties.get<std::array<double, 2>>("center");
+      center_ = Vec2(center[0], center[1]);
+      explicit_center_ = true;
+    }
+  }
+
+  std::string type_name() const override { return "plane"; }
+  std::string child_label(size_t i) const override { return HeightCut::child_label(i); }
+
+  void visit_parameters(const ParameterVisitor& visit) override {
+    visit("offset_mm", offset_mm_);
+    visit("slope_a", slope_a_);
+    visit("slope_b", slope_b_);
+  }
+
+  void evaluate() override {
+    offset_ = offset_mm_.value();
+    slope_ = Vec2(slope_a_.value(), slope_b_.value());
+  }
+
+  void bind(const FrameDomain& incoming, BindContext& context) override {
+    evaluate();
+    const Eigen::AlignedBox3d domain = cut_.cut_domain(incoming);
+    if (!explicit_center_) center_ = domain.center().head<2>();
+    cut_.bind_children(children_, domain, offset_mm_.lower(), offset_mm_.upper(), context);
+  }
+
+  double height(const Vec3& cut_axes) const {
+    return offset_ + slope_.dot(cut_axes.head<2>() - center_);
+  }
+
+  Route route(const QueryPoint& /*point*/, const LocalFrame& frame) const override {
+    const Vec3 p = cut_.to_cut_axes(frame);
+    return cut_.route(p, height(p));
+  }
+
+  nlohmann::json to_json(const MaterialPalette& palette) const override {
+    nlohmann::json out = {{"type", type_name()},
+                          {"offset_mm", numeric_parameter_to_json(offset_mm_)},
+                          {"slope_a", numeric_parameter_to_json(slope_a_)},
+                          {"slope_b", numeric_parameter_to_json(slope_b_)}};
+    if (explicit_center_) out["center"] = {center_.x(), center_.y()};
+    cut_.to_json(children_, palette, out);
+    return out;
+  }
+
+  static TypeDoc doc() {
+    TypeDoc doc{"Geometry node: a plane splits the incoming frame into two half-spaces. Its "
+                "height along `axis` is offset + slope_a·(a − a0) + slope_b·(b − b0) over the "
+                "two other coordinates, (a0, b0) the centre of the incoming domain — tilted "
+                "planes make the facets of a facet-caustic surface.",
+                {{"offset_mm", "parameter (mm)", "0", "height at the centre"},
+                 {"slope_a", "parameter", "0", "dHeight/da"},
+                 {"slope_b", "parameter", "0", "dHeight/db"},
+                 {"center", "[a0, b0]", "centre of the incoming domain", "pivot of the slopes"}},
+                R"({"type": "plane", "axis": "z", "offset_mm": 5, "below": {"type": "layered", )"
+                R"("material": "VeroClear"}, "above": {"type": "layered", "material": "void"}})"};
+    for (auto& p : HeightCut::property_docs()) doc.properties.push_back(p);
+    return doc;
+  }
+
+ private:
+  HeightCut cut_;
+  Parameter offset_mm_, slope_a_, slope_b_;
+  Vec2 center_ = Vec2::Zero();
+  bool explicit_center_ = false;
+  // Derived by evaluate().
+  double offset_ = 0;
+  Vec2 slope_ = Vec2::Zero();
+};
+
+}  // namespace
+}  // namespace spec2fab
+
+SPEC2FAB_REGISTER(spec2fab::NodeRegistry, spec2fab::PlaneNode, "plane")

@@ -1,1 +1,68 @@
-// placeholder, filled in shortly
+// Stratum geometry node: the iso-distance surface at depth d below the solid's
+// surface splits a shell (child 0) from a core (child 1).
+
+#include "geometry/solid.h"
+#include "reducer/node.h"
+
+namespace spec2fab {
+namespace {
+
+class StratumNode final : public ClonableNode<StratumNode, GeometryNode> {
+ public:
+  StratumNode(const Properties& properties, const NodeContext& context)
+      : depth_mm_(read_numeric_parameter(properties, "depth_mm", 1.0, 0, 1e3)) {
+    children_.push_back(build_node(properties.object("shell"), context));
+    children_.push_back(build_node(properties.object("core"), context));
+  }
+
+  std::string type_name() const override { return "stratum"; }
+  std::string child_label(size_t i) const override { return i == 0 ? "shell" : "core"; }
+
+  void visit_parameters(const ParameterVisitor& visit) override { visit("depth_mm", depth_mm_); }
+  void evaluate() override { depth_ = depth_mm_.value(); }
+
+  void bind(const FrameDomain& incoming, BindContext& context) override {
+    evaluate();
+    // A free depth may grow up to its bound while tuning; the band must cover it.
+    const double deepest = depth_mm_.is_free() ? depth_mm_.upper() : depth_mm_.value();
+    context.required_band_mm = std::max(context.required_band_mm, deepest);
+    FrameDomain shell;
+    shell.kind = FrameDomain::Kind::surface;
+    shell.box = Eigen::AlignedBox3d(Vec3(0, 0, 0), Vec3(1, 1, deepest));
+    children_[0]->bind(shell, context);
+    children_[1]->bind(incoming, context);
+  }
+
+  Route route(const QueryPoint& point, const LocalFrame& frame) const override {
+    const SurfaceSample& s = point.surface;
+    if (s.near_surface && s.depth_mm < depth_) return {0, {s.uv.x(), s.uv.y(), s.depth_mm}};
+    return {1, frame};
+  }
+
+  nlohmann::json to_json(const MaterialPalette& palette) const override {
+    return {{"type", type_name()},
+            {"depth_mm", numeric_parameter_to_json(depth_mm_)},
+            {"shell", children_[0]->to_json(palette)},
+            {"core", children_[1]->to_json(palette)}};
+  }
+
+  static TypeDoc doc() {
+    return {"Geometry node: the surface at depth d below the solid's surface splits the "
+            "shell (depth < d) from the core. The shell's frame is (u, v, depth): surface "
+            "coordinates and depth below the surface in mm; the core keeps the incoming frame.",
+            {{"depth_mm", "parameter (mm)", "1.0", "shell thickness d"},
+             {"shell", "node", "required", "child for depth < d"},
+             {"core", "node", "required", "child for depth >= d"}},
+            R"({"type": "stratum", "depth_mm": 1.0, "shell": {"type": "layered", "material": )"
+            R"("VeroCyan"}, "core": {"type": "layered", "material": "VeroWhitePlus"}})"};
+  }
+
+ private:
+  Parameter depth_mm_;
+  double depth_ = 0;  // derived: the current depth, read on the hot path
+};
+
+}  // namespace
+}  // namespace spec2fab
+
+SPEC2FAB_REGISTER(spec2fab::NodeRegistry, spec2fab::StratumNode, "stratum")

@@ -1,0 +1,51 @@
+#pragma once
+/// Private to the geometry module: the data behind a Solid, shared with
+/// SurfaceField so that its hot path projects onto triangles inline.
+
+#include <memory>
+#include <vector>
+
+#include <embree3/rtcore.h>
+
+#include "geometry/solid.h"
+#include "geometry/surface_field.h"
+#include "geometry/triangle_projection.h"
+
+namespace spec2fab {
+
+struct Solid::Impl {
+  Mesh mesh;
+  Bounds bounds;
+  double volume = 0;
+  UvSource uv_source = UvSource::mesh;
+  UvProjection projection;
+  std::vector<TriangleRecord> triangles;
+  RTCScene scene = nullptr;
+
+  // The narrow-band field, built on request (Solid::field).
+  std::unique_ptr<SurfaceField> field;
+  double field_band_mm = 0, field_voxel_mm = 0;
+
+  Impl(Mesh m, UvSource source, int axis);
+  ~Impl();
+
+  Vec2 uv_at(int triangle, const TriangleProjection& hit) const {
+    if (uv_source != UvSource::mesh) return projection(hit.position);
+    const Vec2* uv = &mesh.corner_uv[3 * static_cast<size_t>(triangle)];
+    return hit.barycentric[0] * uv[0] + hit.barycentric[1] * uv[1] + hit.barycentric[2] * uv[2];
+  }
+
+  SurfacePoint on_triangle(int triangle, const Vec3& p) const {
+    const TriangleRecord& record = triangles[triangle];
+    const TriangleProjection hit = project_onto_triangle(record, p);
+    SurfacePoint result;
+    result.position = hit.position;
+    result.triangle = triangle;
+    result.barycentric = hit.barycentric;
+    result.uv = uv_at(triangle, hit);
+    result.signed_distance = signed_distance_to(record, hit, p);
+    return result;
+  }
+};
+
+}  // namespace spec2fab

@@ -1,0 +1,142 @@
+#pragma once
+/// Reducer-tree nodes (paper §5.1, §6.1).
+///
+/// A GeometryNode partitions its region: `route` (the paper's getOutputIndex)
+/// says which child a point belongs to and the point's frame in that child. A
+/// MaterialNode is a leaf: `material` (getMaterial) returns a material id in
+/// the local frame; void is a material. Nodes hold named Parameters that
+/// tuners change, after which `evaluate()` refreshes derived state.
+///
+/// A node type is one .cpp file ending in
+/// `SPEC2FAB_REGISTER(NodeRegistry, MyNode, "my_node")`: a constructor from
+/// (const Properties&, const NodeContext&), `static TypeDoc doc()`, and the
+/// overrides below.
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/parameter.h"
+#include "core/registry.h"
+#include "materials/palette.h"
+#include "reducer/frame.h"
+
+namespace spec2fab {
+
+class ReducerNode;
+class Solid;
+using NodePtr = std::unique_ptr<ReducerNode>;
+
+/// What a node reads while it is built from JSON.
+struct NodeContext {
+  const MaterialPalette& palette;
+};
+
+using NodeRegistry = Registry<ReducerNode, const NodeContext&>;
+
+/// Builds the node described by `properties` (its "type" names it).
+NodePtr build_node(const Properties& properties, const NodeContext& context);
+
+/// What binding a tree to a shape collects from its nodes.
+struct BindContext {
+  const Solid& solid;
+  double required_band_mm = 0;  ///< depth below the surface that must be resolved
+};
+
+using ParameterVisitor = std::function<void(const std::string& name, Parameter& parameter)>;
+
+class ReducerNode {
+ public:
+  enum class Role { geometry, material };
+
+  virtual ~ReducerNode() = default;
+  Role role() const { return role_; }
+  /// The registered name, e.g. "stratum".
+  virtual std::string type_name() const = 0;
+  /// A deep copy (children included).
+  virtual NodePtr clone() const = 0;
+
+  /// Visits this node's own parameters (not its children's).
+  virtual void visit_parameters(const ParameterVisitor& /*visit*/) {}
+  /// Refreshes derived state after parameters changed (the paper's evaluate).
+  virtual void evaluate() {}
+  /// Adapts to the shape: takes defaults from the incoming frame's domain,
+  /// states what it needs from the solid, and binds its children.
+  virtual void bind(const FrameDomain& incoming, BindContext& context);
+  /// The node as JSON, in the form build_node reads (parameters at their
+  /// current values, materials by name).
+  virtual nlohmann::json to_json(const MaterialPalette& palette) const = 0;
+
+  size_t child_count() const { return children_.size(); }
+  ReducerNode& child(size_t i) { return *children_[i]; }
+  const ReducerNode& child(size_t i) const { return *children_[i]; }
+  /// The name of child i in parameter paths and tree.json ("shell", "below", "3").
+  virtual std::string child_label(size_t i) const { return std::to_string(i); }
+
+ protected:
+  explicit ReducerNode(Role role) : role_(role) {}
+  /// Deep-copies children, so derived classes can clone with their copy constructor.
+  ReducerNode(const ReducerNode& other);
+  ReducerNode& operator=(const ReducerNode&) = delete;
+
+  std::vector<NodePtr> children_;
+
+ private:
+  Role role_;
+};
+
+class GeometryNode : public ReducerNode {
+ public:
+  struct Route {
+    int child;
+    LocalFrame frame;
+  };
+  /// Which child holds the point, and the point in that child's frame.
+  virtual Route route(const QueryPoint& point, const LocalFrame& frame) const = 0;
+
+ protected:
+  GeometryNode() : ReducerNode(Role::geometry) {}
+  GeometryNode(const GeometryNode&) = default;
+};
+
+class MaterialNode : public ReducerNode {
+ public:
+  virtual MaterialId material(const QueryPoint& point, const LocalFrame& frame) const = 0;
+
+ protected:
+  MaterialNode() : ReducerNode(Role::material) {}
+  MaterialNode(const MaterialNode&) = default;
+};
+
+/// clone() through the copy constructor.
+template <class Derived, class Base>
+class ClonableNode : public Base {
+ public:
+  NodePtr clone() const override { return std::make_unique<Derived>(static_cast<const Derived&>(*this)); }
+
+ protected:
+  ClonableNode() = default;
+  ClonableNode(const ClonableNode&) = default;
+};
+
+/// A material chosen by name, as a choice parameter over the palette:
+///   "VeroCyan"                                            fixed
+///   {"value": "VeroCyan", "choices": ["VeroCyan", "void"]} free among choices
+///   {"value": "VeroCyan", "choices": "all"}                free among every palette material
+Parameter read_material_parameter(const Properties& properties, const std::string& key,
+                                  const NodeContext& context);
+nlohmann::json material_parameter_to_json(const Parameter& parameter,
+                                          const MaterialPalette& palette);
+
+/// Children given either as one "child" template (copied `count` times) or as
+/// an explicit "children" array of `count` nodes.
+std::vector<NodePtr> read_repeated_children(const Properties& properties, size_t count,
+                                            const NodeContext& context);
+/// Writes children back: as "child" when all are identical, else as "children".
+void repeated_children_to_json(const std::vector<NodePtr>& children,
+                               const MaterialPalette& palette, nlohmann::json& out);
+
+}  // namespace spec2fab

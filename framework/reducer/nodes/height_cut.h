@@ -1,0 +1,49 @@
+#pragma once
+// Shared by the Plane and BSpline nodes: a height surface over two lateral
+// axes of the incoming frame cuts it into "below" (child 0) and "above"
+// (child 1). Each side's frame is (lateral, lateral, distance from the cut),
+// so a Layered child counts its layers from the cut surface.
+
+#include "reducer/node.h"
+
+namespace spec2fab {
+
+class HeightCut {
+ public:
+  /// Reads "axis" ("a"/"x", "b"/"y", "w"/"z": the incoming coordinate the
+  /// height is measured along) and the "below"/"above" children.
+  HeightCut(const Properties& properties, const NodeContext& context,
+            std::vector<NodePtr>& children);
+
+  /// The incoming frame's coordinates as (lateral 1, lateral 2, height).
+  Vec3 to_cut_axes(const LocalFrame& frame) const {
+    switch (axis_) {
+      case 0: return {frame.b, frame.w, frame.a};
+      case 1: return {frame.a, frame.w, frame.b};
+      default: return {frame.a, frame.b, frame.w};
+    }
+  }
+  /// The incoming domain in the same axes.
+  Eigen::AlignedBox3d cut_domain(const FrameDomain& incoming) const;
+
+  GeometryNode::Route route(const Vec3& cut_axes, double surface_height) const {
+    const double above = cut_axes.z() - surface_height;
+    if (above < 0) return {0, {cut_axes.x(), cut_axes.y(), -above}};
+    return {1, {cut_axes.x(), cut_axes.y(), above}};
+  }
+
+  /// Binds both children to their side of a cut lying within [low, high].
+  void bind_children(std::vector<NodePtr>& children, const Eigen::AlignedBox3d& domain, double low,
+                     double high, BindContext& context) const;
+
+  void to_json(const std::vector<NodePtr>& children, const MaterialPalette& palette,
+               nlohmann::json& out) const;
+
+  static std::string child_label(size_t i) { return i == 0 ? "below" : "above"; }
+  static std::vector<PropertyDoc> property_docs();
+
+ private:
+  int axis_ = 2;
+};
+
+}  // namespace spec2fab

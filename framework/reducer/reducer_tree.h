@@ -1,0 +1,77 @@
+#pragma once
+/// A reducer tree bound to a solid: answers "which material is here?" for
+/// single points and for rows of points, and exposes the free parameters of
+/// any subtree as a SearchSpace.
+///
+/// Points outside the solid are void. Every query first asks the solid's
+/// SurfaceField about the point (inside? depth? (u,v)?) once, then walks from
+/// the root to a material node.
+
+#include <memory>
+#include <string>
+
+#include "core/search_space.h"
+#include "geometry/solid.h"
+#include "reducer/node.h"
+
+namespace spec2fab {
+
+class ReducerTree {
+ public:
+  /// Builds a tree from its JSON description; materials resolve in `palette`,
+  /// which must outlive the tree.
+  ReducerTree(const Properties& properties, const MaterialPalette& palette);
+  ReducerTree(NodePtr root, const MaterialPalette& palette);
+
+  ReducerNode& root() { return *root_; }
+  const ReducerNode& root() const { return *root_; }
+  const MaterialPalette& palette() const { return *palette_; }
+
+  /// Binds the tree to a solid (which must outlive it): nodes take their
+  /// default domains from the shape, and the solid's SurfaceField is built to
+  /// the depth the nodes need. `field_voxel_mm` 0 lets the solid choose.
+  void bind(const Solid& solid, double field_voxel_mm = 0);
+  bool is_bound() const { return field_ != nullptr; }
+  const Solid& solid() const { return *solid_; }
+
+  /// Free parameters of the subtree at `node_path` ("" = whole tree), named
+  /// by path, e.g. "shell/12/layers/0/thickness_mm".
+  SearchSpace search_space(const std::string& node_path = "");
+  /// Every parameter (free and fixed), for listing.
+  SearchSpace all_parameters(const std::string& node_path = "");
+  /// The node at a path of child labels ("shell/12"); throws std::out_of_range.
+  ReducerNode& node(const std::string& node_path);
+  /// Refreshes derived state of every node after parameters changed.
+  void evaluate();
+
+  /// Per-thread query object (holds the field's sampler). The tree must stay
+  /// bound and unchanged while queries run.
+  class Query {
+   public:
+    explicit Query(const ReducerTree& tree);
+    MaterialId material_at(const Vec3& world_mm);
+    /// Materials at `count` points start, start + step, ... into `out`.
+    void material_row(const Vec3& start_mm, const Vec3& step_mm, int count, MaterialId* out);
+
+   private:
+    const ReducerTree& tree_;
+    SurfaceField::Sampler sampler_;
+  };
+
+  /// Convenience single query (creates a Query each call; slow).
+  MaterialId material_at(const Vec3& world_mm) const { return Query(*this).material_at(world_mm); }
+
+  /// The tree as JSON ({"type": ...} of the root), readable by the constructor.
+  nlohmann::json to_json() const;
+  size_t node_count() const;
+
+ private:
+  MaterialId walk(const QueryPoint& point) const;
+
+  NodePtr root_;
+  const MaterialPalette* palette_;
+  const Solid* solid_ = nullptr;
+  const SurfaceField* field_ = nullptr;
+};
+
+}  // namespace spec2fab

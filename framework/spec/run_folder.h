@@ -1,0 +1,35 @@
+#pragma once
+/// The output folder of one run, written all-or-nothing: files go into a
+/// hidden temporary folder beside the destination, which replaces the
+/// destination only when the run completes (commit). A run that fails leaves
+/// nothing behind.
+
+#include <filesystem>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+namespace spec2fab {
+
+class RunFolder {
+ public:
+  explicit RunFolder(std::filesystem::path destination);
+  ~RunFolder();  ///< removes the temporary folder unless committed
+  RunFolder(const RunFolder&) = delete;
+  RunFolder& operator=(const RunFolder&) = delete;
+
+  const std::filesystem::path& destination() const { return destination_; }
+  /// Where to write `relative` now (parent folders are created).
+  std::filesystem::path path(const std::filesystem::path& relative) const;
+  void write_text(const std::filesystem::path& relative, const std::string& text) const;
+  /// Pretty-printed with a trailing newline; key order as stored (sorted).
+  void write_json(const std::filesystem::path& relative, const nlohmann::json& value) const;
+  /// Moves the finished folder into place, replacing an older one.
+  void commit();
+
+ private:
+  std::filesystem::path destination_, staging_;
+  bool committed_ = false;
+};
+
+}  // namespace spec2fab

@@ -1,0 +1,65 @@
+#pragma once
+/// Translators (paper §4, §7): given an experiment's inputs, decide which
+/// material goes where. A translator is one folder under translators/ ending
+/// in `SPEC2FAB_REGISTER(TranslatorRegistry, MyTranslator, "name")`.
+///
+/// Its constructor reads its sections of the experiment (goal, simulation,
+/// optimizer) and builds everything it will need — reducer tree, tuners — so
+/// that `spec2fab validate` catches every input problem before any work;
+/// `run` then does the work and writes into the run folder.
+
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "core/registry.h"
+#include "spec/experiment.h"
+#include "spec/run_folder.h"
+
+namespace spec2fab {
+
+class ReducerTree;
+
+struct RunContext {
+  const Experiment& experiment;
+  RunFolder& folder;
+  int threads = 1;
+  std::uint64_t seed = 1;
+  nlohmann::json& result;  ///< result.json; the translator adds its own section(s)
+};
+
+class Translator {
+ public:
+  virtual ~Translator() = default;
+  /// One paragraph for `spec2fab validate`: what will run.
+  virtual std::string summary() const = 0;
+  virtual void run(RunContext& context) = 0;
+  /// The tuned tree (after run), written to tree.json.
+  virtual const ReducerTree& tree() const = 0;
+};
+
+using TranslatorRegistry = Registry<Translator, const Experiment&>;
+
+/// An experiment loaded, its translator built, every key checked.
+struct PreparedExperiment {
+  std::unique_ptr<Experiment> experiment;  // stable address: the translator refers to it
+  std::unique_ptr<Translator> translator;
+};
+
+/// Throws InputError for any problem in the file or the inputs it names.
+PreparedExperiment prepare_experiment(const std::filesystem::path& file);
+
+struct RunOptions {
+  std::filesystem::path out;  ///< empty: out/<experiment name>
+  int threads = 0;            ///< 0: all cores
+  std::optional<std::uint64_t> seed;  ///< overrides the experiment's seed
+};
+
+/// Prepares and runs an experiment, writing the run folder all-or-nothing.
+/// Returns the folder written.
+std::filesystem::path run_experiment(const std::filesystem::path& file, const RunOptions& options);
+
+}  // namespace spec2fab

@@ -1,0 +1,24 @@
+// Writes the meshes in datasets/meshes/ from the primitives in
+// framework/geometry/primitives.h (see datasets/README.md):
+//   build/tools/make_meshes datasets/meshes
+
+#include <filesystem>
+#include <iostream>
+
+#include "geometry/mesh_io.h"
+#include "geometry/primitives.h"
+
+int main(int argc, char** argv) {
+  using namespace spec2fab;
+  if (argc != 2) {
+    std::cerr << "usage: make_meshes OUTPUT_FOLDER\n";
+    return 2;
+  }
+  const std::filesystem::path out = argv[1];
+  std::filesystem::create_directories(out);
+  save_mesh(make_sphere(25.0, 64, 32), out / "sphere_r25.obj");
+  save_mesh(make_torus(20.0, 8.0, 64, 24), out / "torus_R20_r8.obj");
+  save_mesh(make_box(Vec3(0, 0, 0), Vec3(40, 30, 20), 2), out / "box_40x30x20.stl");
+  std::cout << "wrote meshes to " << out.string() << "\n";
+  return 0;
+}
