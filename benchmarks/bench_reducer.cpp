@@ -5,8 +5,10 @@
 //
 // BM_TextureTreeGrid: rows of points on a regular grid over the bounds, the
 //   workload of fabrication (most points are far from the surface).
-// BM_TextureTreeShell: rows confined to the 2 mm shell, every query needs
-//   depth and (u,v) — the worst case.
+// BM_TextureTreeShellRows: rows (latitude circles) inside the 2 mm shell:
+//   every query needs depth and (u,v), but neighbours share cache lines.
+// BM_TextureTreeShellRandom: the same number of shell points in random order —
+//   the worst case, bound by cache misses.
 // The /threads:N argument runs rows in parallel with oneTBB over N threads.
 
 #include <benchmark/benchmark.h>
@@ -93,24 +95,8 @@ void BM_TextureTreeGrid(benchmark::State& state) {
       Vec3(size.x() / kRow, 0, 0));
 }
 
-void BM_TextureTreeShell(benchmark::State& state) {
-  // Random points in the 2 mm shell of the 25 mm sphere.
-  static const std::vector<Vec3> points = [] {
-    std::vector<Vec3> p;
-    uint64_t x = 88172645463325252ull;
-    auto uniform = [&] {  // xorshift64: fixed points, no dependence on the standard library
-      x ^= x << 13;
-      x ^= x >> 7;
-      x ^= x << 17;
-      return static_cast<double>(x >> 11) * 0x1.0p-53;
-    };
-    for (int i = 0; i < kRow * 1024; ++i) {
-      const double z = 2 * uniform() - 1, phi = 2 * M_PI * uniform();
-      const double r = std::sqrt(1 - z * z), depth = 2 * uniform();
-      p.push_back((25.0 - depth) * Vec3(r * std::cos(phi), r * std::sin(phi), z));
-    }
-    return p;
-  }();
+// Queries `points` in chunks of kRow, chunks in parallel.
+void run_points(benchmark::State& state, const std::vector<Vec3>& points) {
   Fixture& f = fixture();
   tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
                               static_cast<size_t>(state.range(0)));
@@ -132,8 +118,46 @@ void BM_TextureTreeShell(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * static_cast<long long>(points.size()));
 }
 
+void BM_TextureTreeShellRows(benchmark::State& state) {
+  static const std::vector<Vec3> points = [] {
+    std::vector<Vec3> p;
+    for (int ring = 0; ring < 1024; ++ring) {
+      const double z = -0.95 + 1.9 * (ring + 0.5) / 1024, r = std::sqrt(1 - z * z);
+      const double depth = 0.1 + 1.8 * (ring % 9) / 8.0;
+      for (int i = 0; i < kRow; ++i) {
+        const double phi = 2 * M_PI * (i + 0.5) / kRow;
+        p.push_back((25.0 - depth) * Vec3(r * std::cos(phi), r * std::sin(phi), z));
+      }
+    }
+    return p;
+  }();
+  run_points(state, points);
+}
+
+void BM_TextureTreeShellRandom(benchmark::State& state) {
+  // Random points in the 2 mm shell of the 25 mm sphere.
+  static const std::vector<Vec3> points = [] {
+    std::vector<Vec3> p;
+    uint64_t x = 88172645463325252ull;
+    auto uniform = [&] {  // xorshift64: fixed points, no dependence on the standard library
+      x ^= x << 13;
+      x ^= x >> 7;
+      x ^= x << 17;
+      return static_cast<double>(x >> 11) * 0x1.0p-53;
+    };
+    for (int i = 0; i < kRow * 1024; ++i) {
+      const double z = 2 * uniform() - 1, phi = 2 * M_PI * uniform();
+      const double r = std::sqrt(1 - z * z), depth = 2 * uniform();
+      p.push_back((25.0 - depth) * Vec3(r * std::cos(phi), r * std::sin(phi), z));
+    }
+    return p;
+  }();
+  run_points(state, points);
+}
+
 BENCHMARK(BM_TextureTreeGrid)->Arg(1)->Arg(2)->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_TextureTreeShell)->Arg(1)->Arg(2)->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_TextureTreeShellRows)->Arg(1)->Arg(2)->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_TextureTreeShellRandom)->Arg(1)->Arg(2)->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace spec2fab

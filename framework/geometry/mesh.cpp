@@ -38,7 +38,8 @@ double Mesh::surface_area() const {
 
 void Mesh::flip() {
   for (auto& t : triangles) std::swap(t[1], t[2]);
-  for (size_t i = 0; i + 2 < corner_uv.size(); i += 3) std::swap(corner_uv[i + 1], corner_uv[i + 2]);
+  for (size_t i = 0; i + 2 < corner_uv.size(); i += 3)
+    std::swap(corner_uv[i + 1], corner_uv[i + 2]);
 }
 
 }  // namespace spec2fab

@@ -123,7 +123,7 @@ MeshDefects find_mesh_defects(const Mesh& mesh) {
 }
 
 void require_closed_manifold(Mesh& mesh) {
-  const std::string& name = mesh.name.empty() ? std::string("mesh") : mesh.name;
+  const std::string name = mesh.name.empty() ? std::string("mesh") : mesh.name;
   for (const auto& t : mesh.triangles) {
     for (int k = 0; k < 3; ++k) {
       if (t[k] < 0 || t[k] >= static_cast<int>(mesh.vertices.size()))
@@ -135,19 +135,19 @@ void require_closed_manifold(Mesh& mesh) {
 
   const MeshDefects d = find_mesh_defects(mesh);
   if (d.boundary_edges > 0)
-    throw InputError(name + ": not closed: " + plural(d.boundary_edges, "boundary edge", "boundary edges"));
+    throw InputError(
+        name + ": not closed: " + plural(d.boundary_edges, "boundary edge", "boundary edges"));
   if (d.non_manifold_edges > 0)
-    throw InputError(name + ": not manifold: " +
-                     plural(d.non_manifold_edges, "edge", "edges") +
+    throw InputError(name + ": not manifold: " + plural(d.non_manifold_edges, "edge", "edges") +
                      " shared by more than two triangles");
   if (d.non_manifold_vertices > 0)
-    throw InputError(name + ": not manifold: " +
-                     plural(d.non_manifold_vertices, "vertex", "vertices") +
+    throw InputError(name +
+                     ": not manifold: " + plural(d.non_manifold_vertices, "vertex", "vertices") +
                      " where separate sheets touch");
   if (d.inconsistent_edges > 0)
-    throw InputError(name + ": not consistently oriented: " +
-                     plural(d.inconsistent_edges, "edge", "edges") +
-                     " traversed twice in the same direction");
+    throw InputError(
+        name + ": not consistently oriented: " + plural(d.inconsistent_edges, "edge", "edges") +
+        " traversed twice in the same direction");
   if (d.degenerate_triangles > 0)
     throw InputError(name + ": degenerate: " +
                      plural(d.degenerate_triangles, "triangle", "triangles") + " with zero area");

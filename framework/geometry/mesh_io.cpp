@@ -8,10 +8,10 @@
 #include <memory>
 #include <unordered_map>
 
-#include <assimp/Exporter.hpp>
-#include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <assimp/Exporter.hpp>
+#include <assimp/Importer.hpp>
 
 #include <Eigen/Geometry>
 
@@ -60,7 +60,8 @@ struct SceneWalker {
   bool all_have_uv = true;
 
   int weld(const Vec3& p) {
-    auto [it, inserted] = index_of.try_emplace(PositionKey(p), static_cast<int>(mesh->vertices.size()));
+    auto [it, inserted] =
+        index_of.try_emplace(PositionKey(p), static_cast<int>(mesh->vertices.size()));
     if (inserted) mesh->vertices.push_back(p);
     return it->second;
   }
@@ -106,9 +107,8 @@ Mesh load_mesh(const std::filesystem::path& file, double scale_to_mm) {
 
   // No DefaultLogger is created, so Assimp stays silent (its NullLogger).
   Assimp::Importer importer;
-  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
-  const aiScene* scene = importer.ReadFile(
-      file.string(), aiProcess_Triangulate | aiProcess_ValidateDataStructure);
+  const aiScene* scene =
+      importer.ReadFile(file.string(), aiProcess_Triangulate | aiProcess_ValidateDataStructure);
   if (scene == nullptr) fail(file, "read", one_line(importer.GetErrorString()));
   if (scene->mRootNode == nullptr || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE))
     fail(file, "read", "no triangles");
@@ -137,7 +137,8 @@ std::unique_ptr<aiMesh> make_indexed_mesh(const Mesh& mesh) {
     };
     struct KeyHash {
       size_t operator()(const Key& k) const {
-        return std::hash<std::uint64_t>()(k.u * 31 + k.v) ^ (size_t(k.vertex) * 0x9e3779b97f4a7c15ull);
+        return std::hash<std::uint64_t>()(k.u * 31 + k.v) ^
+               (size_t(k.vertex) * 0x9e3779b97f4a7c15ull);
       }
     };
     std::unordered_map<Key, int, KeyHash> index_of;
@@ -162,8 +163,8 @@ std::unique_ptr<aiMesh> make_indexed_mesh(const Mesh& mesh) {
   out->mNumVertices = static_cast<unsigned>(positions.size());
   out->mVertices = new aiVector3D[positions.size()];
   for (size_t i = 0; i < positions.size(); ++i)
-    out->mVertices[i] = aiVector3D(ai_real(positions[i].x()), ai_real(positions[i].y()),
-                                   ai_real(positions[i].z()));
+    out->mVertices[i] =
+        aiVector3D(ai_real(positions[i].x()), ai_real(positions[i].y()), ai_real(positions[i].z()));
   if (!uvs.empty()) {
     out->mNumUVComponents[0] = 2;
     out->mTextureCoords[0] = new aiVector3D[uvs.size()];
@@ -227,7 +228,8 @@ void save_mesh(const Mesh& mesh, const std::filesystem::path& file) {
   aiScene scene;
   scene.mNumMeshes = 1;
   scene.mMeshes = new aiMesh*[1];
-  scene.mMeshes[0] = (extension == ".stl" ? make_facet_mesh(mesh) : make_indexed_mesh(mesh)).release();
+  scene.mMeshes[0] =
+      (extension == ".stl" ? make_facet_mesh(mesh) : make_indexed_mesh(mesh)).release();
   scene.mNumMaterials = 1;
   scene.mMaterials = new aiMaterial*[1];
   scene.mMaterials[0] = new aiMaterial();

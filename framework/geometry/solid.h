@@ -54,8 +54,11 @@ class Solid {
   /// before querying in parallel.
   const SurfaceField& field(double interior_band_mm, double voxel_mm = 0) const;
 
-  /// The voxel size `field` chooses when given 0: the largest extent / 256.
-  double default_field_voxel() const;
+  /// The voxel size `field` chooses when given 0: the largest extent / 256,
+  /// coarsened where needed so that a band of `interior_band_mm` holds about
+  /// two million voxels at most (build time and memory stay bounded; accuracy
+  /// near the surface comes from the exact projection, not the voxel size).
+  double default_field_voxel(double interior_band_mm) const;
 
  private:
   friend class SurfaceField;  // its hot path projects onto triangles inline

@@ -19,6 +19,9 @@ struct Solid::Impl {
   double volume = 0;
   UvSource uv_source = UvSource::mesh;
   UvProjection projection;
+  /// Angle-weighted pseudo-normal of each vertex; only gives signs. Filled
+  /// with `triangles`, so declared before it.
+  std::vector<Eigen::Vector3f> vertex_normals;
   std::vector<TriangleRecord> triangles;
   RTCScene scene = nullptr;
 
@@ -35,6 +38,25 @@ struct Solid::Impl {
     return hit.barycentric[0] * uv[0] + hit.barycentric[1] * uv[1] + hit.barycentric[2] * uv[2];
   }
 
+  /// Distance from `p` to its projection onto `record`, negative when `p`
+  /// lies behind the pseudo-normal of the feature it projects onto.
+  double signed_distance(const TriangleRecord& record, const TriangleProjection& hit,
+                         const Vec3& p) const {
+    if (hit.feature == kFace) return hit.plane_distance;
+    const Vec3 offset = p - hit.position;
+    const double distance = offset.norm();
+    const Eigen::Vector3f& normal = hit.feature <= kEdgeCA
+                                        ? record.edge_normal[hit.feature - kEdgeAB]
+                                        : vertex_normals[record.vertex[hit.feature - kVertexA]];
+    return offset.dot(normal.cast<double>()) < 0 ? -distance : distance;
+  }
+
+  /// When `hit` (the projection of `p` onto `triangle`) lies on an edge or a
+  /// corner, a neighbouring triangle may be closer: walks on while one is
+  /// (`triangle` and `hit` are updated). Reaches the closest point whenever
+  /// the start is near it, as a field voxel's closest triangle almost always is.
+  void walk_to_closer(int& triangle, TriangleProjection& hit, const Vec3& p) const;
+
   SurfacePoint on_triangle(int triangle, const Vec3& p) const {
     const TriangleRecord& record = triangles[triangle];
     const TriangleProjection hit = project_onto_triangle(record, p);
@@ -43,7 +65,7 @@ struct Solid::Impl {
     result.triangle = triangle;
     result.barycentric = hit.barycentric;
     result.uv = uv_at(triangle, hit);
-    result.signed_distance = signed_distance_to(record, hit, p);
+    result.signed_distance = signed_distance(record, hit, p);
     return result;
   }
 };

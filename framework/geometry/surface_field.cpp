@@ -38,9 +38,10 @@ constexpr openvdb::Int32 kInside = -1, kOutside = 1;
 // changes once built.
 using CellAccessor = openvdb::tree::ValueAccessor<const openvdb::Int32Tree, false>;
 
-// Rounds to the nearest integer without data-dependent branches.
+// Rounds to the nearest integer without data-dependent branches; clamped so
+// that far-away points stay within int (they land in the background).
 inline int nearest_int(double x) {
-  const double shifted = x + 0.5;
+  const double shifted = std::min(std::max(x, -1e9), 1e9) + 0.5;
   const int i = static_cast<int>(shifted);
   return i - (shifted < i);
 }
@@ -61,7 +62,8 @@ namespace {
 void encode_cells(openvdb::Int32Tree& cells, const openvdb::FloatTree& distance, double voxel_mm) {
   std::vector<openvdb::Int32Tree::LeafNodeType*> leaves;
   cells.getNodes(leaves);
-  const float half_diagonal = float(0.5 * std::sqrt(3.0) * voxel_mm);
+  // Half a cell diagonal, with a margin for the float rounding of the level set.
+  const float half_diagonal = float(1.02 * 0.5 * std::sqrt(3.0) * voxel_mm);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves.size()), [&](const auto& range) {
     openvdb::tree::ValueAccessor<const openvdb::FloatTree, false> phi(distance);
     for (size_t i = range.begin(); i != range.end(); ++i) {
@@ -114,7 +116,7 @@ SurfaceField::SurfaceField(const Solid& solid, double voxel_mm, double interior_
     polygons[t] = openvdb::Vec3I(unsigned(tri[0]), unsigned(tri[1]), unsigned(tri[2]));
   }
   openvdb::tools::QuadAndTriangleDataAdapter<openvdb::Vec3s, openvdb::Vec3I> adapter(points,
-                                                                                      polygons);
+                                                                                     polygons);
   auto transform = openvdb::math::Transform::createLinearTransform(voxel_mm);
 
   // A query's nearest voxel centre is up to half a diagonal (< 1 voxel) deeper
@@ -165,11 +167,27 @@ SurfaceSample SurfaceField::Sampler::sample(const Vec3& point) {
     return result;
   }
   const int decoded = std::abs(cell) - 1;
-  const int triangle = decoded >> 2;
+  int triangle = decoded >> 2;
   const Solid::Impl& solid = *f.solid;
-  const TriangleRecord& record = solid.triangles[triangle];
-  const TriangleProjection hit = project_onto_triangle(record, point);
-  double signed_distance = signed_distance_to(record, hit, point);
+  TriangleProjection hit = project_onto_triangle(solid.triangles[triangle], point);
+  // The voxel's triangle is closest to the voxel centre; when the projection
+  // lands on an edge or corner, a neighbour may be closer to the query.
+  if (hit.feature != kFace) [[unlikely]] {
+    bool settled = false;
+    if (hit.feature <= kEdgeCA) {
+      // Usually one step across the edge settles it, so take it here.
+      const int next = solid.triangles[triangle].neighbour[hit.feature - kEdgeAB];
+      const TriangleProjection across = project_onto_triangle(solid.triangles[next], point);
+      settled = true;
+      if (squared_distance_to(across, point) < squared_distance_to(hit, point)) {
+        triangle = next;
+        hit = across;
+        settled = hit.feature == kFace;
+      }
+    }
+    if (!settled) solid.walk_to_closer(triangle, hit, point);
+  }
+  double signed_distance = solid.signed_distance(solid.triangles[triangle], hit, point);
   const int sign = decoded & 3;
   if (sign != kSignUnsure && (sign == kSignInside) != (signed_distance < 0))
     signed_distance = -signed_distance;

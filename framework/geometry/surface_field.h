@@ -7,9 +7,13 @@
 /// Built with OpenVDB's meshToVolume, which gives a level set and, for every
 /// voxel of the band, the index of the closest triangle. A query looks up the
 /// triangle of its nearest voxel and projects exactly onto it
-/// (Solid::closest_point_on_triangle), so depth and (u,v) are exact whenever
-/// that triangle is the closest one; otherwise the depth error is below one
-/// voxel diagonal. Beyond the band the sign comes from the level set.
+/// (Solid::closest_point_on_triangle); when the projection lands on an edge or
+/// a corner it walks on to neighbouring triangles while they are closer. So
+/// depth and (u,v) are exact whenever that reaches the closest triangle (it
+/// almost always does); otherwise the depth error is below one voxel diagonal.
+/// The sign comes from the level set wherever the whole voxel lies on one side
+/// of the surface, and from angle-weighted pseudo-normals nearer to it. Beyond
+/// the band the sign comes from the level set.
 
 #include <memory>
 

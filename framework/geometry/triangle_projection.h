@@ -26,18 +26,21 @@ enum TriangleFeature : int {
 };
 
 /// One triangle, laid out for the projection below: the common case (a point
-/// over the face) reads only the first two cache lines.
+/// over the face) reads only the first two cache lines; the third holds what
+/// the rarer edge and corner cases need.
 struct alignas(64) TriangleRecord {
-  Vec3 a, ab, ac;  ///< corner a and the edge vectors b − a, c − a (mm)
-  Vec3 normal;     ///< unit face normal
+  Vec3 a;       ///< corner a (mm)
+  Vec3 normal;  ///< unit face normal; with `a` in the first cache line for plane tests
+  Vec3 ab, ac;  ///< edge vectors b − a, c − a (mm)
   /// Inverse Gram matrix of (ab, ac), so that a point's barycentric (v, w)
   /// follow from two dot products; NaN for slivers, which take the slow path.
   double inverse_gram_bb, inverse_gram_bc, inverse_gram_cc;
-  /// Pseudo-normals of edges AB, BC, CA and corners A, B, C (feature − 1);
+  int neighbour[3];  ///< triangles across edges AB, BC, CA
+  /// Pseudo-normals of edges AB, BC, CA (the sum of the two face normals);
   /// they only give signs, so floats suffice.
-  Eigen::Vector3f pseudo_normal[6];
-
-  /// Fills every field but pseudo_normal from the three corners.
+  Eigen::Vector3f edge_normal[3];
+  int vertex[3];  ///< mesh vertex indices of a, b, c
+  /// Fills the geometric fields (up to inverse_gram_cc) from the corners.
   void set_corners(const Vec3& pa, const Vec3& pb, const Vec3& pc) {
     a = pa;
     ab = pb - pa;
@@ -56,6 +59,8 @@ struct alignas(64) TriangleRecord {
     }
   }
 };
+
+static_assert(sizeof(TriangleRecord) == 192, "three cache lines");
 
 struct TriangleProjection {
   Vec3 position;          ///< closest point of the triangle (mm)
@@ -117,16 +122,6 @@ struct TriangleProjection {
 inline double squared_distance_to(const TriangleProjection& hit, const Vec3& p) {
   return hit.feature == kFace ? hit.plane_distance * hit.plane_distance
                               : (p - hit.position).squaredNorm();
-}
-
-/// Distance from `p` to its projection, negative when `p` lies behind the
-/// pseudo-normal of the feature it projects onto.
-inline double signed_distance_to(const TriangleRecord& t, const TriangleProjection& hit,
-                                 const Vec3& p) {
-  if (hit.feature == kFace) return hit.plane_distance;
-  const Vec3 offset = p - hit.position;
-  const double distance = offset.norm();
-  return offset.dot(t.pseudo_normal[hit.feature - 1].cast<double>()) < 0 ? -distance : distance;
 }
 
 }  // namespace spec2fab

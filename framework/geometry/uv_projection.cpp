@@ -66,7 +66,8 @@ Vec2 UvProjection::operator()(const Vec3& p) const {
     case UvSource::spherical: {
       const Vec3 d = p - bounds_.center();
       const double r = d.norm();
-      const double v = r > 0 ? std::acos(std::clamp(d[axis_] / r, -1.0, 1.0)) / std::numbers::pi : 0.5;
+      const double v =
+          r > 0 ? std::acos(std::clamp(d[axis_] / r, -1.0, 1.0)) / std::numbers::pi : 0.5;
       return {turn_fraction(d[a_], d[b_]), v};
     }
   }

@@ -41,7 +41,10 @@ std::string expected_material(const Bounds& bounds, const AnalyticSurfacePoint& 
   const double v = (s.position.y() - bounds.lower.y()) / bounds.size().y();
   const int column = (u >= 0.5 ? 1 : 0) + 2 * (v >= 0.5 ? 1 : 0);
   if (depth >= 2 * kLayer) return "deep";
-  return "c" + std::to_string(column) + (depth < kLayer ? "a" : "b");
+  std::string name = "c";  // built piecewise: g++ 12 warns falsely (-Wrestrict) on "c" + string&&
+  name += std::to_string(column);
+  name += depth < kLayer ? "a" : "b";
+  return name;
 }
 
 // Depths well away from the layer boundaries 0.5, 1.0 and 2.0.
