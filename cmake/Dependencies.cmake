@@ -7,6 +7,8 @@ find_package(CLI11 CONFIG REQUIRED)
 find_package(spdlog REQUIRED)
 find_package(embree 3 REQUIRED)
 find_package(assimp REQUIRED)
+find_package(Ceres REQUIRED)
+find_package(NLopt CONFIG REQUIRED)
 
 list(APPEND CMAKE_MODULE_PATH /usr/lib/x86_64-linux-gnu/cmake/OpenVDB)
 find_package(OpenVDB REQUIRED)
@@ -27,3 +29,12 @@ foreach(module core imgproc imgcodecs)
   find_library(OpenCV_${module}_LIBRARY opencv_${module} REQUIRED)
   target_link_libraries(spec2fab_opencv INTERFACE ${OpenCV_${module}_LIBRARY})
 endforeach()
+
+# lib3mf 1.8 (C-style COM API) and the libzip it needs; libpng for indexed-colour
+# slice PNGs (OpenCV writes no palette images).
+find_package(PkgConfig REQUIRED)
+pkg_check_modules(LIB3MF REQUIRED IMPORTED_TARGET lib3MF)
+pkg_check_modules(LIBZIP REQUIRED IMPORTED_TARGET libzip)
+add_library(spec2fab_lib3mf INTERFACE)
+target_link_libraries(spec2fab_lib3mf INTERFACE PkgConfig::LIB3MF PkgConfig::LIBZIP)
+find_package(PNG REQUIRED)

@@ -35,7 +35,11 @@ nlohmann::json describe_inputs(const Experiment& experiment) {
         {"volume_mm3", solid.volume()},
         {"surface_area_mm2", solid.mesh().surface_area()},
         {"bounds_mm", {{b.lower.x(), b.lower.y(), b.lower.z()}, {b.upper.x(), b.upper.y(), b.upper.z()}}},
-        {"uv", to_string(solid.uv_source())}}},
+        {"uv", to_string(solid.uv_source())},
+        // What `spec2fab export` needs to rebuild the same Solid.
+        {"scale_to_mm", experiment.geometry_spec().scale_to_mm},
+        {"uv_axis", experiment.geometry_spec().uv_axis},
+        {"field_voxel_mm", experiment.geometry_spec().field_voxel_mm}}},
       {"materials", experiment.library().origin()},
       {"printer",
        {{"name", printer.name},
@@ -69,14 +73,16 @@ std::filesystem::path run_experiment(const std::filesystem::path& file, const Ru
                            {"translator", experiment.translator()},
                            {"seed", options.seed.value_or(experiment.seed())},
                            {"inputs", describe_inputs(experiment)}};
-  RunContext context{experiment, folder, threads, options.seed.value_or(experiment.seed()), result};
+  nlohmann::json timing = {{"threads", threads}};
+  RunContext context{experiment, folder, threads, options.seed.value_or(experiment.seed()), result, &timing};
   spdlog::info("running '{}' ({}) on {} thread(s)", experiment.name(), experiment.translator(), threads);
   prepared.translator->run(context);
 
   folder.write_json("tree.json", prepared.translator->tree().to_json());
   folder.write_json("result.json", result);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  folder.write_json("timing.json", {{"threads", threads}, {"wall_seconds", seconds}});
+  timing["wall_seconds"] = seconds;
+  folder.write_json("timing.json", timing);
   folder.commit();
   return out;
 }

@@ -29,6 +29,9 @@ struct RunContext {
   int threads = 1;
   std::uint64_t seed = 1;
   nlohmann::json& result;  ///< result.json; the translator adds its own section(s)
+  /// timing.json (wall-clock figures, which would break result.json's
+  /// byte-identity); null when nobody records timings.
+  nlohmann::json* timing = nullptr;
 };
 
 class Translator {

@@ -37,11 +37,20 @@ const fs::path kDatasets = SPEC2FAB_DATASETS_DIR;
 
 class Cli : public ::testing::Test {
  protected:
-  Cli() : dir_(fs::temp_directory_path() / ("spec2fab_cli_" + std::to_string(getpid()) + "_" +
-                                             ::testing::UnitTest::GetInstance()->current_test_info()->name())) {
+  Cli()
+      : dir_(fs::temp_directory_path() /
+             ("spec2fab_cli_" + std::to_string(getpid()) + "_" +
+              ::testing::UnitTest::GetInstance()->current_test_info()->name())) {
     fs::remove_all(dir_);
     fs::create_directories(dir_);
+    // Runs fabricate at the printer's resolution: a coarse printer (0.4 mm
+    // voxels) keeps them fast; the shipped printers would print 2e9 voxels.
+    std::ofstream(dir_ / "coarse_printer.json") << kCoarsePrinter;
   }
+  static constexpr const char* kCoarsePrinter =
+      R"({"name": "coarse", "technology": "polyjet", "resolution_dpi": [63.5, 63.5], "layer_mm": 0.4,
+          "build_volume_mm": [200, 200, 200], "model_materials": ["VeroCyan", "VeroWhitePlus"],
+          "source": "test"})";
   ~Cli() override { fs::remove_all(dir_); }
 
   // Writes an experiment whose paths point into datasets/.
@@ -52,10 +61,11 @@ class Cli : public ::testing::Test {
   }
   std::string valid_body(const std::string& tree, const std::string& extra = "",
                          const std::string& translator = "tree") {
-    return R"({"translator": ")" + translator + R"(", "geometry": {"mesh": ")" + (kDatasets / "meshes/sphere_r25.obj").string() +
+    return R"({"translator": ")" + translator + R"(", "geometry": {"mesh": ")" +
+           (kDatasets / "meshes/sphere_r25.obj").string() +
            R"(", "uv": "mesh"}, "goal": {"tree": )" + tree + R"(}, "materials": ")" +
            (kDatasets / "materials/polyjet.json").string() + R"(", "printer": ")" +
-           (kDatasets / "printers/objet500_connex.json").string() + "\"" + extra + "}";
+           (dir_ / "coarse_printer.json").string() + "\"" + extra + "}";
   }
   static std::string single_line(const std::string& s) {
     EXPECT_EQ(std::count(s.begin(), s.end(), '\n'), 1) << s;
@@ -65,10 +75,12 @@ class Cli : public ::testing::Test {
   fs::path dir_;
 };
 
-const char* kTree = R"({"type": "stratum", "depth_mm": 1, "shell": {"type": "layered", "material": "VeroCyan"}, "core": {"type": "layered", "material": "VeroWhitePlus"}})";
+const char* kTree =
+    R"({"type": "stratum", "depth_mm": 1, "shell": {"type": "layered", "material": "VeroCyan"}, "core": {"type": "layered", "material": "VeroWhitePlus"}})";
 
 TEST_F(Cli, HelpAnswersForEveryCommand) {
-  for (const char* command : {"--help", "run --help", "validate --help", "list --help"}) {
+  for (const char* command :
+       {"--help", "run --help", "validate --help", "list --help", "export --help"}) {
     const Result r = spec2fab(command);
     EXPECT_EQ(r.code, 0) << command;
     EXPECT_THAT(r.out, HasSubstr("Usage")) << command;
@@ -116,8 +128,9 @@ TEST_F(Cli, BadInputIsOneLineAndExitCodeTwo) {
   };
   for (const Case& c : cases) {
     const fs::path file = experiment("bad", c.body);
-    for (const std::string& command : {"validate " + file.string(),
-                                      "run " + file.string() + " --out " + (dir_ / "out").string()}) {
+    for (const std::string& command :
+         {"validate " + file.string(),
+          "run " + file.string() + " --out " + (dir_ / "out").string()}) {
       const Result r = spec2fab(command);
       EXPECT_EQ(r.code, 2) << r.out;
       EXPECT_THAT(single_line(r.out), StartsWith("error: " + file.string()));
@@ -148,8 +161,10 @@ std::string read(const fs::path& file) {
 
 TEST_F(Cli, RunWritesFolderIdenticalForAnyThreadCount) {
   const fs::path file = experiment("det", valid_body(kTree));
-  const Result one = spec2fab("run -q " + file.string() + " --threads 1 --out " + (dir_ / "t1").string());
-  const Result two = spec2fab("run -q " + file.string() + " --threads 2 --out " + (dir_ / "t2").string());
+  const Result one =
+      spec2fab("run -q " + file.string() + " --threads 1 --out " + (dir_ / "t1").string());
+  const Result two =
+      spec2fab("run -q " + file.string() + " --threads 2 --out " + (dir_ / "t2").string());
   ASSERT_EQ(one.code, 0) << one.out;
   ASSERT_EQ(two.code, 0) << two.out;
   int compared = 0;
@@ -160,6 +175,12 @@ TEST_F(Cli, RunWritesFolderIdenticalForAnyThreadCount) {
     ++compared;
   }
   EXPECT_GE(compared, 5);  // result.json, tree.json, three previews
+  // ... and the print: slices, manifest, one STL per material, the 3MF, the render.
+  for (const char* file :
+       {"print/slices/manifest.json", "print/slices/slice_00000.png", "print/VeroCyan.stl",
+        "print/VeroWhitePlus.stl", "print/model.3mf", "preview/render.png"}) {
+    EXPECT_TRUE(fs::is_regular_file(dir_ / "t1" / file)) << file;
+  }
   // No staging folder is left behind.
   for (const auto& entry : fs::directory_iterator(dir_)) {
     EXPECT_THAT(entry.path().filename().string(), ::testing::Not(HasSubstr("partial")));
@@ -174,6 +195,69 @@ TEST_F(Cli, TreeJsonRunsAgainAsAGoal) {
   const fs::path second = experiment("second", valid_body(tree));
   ASSERT_EQ(spec2fab("run -q " + second.string() + " --out " + (dir_ / "b").string()).code, 0);
   EXPECT_EQ(read(dir_ / "b" / "tree.json"), tree);
+}
+
+TEST_F(Cli, OversizedPrintIsRefusedBeforeAnyWork) {
+  const fs::path file = experiment("big", valid_body(kTree, R"(, "output": {"max_voxels": 1000})"));
+  for (const std::string& command :
+       {"validate " + file.string(),
+        "run " + file.string() + " --out " + (dir_ / "out").string()}) {
+    const Result r = spec2fab(command);
+    EXPECT_EQ(r.code, 2) << r.out;
+    EXPECT_THAT(single_line(r.out), HasSubstr("raise output.max_voxels"));
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "out"));
+  // Without print files there is nothing to refuse.
+  const fs::path off = experiment(
+      "off",
+      valid_body(kTree,
+                 R"(, "output": {"max_voxels": 1000, "slices": false, "stl": false, "3mf": false,
+                                               "render": false})"));
+  const Result r = spec2fab("run -q " + off.string() + " --out " + (dir_ / "off").string());
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_FALSE(fs::exists(dir_ / "off" / "print"));
+}
+
+TEST_F(Cli, ExportRefabricatesATreeForAnotherPrinter) {
+  const fs::path file = experiment("src", valid_body(kTree));
+  ASSERT_EQ(spec2fab("run -q " + file.string() + " --out " + (dir_ / "run").string()).code, 0);
+  // Another printer: finer voxels, a third material loaded, another order.
+  std::ofstream(dir_ / "other.json")
+      << R"({"name": "other", "technology": "polyjet", "resolution_dpi": [84.67, 84.67], "layer_mm": 0.3,
+             "build_volume_mm": [200, 200, 200], "model_materials": ["VeroYellow", "VeroWhitePlus", "VeroCyan"],
+             "source": "test"})";
+  const Result r =
+      spec2fab("export -q " + (dir_ / "run" / "tree.json").string() + " --printer " +
+               (dir_ / "other.json").string() + " --out " + (dir_ / "exported").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  const std::string report = read(dir_ / "exported" / "export.json");
+  EXPECT_THAT(report, HasSubstr("\"other\""));
+  for (const char* name : {"print/slices/manifest.json", "print/VeroCyan.stl",
+                           "print/VeroWhitePlus.stl", "print/model.3mf", "preview/render.png"}) {
+    EXPECT_TRUE(fs::is_regular_file(dir_ / "exported" / name)) << name;
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "exported" / "print" / "VeroYellow.stl"));  // loaded, not used
+  const std::string manifest = read(dir_ / "exported" / "print" / "slices" / "manifest.json");
+  EXPECT_THAT(manifest, HasSubstr("\"layers\": 167"));  // 50 mm / 0.3 mm
+  EXPECT_THAT(manifest, HasSubstr("VeroYellow"));
+
+  // A printer without the tree's materials: one line, exit 2, nothing written.
+  std::ofstream(dir_ / "white.json")
+      << R"({"name": "white-only", "technology": "polyjet", "resolution_dpi": [63.5, 63.5], "layer_mm": 0.4,
+             "build_volume_mm": [200, 200, 200], "model_materials": ["VeroWhitePlus"], "source": "test"})";
+  const Result bad = spec2fab("export " + (dir_ / "run").string() + " --printer " +
+                              (dir_ / "white.json").string() + " --out " + (dir_ / "bad").string());
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_THAT(single_line(bad.out),
+              HasSubstr("material 'VeroCyan' is not loaded in printer 'white-only'"));
+  EXPECT_FALSE(fs::exists(dir_ / "bad"));
+  // A tree without its run folder's result.json cannot know the geometry.
+  fs::copy_file(dir_ / "run" / "tree.json", dir_ / "lonely_tree.json");
+  const Result lonely =
+      spec2fab("export " + (dir_ / "lonely_tree.json").string() + " --printer " +
+               (dir_ / "other.json").string() + " --out " + (dir_ / "bad").string());
+  EXPECT_EQ(lonely.code, 2);
+  EXPECT_THAT(single_line(lonely.out), HasSubstr("result.json: file not found"));
 }
 
 }  // namespace

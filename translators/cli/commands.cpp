@@ -4,8 +4,16 @@
 #include <iostream>
 #include <map>
 
+#include <chrono>
+#include <fstream>
+#include <thread>
+
+#include <tbb/global_control.h>
+
 #include "core/error.h"
 #include "core/strings.h"
+#include "fabrication/fabricate.h"
+#include "geometry/mesh_io.h"
 #include "materials/material_library.h"
 #include "materials/printer_profile.h"
 #include "reducer/node.h"
@@ -22,7 +30,99 @@ int run_command(const RunArguments& arguments) {
   options.threads = arguments.threads;
   options.seed = arguments.seed;
   const fs::path folder = run_experiment(arguments.experiment, options);
-  std::cout << "wrote " << folder.string() << "/ (result.json, tree.json, preview/)\n";
+  std::cout << "wrote " << folder.string() << "/ (result.json, tree.json, preview/, print/)\n";
+  return 0;
+}
+
+namespace {
+
+// A path recorded in result.json: absolute, or relative to the folder the run
+// was started in (tried from here).
+fs::path recorded_file(const nlohmann::json& value, const fs::path& result_file,
+                       const std::string& pointer) {
+  if (!value.is_string()) throw InputError(result_file.string() + ": " + pointer + ": missing");
+  const fs::path file = value.get<std::string>();
+  if (!fs::is_regular_file(file)) {
+    throw InputError(result_file.string() + ": " + pointer + ": file not found: " + file.string() +
+                     " (relative paths are read from the folder the run was started in)");
+  }
+  return file;
+}
+
+}  // namespace
+
+int export_command(const ExportArguments& arguments) {
+  const auto start = std::chrono::steady_clock::now();
+  // tree.json holds the tree; its run folder's result.json says which
+  // geometry (and material library) it was tuned on.
+  const fs::path run_folder =
+      fs::is_directory(arguments.source) ? arguments.source : arguments.source.parent_path();
+  const fs::path tree_file =
+      fs::is_directory(arguments.source) ? run_folder / "tree.json" : arguments.source;
+  const fs::path result_file = run_folder / "result.json";
+  if (!fs::is_regular_file(tree_file)) throw InputError(tree_file.string() + ": file not found");
+  if (!fs::is_regular_file(result_file)) {
+    throw InputError(
+        result_file.string() +
+        ": file not found; export reads the geometry from the run folder tree.json came from");
+  }
+  nlohmann::json result;
+  try {
+    std::ifstream(result_file) >> result;
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(result_file.string() + ": malformed JSON: " + e.what());
+  }
+  const nlohmann::json geometry =
+      result.value("/inputs/geometry"_json_pointer, nlohmann::json::object());
+  const fs::path mesh_file =
+      recorded_file(geometry.value("mesh", nlohmann::json()), result_file, "/inputs/geometry/mesh");
+  const fs::path materials_file =
+      arguments.materials.empty()
+          ? recorded_file(result.value("/inputs/materials"_json_pointer, nlohmann::json()),
+                          result_file, "/inputs/materials")
+          : arguments.materials;
+
+  const PrinterProfile printer = PrinterProfile::load(arguments.printer);
+  const MaterialLibrary library = MaterialLibrary::load(materials_file);
+  const MaterialPalette palette(library, printer);
+  UvSource uv = UvSource::mesh;
+  try {
+    uv = parse_uv_source(geometry.value("uv", std::string("mesh")));
+  } catch (const std::invalid_argument&) {
+    throw InputError(result_file.string() + ": /inputs/geometry/uv: unknown uv source");
+  }
+  Solid solid(load_mesh(mesh_file, geometry.value("scale_to_mm", 1.0)), uv,
+              geometry.value("uv_axis", 2));
+  // Materials the tree names must be loaded in the new printer: the palette
+  // says which one is missing, where, and what the printer holds.
+  ReducerTree tree(Properties::load(tree_file), palette);
+
+  const int threads = arguments.threads > 0
+                          ? arguments.threads
+                          : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism,
+                                  static_cast<size_t>(threads));
+  tree.bind(solid, geometry.value("field_voxel_mm", 0.0));
+  FabricationOptions options;
+  if (arguments.max_voxels > 0) options.max_voxels = static_cast<long long>(arguments.max_voxels);
+  options.mesh_voxel_mm = arguments.mesh_voxel_mm;
+  check_fabrication(tree, printer, options);
+
+  RunFolder folder(arguments.out);
+  const FabricationReport report = fabricate(tree, printer, options, folder);
+  folder.write_json("export.json", {{"tree", tree_file.string()},
+                                    {"geometry", mesh_file.string()},
+                                    {"materials", materials_file.string()},
+                                    {"printer", {{"name", printer.name}, {"file", printer.origin}}},
+                                    {"fabrication", report.result}});
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  folder.write_json(
+      "timing.json",
+      {{"threads", threads}, {"wall_seconds", seconds}, {"fabrication_seconds", report.seconds}});
+  folder.commit();
+  std::cout << "wrote " << arguments.out.string()
+            << "/ (export.json, print/, preview/render.png)\n";
   return 0;
 }
 
@@ -83,10 +183,11 @@ void print_materials(const fs::path& datasets, bool verbose) {
       if (verbose) {
         const Rgb& sa = m.absorption_per_mm.value;
         const Rgb& ss = m.reduced_scattering_per_mm.value;
-        std::printf("      sigma_a [%.4g %.4g %.4g]/mm  sigma_s' [%.4g %.4g %.4g]/mm  n %.3g  "
-                    "E %.3g Pa  nu %.3g  rho %.4g kg/m^3\n",
-                    sa[0], sa[1], sa[2], ss[0], ss[1], ss[2], m.refractive_index.value,
-                    m.youngs_modulus_pa.value, m.poisson_ratio.value, m.density_kg_m3.value);
+        std::printf(
+            "      sigma_a [%.4g %.4g %.4g]/mm  sigma_s' [%.4g %.4g %.4g]/mm  n %.3g  "
+            "E %.3g Pa  nu %.3g  rho %.4g kg/m^3\n",
+            sa[0], sa[1], sa[2], ss[0], ss[1], ss[2], m.refractive_index.value,
+            m.youngs_modulus_pa.value, m.poisson_ratio.value, m.density_kg_m3.value);
       }
     }
   }
@@ -120,7 +221,8 @@ int list_command(const std::string& kind, bool verbose, const fs::path& datasets
                      " (known: " + join(kinds) + ")");
   }
   if (k.empty() || k == "node") print_registry("nodes", NodeRegistry::instance(), verbose);
-  if (k.empty() || k == "translator") print_registry("translators", TranslatorRegistry::instance(), verbose);
+  if (k.empty() || k == "translator")
+    print_registry("translators", TranslatorRegistry::instance(), verbose);
   if (k.empty() || k == "material") print_materials(datasets, verbose);
   if (k.empty() || k == "printer") print_printers(datasets, verbose);
   return 0;

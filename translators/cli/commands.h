@@ -14,7 +14,19 @@ struct RunArguments {
   std::optional<std::uint64_t> seed;
 };
 
+struct ExportArguments {
+  std::filesystem::path source;     ///< a run folder, or the tree.json inside one
+  std::filesystem::path printer;    ///< the printer to fabricate for
+  std::filesystem::path materials;  ///< material library; empty: the run's
+  std::filesystem::path out;
+  int threads = 0;
+  double max_voxels = 0;     ///< 0: the default limit
+  double mesh_voxel_mm = 0;  ///< 0: automatic
+};
+
 int run_command(const RunArguments& arguments);
+/// Re-fabricates a run's tuned tree for another printer (device independence).
+int export_command(const ExportArguments& arguments);
 int validate_command(const std::filesystem::path& experiment);
 int list_command(const std::string& kind, bool verbose, const std::filesystem::path& datasets);
 

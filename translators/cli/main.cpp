@@ -43,9 +43,41 @@ int main(int argc, char** argv) {
   run_cmd->add_flag("-q,--quiet", quiet, "only warnings and errors");
   run_cmd->footer(
       "Writes <out>/result.json (inputs, goal metrics), tree.json (the tuned tree; `export` "
-      "reads it),\ntiming.json (wall time, threads) and preview/*.png. The folder appears only "
-      "when the run\ncompletes. The same experiment and seed give byte-identical files for any "
-      "thread count,\nexcept timing.json.");
+      "reads it),\ntiming.json (wall time, threads), preview/*.png and print/ (slices/, "
+      "<material>.stl, model.3mf).\nThe folder appears only when the run completes. The same "
+      "experiment and seed give\n"
+      "byte-identical files for any thread count, except timing.json.");
+
+  cli::ExportArguments export_arguments;
+  CLI::App* export_cmd = app.add_subcommand("export",
+                                            "re-fabricate a run's tuned tree for another printer "
+                                            "(same tree, its resolution and materials)");
+  export_cmd->add_option("tree", export_arguments.source, "a run folder, or the tree.json in one")
+      ->required();
+  export_cmd->add_option("--printer", export_arguments.printer, "printer profile (JSON)")
+      ->required();
+  export_cmd->add_option("--materials", export_arguments.materials,
+                         "material library (default: the run's, from its result.json)");
+  export_cmd->add_option("--out", export_arguments.out, "output folder")->required();
+  export_cmd
+      ->add_option("--threads", export_arguments.threads, "worker threads (default: all cores)")
+      ->check(CLI::Range(1, 1024));
+  export_cmd
+      ->add_option("--max-voxels", export_arguments.max_voxels,
+                   "refuse above this many print voxels (default 5e9)")
+      ->check(CLI::PositiveNumber);
+  export_cmd
+      ->add_option(
+          "--mesh-voxel-mm", export_arguments.mesh_voxel_mm,
+          "voxel of the STL/3MF surfaces (default: print voxels, <= 512 along the longest side)")
+      ->check(CLI::NonNegativeNumber);
+  export_cmd->add_flag("-q,--quiet", quiet, "only warnings and errors");
+  export_cmd->footer(
+      "Reads <run>/tree.json and the geometry named in <run>/result.json; writes <out>/print/ "
+      "(slices/,\n"
+      "<material>.stl, model.3mf), preview/render.png and export.json. Every material the tree "
+      "names\n"
+      "must be loaded in the new printer.");
 
   std::filesystem::path validate_file;
   CLI::App* validate_cmd =
@@ -80,6 +112,7 @@ int main(int argc, char** argv) {
   try {
     if (*run_cmd) return cli::run_command(run);
     if (*validate_cmd) return cli::validate_command(validate_file);
+    if (*export_cmd) return cli::export_command(export_arguments);
     if (*list_cmd) return cli::list_command(kind, list_verbose, datasets);
   } catch (const InputError& e) {
     std::cerr << "error: " << e.what() << "\n";

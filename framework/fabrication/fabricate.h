@@ -1,0 +1,72 @@
+#pragma once
+/// The one fabrication entry point every translator (and `spec2fab export`)
+/// calls: plans the print, refuses what is too big, streams the tuned tree's
+/// slices at the printer's resolution through the writers, and reports.
+///
+/// Into the run folder:
+///   print/slices/slice_NNNNN.png + manifest.json   (voxel-print slice stack)
+///   print/<material>.stl                           (one closed surface per material)
+///   print/model.3mf                                (one named, coloured object per material)
+///   preview/render.png                             (ray-traced picture of the print)
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/properties.h"
+#include "materials/printer_profile.h"
+#include "reducer/reducer_tree.h"
+#include "spec/run_folder.h"
+
+namespace spec2fab {
+
+/// The experiment's "output" section, as far as fabrication reads it:
+///   "output": {"slices": true, "stl": true, "3mf": true, "render": true,
+///              "max_voxels": 5e9, "mesh_voxel_mm": 0, "render_pixels": 512,
+///              "png_compression": 1}
+struct FabricationOptions {
+  bool slices = true;    ///< PNG slice stack + manifest.json
+  bool stl = true;       ///< one STL per material
+  bool three_mf = true;  ///< model.3mf
+  bool render = true;    ///< preview/render.png
+  /// Refuse above this many print voxels (a 50 mm cube at 600 × 600 dpi ×
+  /// 30 µm is 2.3e9, about a minute on two cores).
+  long long max_voxels = 5'000'000'000LL;
+  /// Voxel size of the STL/3MF surfaces: 0 = the print voxels, coarsened (by
+  /// whole voxels) so that the longest side has at most 512 of them — the
+  /// slice stack carries the full resolution; meshes at 600 dpi would run to
+  /// tens of millions of triangles.
+  double mesh_voxel_mm = 0;
+  int render_pixels = 512;
+  int png_compression = 1;           ///< zlib level of the slice PNGs (0–9)
+  std::vector<Rgb> appearance_srgb;  ///< optional per-material colours for the render
+  bool progress = true;              ///< progress line on a terminal
+
+  bool any() const { return slices || stl || three_mf || render; }
+  /// Reads (and marks read) the keys above; absent section = defaults.
+  static FabricationOptions from_properties(const std::optional<Properties>& output);
+  /// The option that raises the voxel limit, as users write it.
+  static constexpr const char* kMaxVoxelsOption = "output.max_voxels";
+};
+
+struct FabricationReport {
+  nlohmann::json result;  ///< deterministic: grid, voxels and volumes per material, files
+  double seconds = 0;     ///< wall time (for timing.json)
+};
+
+/// Throws InputError when the plan exceeds options.max_voxels or the object
+/// does not fit the printer; call it before any work (e.g. at validate time).
+void check_fabrication(const ReducerTree& tree, const PrinterProfile& printer,
+                       const FabricationOptions& options);
+
+/// Fabricates `tree` (bound) for `printer` into `folder`. The tree's palette
+/// must be the printer's. Does nothing but report when no writer is enabled.
+FabricationReport fabricate(const ReducerTree& tree, const PrinterProfile& printer,
+                            const FabricationOptions& options, RunFolder& folder);
+
+/// A material name made safe as a file name ("Vero Cyan/2" -> "Vero_Cyan_2").
+std::string material_file_name(const std::string& material);
+
+}  // namespace spec2fab

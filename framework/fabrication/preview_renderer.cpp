@@ -1,0 +1,156 @@
+#include "fabrication/preview_renderer.h"
+
+#include <embree3/rtcore.h>
+
+#include <Eigen/Geometry>
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include <tbb/parallel_for.h>
+#include <opencv2/imgcodecs.hpp>
+
+namespace spec2fab {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Scene {
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+  ~Scene() {
+    if (scene) rtcReleaseScene(scene);
+    if (device) rtcReleaseDevice(device);
+  }
+};
+
+// A hidden name beside `file` keeping its extension (OpenCV picks the format
+// from it). Built piecewise: g++ 12 warns falsely (-Wrestrict) on "." + string&&.
+fs::path partial_name(const fs::path& file) {
+  std::string name = ".";
+  name += file.stem().string();
+  name += ".partial";
+  name += file.extension().string();
+  return fs::path(file).replace_filename(name);
+}
+
+double srgb_to_linear(double c) {
+  return c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4);
+}
+double linear_to_srgb(double c) {
+  c = std::clamp(c, 0.0, 1.0);
+  return c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1 / 2.4) - 0.055;
+}
+
+}  // namespace
+
+void render_preview(const std::vector<Mesh>& meshes, const MaterialPalette& palette,
+                    const RenderOptions& options, const fs::path& file) {
+  Scene s;
+  s.device = rtcNewDevice(nullptr);
+  if (!s.device) throw std::runtime_error("cannot create an Embree device");
+  s.scene = rtcNewScene(s.device);
+  std::vector<MaterialId> material_of_geometry;
+  Bounds bounds;
+  for (size_t id = 1; id < meshes.size(); ++id) {
+    const Mesh& mesh = meshes[id];
+    if (mesh.triangles.empty()) continue;
+    RTCGeometry geometry = rtcNewGeometry(s.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    auto* vertices = static_cast<float*>(
+        rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                3 * sizeof(float), mesh.vertices.size()));
+    auto* indices = static_cast<unsigned*>(
+        rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                3 * sizeof(unsigned), mesh.triangles.size()));
+    for (size_t v = 0; v < mesh.vertices.size(); ++v) {
+      for (int k = 0; k < 3; ++k)
+        vertices[3 * v + static_cast<size_t>(k)] = static_cast<float>(mesh.vertices[v][k]);
+      bounds.extend(mesh.vertices[v]);
+    }
+    for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+      for (int k = 0; k < 3; ++k)
+        indices[3 * t + static_cast<size_t>(k)] = static_cast<unsigned>(mesh.triangles[t][k]);
+    }
+    rtcCommitGeometry(geometry);
+    const unsigned geometry_id = rtcAttachGeometry(s.scene, geometry);
+    rtcReleaseGeometry(geometry);
+    if (material_of_geometry.size() <= geometry_id)
+      material_of_geometry.resize(geometry_id + 1, kVoid);
+    material_of_geometry[geometry_id] = static_cast<MaterialId>(id);
+  }
+  rtcCommitScene(s.scene);
+  if (rtcGetDeviceError(s.device) != RTC_ERROR_NONE)
+    throw std::runtime_error("Embree: cannot build the scene");
+
+  std::vector<Vec3> albedo(palette.size(), Vec3::Constant(0.5));
+  for (size_t id = 1; id < palette.size(); ++id) {
+    const Rgb& c = id < options.appearance_srgb.size()
+                       ? options.appearance_srgb[id]
+                       : palette.material(static_cast<MaterialId>(id)).display_srgb;
+    albedo[id] = Vec3(srgb_to_linear(c[0]), srgb_to_linear(c[1]), srgb_to_linear(c[2]));
+  }
+
+  // Fixed camera: perspective, 30° field of view, framing the bounding sphere.
+  const int n = std::max(16, options.pixels);
+  const Vec3 centre = bounds.empty() ? Vec3::Zero() : bounds.center();
+  const double radius = bounds.empty() ? 1.0 : std::max(0.5 * bounds.size().norm(), 1e-3);
+  const Vec3 back = Vec3(0.55, -1.0, 0.7).normalized();  // from the centre towards the camera
+  const double half_fov = 15.0 * M_PI / 180.0;
+  const Vec3 eye = centre + back * (radius / std::sin(half_fov));
+  const Vec3 forward = -back;
+  const Vec3 right = forward.cross(Vec3::UnitZ()).normalized();
+  const Vec3 up = right.cross(forward);
+  const Vec3 light = (back + 0.6 * up - 0.4 * right).normalized();
+  const double tan_half = std::tan(half_fov);
+  constexpr int kSamples = 2;  // 2 × 2 per pixel, a fixed pattern
+
+  cv::Mat image(n, n, CV_8UC3);
+  tbb::parallel_for(0, n, [&](int row) {
+    RTCIntersectContext context;
+    for (int col = 0; col < n; ++col) {
+      Vec3 sum = Vec3::Zero();
+      for (int sy = 0; sy < kSamples; ++sy) {
+        for (int sx = 0; sx < kSamples; ++sx) {
+          const double u = (2 * (col + (sx + 0.5) / kSamples) / n - 1) * tan_half;
+          const double v = (1 - 2 * (row + (sy + 0.5) / kSamples) / n) * tan_half;
+          const Vec3 direction = (forward + u * right + v * up).normalized();
+          rtcInitIntersectContext(&context);
+          RTCRayHit hit{};
+          hit.ray.org_x = static_cast<float>(eye.x());
+          hit.ray.org_y = static_cast<float>(eye.y());
+          hit.ray.org_z = static_cast<float>(eye.z());
+          hit.ray.dir_x = static_cast<float>(direction.x());
+          hit.ray.dir_y = static_cast<float>(direction.y());
+          hit.ray.dir_z = static_cast<float>(direction.z());
+          hit.ray.tnear = 0;
+          hit.ray.tfar = std::numeric_limits<float>::infinity();
+          hit.ray.mask = 0xFFFFFFFFu;
+          hit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+          rtcIntersect1(s.scene, &context, &hit);
+          if (hit.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
+            sum += Vec3::Ones();  // white background
+            continue;
+          }
+          Vec3 normal = Vec3(hit.hit.Ng_x, hit.hit.Ng_y, hit.hit.Ng_z).normalized();
+          if (normal.dot(direction) > 0) normal = -normal;
+          const double lambert = std::max(0.0, normal.dot(light));
+          sum += albedo[material_of_geometry[hit.hit.geomID]] * (0.25 + 0.75 * lambert);
+        }
+      }
+      sum /= kSamples * kSamples;
+      // OpenCV stores BGR.
+      image.at<cv::Vec3b>(row, col) =
+          cv::Vec3b(static_cast<uchar>(std::lround(255 * linear_to_srgb(sum.z()))),
+                    static_cast<uchar>(std::lround(255 * linear_to_srgb(sum.y()))),
+                    static_cast<uchar>(std::lround(255 * linear_to_srgb(sum.x()))));
+    }
+  });
+  const fs::path partial = partial_name(file);
+  if (!cv::imwrite(partial.string(), image))
+    throw std::runtime_error("cannot write " + partial.string());
+  fs::rename(partial, file);
+}
+
+}  // namespace spec2fab

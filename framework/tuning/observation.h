@@ -1,0 +1,79 @@
+#pragma once
+/// What simulators produce and goals describe. Each observation type has a
+/// name (`kType`); a tuner's simulator, metric and goal must agree on it —
+/// at compile time when a translator is written in C++ (see parts.h), at load
+/// time when assembled from JSON.
+///
+/// Every observation also exposes its numbers as one flat array, so that
+/// generic machinery (error diffusion between tuners, CSV output) needs no
+/// knowledge of the type.
+
+#include <array>
+#include <memory>
+#include <span>
+#include <string_view>
+#include <vector>
+
+namespace spec2fab {
+
+class Observation {
+ public:
+  virtual ~Observation() = default;
+  virtual std::string_view type() const = 0;
+  virtual std::span<const double> values() const = 0;
+  virtual std::span<double> values() = 0;
+  virtual std::unique_ptr<Observation> clone() const = 0;
+};
+
+template <class Derived>
+class ObservationOf : public Observation {
+ public:
+  std::string_view type() const final { return Derived::kType; }
+  std::unique_ptr<Observation> clone() const final {
+    return std::make_unique<Derived>(static_cast<const Derived&>(*this));
+  }
+};
+
+/// A raster image, row-major, `channels` interleaved values per pixel (linear).
+struct ImageObservation final : ObservationOf<ImageObservation> {
+  static constexpr std::string_view kType = "image";
+  int width = 0, height = 0, channels = 1;
+  std::vector<double> pixels;
+  std::span<const double> values() const override { return pixels; }
+  std::span<double> values() override { return pixels; }
+};
+
+/// Radial diffuse reflectance profile R(r): `radius_mm` samples, 3 values (RGB) each.
+struct RadialProfileObservation final : ObservationOf<RadialProfileObservation> {
+  static constexpr std::string_view kType = "radial_profile";
+  std::vector<double> radius_mm;
+  std::vector<double> reflectance;  ///< 3·#radius_mm, RGB per sample
+  std::span<const double> values() const override { return reflectance; }
+  std::span<double> values() override { return reflectance; }
+};
+
+/// Node displacements (mm), 3 per node.
+struct DisplacementsObservation final : ObservationOf<DisplacementsObservation> {
+  static constexpr std::string_view kType = "displacements";
+  std::vector<double> xyz_mm;
+  std::span<const double> values() const override { return xyz_mm; }
+  std::span<double> values() override { return xyz_mm; }
+};
+
+/// Plain numbers (e.g. a coverage fraction, a scalar response).
+struct VectorObservation final : ObservationOf<VectorObservation> {
+  static constexpr std::string_view kType = "vector";
+  std::vector<double> data;
+  std::span<const double> values() const override { return data; }
+  std::span<double> values() override { return data; }
+};
+
+/// The linear RGB albedo of one surface patch.
+struct AlbedoObservation final : ObservationOf<AlbedoObservation> {
+  static constexpr std::string_view kType = "albedo";
+  std::array<double, 3> rgb{};
+  std::span<const double> values() const override { return rgb; }
+  std::span<double> values() override { return rgb; }
+};
+
+}  // namespace spec2fab

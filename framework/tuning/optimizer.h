@@ -1,0 +1,130 @@
+#pragma once
+/// Optimizers, in the manner of Ceres: each has flat `Options` with defaults
+/// written in the class and `IsValid(std::string* why)` naming a bad field,
+/// and returns a `Summary` (termination, initial/final error, evaluations,
+/// iterations, time, a per-iteration trace, brief and full reports).
+///
+/// An optimizer is one folder under optimizers/ ending in
+/// `SPEC2FAB_REGISTER(OptimizerRegistry, MyOptimizer, "my_optimizer")`: a
+/// constructor from (const Properties&) that reads its Options, `static
+/// TypeDoc doc()`, `requirements()` and `run()`.
+
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/registry.h"
+#include "tuning/problem.h"
+
+namespace spec2fab {
+
+enum class Termination {
+  not_run,    ///< "Solve was not called."
+  converged,  ///< a tolerance was met (or, for exact methods, optimality proved)
+  max_iterations,
+  max_evaluations,
+  user_abort,      ///< a callback asked to stop and discard the run's progress
+  user_terminate,  ///< a callback asked to stop and keep the best point found
+  failure,         ///< the method failed (message says why)
+};
+std::string to_string(Termination termination);
+
+/// One row of the convergence trace.
+struct IterationRecord {
+  int iteration = 0;
+  long long evaluations = 0;  ///< error() calls so far (gradient calls count as one)
+  double error = 0;           ///< error at the current point
+  double best_error = 0;      ///< best error so far
+  double seconds = 0;         ///< wall time since the start
+};
+
+enum class CallbackResult { proceed, abort, terminate };
+using IterationCallback = std::function<CallbackResult(const IterationRecord&)>;
+
+struct Summary {
+  std::string optimizer;
+  Termination termination = Termination::not_run;
+  std::string message = "Solve was not called.";
+  double initial_error = std::numeric_limits<double>::quiet_NaN();
+  double final_error = std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> initial_x, final_x;
+  long long evaluations = 0;
+  int iterations = 0;
+  double seconds = 0;
+  std::vector<IterationRecord> trace;
+  nlohmann::json details =
+      nlohmann::json::object();  ///< method-specific figures (e.g. nodes pruned)
+
+  bool usable() const {
+    return termination != Termination::not_run && termination != Termination::failure;
+  }
+  /// One line: optimizer, termination, initial → final error, evaluations, time.
+  std::string brief_report() const;
+  /// Several lines, including details and the trace's first and last rows.
+  std::string full_report() const;
+  /// Everything but wall times, which go to timing records (runs must be
+  /// byte-identical whatever the machine's speed).
+  nlohmann::json to_json() const;
+};
+
+class Optimizer {
+ public:
+  virtual ~Optimizer() = default;
+  /// The registered name, e.g. "annealing".
+  virtual std::string name() const = 0;
+  /// Capabilities a problem must offer.
+  virtual std::vector<Capability> requirements() const { return {}; }
+  /// Stochastic optimizers restart their random generator from `seed`. A
+  /// tuner network gives every tuner run a seed derived from (run seed, tuner,
+  /// sweep), so results never depend on which thread ran what.
+  virtual void set_seed(std::uint64_t /*seed*/) {}
+
+  /// Minimises `problem` from `x` (start in, best point out). Refuses, with
+  /// std::invalid_argument naming the optimizer and the missing capability,
+  /// a problem that lacks a requirement. Never throws for a failed search:
+  /// the Summary says so.
+  Summary minimize(Problem& problem, std::vector<double>& x,
+                   const IterationCallback& callback = {});
+
+ protected:
+  /// The method itself: fills summary.termination/message/iterations/trace/
+  /// details and leaves the best point in x. `minimize` counts evaluations,
+  /// times the run and records initial/final error around it.
+  virtual void run(Problem& problem, std::vector<double>& x, Summary& summary,
+                   const IterationCallback& callback) = 0;
+};
+
+/// For run(): passes the row for `iteration` — evaluations so far and wall
+/// time filled in — to `callback` and, when `keep`, appends it to
+/// summary.trace (long runs keep a sample of rows, see trace_keeps). Returns
+/// the callback's answer; proceed when there is no callback.
+CallbackResult report_iteration(const Problem& problem, Summary& summary,
+                                const IterationCallback& callback, int iteration, double error,
+                                double best_error, bool keep = true);
+
+/// For run(): when `answer` asks to stop, records user_abort or
+/// user_terminate (with a message) in `summary` and returns true.
+bool stop_requested(CallbackResult answer, Summary& summary);
+
+/// Whether iteration `iteration` of `iterations` gets a trace row when a run
+/// keeps about `rows` evenly spaced rows (always the first and the last).
+bool trace_keeps(long long iteration, long long iterations, long long rows = 1000);
+
+using OptimizerRegistry = Registry<Optimizer>;
+
+/// Builds the optimizer described by `properties` (its "type" names it).
+std::unique_ptr<Optimizer> build_optimizer(const Properties& properties);
+
+/// Throws InputError at `properties` when options.IsValid fails.
+template <class Options>
+Options validated(const Properties& properties, Options options) {
+  std::string why;
+  if (!options.IsValid(&why)) properties.fail(why);
+  return options;
+}
+
+}  // namespace spec2fab

@@ -1,0 +1,96 @@
+#pragma once
+/// The three typed parts of a tuner besides its optimizer (paper §6.2):
+/// a Simulator produces an observation of a reducer subtree, a Goal holds the
+/// target observation, an ErrorMetric compares the two.
+///
+/// Write parts against a concrete observation type by deriving from
+/// SimulatorFor<O>, MetricFor<O>, GoalFor<O>; `make_tuner` (tuner.h) then
+/// refuses to compile when the types differ, and the JSON path checks the
+/// same at load time. Parts register by name like every other type:
+/// `SPEC2FAB_REGISTER(SimulatorRegistry, MySimulator, "my_simulator")`.
+
+#include <concepts>
+#include <memory>
+#include <string>
+#include <string_view>
+
+#include "core/registry.h"
+#include "reducer/node.h"
+#include "tuning/observation.h"
+
+namespace spec2fab {
+
+class Simulator {
+ public:
+  virtual ~Simulator() = default;
+  virtual std::string name() const = 0;
+  virtual std::string_view produces() const = 0;
+  virtual std::unique_ptr<Observation> make_observation() const = 0;
+  /// One-time work for a subtree (meshes, factorisations, lookup tables).
+  virtual void setup(const ReducerNode& /*subtree*/) {}
+  /// Simulates the subtree at its current parameters into `out` (made by
+  /// make_observation); called thousands of times, so it must not allocate.
+  virtual void simulate(const ReducerNode& subtree, Observation& out) = 0;
+};
+
+class ErrorMetric {
+ public:
+  virtual ~ErrorMetric() = default;
+  virtual std::string name() const = 0;
+  virtual std::string_view compares() const = 0;
+  virtual double error(const Observation& simulated, const Observation& target) const = 0;
+};
+
+class Goal {
+ public:
+  virtual ~Goal() = default;
+  virtual std::string name() const = 0;
+  virtual std::string_view describes() const = 0;
+  virtual const Observation& target() const = 0;
+};
+
+template <class O>
+class SimulatorFor : public Simulator {
+ public:
+  using ObservationType = O;
+  std::string_view produces() const final { return O::kType; }
+  std::unique_ptr<Observation> make_observation() const override { return std::make_unique<O>(); }
+  void simulate(const ReducerNode& subtree, Observation& out) final {
+    simulate(subtree, static_cast<O&>(out));
+  }
+  virtual void simulate(const ReducerNode& subtree, O& out) = 0;
+};
+
+template <class O>
+class MetricFor : public ErrorMetric {
+ public:
+  using ObservationType = O;
+  std::string_view compares() const final { return O::kType; }
+  double error(const Observation& simulated, const Observation& target) const final {
+    return error(static_cast<const O&>(simulated), static_cast<const O&>(target));
+  }
+  virtual double error(const O& simulated, const O& target) const = 0;
+};
+
+template <class O>
+class GoalFor : public Goal {
+ public:
+  using ObservationType = O;
+  std::string_view describes() const final { return O::kType; }
+  const Observation& target() const final { return typed_target(); }
+  virtual const O& typed_target() const = 0;
+};
+
+/// Simulator, metric and goal that agree on their observation type.
+template <class S, class M, class G>
+concept CompatibleParts =
+    std::derived_from<S, Simulator> && std::derived_from<M, ErrorMetric> &&
+    std::derived_from<G, Goal> &&
+    std::same_as<typename S::ObservationType, typename M::ObservationType> &&
+    std::same_as<typename S::ObservationType, typename G::ObservationType>;
+
+using SimulatorRegistry = Registry<Simulator>;
+using MetricRegistry = Registry<ErrorMetric>;
+using GoalRegistry = Registry<Goal>;
+
+}  // namespace spec2fab

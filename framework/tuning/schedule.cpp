@@ -1,0 +1,174 @@
+#include "tuning/schedule.h"
+
+#include <chrono>
+#include <numeric>
+#include <sstream>
+#include <stdexcept>
+
+#include <tbb/parallel_for.h>
+
+#include "core/log.h"
+
+namespace spec2fab {
+
+std::uint64_t tuner_seed(std::uint64_t run_seed, size_t phase, int sweep, size_t tuner) {
+  auto mix = [](std::uint64_t z) {
+    z += 0x9e3779b97f4a7c15ull;
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+  };
+  return mix(mix(mix(mix(run_seed) ^ phase) ^ static_cast<std::uint64_t>(sweep)) ^ tuner);
+}
+
+void ErrorDiffusion::begin_sweep(TunerNetwork& network, const std::vector<size_t>& tuners) {
+  for (size_t t : tuners) network.tuner(t).reset_target();
+}
+
+void ErrorDiffusion::after_tune(TunerNetwork& network, size_t t, const std::vector<bool>& tuned) {
+  struct Offset {
+    long dx, dy;
+    double weight;
+  };
+  static constexpr Offset kFloydSteinberg[] = {{1, 0, 7}, {-1, 1, 3}, {0, 1, 5}, {1, 1, 1}};
+  const long width = grid_width_;
+  const long x = static_cast<long>(t) % width, y = static_cast<long>(t) / width;
+  std::vector<std::pair<size_t, double>> targets;
+  double total = 0;
+  for (const Offset& o : kFloydSteinberg) {
+    const long nx = x + o.dx, ny = y + o.dy;
+    if (nx < 0 || nx >= width) continue;
+    const size_t n = static_cast<size_t>(ny * width + nx);
+    if (n >= network.size() || tuned[n] || !network.connected(t, n)) continue;
+    targets.emplace_back(n, o.weight);
+    total += o.weight;
+  }
+  if (targets.empty()) return;
+  Tuner& self = network.tuner(t);
+  const auto target = self.effective_target().values();
+  const auto simulated = self.simulated().values();
+  for (const auto& [n, weight] : targets) {
+    auto neighbour_target = network.tuner(n).effective_target().values();
+    for (size_t k = 0; k < neighbour_target.size() && k < target.size(); ++k) {
+      neighbour_target[k] += weight / total * (target[k] - simulated[k]);
+    }
+  }
+}
+
+Schedule& Schedule::add(Phase phase) {
+  phases_.push_back(std::move(phase));
+  return *this;
+}
+
+RunRecord Schedule::run(TunerNetwork& network, std::uint64_t seed) const {
+  RunRecord record;
+  for (size_t p = 0; p < phases_.size(); ++p) {
+    const Phase& phase = phases_[p];
+    std::vector<size_t> tuners = phase.tuners;
+    if (tuners.empty()) {
+      tuners.resize(network.size());
+      std::iota(tuners.begin(), tuners.end(), 0);
+    }
+    for (size_t t : tuners) {
+      if (t >= network.size()) throw std::invalid_argument("schedule: no tuner " + std::to_string(t));
+    }
+    const bool parallel = phase.mode == Phase::Mode::parallel;
+    if (parallel && phase.coupling && !phase.coupling->allows_parallel()) {
+      throw std::invalid_argument("schedule: phase '" + phase.name + "' couples tuners by " +
+                                  phase.coupling->name() + ", which must run serially");
+    }
+    record.phase_names.push_back(phase.name);
+    const auto start = std::chrono::steady_clock::now();
+    const auto classes = parallel ? network.colour_classes(tuners) : std::vector<std::vector<size_t>>{};
+    Progress progress(phase.name, static_cast<long long>(tuners.size()) * phase.sweeps);
+    long long done = 0;
+    for (int sweep = 0; sweep < phase.sweeps; ++sweep) {
+      if (phase.coupling) phase.coupling->begin_sweep(network, tuners);
+      std::vector<bool> tuned(network.size(), false);
+      std::vector<Summary> summaries(network.size());
+      auto tune_one = [&](size_t t) {
+        Tuner& tuner = network.tuner(t);
+        tuner.optimizer().set_seed(tuner_seed(seed, p, sweep, t));
+        summaries[t] = tuner.tune();
+      };
+      if (parallel) {
+        for (const auto& colour : classes) {
+          tbb::parallel_for(size_t{0}, colour.size(), [&](size_t i) { tune_one(colour[i]); });
+          for (size_t t : colour) {
+            tuned[t] = true;
+            if (phase.coupling) phase.coupling->after_tune(network, t, tuned);
+          }
+          done += static_cast<long long>(colour.size());
+          progress.update(done, "sweep " + std::to_string(sweep + 1));
+        }
+      } else {
+        for (size_t t : tuners) {
+          tune_one(t);
+          tuned[t] = true;
+          if (phase.coupling) phase.coupling->after_tune(network, t, tuned);
+          progress.update(++done, "sweep " + std::to_string(sweep + 1));
+        }
+      }
+      for (size_t t : tuners) record.runs.push_back({p, sweep, t, std::move(summaries[t])});
+    }
+    progress.finish();
+    if (phase.fix_after) {
+      for (size_t t : tuners) {
+        for (const auto& e : network.tuner(t).search_space().entries()) e.parameter->set_free(false);
+      }
+    }
+    record.phase_seconds.push_back(
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  }
+  return record;
+}
+
+nlohmann::json RunRecord::to_json(TunerNetwork& network) const {
+  nlohmann::json phases = nlohmann::json::array();
+  for (size_t p = 0; p < phase_names.size(); ++p) {
+    double initial = 0, final_error = 0;
+    long long evaluations = 0, runs_in_phase = 0;
+    for (const TunerRun& run : runs) {
+      if (run.phase != p) continue;
+      initial += run.summary.initial_error;
+      final_error += run.summary.final_error;
+      evaluations += run.summary.evaluations;
+      ++runs_in_phase;
+    }
+    phases.push_back({{"name", phase_names[p]},
+                      {"tuner_runs", runs_in_phase},
+                      {"evaluations", evaluations},
+                      {"sum_initial_error", initial},
+                      {"sum_final_error", final_error}});
+  }
+  nlohmann::json tuners = nlohmann::json::array();
+  for (const TunerRun& run : runs) {
+    nlohmann::json entry = run.summary.to_json();
+    entry["phase"] = phase_names[run.phase];
+    entry["sweep"] = run.sweep;
+    entry["tuner"] = network.tuner(run.tuner).name();
+    tuners.push_back(std::move(entry));
+  }
+  return {{"phases", phases}, {"tuner_runs", tuners}};
+}
+
+std::string RunRecord::convergence_csv(TunerNetwork& network) const {
+  std::ostringstream out;
+  out.precision(10);
+  out << "phase,sweep,tuner,iteration,evaluations,error,best_error\n";
+  for (const TunerRun& run : runs) {
+    const std::string prefix = phase_names[run.phase] + "," + std::to_string(run.sweep) + "," +
+                               network.tuner(run.tuner).name() + ",";
+    if (run.summary.trace.empty()) {
+      out << prefix << run.summary.iterations << "," << run.summary.evaluations << ","
+          << run.summary.final_error << "," << run.summary.final_error << "\n";
+    }
+    for (const IterationRecord& r : run.summary.trace) {
+      out << prefix << r.iteration << "," << r.evaluations << "," << r.error << "," << r.best_error
+          << "\n";
+    }
+  }
+  return out.str();
+}
+
+}  // namespace spec2fab

@@ -1,0 +1,125 @@
+#include "tuning/tuner.h"
+
+namespace spec2fab {
+
+void evaluate_subtree(ReducerNode& node) {
+  node.evaluate();
+  for (size_t i = 0; i < node.child_count(); ++i) evaluate_subtree(node.child(i));
+}
+
+namespace {
+
+void collect_free_parameters(ReducerNode& node, const std::string& path, SearchSpace& space) {
+  node.visit_parameters([&](const std::string& name, Parameter& parameter) {
+    if (parameter.is_free()) space.add(path.empty() ? name : path + "/" + name, &parameter);
+  });
+  for (size_t i = 0; i < node.child_count(); ++i) {
+    const std::string label = node.child_label(i);
+    collect_free_parameters(node.child(i), path.empty() ? label : path + "/" + label, space);
+  }
+}
+
+std::string incompatibility(const Simulator& simulator, const ErrorMetric& metric, const Goal& goal) {
+  if (metric.compares() != simulator.produces()) {
+    return "metric '" + metric.name() + "' compares " + std::string(metric.compares()) +
+           " observations, but simulator '" + simulator.name() + "' produces " +
+           std::string(simulator.produces());
+  }
+  if (goal.describes() != simulator.produces()) {
+    return "goal '" + goal.name() + "' describes " + std::string(goal.describes()) +
+           " observations, but simulator '" + simulator.name() + "' produces " +
+           std::string(simulator.produces());
+  }
+  return {};
+}
+
+}  // namespace
+
+class Tuner::TunerProblem final : public Problem {
+ public:
+  explicit TunerProblem(Tuner& tuner) : tuner_(tuner) {
+    for (const SearchSpace::Entry& e : tuner.space_.entries()) {
+      domains_.push_back(VariableDomain::of(*e.parameter));
+    }
+  }
+  int dimension() const override { return static_cast<int>(domains_.size()); }
+  const VariableDomain& domain(int i) const override { return domains_[static_cast<size_t>(i)]; }
+  double error(std::span<const double> x) override { return tuner_.error_at(x); }
+
+ private:
+  Tuner& tuner_;
+  std::vector<VariableDomain> domains_;
+};
+
+Tuner::Tuner(std::string name, std::unique_ptr<Simulator> simulator,
+             std::unique_ptr<ErrorMetric> metric, std::unique_ptr<Goal> goal,
+             std::unique_ptr<Optimizer> optimizer)
+    : name_(std::move(name)),
+      simulator_(std::move(simulator)),
+      metric_(std::move(metric)),
+      goal_(std::move(goal)),
+      optimizer_(std::move(optimizer)) {
+  const std::string problem = incompatibility(*simulator_, *metric_, *goal_);
+  if (!problem.empty()) throw InputError("tuner '" + name_ + "': " + problem);
+  simulated_ = simulator_->make_observation();
+  reset_target();
+}
+
+Tuner::~Tuner() = default;
+
+void Tuner::reset_target() { effective_target_ = goal_->target().clone(); }
+
+void Tuner::set_node(ReducerNode& node) {
+  node_ = &node;
+  collect_search_space();
+  simulator_->setup(node);
+}
+
+void Tuner::collect_search_space() {
+  space_ = SearchSpace();
+  collect_free_parameters(*node_, "", space_);
+  problem_ = std::make_unique<TunerProblem>(*this);
+}
+
+double Tuner::error() {
+  simulator_->simulate(*node_, *simulated_);
+  return metric_->error(*simulated_, *effective_target_);
+}
+
+double Tuner::error_at(std::span<const double> x) {
+  for (size_t i = 0; i < x.size(); ++i) space_.entries()[i].parameter->set(x[i]);
+  evaluate_subtree(*node_);
+  return error();
+}
+
+Problem& Tuner::problem() { return *problem_; }
+
+Summary Tuner::tune(const IterationCallback& callback) {
+  collect_search_space();
+  if (space_.dimension() == 0) {
+    Summary summary;
+    summary.optimizer = optimizer_->name();
+    summary.termination = Termination::converged;
+    summary.message = "no free parameters";
+    summary.initial_error = summary.final_error = error();
+    summary.evaluations = 1;
+    return summary;
+  }
+  std::vector<double> x = space_.values();
+  Summary summary = optimizer_->minimize(*problem_, x, callback);
+  error_at(x);  // leave the best values set and simulated
+  return summary;
+}
+
+std::unique_ptr<Tuner> build_tuner(const Properties& properties, std::string name) {
+  auto simulator = SimulatorRegistry::instance().create(properties.object("simulator"), "simulator");
+  auto metric = MetricRegistry::instance().create(properties.object("metric"), "metric");
+  auto goal = GoalRegistry::instance().create(properties.object("goal"), "goal");
+  auto optimizer = build_optimizer(properties.object("optimizer"));
+  const std::string problem = incompatibility(*simulator, *metric, *goal);
+  if (!problem.empty()) properties.fail(problem);
+  return std::make_unique<Tuner>(std::move(name), std::move(simulator), std::move(metric),
+                                 std::move(goal), std::move(optimizer));
+}
+
+}  // namespace spec2fab

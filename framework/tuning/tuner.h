@@ -1,0 +1,94 @@
+#pragma once
+/// A tuner (paper §5.2, §6.2–6.3): simulator + error metric + goal +
+/// optimizer, bound to one reducer node (`set_node`, the paper's setNode). It
+/// exposes getError over the free parameters of that subtree as a Problem and
+/// tunes them with its optimizer.
+///
+/// The goal's target is copied into an *effective target* that tuner-network
+/// couplings may shift (error diffusion adds neighbours' residuals to it);
+/// `published()` is the state neighbours read.
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/search_space.h"
+#include "tuning/optimizer.h"
+#include "tuning/parts.h"
+
+namespace spec2fab {
+
+class Tuner {
+ public:
+  /// Throws InputError naming both parts when their observation types differ.
+  Tuner(std::string name, std::unique_ptr<Simulator> simulator, std::unique_ptr<ErrorMetric> metric,
+        std::unique_ptr<Goal> goal, std::unique_ptr<Optimizer> optimizer);
+  ~Tuner();
+
+  const std::string& name() const { return name_; }
+  /// Binds the tuner to a subtree (the paper's setNode): collects its free
+  /// parameters and runs the simulator's one-time setup.
+  void set_node(ReducerNode& node);
+  bool is_bound() const { return node_ != nullptr; }
+  ReducerNode& node() { return *node_; }
+  SearchSpace& search_space() { return space_; }
+
+  /// getError: simulates the subtree at its current parameters and compares
+  /// with the effective target.
+  double error();
+  /// The same at parameter values x (leaves them set).
+  double error_at(std::span<const double> x);
+  /// The Problem optimizers see: error over the free parameters.
+  Problem& problem();
+  /// Runs the optimizer from the current values and leaves the best ones set.
+  /// Parameters fixed since set_node (by an earlier schedule phase) are left
+  /// alone; with nothing free the summary says so and nothing runs.
+  Summary tune(const IterationCallback& callback = {});
+
+  const Observation& simulated() const { return *simulated_; }
+  Observation& effective_target() { return *effective_target_; }
+  const Goal& goal() const { return *goal_; }
+  Optimizer& optimizer() { return *optimizer_; }
+  /// Resets the effective target to the goal's.
+  void reset_target();
+
+  std::vector<double>& published() { return published_; }
+  const std::vector<double>& published() const { return published_; }
+
+ private:
+  class TunerProblem;
+  void collect_search_space();
+
+  std::string name_;
+  std::unique_ptr<Simulator> simulator_;
+  std::unique_ptr<ErrorMetric> metric_;
+  std::unique_ptr<Goal> goal_;
+  std::unique_ptr<Optimizer> optimizer_;
+  ReducerNode* node_ = nullptr;
+  SearchSpace space_;
+  std::unique_ptr<Observation> simulated_, effective_target_;
+  std::unique_ptr<TunerProblem> problem_;
+  std::vector<double> published_;
+};
+
+/// Builds a tuner from C++ parts; does not compile when the simulator, metric
+/// and goal disagree on their observation type.
+template <class S, class M, class G>
+  requires CompatibleParts<S, M, G>
+std::unique_ptr<Tuner> make_tuner(std::string name, std::unique_ptr<S> simulator,
+                                  std::unique_ptr<M> metric, std::unique_ptr<G> goal,
+                                  std::unique_ptr<Optimizer> optimizer) {
+  return std::make_unique<Tuner>(std::move(name), std::move(simulator), std::move(metric),
+                                 std::move(goal), std::move(optimizer));
+}
+
+/// Builds a tuner from JSON: {"simulator": {...}, "metric": {...}, "goal":
+/// {...}, "optimizer": {...}}, each with a registered "type". Incompatible
+/// parts are an InputError at `properties` naming both.
+std::unique_ptr<Tuner> build_tuner(const Properties& properties, std::string name);
+
+/// Refreshes derived state of every node of a subtree (after its parameters changed).
+void evaluate_subtree(ReducerNode& node);
+
+}  // namespace spec2fab

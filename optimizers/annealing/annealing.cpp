@@ -1,0 +1,209 @@
+// "annealing": simulated annealing over mixed variables. Each iteration
+// proposes one move and accepts it by the Metropolis rule at the current
+// temperature:
+//   - change one variable: a continuous one by a Gaussian step of
+//     step_fraction × its range (reflected at the bounds), a discrete or
+//     choice one to another admissible value drawn uniformly;
+//   - or, with probability swap_probability when the problem offers
+//     neighbour moves, exchange states with a random neighbouring tuner
+//     (accepted on swap_delta, performed by commit_swap).
+// Temperature schedules: exponential T0·cooling^k, linear T0·(1 − k/iterations),
+// logarithmic T0/log(k + 2). Returns the best point seen since the last
+// committed swap (a neighbour already holds the state given away).
+//
+//   {"type": "annealing", "iterations": 10000, "initial_temperature": 1.0,
+//    "cooling": 0.999, "schedule": "exponential", "step_fraction": 0.1,
+//    "swap_probability": 0.2, "seed": 1}
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "../random.h"
+#include "core/strings.h"
+#include "tuning/optimizer.h"
+
+namespace spec2fab {
+
+class Annealing final : public Optimizer {
+ public:
+  struct Options {
+    int iterations = 10000;
+    double initial_temperature = 1.0;
+    double cooling = 0.999;  ///< alpha of the exponential schedule
+    std::string schedule = "exponential";
+    double step_fraction = 0.1;
+    double swap_probability = 0.2;
+    int seed = 1;
+
+    bool IsValid(std::string* why) const {
+      const std::vector<std::string> schedules = {"exponential", "linear", "logarithmic"};
+      if (iterations < 1) {
+        *why = "iterations: must be positive";
+      } else if (!(initial_temperature > 0) || !std::isfinite(initial_temperature)) {
+        *why = "initial_temperature: must be positive";
+      } else if (!(cooling > 0 && cooling <= 1)) {
+        *why = "cooling: must lie in (0, 1]";
+      } else if (std::find(schedules.begin(), schedules.end(), schedule) == schedules.end()) {
+        *why = "schedule: unknown schedule '" + schedule + "'" + did_you_mean(schedule, schedules) +
+               " (known: " + join(schedules) + ")";
+      } else if (!(step_fraction > 0 && step_fraction <= 1)) {
+        *why = "step_fraction: must lie in (0, 1]";
+      } else if (!(swap_probability >= 0 && swap_probability <= 1)) {
+        *why = "swap_probability: must lie in [0, 1]";
+      } else if (seed < 0) {
+        *why = "seed: must not be negative";
+      } else {
+        return true;
+      }
+      return false;
+    }
+  };
+
+  explicit Annealing(const Properties& properties)
+      : options_(validated(properties, read(properties))) {}
+
+  static TypeDoc doc() {
+    return {
+        "Simulated annealing over continuous, discrete and choice variables, with optional "
+        "state swaps between neighbouring tuners.",
+        {{"iterations", "integer", "10000", "moves proposed (one error evaluation each)"},
+         {"initial_temperature", "number", "1", "T0, in units of the error"},
+         {"cooling", "number in (0, 1]", "0.999", "alpha of the exponential schedule"},
+         {"schedule", "string", "\"exponential\"", "exponential, linear or logarithmic"},
+         {"step_fraction", "number in (0, 1]", "0.1",
+          "Gaussian step of a continuous variable, as a fraction of its range"},
+         {"swap_probability", "number in [0, 1]", "0.2",
+          "chance that a move is a swap with a neighbour (problems with neighbour moves)"},
+         {"seed", "integer", "1", "random seed; a seed gives the same run every time"}},
+        R"({"type": "annealing", "iterations": 10000, "initial_temperature": 1.0, )"
+        R"("cooling": 0.999, "schedule": "exponential", "seed": 1})"};
+  }
+
+  std::string name() const override { return "annealing"; }
+
+ protected:
+  void run(Problem& problem, std::vector<double>& x, Summary& summary,
+           const IterationCallback& callback) override {
+    Random random(static_cast<std::uint64_t>(options_.seed));
+    const int n = problem.dimension();
+    std::vector<int> movable;
+    for (int i = 0; i < n; ++i) {
+      const VariableDomain& d = problem.domain(i);
+      if (d.kind == ParameterKind::continuous ? d.upper > d.lower : d.cardinality() > 1) {
+        movable.push_back(i);
+      }
+    }
+    const bool swaps = problem.has(Capability::neighbour_moves) && problem.neighbour_count() > 0 &&
+                       options_.swap_probability > 0;
+    if (movable.empty() && !swaps) {
+      summary.termination = Termination::converged;
+      summary.message = "no variable can change and there is no neighbour to swap with";
+      return;
+    }
+
+    // A NaN start is beaten by anything.
+    double error = std::isnan(summary.initial_error) ? HUGE_VAL : summary.initial_error;
+    std::vector<double> best_x = x;
+    double best = error;
+    long long accepted = 0, rejected = 0, swaps_proposed = 0, swaps_accepted = 0;
+    double temperature = options_.initial_temperature;
+    const auto metropolis = [&](double delta) {
+      return delta <= 0 || random.uniform() < std::exp(-delta / temperature);
+    };
+
+    for (int k = 0; k < options_.iterations; ++k) {
+      temperature = temperature_at(k);
+      if (swaps && (movable.empty() || random.uniform() < options_.swap_probability)) {
+        ++swaps_proposed;
+        const int neighbour = static_cast<int>(random.index(problem.neighbour_count()));
+        if (metropolis(problem.swap_delta(x, neighbour))) {
+          ++swaps_accepted;
+          x = problem.commit_swap(x, neighbour);
+          error = problem.error(x);
+          best_x = x;
+          best = error;
+        }
+      } else {
+        const int i =
+            movable[static_cast<size_t>(random.index(static_cast<long long>(movable.size())))];
+        const auto u = static_cast<size_t>(i);
+        const double old_value = x[u];
+        x[u] = propose(problem.domain(i), old_value, random);
+        const double candidate = problem.error(x);
+        if (metropolis(candidate - error)) {
+          ++accepted;
+          error = candidate;
+          if (error < best) {
+            best = error;
+            best_x = x;
+          }
+        } else {
+          ++rejected;
+          x[u] = old_value;
+        }
+      }
+      summary.iterations = k + 1;
+      const CallbackResult answer = report_iteration(problem, summary, callback, k, error, best,
+                                                     trace_keeps(k, options_.iterations));
+      if (stop_requested(answer, summary)) break;
+    }
+    x = best_x;
+    if (summary.termination == Termination::not_run) {
+      summary.termination = Termination::max_iterations;
+      summary.message = "completed " + std::to_string(options_.iterations) + " iterations";
+    }
+    summary.details["accepted"] = accepted;
+    summary.details["rejected"] = rejected;
+    summary.details["swaps_proposed"] = swaps_proposed;
+    summary.details["swaps_accepted"] = swaps_accepted;
+    summary.details["final_temperature"] = temperature;
+  }
+
+ private:
+  static Options read(const Properties& properties) {
+    Options o;
+    o.iterations = properties.get<int>("iterations", o.iterations);
+    o.initial_temperature = properties.get<double>("initial_temperature", o.initial_temperature);
+    o.cooling = properties.get<double>("cooling", o.cooling);
+    o.schedule = properties.get<std::string>("schedule", o.schedule);
+    o.step_fraction = properties.get<double>("step_fraction", o.step_fraction);
+    o.swap_probability = properties.get<double>("swap_probability", o.swap_probability);
+    o.seed = properties.get<int>("seed", o.seed);
+    return o;
+  }
+
+  double temperature_at(int k) const {
+    const double t0 = options_.initial_temperature;
+    if (options_.schedule == "linear") {
+      return t0 * (1.0 - static_cast<double>(k) / options_.iterations);
+    }
+    if (options_.schedule == "logarithmic") return t0 / std::log(k + 2.0);
+    return t0 * std::pow(options_.cooling, k);
+  }
+
+  double propose(const VariableDomain& d, double value, Random& random) const {
+    if (d.kind != ParameterKind::continuous) {
+      // Another admissible value, uniformly: skip over the current index.
+      const long long current = d.index_of(value);
+      long long j = random.index(d.cardinality() - 1);
+      if (j >= current) ++j;
+      return d.admissible(j);
+    }
+    const double range = d.upper - d.lower;
+    const double scale =
+        options_.step_fraction * (std::isfinite(range) ? range : std::max(1.0, std::abs(value)));
+    double y = value + scale * random.normal();
+    // Reflect rather than clamp, so that the bounds do not collect samples.
+    if (y < d.lower) y = 2 * d.lower - y;
+    if (y > d.upper) y = 2 * d.upper - y;
+    return std::clamp(y, d.lower, d.upper);
+  }
+
+  Options options_;
+};
+
+}  // namespace spec2fab
+
+SPEC2FAB_REGISTER(spec2fab::OptimizerRegistry, spec2fab::Annealing, "annealing")

@@ -1,0 +1,282 @@
+// "ceres": bounded nonlinear least squares with Ceres Solver on the problem's
+// residuals (error = ½‖r(x)‖²), with the problem's analytic Jacobian or
+// central finite differences of its residuals. Finite variable bounds
+// become parameter bounds (Ceres projects steps onto them, which can stall a
+// little short of a minimum on an active bound in a curved valley; NLopt's
+// bounded methods do better there); discrete and choice variables are relaxed to
+// their range and snapped to the nearest admissible value at the end.
+// Ceres' own logging is silenced; its iterations become trace rows and
+// consult the callback.
+//
+//   {"type": "ceres", "max_iterations": 100, "derivatives": "analytic",
+//    "trust_region": "levenberg_marquardt", "linear_solver": "dense_qr"}
+
+#include <ceres/ceres.h>
+
+#include <algorithm>
+#include <cmath>
+#include <exception>
+#include <limits>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "core/strings.h"
+#include "tuning/optimizer.h"
+
+namespace spec2fab {
+
+namespace {
+
+const std::vector<std::string> kLinearSolvers = {
+    "dense_qr",     "dense_normal_cholesky", "dense_schur", "sparse_normal_cholesky",
+    "sparse_schur", "iterative_schur",       "cgnr"};
+const std::vector<std::string> kTrustRegions = {"levenberg_marquardt", "dogleg"};
+const std::vector<std::string> kDerivatives = {"analytic", "numeric"};
+
+bool one_of(const std::string& value, const std::vector<std::string>& known,
+            const std::string& field, std::string* why) {
+  if (std::find(known.begin(), known.end(), value) != known.end()) return true;
+  *why = field + ": unknown value '" + value + "'" + did_you_mean(value, known) +
+         " (known: " + join(known) + ")";
+  return false;
+}
+
+// Problem::residuals behind Ceres' interface. Exceptions must not cross
+// Ceres' frames: the first is kept and rethrown after Solve.
+class Residuals {
+ public:
+  Residuals(Problem& problem, std::exception_ptr& failure) : problem_(problem), failure_(failure) {}
+
+  bool evaluate(const double* x, double* residuals, double* jacobian) const {
+    const auto n = static_cast<size_t>(problem_.dimension());
+    const auto m = static_cast<size_t>(problem_.residual_count());
+    // Problems see admissible points only: a discrete variable is relaxed for
+    // Ceres and evaluated at its nearest admissible value.
+    point_.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+      point_[i] = problem_.domain(static_cast<int>(i)).nearest_admissible(x[i]);
+    }
+    try {
+      problem_.residuals(point_, {residuals, m},
+                         jacobian ? std::span<double>(jacobian, m * n) : std::span<double>());
+    } catch (...) {
+      if (!failure_) failure_ = std::current_exception();
+      return false;
+    }
+    return std::all_of(residuals, residuals + m, [](double r) { return std::isfinite(r); });
+  }
+
+  // Functor of DynamicNumericDiffCostFunction.
+  bool operator()(double const* const* parameters, double* residuals) const {
+    return evaluate(parameters[0], residuals, nullptr);
+  }
+
+ private:
+  Problem& problem_;
+  std::exception_ptr& failure_;
+  mutable std::vector<double> point_;  // Ceres evaluates on one thread here
+};
+
+class AnalyticCost final : public ceres::CostFunction {
+ public:
+  explicit AnalyticCost(const Residuals& residuals, int n, int m) : residuals_(residuals) {
+    set_num_residuals(m);
+    mutable_parameter_block_sizes()->push_back(n);
+  }
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
+    return residuals_.evaluate(parameters[0], residuals, jacobians ? jacobians[0] : nullptr);
+  }
+
+ private:
+  Residuals residuals_;
+};
+
+// Ceres iterations → trace rows and our callback's answer.
+class Progress final : public ceres::IterationCallback {
+ public:
+  Progress(const Problem& problem, Summary& summary, const spec2fab::IterationCallback& callback)
+      : problem_(problem), summary_(summary), callback_(callback) {}
+
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& step) override {
+    best_ = std::min(best_, step.cost);
+    answer = report_iteration(problem_, summary_, callback_, step.iteration, step.cost, best_);
+    switch (answer) {
+      case CallbackResult::proceed:
+        return ceres::SOLVER_CONTINUE;
+      case CallbackResult::abort:
+        return ceres::SOLVER_ABORT;
+      case CallbackResult::terminate:
+        return ceres::SOLVER_TERMINATE_SUCCESSFULLY;
+    }
+    return ceres::SOLVER_CONTINUE;
+  }
+
+  CallbackResult answer = CallbackResult::proceed;
+
+ private:
+  const Problem& problem_;
+  Summary& summary_;
+  const spec2fab::IterationCallback& callback_;
+  double best_ = std::numeric_limits<double>::infinity();
+};
+
+}  // namespace
+
+class CeresAdapter final : public Optimizer {
+ public:
+  struct Options {
+    int max_iterations = 100;
+    // Ceres' own defaults.
+    double function_tolerance = 1e-6;
+    double gradient_tolerance = 1e-10;
+    double parameter_tolerance = 1e-8;
+    std::string derivatives = "analytic";
+    std::string linear_solver = "dense_qr";
+    std::string trust_region = "levenberg_marquardt";
+
+    bool IsValid(std::string* why) const {
+      if (max_iterations < 1) {
+        *why = "max_iterations: must be positive";
+      } else if (!(function_tolerance >= 0)) {
+        *why = "function_tolerance: must not be negative";
+      } else if (!(gradient_tolerance >= 0)) {
+        *why = "gradient_tolerance: must not be negative";
+      } else if (!(parameter_tolerance >= 0)) {
+        *why = "parameter_tolerance: must not be negative";
+      } else {
+        return one_of(derivatives, kDerivatives, "derivatives", why) &&
+               one_of(linear_solver, kLinearSolvers, "linear_solver", why) &&
+               one_of(trust_region, kTrustRegions, "trust_region", why);
+      }
+      return false;
+    }
+  };
+
+  explicit CeresAdapter(const Properties& properties)
+      : options_(validated(properties, read(properties))) {}
+
+  static TypeDoc doc() {
+    return {"Bounded nonlinear least squares with Ceres Solver on the problem's residuals.",
+            {{"max_iterations", "integer", "100", "Ceres' max_num_iterations"},
+             {"function_tolerance", "number", "1e-6", "stop when |Δcost|/cost falls below"},
+             {"gradient_tolerance", "number", "1e-10",
+              "stop when the projected gradient's max norm falls below"},
+             {"parameter_tolerance", "number", "1e-8", "stop when |Δx|/(|x| + tol) falls below"},
+             {"derivatives", "string", "\"analytic\"",
+              "analytic (the problem's Jacobian) or numeric (central differences of residuals)"},
+             {"linear_solver", "string", "\"dense_qr\"", join(kLinearSolvers)},
+             {"trust_region", "string", "\"levenberg_marquardt\"", join(kTrustRegions)}},
+            R"({"type": "ceres", "max_iterations": 100, "derivatives": "analytic", )"
+            R"("trust_region": "levenberg_marquardt", "linear_solver": "dense_qr"})"};
+  }
+
+  std::string name() const override { return "ceres"; }
+  std::vector<Capability> requirements() const override { return {Capability::residuals}; }
+
+ protected:
+  void run(Problem& problem, std::vector<double>& x, Summary& summary,
+           const IterationCallback& callback) override {
+    const int n = problem.dimension();
+    const int m = problem.residual_count();
+    if (n == 0 || m <= 0) {
+      summary.termination = Termination::failure;
+      summary.message = n == 0 ? "the problem has no variables" : "the problem has no residuals";
+      return;
+    }
+    std::exception_ptr failure;
+    const Residuals residuals(problem, failure);
+    ceres::CostFunction* cost = nullptr;  // owned by the ceres::Problem
+    if (options_.derivatives == "numeric") {
+      auto* numeric = new ceres::DynamicNumericDiffCostFunction<Residuals, ceres::CENTRAL>(
+          new Residuals(residuals));
+      numeric->AddParameterBlock(n);
+      numeric->SetNumResiduals(m);
+      cost = numeric;
+    } else {
+      cost = new AnalyticCost(residuals, n, m);
+    }
+    ceres::Problem least_squares;
+    least_squares.AddResidualBlock(cost, nullptr, x.data());
+    for (int i = 0; i < n; ++i) {
+      const VariableDomain& d = problem.domain(i);
+      if (std::isfinite(d.smallest()))
+        least_squares.SetParameterLowerBound(x.data(), i, d.smallest());
+      if (std::isfinite(d.largest()))
+        least_squares.SetParameterUpperBound(x.data(), i, d.largest());
+    }
+
+    ceres::Solver::Options solver;
+    solver.max_num_iterations = options_.max_iterations;
+    solver.function_tolerance = options_.function_tolerance;
+    solver.gradient_tolerance = options_.gradient_tolerance;
+    solver.parameter_tolerance = options_.parameter_tolerance;
+    ceres::StringToLinearSolverType(options_.linear_solver, &solver.linear_solver_type);
+    ceres::StringToTrustRegionStrategyType(options_.trust_region,
+                                           &solver.trust_region_strategy_type);
+    solver.logging_type = ceres::SILENT;
+    solver.minimizer_progress_to_stdout = false;
+    Progress progress(problem, summary, callback);
+    solver.callbacks.push_back(&progress);
+    std::string invalid;
+    if (!solver.IsValid(&invalid)) {
+      // e.g. a sparse linear solver this Ceres was built without.
+      summary.termination = Termination::failure;
+      summary.message = "Ceres rejected the options: " + invalid;
+      return;
+    }
+
+    ceres::Solver::Summary result;
+    ceres::Solve(solver, &least_squares, &result);
+    if (failure) std::rethrow_exception(failure);
+
+    // Ceres counts iteration 0 (the start) among its successful steps.
+    summary.iterations = result.iterations.empty() ? 0 : result.iterations.back().iteration;
+    summary.message = "Ceres: " + result.message;
+    summary.details["successful_steps"] = result.num_successful_steps;
+    summary.details["unsuccessful_steps"] = result.num_unsuccessful_steps;
+    summary.details["residual_evaluations"] = result.num_residual_evaluations;
+    summary.details["jacobian_evaluations"] = result.num_jacobian_evaluations;
+    switch (result.termination_type) {
+      case ceres::CONVERGENCE:
+        summary.termination = Termination::converged;
+        break;
+      case ceres::NO_CONVERGENCE:
+        summary.termination = Termination::max_iterations;
+        break;
+      case ceres::USER_SUCCESS:
+      case ceres::USER_FAILURE:
+        if (!stop_requested(progress.answer, summary)) {
+          summary.termination = Termination::failure;  // a user callback we did not install
+        }
+        break;
+      case ceres::FAILURE:
+      default:
+        summary.termination = Termination::failure;
+        break;
+    }
+    for (int i = 0; i < n; ++i) {
+      x[static_cast<size_t>(i)] = problem.domain(i).nearest_admissible(x[static_cast<size_t>(i)]);
+    }
+  }
+
+ private:
+  static Options read(const Properties& properties) {
+    Options o;
+    o.max_iterations = properties.get<int>("max_iterations", o.max_iterations);
+    o.function_tolerance = properties.get<double>("function_tolerance", o.function_tolerance);
+    o.gradient_tolerance = properties.get<double>("gradient_tolerance", o.gradient_tolerance);
+    o.parameter_tolerance = properties.get<double>("parameter_tolerance", o.parameter_tolerance);
+    o.derivatives = properties.get<std::string>("derivatives", o.derivatives);
+    o.linear_solver = properties.get<std::string>("linear_solver", o.linear_solver);
+    o.trust_region = properties.get<std::string>("trust_region", o.trust_region);
+    return o;
+  }
+
+  Options options_;
+};
+
+}  // namespace spec2fab
+
+SPEC2FAB_REGISTER(spec2fab::OptimizerRegistry, spec2fab::CeresAdapter, "ceres")

@@ -1,0 +1,113 @@
+// "exhaustive": evaluates every admissible assignment of a problem whose
+// variables are all discrete or choices, and returns the best (among equals,
+// the start point, else the first in lexicographic order of indices). The
+// reference answer for branch and bound and for tests; refuses problems with
+// more than `max_candidates` assignments.
+//
+//   {"type": "exhaustive", "max_candidates": 10000000}
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "tuning/optimizer.h"
+
+namespace spec2fab {
+
+class Exhaustive final : public Optimizer {
+ public:
+  struct Options {
+    int max_candidates = 10'000'000;
+
+    bool IsValid(std::string* why) const {
+      if (max_candidates < 1) {
+        *why = "max_candidates: must be positive";
+        return false;
+      }
+      return true;
+    }
+  };
+
+  explicit Exhaustive(const Properties& properties)
+      : options_(validated(properties, read(properties))) {}
+
+  static TypeDoc doc() {
+    return {
+        "Evaluates every admissible assignment of an all-discrete problem and keeps the best; "
+        "the exact reference for small problems.",
+        {{"max_candidates", "integer", "10000000",
+          "refuse (failure) problems with more assignments than this"}},
+        R"({"type": "exhaustive", "max_candidates": 10000000})"};
+  }
+
+  std::string name() const override { return "exhaustive"; }
+  std::vector<Capability> requirements() const override { return {Capability::discrete_only}; }
+
+ protected:
+  void run(Problem& problem, std::vector<double>& x, Summary& summary,
+           const IterationCallback& callback) override {
+    const int n = problem.dimension();
+    std::vector<long long> sizes(static_cast<size_t>(n));
+    long long candidates = 1;
+    for (int i = 0; i < n; ++i) {
+      const long long size = problem.domain(i).cardinality();
+      sizes[static_cast<size_t>(i)] = size;
+      if (size < 1) {
+        summary.termination = Termination::failure;
+        summary.message = "variable " + std::to_string(i) + " admits no value";
+        return;
+      }
+      // Compare before multiplying so that the product cannot overflow.
+      if (candidates > options_.max_candidates / size) {
+        summary.termination = Termination::failure;
+        summary.message = "more than max_candidates = " + std::to_string(options_.max_candidates) +
+                          " assignments; use branch_and_bound or a stochastic optimizer";
+        return;
+      }
+      candidates *= size;
+    }
+
+    std::vector<long long> index(static_cast<size_t>(n), 0);
+    std::vector<double> candidate(static_cast<size_t>(n));
+    for (int i = 0; i < n; ++i) candidate[static_cast<size_t>(i)] = problem.domain(i).admissible(0);
+    // The start is admissible: keep it unless beaten (a NaN start is beaten by anything).
+    double best = std::isnan(summary.initial_error) ? HUGE_VAL : summary.initial_error;
+    for (long long k = 0; k < candidates; ++k) {
+      const double error = problem.error(candidate);
+      if (error < best) {
+        best = error;
+        x = candidate;
+      }
+      summary.iterations = static_cast<int>(k + 1);
+      const CallbackResult answer = report_iteration(
+          problem, summary, callback, static_cast<int>(k), error, best, trace_keeps(k, candidates));
+      if (stop_requested(answer, summary)) return;
+      // Odometer step: the last variable changes fastest.
+      for (int i = n - 1; i >= 0; --i) {
+        const auto u = static_cast<size_t>(i);
+        if (++index[u] < sizes[u]) {
+          candidate[u] = problem.domain(i).admissible(index[u]);
+          break;
+        }
+        index[u] = 0;
+        candidate[u] = problem.domain(i).admissible(0);
+      }
+    }
+    summary.termination = Termination::converged;
+    summary.message = "optimal: enumerated all " + std::to_string(candidates) + " assignments";
+    summary.details["candidates"] = candidates;
+  }
+
+ private:
+  static Options read(const Properties& properties) {
+    Options o;
+    o.max_candidates = properties.get<int>("max_candidates", o.max_candidates);
+    return o;
+  }
+
+  Options options_;
+};
+
+}  // namespace spec2fab
+
+SPEC2FAB_REGISTER(spec2fab::OptimizerRegistry, spec2fab::Exhaustive, "exhaustive")

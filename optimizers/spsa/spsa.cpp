@@ -1,0 +1,200 @@
+// "spsa": simultaneous perturbation stochastic approximation (Spall 1998), as
+// Finckh et al. 2010 tuned noisy simulations with it. Iteration k perturbs
+// every variable at once by ±c_k (Rademacher signs), estimates the gradient
+// from the two errors, steps by −a_k·ĝ and projects onto the bounds:
+//   a_k = a/(k + 1 + A)^alpha,  c_k = c/(k + 1)^gamma.
+// It works in coordinates scaled to each variable's range (unit scale for an
+// unbounded one), so a and c are fractions of the range; discrete and choice
+// variables are evaluated at the nearest admissible value. Two evaluations
+// per iteration. Returns the best point evaluated (the final iterate, then
+// evaluated once more, included), or with result "last_iterate" the final
+// iterate: the lowest of many noisy errors mostly measures luckiest noise.
+//
+//   {"type": "spsa", "iterations": 1000, "c": 0.05, "seed": 1}
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "../random.h"
+#include "tuning/optimizer.h"
+
+namespace spec2fab {
+
+class Spsa final : public Optimizer {
+ public:
+  struct Options {
+    int iterations = 1000;
+    double a = 0;     ///< step gain; 0: calibrated at the start (see doc)
+    double c = 0.05;  ///< perturbation, as a fraction of each range
+    double A = -1;    ///< stability constant; < 0: 10% of iterations
+    double alpha = 0.602;
+    double gamma = 0.101;
+    int seed = 1;
+    /// "best_seen" (Finckh et al.) or "last_iterate" (for noisy errors, where
+    /// the lowest error seen flatters the point that drew the luckiest noise)
+    std::string result = "best_seen";
+
+    bool IsValid(std::string* why) const {
+      if (iterations < 1) {
+        *why = "iterations: must be positive";
+      } else if (!(a >= 0) || !std::isfinite(a)) {
+        *why = "a: must not be negative (0 calibrates it)";
+      } else if (!(c > 0) || !std::isfinite(c)) {
+        *why = "c: must be positive";
+      } else if (!std::isfinite(A)) {
+        *why = "A: must be a finite number (negative: 10% of iterations)";
+      } else if (!(alpha > 0 && alpha <= 1)) {
+        *why = "alpha: must lie in (0, 1]";
+      } else if (!(gamma > 0 && gamma <= alpha)) {
+        *why = "gamma: must lie in (0, alpha]";
+      } else if (seed < 0) {
+        *why = "seed: must not be negative";
+      } else if (result != "best_seen" && result != "last_iterate") {
+        *why = "result: must be \"best_seen\" or \"last_iterate\", not \"" + result + "\"";
+      } else {
+        return true;
+      }
+      return false;
+    }
+  };
+
+  explicit Spsa(const Properties& properties) : options_(validated(properties, read(properties))) {}
+
+  static TypeDoc doc() {
+    return {
+        "Simultaneous perturbation stochastic approximation (Spall 1998) for noisy errors: "
+        "two evaluations per iteration whatever the dimension.",
+        {{"iterations", "integer", "1000", "gradient estimates and steps"},
+         {"a", "number", "0",
+          "step gain a; 0 calibrates it from 4 gradient estimates at the start so that the "
+          "first step moves about 10% of each range"},
+         {"c", "number", "0.05", "perturbation c, as a fraction of each variable's range"},
+         {"A", "number", "-1", "stability constant A; negative means 10% of iterations"},
+         {"alpha", "number", "0.602", "decay exponent of a_k"},
+         {"gamma", "number", "0.101", "decay exponent of c_k"},
+         {"seed", "integer", "1", "random seed; a seed gives the same run every time"},
+         {"result", "string", "\"best_seen\"",
+          "best_seen: the lowest error evaluated, the final iterate included; last_iterate: "
+          "the final iterate (better when the error is noisy)"}},
+        R"({"type": "spsa", "iterations": 1000, "c": 0.05, "seed": 1})"};
+  }
+
+  std::string name() const override { return "spsa"; }
+
+ protected:
+  void run(Problem& problem, std::vector<double>& x, Summary& summary,
+           const IterationCallback& callback) override {
+    const auto n = static_cast<size_t>(problem.dimension());
+    Random random(static_cast<std::uint64_t>(options_.seed));
+    // Scaled coordinates u: x = offset + scale·u, u in [0, 1] for bounded variables.
+    std::vector<double> offset(n), scale(n), u(n), lower(n), upper(n);
+    for (size_t i = 0; i < n; ++i) {
+      const VariableDomain& d = problem.domain(static_cast<int>(i));
+      const double lo = d.smallest(), hi = d.largest();
+      const bool bounded = std::isfinite(lo) && std::isfinite(hi) && hi > lo;
+      offset[i] = bounded ? lo : 0.0;
+      scale[i] = bounded ? hi - lo : 1.0;
+      lower[i] = bounded ? 0.0 : (lo - offset[i]) / scale[i];
+      upper[i] = bounded ? 1.0 : (hi - offset[i]) / scale[i];
+      u[i] = (x[i] - offset[i]) / scale[i];
+    }
+    const auto to_x = [&](const std::vector<double>& v, std::vector<double>& out) {
+      for (size_t i = 0; i < n; ++i) {
+        out[i] =
+            problem.domain(static_cast<int>(i)).nearest_admissible(offset[i] + scale[i] * v[i]);
+      }
+    };
+
+    double best = std::isnan(summary.initial_error) ? HUGE_VAL : summary.initial_error;
+    std::vector<double> best_x = x;
+    std::vector<double> delta(n), u_plus(n), u_minus(n), x_plus(n), x_minus(n), gradient(n);
+    // One gradient estimate at u with perturbation ck; returns the mean of the two errors.
+    const auto estimate = [&](double ck) {
+      for (size_t i = 0; i < n; ++i) {
+        delta[i] = random.sign();
+        u_plus[i] = std::clamp(u[i] + ck * delta[i], lower[i], upper[i]);
+        u_minus[i] = std::clamp(u[i] - ck * delta[i], lower[i], upper[i]);
+      }
+      to_x(u_plus, x_plus);
+      to_x(u_minus, x_minus);
+      const double y_plus = problem.error(x_plus);
+      const double y_minus = problem.error(x_minus);
+      for (const auto& [y, point] : {std::pair{y_plus, &x_plus}, std::pair{y_minus, &x_minus}}) {
+        if (y < best) {
+          best = y;
+          best_x = *point;
+        }
+      }
+      const double difference = y_plus - y_minus;
+      for (size_t i = 0; i < n; ++i) {
+        // Projection can shorten the perturbation: divide by the actual one.
+        const double du = u_plus[i] - u_minus[i];
+        gradient[i] = du != 0 && std::isfinite(difference) ? difference / du : 0.0;
+      }
+      return 0.5 * (y_plus + y_minus);
+    };
+
+    const double big_a =
+        options_.A >= 0 ? options_.A : 0.1 * static_cast<double>(options_.iterations);
+    double a = options_.a;
+    if (a == 0) {
+      // Spall's rule: a_0·mean|ĝ| ≈ the wanted first step (10% of the range).
+      constexpr int samples = 4;
+      double magnitude = 0;
+      for (int s = 0; s < samples; ++s) {
+        estimate(options_.c);
+        for (double g : gradient) magnitude += std::abs(g);
+      }
+      magnitude /= samples * std::max<double>(1.0, static_cast<double>(n));
+      a = 0.1 * std::pow(big_a + 1, options_.alpha) / (magnitude > 0 ? magnitude : 1.0);
+      summary.details["calibration_evaluations"] = 2 * samples;
+    }
+
+    for (int k = 0; k < options_.iterations; ++k) {
+      const double ak = a / std::pow(k + 1 + big_a, options_.alpha);
+      const double ck = options_.c / std::pow(k + 1, options_.gamma);
+      const double mean_error = estimate(ck);
+      for (size_t i = 0; i < n; ++i) u[i] = std::clamp(u[i] - ak * gradient[i], lower[i], upper[i]);
+      summary.iterations = k + 1;
+      const CallbackResult answer = report_iteration(problem, summary, callback, k, mean_error,
+                                                     best, trace_keeps(k, options_.iterations));
+      if (stop_requested(answer, summary)) break;
+    }
+    if (options_.result == "last_iterate") {
+      to_x(u, x);
+    } else if (summary.termination != Termination::user_abort) {
+      std::vector<double> final_x(n);
+      to_x(u, final_x);
+      if (problem.error(final_x) <= best) best_x = final_x;
+      x = best_x;
+    }
+    if (summary.termination == Termination::not_run) {
+      summary.termination = Termination::max_iterations;
+      summary.message = "completed " + std::to_string(options_.iterations) + " iterations";
+    }
+    summary.details["a"] = a;
+    summary.details["A"] = big_a;
+  }
+
+ private:
+  static Options read(const Properties& properties) {
+    Options o;
+    o.iterations = properties.get<int>("iterations", o.iterations);
+    o.a = properties.get<double>("a", o.a);
+    o.c = properties.get<double>("c", o.c);
+    o.A = properties.get<double>("A", o.A);
+    o.alpha = properties.get<double>("alpha", o.alpha);
+    o.gamma = properties.get<double>("gamma", o.gamma);
+    o.seed = properties.get<int>("seed", o.seed);
+    o.result = properties.get<std::string>("result", o.result);
+    return o;
+  }
+
+  Options options_;
+};
+
+}  // namespace spec2fab
+
+SPEC2FAB_REGISTER(spec2fab::OptimizerRegistry, spec2fab::Spsa, "spsa")

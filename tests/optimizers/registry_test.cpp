@@ -1,0 +1,173 @@
+// Every optimizer built from JSON as users write it: defaults valid, doc
+// examples that build, bad options and unknown keys reported with their
+// field, and problems lacking a needed capability refused.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <stdexcept>
+
+#include "optimizers/optimizer_test_support.h"
+
+namespace spec2fab {
+namespace {
+
+using ::testing::AllOf;
+using ::testing::HasSubstr;
+using testing::input_error_of;
+using testing::optimizer_from;
+using ::testing::StartsWith;
+
+const std::vector<std::string> kOptimizers = {"exhaustive", "annealing", "branch_and_bound",
+                                              "spsa",       "ceres",     "nlopt"};
+
+TEST(OptimizerRegistry, EveryOptimizerIsRegistered) {
+  for (const std::string& name : kOptimizers) {
+    EXPECT_TRUE(OptimizerRegistry::instance().contains(name)) << name;
+  }
+}
+
+TEST(OptimizerRegistry, DefaultOptionsAreValid) {
+  for (const std::string& name : kOptimizers) {
+    std::unique_ptr<Optimizer> optimizer;
+    EXPECT_NO_THROW(optimizer = optimizer_from(R"({"type": ")" + name + R"("})")) << name;
+    ASSERT_NE(optimizer, nullptr);
+    EXPECT_EQ(optimizer->name(), name);
+  }
+}
+
+TEST(OptimizerRegistry, DocumentedExamplesBuildAndDocumentEveryProperty) {
+  for (const std::string& name : kOptimizers) {
+    const TypeDoc& doc = OptimizerRegistry::instance().entry(name).doc;
+    EXPECT_FALSE(doc.summary.empty()) << name;
+    std::unique_ptr<Optimizer> optimizer;
+    EXPECT_NO_THROW(optimizer = optimizer_from(doc.example)) << name << ": " << doc.example;
+    ASSERT_NE(optimizer, nullptr);
+    EXPECT_EQ(optimizer->name(), name);
+    // Every documented property is accepted with its documented default.
+    for (const PropertyDoc& property : doc.properties) {
+      const std::string json = R"({"type": ")" + name + R"(", ")" + property.name + R"(": )" +
+                               property.default_value + "}";
+      EXPECT_NO_THROW(optimizer_from(json)) << json;
+    }
+  }
+}
+
+TEST(OptimizerRegistry, BuildsTheDocumentedNloptExample) {
+  const std::unique_ptr<Optimizer> nlopt =
+      optimizer_from(R"({"type": "nlopt", "algorithm": "LD_LBFGS"})");
+  EXPECT_EQ(nlopt->name(), "nlopt");
+  ASSERT_EQ(nlopt->requirements().size(), 1u);
+  EXPECT_EQ(nlopt->requirements()[0], Capability::gradient);
+  EXPECT_TRUE(
+      optimizer_from(R"({"type": "nlopt", "algorithm": "LN_BOBYQA"})")->requirements().empty());
+  // NLopt's names are upper case; lower case is accepted.
+  EXPECT_EQ(optimizer_from(R"({"type": "nlopt", "algorithm": "ld_mma"})")->requirements().size(),
+            1u);
+}
+
+struct BadOption {
+  std::string json;
+  std::string message;  // a substring of the InputError
+};
+
+TEST(OptimizerRegistry, BadOptionsNameTheField) {
+  const std::vector<BadOption> cases = {
+      {R"({"type": "exhaustive", "max_candidates": 0})",
+       "t.json: /: max_candidates: must be positive"},
+      {R"({"type": "annealing", "iterations": 0})", "t.json: /: iterations: must be positive"},
+      {R"({"type": "annealing", "cooling": 1.5})", "t.json: /: cooling: must lie in (0, 1]"},
+      {R"({"type": "annealing", "schedule": "exponentail"})",
+       "t.json: /: schedule: unknown schedule 'exponentail'; did you mean 'exponential'?"},
+      {R"({"type": "annealing", "swap_probability": -0.1})", "t.json: /: swap_probability:"},
+      {R"({"type": "annealing", "iterations": "many"})",
+       "t.json: /iterations: expected an integer, got a string"},
+      {R"({"type": "branch_and_bound", "continuous_steps": 0})",
+       "t.json: /: continuous_steps: must be positive"},
+      {R"({"type": "branch_and_bound", "value_order": "best_bound"})",
+       "t.json: /: value_order: unknown order 'best_bound'"},
+      {R"({"type": "spsa", "iterations": -5})", "t.json: /: iterations: must be positive"},
+      {R"({"type": "spsa", "c": 0})", "t.json: /: c: must be positive"},
+      {R"({"type": "spsa", "gamma": 0.9})", "t.json: /: gamma: must lie in (0, alpha]"},
+      {R"({"type": "spsa", "result": "best"})", "t.json: /: result: must be"},
+      {R"({"type": "ceres", "max_iterations": 0})", "t.json: /: max_iterations: must be positive"},
+      {R"({"type": "ceres", "linear_solver": "dense_qrr"})",
+       "t.json: /: linear_solver: unknown value 'dense_qrr'; did you mean 'dense_qr'?"},
+      {R"({"type": "ceres", "derivatives": "automatic"})", "t.json: /: derivatives: unknown value"},
+      {R"({"type": "ceres", "trust_region": "dogleg2"})", "t.json: /: trust_region:"},
+      {R"({"type": "nlopt", "algorithm": "LD_LBFSG"})",
+       "t.json: /: algorithm: unknown NLopt algorithm 'LD_LBFSG'; did you mean 'LD_LBFGS'?"},
+      {R"({"type": "nlopt", "max_evaluations": 0})",
+       "t.json: /: max_evaluations: must be positive"},
+      {R"({"type": "nlopt", "max_seconds": -1})", "t.json: /: max_seconds: must not be negative"},
+  };
+  for (const BadOption& c : cases) {
+    EXPECT_THAT(input_error_of([&] { optimizer_from(c.json); }), HasSubstr(c.message)) << c.json;
+  }
+}
+
+TEST(OptimizerRegistry, UnknownNloptAlgorithmListsValidOnes) {
+  EXPECT_THAT(input_error_of([] { optimizer_from(R"({"type": "nlopt", "algorithm": "BFGS"})"); }),
+              AllOf(HasSubstr("algorithm: unknown NLopt algorithm 'BFGS'"), HasSubstr("LD_LBFGS"),
+                    HasSubstr("LN_BOBYQA")));
+}
+
+TEST(OptimizerRegistry, UnknownKeyIsRejected) {
+  EXPECT_THAT(input_error_of([] { optimizer_from(R"({"type": "annealing", "iteratoins": 100})"); }),
+              AllOf(StartsWith("t.json: /iteratoins: unknown key"), HasSubstr("iterations")));
+  EXPECT_THAT(input_error_of([] { optimizer_from(R"({"type": "ceres", "tolerance": 1e-9})"); }),
+              StartsWith("t.json: /tolerance: unknown key"));
+}
+
+TEST(OptimizerRegistry, UnknownOptimizerListsKnownOnes) {
+  EXPECT_THAT(input_error_of([] { optimizer_from(R"({"type": "aneal"})"); }),
+              AllOf(HasSubstr("unknown optimizer 'aneal'"), HasSubstr("annealing")));
+}
+
+// A continuous problem with nothing but error().
+FunctionProblem plain_quadratic() {
+  return FunctionProblem({VariableDomain::continuous(-1, 1), VariableDomain::continuous(-1, 1)},
+                         [](std::span<const double> x) { return x[0] * x[0] + x[1] * x[1]; });
+}
+
+std::string refusal(const std::string& json, Problem& problem) {
+  std::vector<double> x(static_cast<size_t>(problem.dimension()), 0.5);
+  try {
+    optimizer_from(json)->minimize(problem, x);
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "no refusal";
+}
+
+TEST(OptimizerCapabilities, MissingCapabilityIsRefusedNamingBoth) {
+  FunctionProblem problem = plain_quadratic();
+  EXPECT_THAT(refusal(R"({"type": "nlopt", "algorithm": "LD_LBFGS"})", problem),
+              AllOf(HasSubstr("'nlopt'"), HasSubstr("gradient")));
+  EXPECT_THAT(refusal(R"({"type": "branch_and_bound"})", problem),
+              AllOf(HasSubstr("'branch_and_bound'"), HasSubstr("lower bound")));
+  EXPECT_THAT(refusal(R"({"type": "ceres"})", problem),
+              AllOf(HasSubstr("'ceres'"), HasSubstr("residuals")));
+  EXPECT_THAT(refusal(R"({"type": "exhaustive"})", problem),
+              AllOf(HasSubstr("'exhaustive'"), HasSubstr("discrete")));
+  // Derivative-free methods need nothing more.
+  EXPECT_EQ(refusal(R"({"type": "nlopt", "algorithm": "LN_BOBYQA"})", problem), "no refusal");
+  EXPECT_EQ(refusal(R"({"type": "annealing", "iterations": 10})", problem), "no refusal");
+  EXPECT_EQ(refusal(R"({"type": "spsa", "iterations": 10})", problem), "no refusal");
+}
+
+TEST(OptimizerCapabilities, WrongStartSizeIsRefused) {
+  FunctionProblem problem = plain_quadratic();
+  std::vector<double> x = {0.5};
+  EXPECT_THROW(optimizer_from(R"({"type": "spsa"})")->minimize(problem, x), std::invalid_argument);
+}
+
+TEST(Summary, NotRunUntilMinimized) {
+  const Summary summary;
+  EXPECT_EQ(summary.termination, Termination::not_run);
+  EXPECT_EQ(summary.message, "Solve was not called.");
+  EXPECT_FALSE(summary.usable());
+}
+
+}  // namespace
+}  // namespace spec2fab
