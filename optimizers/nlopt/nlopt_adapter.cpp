@@ -251,6 +251,9 @@ class NloptAdapter final : public Optimizer {
       x[i] = problem.domain(static_cast<int>(i)).nearest_admissible(x[i]);
   }
 
+  // A tuner network reseeds every run (see Optimizer::set_seed).
+  void set_seed(std::uint64_t seed) override { options_.seed = static_cast<int>(seed % 2147483647u); }
+
  private:
   static Options read(const Properties& properties) {
     Options o;

@@ -178,6 +178,9 @@ class Spsa final : public Optimizer {
     summary.details["A"] = big_a;
   }
 
+  // A tuner network reseeds every run (see Optimizer::set_seed).
+  void set_seed(std::uint64_t seed) override { options_.seed = static_cast<int>(seed % 2147483647u); }
+
  private:
   static Options read(const Properties& properties) {
     Options o;
