@@ -1,5 +1,7 @@
 #include "core/strings.h"
 
+#include <cstdio>
+
 #include <algorithm>
 #include <numeric>
 
@@ -45,6 +47,20 @@ std::string join(const std::vector<std::string>& items, std::string_view separat
     out += items[i];
   }
   return out;
+}
+
+std::string format_seconds(double seconds) {
+  char text[32];
+  if (seconds >= 1) {
+    std::snprintf(text, sizeof text, "%.3g s", seconds);
+  } else if (seconds >= 1e-3) {
+    std::snprintf(text, sizeof text, "%.3g ms", seconds * 1e3);
+  } else if (seconds >= 1e-6) {
+    std::snprintf(text, sizeof text, "%.3g us", seconds * 1e6);
+  } else {
+    std::snprintf(text, sizeof text, "%.3g ns", seconds * 1e9);
+  }
+  return text;
 }
 
 }  // namespace spec2fab

@@ -11,6 +11,8 @@
 #include <tbb/parallel_for.h>
 #include <opencv2/imgcodecs.hpp>
 
+#include "core/colour.h"
+
 namespace spec2fab {
 
 namespace fs = std::filesystem;
@@ -34,14 +36,6 @@ fs::path partial_name(const fs::path& file) {
   name += ".partial";
   name += file.extension().string();
   return fs::path(file).replace_filename(name);
-}
-
-double srgb_to_linear(double c) {
-  return c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4);
-}
-double linear_to_srgb(double c) {
-  c = std::clamp(c, 0.0, 1.0);
-  return c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1 / 2.4) - 0.055;
 }
 
 }  // namespace

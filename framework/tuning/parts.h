@@ -7,7 +7,8 @@
 /// SimulatorFor<O>, MetricFor<O>, GoalFor<O>; `make_tuner` (tuner.h) then
 /// refuses to compile when the types differ, and the JSON path checks the
 /// same at load time. Parts register by name like every other type:
-/// `SPEC2FAB_REGISTER(SimulatorRegistry, MySimulator, "my_simulator")`.
+/// `SPEC2FAB_REGISTER(SimulatorRegistry, MySimulator, "my_simulator")`, with
+/// a constructor from (const Properties&, const PartContext&).
 
 #include <concepts>
 #include <memory>
@@ -15,6 +16,7 @@
 #include <string_view>
 
 #include "core/registry.h"
+#include "materials/palette.h"
 #include "reducer/node.h"
 #include "tuning/observation.h"
 
@@ -89,8 +91,15 @@ concept CompatibleParts =
     std::same_as<typename S::ObservationType, typename M::ObservationType> &&
     std::same_as<typename S::ObservationType, typename G::ObservationType>;
 
-using SimulatorRegistry = Registry<Simulator>;
-using MetricRegistry = Registry<ErrorMetric>;
-using GoalRegistry = Registry<Goal>;
+/// What a part reads while it is built from JSON besides its properties:
+/// the run's materials, whose optical and mechanical data simulators need.
+/// (Relative file names in properties resolve with Properties::existing_file.)
+struct PartContext {
+  const MaterialPalette& palette;
+};
+
+using SimulatorRegistry = Registry<Simulator, const PartContext&>;
+using MetricRegistry = Registry<ErrorMetric, const PartContext&>;
+using GoalRegistry = Registry<Goal, const PartContext&>;
 
 }  // namespace spec2fab

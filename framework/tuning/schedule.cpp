@@ -1,5 +1,7 @@
 #include "tuning/schedule.h"
 
+#include <fmt/format.h>
+
 #include <chrono>
 #include <numeric>
 #include <sstream>
@@ -60,6 +62,15 @@ Schedule& Schedule::add(Phase phase) {
   return *this;
 }
 
+namespace {
+
+std::string progress_detail(int sweep, double error_sum, size_t runs) {
+  return fmt::format("sweep {}, mean error {:.4g}", sweep + 1,
+                     error_sum / static_cast<double>(std::max<size_t>(runs, 1)));
+}
+
+}  // namespace
+
 RunRecord Schedule::run(TunerNetwork& network, std::uint64_t seed) const {
   RunRecord record;
   for (size_t p = 0; p < phases_.size(); ++p) {
@@ -86,6 +97,8 @@ RunRecord Schedule::run(TunerNetwork& network, std::uint64_t seed) const {
       if (phase.coupling) phase.coupling->begin_sweep(network, tuners);
       std::vector<bool> tuned(network.size(), false);
       std::vector<Summary> summaries(network.size());
+      double sweep_error = 0;  // sum of the final errors of this sweep's runs so far
+      size_t swept = 0;
       auto tune_one = [&](size_t t) {
         Tuner& tuner = network.tuner(t);
         tuner.optimizer().set_seed(tuner_seed(seed, p, sweep, t));
@@ -99,14 +112,17 @@ RunRecord Schedule::run(TunerNetwork& network, std::uint64_t seed) const {
             if (phase.coupling) phase.coupling->after_tune(network, t, tuned);
           }
           done += static_cast<long long>(colour.size());
-          progress.update(done, "sweep " + std::to_string(sweep + 1));
+          for (size_t t : colour) sweep_error += summaries[t].final_error;
+          swept += colour.size();
+          progress.update(done, progress_detail(sweep, sweep_error, swept));
         }
       } else {
         for (size_t t : tuners) {
           tune_one(t);
           tuned[t] = true;
           if (phase.coupling) phase.coupling->after_tune(network, t, tuned);
-          progress.update(++done, "sweep " + std::to_string(sweep + 1));
+          sweep_error += summaries[t].final_error;
+          progress.update(++done, progress_detail(sweep, sweep_error, ++swept));
         }
       }
       for (size_t t : tuners) record.runs.push_back({p, sweep, t, std::move(summaries[t])});

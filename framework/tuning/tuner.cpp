@@ -111,10 +111,12 @@ Summary Tuner::tune(const IterationCallback& callback) {
   return summary;
 }
 
-std::unique_ptr<Tuner> build_tuner(const Properties& properties, std::string name) {
-  auto simulator = SimulatorRegistry::instance().create(properties.object("simulator"), "simulator");
-  auto metric = MetricRegistry::instance().create(properties.object("metric"), "metric");
-  auto goal = GoalRegistry::instance().create(properties.object("goal"), "goal");
+std::unique_ptr<Tuner> build_tuner(const Properties& properties, std::string name,
+                                   const PartContext& context) {
+  auto simulator =
+      SimulatorRegistry::instance().create(properties.object("simulator"), "simulator", context);
+  auto metric = MetricRegistry::instance().create(properties.object("metric"), "metric", context);
+  auto goal = GoalRegistry::instance().create(properties.object("goal"), "goal", context);
   auto optimizer = build_optimizer(properties.object("optimizer"));
   const std::string problem = incompatibility(*simulator, *metric, *goal);
   if (!problem.empty()) properties.fail(problem);

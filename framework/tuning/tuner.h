@@ -86,7 +86,8 @@ std::unique_ptr<Tuner> make_tuner(std::string name, std::unique_ptr<S> simulator
 /// Builds a tuner from JSON: {"simulator": {...}, "metric": {...}, "goal":
 /// {...}, "optimizer": {...}}, each with a registered "type". Incompatible
 /// parts are an InputError at `properties` naming both.
-std::unique_ptr<Tuner> build_tuner(const Properties& properties, std::string name);
+std::unique_ptr<Tuner> build_tuner(const Properties& properties, std::string name,
+                                   const PartContext& context);
 
 /// Refreshes derived state of every node of a subtree (after its parameters changed).
 void evaluate_subtree(ReducerNode& node);

@@ -80,7 +80,8 @@ const char* kTree =
 
 TEST_F(Cli, HelpAnswersForEveryCommand) {
   for (const char* command :
-       {"--help", "run --help", "validate --help", "list --help", "export --help"}) {
+       {"--help", "run --help", "validate --help", "list --help", "export --help",
+        "simulate --help"}) {
     const Result r = spec2fab(command);
     EXPECT_EQ(r.code, 0) << command;
     EXPECT_THAT(r.out, HasSubstr("Usage")) << command;
@@ -99,11 +100,14 @@ TEST_F(Cli, ListShowsNodesTranslatorsMaterialsAndPrinters) {
   const Result r = spec2fab("list");
   EXPECT_EQ(r.code, 0);
   for (const char* name : {"stratum", "column", "voxel", "bspline", "plane", "layered", "tree",
-                           "VeroCyan", "objet500_connex.json", "j750.json"}) {
+                           "albedo", "ciede2000", "rgb_mse", "annealing", "branch_and_bound",
+                           "nlopt", "VeroCyan", "objet500_connex.json", "j750.json"}) {
     EXPECT_THAT(r.out, HasSubstr(name));
   }
   const Result verbose = spec2fab("list node --verbose");
   EXPECT_THAT(verbose.out, HasSubstr("depth_mm"));
+  const Result optimizers = spec2fab("list optimizer --verbose");
+  EXPECT_THAT(optimizers.out, HasSubstr("max_evaluations"));
   EXPECT_THAT(verbose.out, HasSubstr("example:"));
   EXPECT_EQ(spec2fab("list nodez").code, 2);
   const Result bad_flag = spec2fab("run --threads 0 x.json");
@@ -261,3 +265,130 @@ TEST_F(Cli, ExportRefabricatesATreeForAnotherPrinter) {
 }
 
 }  // namespace
+
+namespace {
+
+// The linear RGB in an albedo.csv written by `spec2fab simulate`.
+std::array<double, 3> read_albedo_csv(const fs::path& file) {
+  std::istringstream in(read(file));
+  std::string line;
+  std::getline(in, line);  // header
+  std::array<double, 3> rgb{};
+  for (double& channel : rgb) {
+    std::getline(in, line);
+    channel = std::stod(line.substr(line.find(',') + 1));
+  }
+  return rgb;
+}
+
+}  // namespace
+
+TEST_F(Cli, SimulateWritesTheObservationOfOneSimulator) {
+  const std::string config_body =
+      R"({"materials": ")" + (kDatasets / "materials/polyjet.json").string() +
+      R"(", "printer": ")" + (dir_ / "coarse_printer.json").string() + R"(",
+          "subtree": {"type": "layered", "layers": [{"material": "VeroCyan", "thickness_mm": 0.2},
+                                                    {"material": "VeroWhitePlus"}]},
+          "simulator": {"depth_mm": 1}})";
+  const fs::path config = experiment("sim", config_body);
+  const Result r = spec2fab("simulate albedo " + config.string() + " --repeat 10 --out " +
+                            (dir_ / "sim").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("per evaluation"));
+  for (const char* file : {"simulation.json", "albedo.csv", "albedo.png"}) {
+    EXPECT_TRUE(fs::is_regular_file(dir_ / "sim" / file)) << file;
+  }
+  const auto rgb = read_albedo_csv(dir_ / "sim" / "albedo.csv");
+  EXPECT_LT(rgb[0], rgb[2]);  // cyan over white: red absorbed
+  for (const std::string& arguments :
+       {"simulate albedoo " + config.string(), "simulate albedo " + dir_.string() + "/none.json",
+        "simulate albedo " +
+            experiment("bad", config_body.substr(0, config_body.size() - 1) + R"(, "stpe_mm": 1})")
+                .string()}) {
+    const Result bad = spec2fab(arguments + " --out " + (dir_ / "bad_out").string());
+    EXPECT_EQ(bad.code, 2) << arguments;
+    EXPECT_THAT(single_line(bad.out), StartsWith("error: "));
+    EXPECT_FALSE(fs::exists(dir_ / "bad_out"));
+  }
+  EXPECT_THAT(spec2fab("simulate albedoo " + config.string() + " --out x").out,
+              HasSubstr("did you mean 'albedo'?"));
+}
+
+TEST_F(Cli, TunedRunRecordsEverySummaryAndFindsAReachableColour) {
+  // The target of the first patch is what `simulate` says 0.2 mm of cyan over
+  // white looks like; exhaustive search must find exactly that thickness.
+  const fs::path config = experiment(
+      "sim", R"({"materials": ")" + (kDatasets / "materials/polyjet.json").string() +
+                 R"(", "printer": ")" + (dir_ / "coarse_printer.json").string() + R"(",
+          "subtree": {"type": "layered", "layers": [{"material": "VeroCyan", "thickness_mm": 0.2},
+                                                    {"material": "VeroWhitePlus"}]},
+          "simulator": {"depth_mm": 1}})");
+  ASSERT_EQ(spec2fab("simulate albedo " + config.string() + " --out " + (dir_ / "sim").string()).code, 0);
+  const auto rgb = read_albedo_csv(dir_ / "sim" / "albedo.csv");
+  const std::string target = "[" + std::to_string(rgb[0]) + ", " + std::to_string(rgb[1]) + ", " +
+                             std::to_string(rgb[2]) + "]";
+  const std::string tree = R"({"type": "stratum", "depth_mm": 1,
+      "shell": {"type": "column", "count": [2, 1], "child": {"type": "layered", "layers": [
+          {"material": "VeroCyan", "thickness_mm": {"value": 0.5, "min": 0, "max": 0.5, "step": 0.05}},
+          {"material": "VeroWhitePlus"}]}},
+      "core": {"type": "layered", "material": "VeroWhitePlus"}})";
+  auto tuner = [](const std::string& name, const std::string& node, const std::string& goal) {
+    return R"({"name": ")" + name + R"(", "node": ")" + node +
+           R"(", "simulator": {"type": "albedo", "depth_mm": 1}, "metric": {"type": "ciede2000"},
+              "goal": {"type": "albedo", )" + goal + R"(}, "optimizer": {"type": "exhaustive"}})";
+  };
+  std::string body = valid_body(tree);
+  const std::string tuning =
+      R"(, "tuners": [)" + tuner("exact", "shell/0", R"("linear_rgb": )" + target) + ", " +
+      tuner("pale", "shell/1", R"("srgb": [0.7, 0.95, 0.95])") +
+      R"(], "network": {"type": "grid4", "width": 2},
+          "schedule": [{"name": "patches", "mode": "parallel"}])";
+  body.insert(body.find(R"(}, "materials")"), tuning);
+  const fs::path file = experiment("tuned", body);
+  const Result one = spec2fab("run -q " + file.string() + " --threads 1 --out " + (dir_ / "t1").string());
+  ASSERT_EQ(one.code, 0) << one.out;
+  ASSERT_EQ(spec2fab("run -q " + file.string() + " --threads 2 --out " + (dir_ / "t2").string()).code, 0);
+  for (const char* name : {"result.json", "tree.json", "convergence.csv"}) {
+    EXPECT_EQ(read(dir_ / "t1" / name), read(dir_ / "t2" / name)) << name;
+  }
+  const std::string result = read(dir_ / "t1" / "result.json");
+  EXPECT_THAT(result, HasSubstr(R"("tuner": "exact")"));
+  EXPECT_THAT(result, HasSubstr(R"("tuner": "pale")"));
+  EXPECT_THAT(result, HasSubstr(R"("evaluations": 12)"));  // 11 thicknesses + the start
+  const std::string convergence = read(dir_ / "t1" / "convergence.csv");
+  EXPECT_THAT(convergence, StartsWith("phase,sweep,tuner,iteration,evaluations,error,best_error\n"));
+  EXPECT_THAT(convergence, HasSubstr("patches,0,exact,"));
+  // The exact patch found 0.2 mm; the pale one something thinner.
+  const std::string tuned = read(dir_ / "t1" / "tree.json");
+  EXPECT_THAT(tuned, HasSubstr(R"("value": 0.2)"));
+}
+
+TEST_F(Cli, TunerMistakesAreCaughtByValidate) {
+  const std::string tree = R"({"type": "layered", "layers": [
+      {"material": "VeroCyan", "thickness_mm": {"value": 0.1, "min": 0, "max": 0.5, "step": 0.05}},
+      {"material": "VeroWhitePlus"}]})";
+  const std::string parts = R"("simulator": {"type": "albedo"}, "metric": {"type": "ciede2000"},
+      "goal": {"type": "albedo", "srgb": [0.5, 0.5, 0.5]}, "optimizer": {"type": "exhaustive"})";
+  struct Case {
+    std::string tuning, expected;
+  };
+  const std::vector<Case> cases = {
+      {R"(, "tuners": [{"node": "shell", )" + parts + "}]", "/goal/tuners/0/node: no node 'shell'"},
+      {R"(, "tuners": [{"simulator": {"type": "albedo"}, "metric": {"type": "ciede2000"},
+          "goal": {"type": "albedo", "srgb": [0.5, 0.5, 0.5]}, "optimizer": {"type": "annealing", "coolng": 0.9}}])",
+       "coolng: unknown key"},
+      {R"(, "tuners": [{)" + parts + R"(}], "schedule": [{"tuners": ["tuner1"]}])",
+       "/goal/schedule/0/tuners: no tuner 'tuner1'; did you mean 'tuner0'?"},
+      {R"(, "tuners": [{)" + parts + R"(}], "schedule": [{"coupling": "error_diffusion"}])",
+       "error_diffusion needs a grid4 or grid8 network"},
+      {R"(, "tuners": [{)" + parts + R"(}], "network": {"type": "grid4", "width": 2})",
+       "/goal/network/width: 1 tuners do not fill rows of 2"},
+  };
+  for (const Case& c : cases) {
+    std::string body = valid_body(tree);
+    body.insert(body.find(R"(}, "materials")"), c.tuning);
+    const Result r = spec2fab("validate " + experiment("bad", body).string());
+    EXPECT_EQ(r.code, 2) << r.out;
+    EXPECT_THAT(single_line(r.out), HasSubstr(c.expected));
+  }
+}

@@ -22,6 +22,13 @@
 #include "geometry/mesh_check.h"
 #include "geometry/mesh_io.h"
 
+// lib3mf 1.8's reader opens ZIP entries with libzip and never closes them
+// (COpcPackageReader::openZIPEntryIndexed): a library leak of ~160 bytes per
+// entry read, which LeakSanitizer would otherwise report for our read-back
+// test. Matched by module: the fast unwinder stops inside libzip. Only
+// lib3mf uses libzip here.
+extern "C" const char* __lsan_default_suppressions() { return "leak:libzip.so\n"; }
+
 namespace spec2fab {
 namespace {
 

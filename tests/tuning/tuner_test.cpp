@@ -18,6 +18,7 @@ namespace spec2fab {
 namespace {
 
 using ::testing::HasSubstr;
+using ::testing::ThrowsMessage;
 
 SPEC2FAB_REGISTER(SimulatorRegistry, testing::ZeroDisplacements, "test_displacements")
 SPEC2FAB_REGISTER(MetricRegistry, testing::ImageMse, "test_image_mse")
@@ -64,13 +65,26 @@ TEST(Tuner, IncompatiblePartsFailAtLoadTimeFromJson) {
       "simulator": {"type": "test_displacements"}, "metric": {"type": "test_image_mse"},
       "goal": {"type": "test_black_image"}, "optimizer": {"type": "exhaustive"}}]})", "exp.json");
   try {
-    build_tuner(p.objects("tuners")[0], "t");
+    const MaterialPalette no_materials{std::vector<Material>{}};
+    build_tuner(p.objects("tuners")[0], "t", PartContext{no_materials});
     FAIL();
   } catch (const InputError& e) {
     EXPECT_THAT(e.what(), HasSubstr("exp.json: /tuners/0: metric 'test_image_mse' compares image "
                                     "observations, but simulator 'test_displacements' produces "
                                     "displacements"));
   }
+}
+
+TEST(Tuner, RegisteredAlbedoSimulatorRefusesAnImageMetricFromJson) {
+  const Properties p = Properties::parse(R"({"tuners": [{
+      "simulator": {"type": "albedo"}, "metric": {"type": "test_image_mse"},
+      "goal": {"type": "albedo", "srgb": [1, 1, 1]}, "optimizer": {"type": "exhaustive"}}]})",
+                                         "exp.json");
+  const MaterialPalette no_materials{std::vector<Material>{}};
+  EXPECT_THAT([&] { build_tuner(p.objects("tuners")[0], "t", PartContext{no_materials}); },
+              ThrowsMessage<InputError>(HasSubstr(
+                  "exp.json: /tuners/0: metric 'test_image_mse' compares image observations, but "
+                  "simulator 'albedo' produces albedo")));
 }
 
 TEST(Tuner, TunesItsSubtreeToTheGoal) {

@@ -72,6 +72,7 @@ class ConstantGoal final : public GoalFor<VectorObservation> {
 /// A displacement simulator and an image metric: parts that must not combine.
 class ZeroDisplacements final : public SimulatorFor<DisplacementsObservation> {
  public:
+  ZeroDisplacements(const Properties& p, const PartContext&) : ZeroDisplacements(p) {}
   explicit ZeroDisplacements(const Properties&) {}
   std::string name() const override { return "test_displacements"; }
   using SimulatorFor::simulate;
@@ -81,6 +82,7 @@ class ZeroDisplacements final : public SimulatorFor<DisplacementsObservation> {
 
 class ImageMse final : public MetricFor<ImageObservation> {
  public:
+  ImageMse(const Properties& p, const PartContext&) : ImageMse(p) {}
   explicit ImageMse(const Properties&) {}
   std::string name() const override { return "test_image_mse"; }
   using MetricFor::error;
@@ -94,6 +96,7 @@ class ImageMse final : public MetricFor<ImageObservation> {
 
 class BlackImageGoal final : public GoalFor<ImageObservation> {
  public:
+  BlackImageGoal(const Properties& p, const PartContext&) : BlackImageGoal(p) {}
   explicit BlackImageGoal(const Properties&) {
     target_.width = target_.height = 2;
     target_.pixels.assign(4, 0.0);

@@ -5,6 +5,7 @@
 #include <map>
 
 #include <chrono>
+#include <cmath>
 #include <fstream>
 #include <thread>
 
@@ -18,7 +19,11 @@
 #include "materials/printer_profile.h"
 #include "reducer/node.h"
 #include "reducer/reducer_tree.h"
+#include "spec/run_folder.h"
 #include "spec/translator.h"
+#include "tuning/observation_io.h"
+#include "tuning/optimizer.h"
+#include "tuning/parts.h"
 
 namespace spec2fab::cli {
 
@@ -139,6 +144,56 @@ int validate_command(const fs::path& experiment) {
   return 0;
 }
 
+int simulate_command(const SimulateArguments& arguments) {
+  const Properties config = Properties::load(arguments.config);
+  const MaterialLibrary library = MaterialLibrary::load(config.existing_file("materials"));
+  const PrinterProfile printer = PrinterProfile::load(config.existing_file("printer"));
+  const MaterialPalette palette(library, printer);
+  const NodePtr subtree = build_node(config.object("subtree"), NodeContext{palette});
+  const PartContext context{palette};
+  const auto& simulators = SimulatorRegistry::instance();
+  if (!simulators.contains(arguments.simulator)) {
+    throw InputError("simulate: unknown simulator '" + arguments.simulator + "'" +
+                     did_you_mean(arguments.simulator, simulators.names()) +
+                     " (known: " + join(simulators.names()) + ")");
+  }
+  const auto options = config.optional_object("simulator");
+  std::unique_ptr<Simulator> simulator = simulators.create_named(
+      arguments.simulator, options ? *options : config, "simulator", context);
+  config.check_all_read();
+
+  using Clock = std::chrono::steady_clock;
+  const auto setup_start = Clock::now();
+  simulator->setup(*subtree);
+  const double setup_seconds = std::chrono::duration<double>(Clock::now() - setup_start).count();
+  auto observation = simulator->make_observation();
+  const auto simulate_start = Clock::now();
+  for (int i = 0; i < arguments.repeat; ++i) simulator->simulate(*subtree, *observation);
+  const double simulate_seconds =
+      std::chrono::duration<double>(Clock::now() - simulate_start).count() / arguments.repeat;
+  for (double v : observation->values()) {
+    if (!std::isfinite(v)) throw std::runtime_error(simulator->name() + " produced a non-finite value");
+  }
+
+  RunFolder folder(arguments.out);
+  const std::vector<std::string> files = write_observation(*observation, folder.path("."));
+  folder.write_json("simulation.json",
+                    {{"simulator", simulator->name()},
+                     {"produces", std::string(simulator->produces())},
+                     {"config", arguments.config.string()},
+                     {"printer", printer.name},
+                     {"subtree", subtree->to_json(palette)},
+                     {"values", std::vector<double>(observation->values().begin(),
+                                                    observation->values().end())},
+                     {"files", files}});
+  folder.commit();
+  std::cout << "wrote " << arguments.out.string() << "/ (simulation.json, " << join(files)
+            << "); setup " << format_seconds(setup_seconds) << ", simulate "
+            << format_seconds(simulate_seconds) << " per evaluation (mean of " << arguments.repeat
+            << ")\n";
+  return 0;
+}
+
 namespace {
 
 template <class RegistryType>
@@ -213,7 +268,8 @@ void print_printers(const fs::path& datasets, bool verbose) {
 }  // namespace
 
 int list_command(const std::string& kind, bool verbose, const fs::path& datasets) {
-  static const std::vector<std::string> kinds = {"node", "translator", "material", "printer"};
+  static const std::vector<std::string> kinds = {"node",  "translator", "simulator", "metric",
+                                                 "goal",  "optimizer",  "material",  "printer"};
   std::string k = kind;
   if (!k.empty() && k.back() == 's') k.pop_back();  // "nodes" works too
   if (!k.empty() && std::find(kinds.begin(), kinds.end(), k) == kinds.end()) {
@@ -223,6 +279,12 @@ int list_command(const std::string& kind, bool verbose, const fs::path& datasets
   if (k.empty() || k == "node") print_registry("nodes", NodeRegistry::instance(), verbose);
   if (k.empty() || k == "translator")
     print_registry("translators", TranslatorRegistry::instance(), verbose);
+  if (k.empty() || k == "simulator")
+    print_registry("simulators", SimulatorRegistry::instance(), verbose);
+  if (k.empty() || k == "metric") print_registry("metrics", MetricRegistry::instance(), verbose);
+  if (k.empty() || k == "goal") print_registry("goals", GoalRegistry::instance(), verbose);
+  if (k.empty() || k == "optimizer")
+    print_registry("optimizers", OptimizerRegistry::instance(), verbose);
   if (k.empty() || k == "material") print_materials(datasets, verbose);
   if (k.empty() || k == "printer") print_printers(datasets, verbose);
   return 0;

@@ -24,9 +24,18 @@ struct ExportArguments {
   double mesh_voxel_mm = 0;  ///< 0: automatic
 };
 
+struct SimulateArguments {
+  std::string simulator;         ///< a registered simulator
+  std::filesystem::path config;  ///< materials, printer, subtree, simulator options
+  std::filesystem::path out;
+  int repeat = 100;  ///< evaluations timed after the first
+};
+
 int run_command(const RunArguments& arguments);
 /// Re-fabricates a run's tuned tree for another printer (device independence).
 int export_command(const ExportArguments& arguments);
+/// Runs one simulator standalone on a subtree and writes its observation.
+int simulate_command(const SimulateArguments& arguments);
 int validate_command(const std::filesystem::path& experiment);
 int list_command(const std::string& kind, bool verbose, const std::filesystem::path& datasets);
 

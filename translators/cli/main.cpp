@@ -79,6 +79,28 @@ int main(int argc, char** argv) {
       "names\n"
       "must be loaded in the new printer.");
 
+  cli::SimulateArguments simulate;
+  CLI::App* simulate_cmd = app.add_subcommand(
+      "simulate", "run one simulator standalone on a subtree and write its observation");
+  simulate_cmd->add_option("simulator", simulate.simulator, "a registered simulator (spec2fab list simulator)")
+      ->required();
+  simulate_cmd->add_option("config", simulate.config, "input description (JSON)")->required();
+  simulate_cmd->add_option("--out", simulate.out, "output folder")->required();
+  simulate_cmd->add_option("--repeat", simulate.repeat, "evaluations to time (default 100)")
+      ->check(CLI::Range(1, 100000000));
+  simulate_cmd->add_flag("-q,--quiet", quiet, "only warnings and errors");
+  simulate_cmd->footer(
+      "CONFIG names the run's materials and printer (the palette), the subtree to simulate and\n"
+      "the simulator's options, e.g.\n"
+      "  {\"materials\": \"../materials/polyjet.json\", \"printer\": \"../printers/j750.json\",\n"
+      "   \"subtree\": {\"type\": \"layered\", \"layers\": [{\"material\": \"VeroCyan\", "
+      "\"thickness_mm\": 0.1},\n"
+      "                                       {\"material\": \"VeroWhitePlus\"}]},\n"
+      "   \"simulator\": {\"depth_mm\": 2}}\n"
+      "Paths are relative to CONFIG. Writes simulation.json (inputs and values) and the\n"
+      "observation: PNG for images, CSV for profiles and displacements, CSV + swatch PNG for\n"
+      "albedo. Prints setup and per-evaluation times (mean of --repeat runs).");
+
   std::filesystem::path validate_file;
   CLI::App* validate_cmd =
       app.add_subcommand("validate", "check an experiment and everything it names, run nothing");
@@ -88,8 +110,11 @@ int main(int argc, char** argv) {
   bool list_verbose = false;
   std::filesystem::path datasets = default_datasets();
   CLI::App* list_cmd = app.add_subcommand(
-      "list", "list registered types (nodes, translators) and shipped materials and printers");
-  list_cmd->add_option("kind", kind, "node | translator | material | printer (default: all)");
+      "list", "list registered types (nodes, translators, simulators, metrics, goals, optimizers) and "
+      "shipped materials and printers");
+  list_cmd->add_option("kind", kind,
+                       "node | translator | simulator | metric | goal | optimizer | material | "
+                       "printer (default: all)");
   list_cmd->add_flag("--verbose", list_verbose, "properties, defaults and an example of each");
   list_cmd->add_option("--datasets", datasets,
                        "datasets folder (default $SPEC2FAB_DATASETS or the source tree's)");
@@ -112,6 +137,7 @@ int main(int argc, char** argv) {
   try {
     if (*run_cmd) return cli::run_command(run);
     if (*validate_cmd) return cli::validate_command(validate_file);
+    if (*simulate_cmd) return cli::simulate_command(simulate);
     if (*export_cmd) return cli::export_command(export_arguments);
     if (*list_cmd) return cli::list_command(kind, list_verbose, datasets);
   } catch (const InputError& e) {

@@ -1,8 +1,11 @@
-// The "tree" translator: direct specification. The goal is a reducer tree
-// written in the experiment file with fixed parameters; the translator binds
-// it to the shape and writes what it assigns (tree.json, a material census,
-// cross-section pictures), then fabricates it at the printer's resolution
-// (print/ and preview/render.png; see fabrication/fabricate.h).
+// The "tree" translator: a reducer tree written in the experiment file,
+// either fully specified (direct specification) or with free parameters that
+// tuners assembled from JSON tune first (tuning/tuning_plan.h: any registered
+// simulator, metric, goal and optimizer, a network and a schedule). It binds
+// the tree to the shape, tunes, writes what the tree assigns (tree.json, a
+// material census, cross-section pictures, the tuning record and
+// convergence.csv), then fabricates it at the printer's resolution (print/ and
+// preview/render.png; see fabrication/fabricate.h).
 
 #include <cmath>
 
@@ -13,6 +16,7 @@
 #include "reducer/census.h"
 #include "reducer/reducer_tree.h"
 #include "spec/translator.h"
+#include "tuning/tuning_plan.h"
 
 namespace spec2fab {
 namespace {
@@ -33,25 +37,31 @@ class TreeTranslator final : public Translator {
     tree_->bind(experiment.solid(), experiment.geometry_spec().field_voxel_mm);
     // Refuse an oversized print now, so that `validate` says so before any work.
     check_fabrication(*tree_, experiment.printer(), fabrication_);
-    const SearchSpace parameters = tree_->all_parameters();
-    const SearchSpace free = tree_->search_space();
-    if (free.dimension() > 0) {
-      // Direct specification tunes nothing; a free parameter is likely a mistake.
+    if (goal.has("tuners")) {
+      tuning_ = build_tuning_plan(goal, *tree_, PartContext{experiment.palette()});
+    } else if (const SearchSpace free = tree_->search_space(); free.dimension() > 0) {
+      // Without tuners nothing is tuned; a free parameter is likely a mistake.
       spdlog::warn(
-          "{} free parameter(s) (e.g. {}) stay at their values: the tree translator tunes nothing",
+          "{} free parameter(s) (e.g. {}) stay at their values: no \"tuners\" tune them",
           free.dimension(), free.entries().front().name);
     }
   }
 
   std::string summary() const override {
-    return "tree: a directly specified reducer tree (" + std::to_string(tree_->node_count()) +
-           " nodes) bound to the shape; writes tree.json, a material census on " +
+    std::string text = "tree: a reducer tree (" + std::to_string(tree_->node_count()) +
+                       " nodes) bound to the shape";
+    if (tuning_) {
+      text += ", tuned by " + std::to_string(tuning_->network.size()) + " tuner(s) in " +
+              std::to_string(tuning_->schedule.phases().size()) + " phase(s)";
+    }
+    return text + "; writes tree.json, a material census on " +
            std::to_string(census_voxel_mm_) + " mm voxels and cross-section previews";
   }
 
   const ReducerTree& tree() const override { return *tree_; }
 
   void run(RunContext& context) override {
+    if (tuning_) tune(context);
     const MaterialCensus census = take_census(*tree_, census_voxel_mm_);
     nlohmann::json volumes = nlohmann::json::object();
     const double inside_voxels = [&] {
@@ -92,9 +102,16 @@ class TreeTranslator final : public Translator {
 
   static TypeDoc doc() {
     return {
-        "Direct specification: the goal is a reducer tree with fixed parameters. Binds it "
-        "to the shape and reports what it assigns.",
+        "A reducer tree, directly specified or tuned by tuners assembled from JSON. Binds it "
+        "to the shape, tunes its free parameters, reports what it assigns and fabricates it.",
         {{"goal.tree", "node", "required", "the reducer tree (see `spec2fab list node`)"},
+         {"goal.tuners", "array", "none",
+          "tuners: {name, node (path of child labels, \"\" = root), simulator, metric, goal, "
+          "optimizer}, each a registered type with its options (`spec2fab list simulator` ...)"},
+         {"goal.network", "object", "none", "{type: none | grid4 | grid8, width}: tuners row-major"},
+         {"goal.schedule", "array", "one serial phase of all tuners",
+          "phases: {name, tuners (names), sweeps, mode: serial | parallel, coupling: none | "
+          "error_diffusion, fix_after}"},
          {"goal.census_voxel_mm", "number (mm)", "longest side / 128",
           "voxel size of the material census in result.json"},
          {"output.section_pixels", "integer", "512", "size of the cross-section previews"},
@@ -111,7 +128,28 @@ class TreeTranslator final : public Translator {
 
  private:
   const Experiment& experiment_;
+  void tune(RunContext& context) {
+    TunerNetwork& network = tuning_->network;
+    const RunRecord record = tuning_->schedule.run(network, context.seed);
+    tree_->evaluate();
+    nlohmann::json tuners = nlohmann::json::array();
+    for (size_t t = 0; t < network.size(); ++t) {
+      Tuner& tuner = network.tuner(t);
+      tuner.reset_target();  // report against the goal, not a diffused target
+      tuners.push_back({{"name", tuner.name()}, {"final_error", tuner.error()}});
+    }
+    context.result["tuning"] = record.to_json(network);
+    context.result["tuning"]["tuners"] = tuners;
+    context.folder.write_text("convergence.csv", record.convergence_csv(network));
+    for (const TunerRun& run : record.runs) {
+      spdlog::debug("{} ({}, sweep {}): {}", network.tuner(run.tuner).name(),
+                    record.phase_names[run.phase], run.sweep + 1, run.summary.brief_report());
+    }
+    if (context.timing) (*context.timing)["tuning_phase_seconds"] = record.phase_seconds;
+  }
+
   std::unique_ptr<ReducerTree> tree_;
+  std::unique_ptr<TuningPlan> tuning_;
   double census_voxel_mm_ = 1;
   int section_pixels_ = 512;
   FabricationOptions fabrication_;

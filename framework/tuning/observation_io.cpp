@@ -1,0 +1,100 @@
+#include "tuning/observation_io.h"
+
+#include <cmath>
+#include <fstream>
+#include <stdexcept>
+
+#include <fmt/format.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "core/colour.h"
+
+namespace spec2fab {
+namespace {
+
+namespace fs = std::filesystem;
+
+uchar encode_srgb(double linear) {
+  return static_cast<uchar>(std::lround(255 * linear_to_srgb(linear)));
+}
+
+void write_text(const fs::path& file, const std::string& text) {
+  std::ofstream out(file, std::ios::binary);
+  out << text;
+  if (!out) throw std::runtime_error("cannot write " + file.string());
+}
+
+void write_png(const fs::path& file, const cv::Mat& image) {
+  if (!cv::imwrite(file.string(), image)) throw std::runtime_error("cannot write " + file.string());
+}
+
+/// Linear values in [0, 1] to an 8-bit sRGB image (1 channel: grey; 3: RGB).
+cv::Mat to_png_image(int width, int height, int channels, std::span<const double> linear) {
+  cv::Mat image(height, width, channels == 1 ? CV_8UC1 : CV_8UC3);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      const size_t i = (static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x)) *
+                       static_cast<size_t>(channels);
+      if (channels == 1) {
+        image.at<uchar>(y, x) = encode_srgb(linear[i]);
+      } else {  // OpenCV stores BGR
+        image.at<cv::Vec3b>(y, x) =
+            cv::Vec3b(encode_srgb(linear[i + 2]), encode_srgb(linear[i + 1]), encode_srgb(linear[i]));
+      }
+    }
+  }
+  return image;
+}
+
+}  // namespace
+
+std::vector<std::string> write_observation(const Observation& observation, const fs::path& folder) {
+  if (const auto* image = dynamic_cast<const ImageObservation*>(&observation)) {
+    if (image->channels != 1 && image->channels != 3) {
+      throw std::runtime_error("an image observation with " + std::to_string(image->channels) +
+                               " channels cannot be written as PNG");
+    }
+    write_png(folder / "image.png",
+              to_png_image(image->width, image->height, image->channels, image->pixels));
+    return {"image.png"};
+  }
+  if (const auto* profile = dynamic_cast<const RadialProfileObservation*>(&observation)) {
+    std::string csv = "radius_mm,r,g,b\n";
+    for (size_t i = 0; i < profile->radius_mm.size(); ++i) {
+      csv += fmt::format("{:.6g},{:.9g},{:.9g},{:.9g}\n", profile->radius_mm[i],
+                         profile->reflectance[3 * i], profile->reflectance[3 * i + 1],
+                         profile->reflectance[3 * i + 2]);
+    }
+    write_text(folder / "profile.csv", csv);
+    return {"profile.csv"};
+  }
+  if (const auto* displacements = dynamic_cast<const DisplacementsObservation*>(&observation)) {
+    std::string csv = "node,x_mm,y_mm,z_mm\n";
+    for (size_t i = 0; 3 * i + 2 < displacements->xyz_mm.size(); ++i) {
+      csv += fmt::format("{},{:.9g},{:.9g},{:.9g}\n", i, displacements->xyz_mm[3 * i],
+                         displacements->xyz_mm[3 * i + 1], displacements->xyz_mm[3 * i + 2]);
+    }
+    write_text(folder / "displacements.csv", csv);
+    return {"displacements.csv"};
+  }
+  if (const auto* albedo = dynamic_cast<const AlbedoObservation*>(&observation)) {
+    std::string csv = "channel,linear,srgb_8bit\n";
+    static const char* names[] = {"r", "g", "b"};
+    for (int c = 0; c < 3; ++c) {
+      csv += fmt::format("{},{:.9g},{}\n", names[c], albedo->rgb[c], encode_srgb(albedo->rgb[c]));
+    }
+    write_text(folder / "albedo.csv", csv);
+    std::vector<double> swatch;
+    for (int i = 0; i < 64 * 64; ++i) swatch.insert(swatch.end(), albedo->rgb.begin(), albedo->rgb.end());
+    write_png(folder / "albedo.png", to_png_image(64, 64, 3, swatch));
+    return {"albedo.csv", "albedo.png"};
+  }
+  std::string csv = "index,value\n";
+  const auto values = observation.values();
+  for (size_t i = 0; i < values.size(); ++i) csv += fmt::format("{},{:.9g}\n", i, values[i]);
+  write_text(folder / "values.csv", csv);
+  return {"values.csv"};
+}
+
+}  // namespace spec2fab
