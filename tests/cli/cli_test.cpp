@@ -348,7 +348,7 @@ TEST_F(Cli, TunedRunRecordsEverySummaryAndFindsAReachableColour) {
   const Result one = spec2fab("run -q " + file.string() + " --threads 1 --out " + (dir_ / "t1").string());
   ASSERT_EQ(one.code, 0) << one.out;
   ASSERT_EQ(spec2fab("run -q " + file.string() + " --threads 2 --out " + (dir_ / "t2").string()).code, 0);
-  for (const char* name : {"result.json", "tree.json", "convergence.csv"}) {
+  for (const char* name : {"result.json", "tree.json", "convergence.csv", "preview/convergence.png"}) {
     EXPECT_EQ(read(dir_ / "t1" / name), read(dir_ / "t2" / name)) << name;
   }
   const std::string result = read(dir_ / "t1" / "result.json");

@@ -16,6 +16,7 @@
 #include "reducer/census.h"
 #include "reducer/reducer_tree.h"
 #include "spec/translator.h"
+#include "tuning/convergence_plot.h"
 #include "tuning/tuning_plan.h"
 
 namespace spec2fab {
@@ -141,6 +142,7 @@ class TreeTranslator final : public Translator {
     context.result["tuning"] = record.to_json(network);
     context.result["tuning"]["tuners"] = tuners;
     context.folder.write_text("convergence.csv", record.convergence_csv(network));
+    write_convergence_plot(record, network.size(), context.folder.path("preview/convergence.png"));
     for (const TunerRun& run : record.runs) {
       spdlog::debug("{} ({}, sweep {}): {}", network.tuner(run.tuner).name(),
                     record.phase_names[run.phase], run.sweep + 1, run.summary.brief_report());
