@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <numeric>
 #include <sstream>
@@ -53,6 +54,7 @@ void ErrorDiffusion::after_tune(TunerNetwork& network, size_t t, const std::vect
     auto neighbour_target = network.tuner(n).effective_target().values();
     for (size_t k = 0; k < neighbour_target.size() && k < target.size(); ++k) {
       neighbour_target[k] += weight / total * (target[k] - simulated[k]);
+      if (clamp_) neighbour_target[k] = std::clamp(neighbour_target[k], clamp_->first, clamp_->second);
     }
   }
 }

@@ -11,6 +11,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -41,9 +42,16 @@ class Coupling {
 /// (right), 3/16 (down-left), 5/16 (down), 1/16 (down-right) renormalised
 /// over the neighbours present — on a 4-neighbour network that is 7/12 right
 /// and 5/12 down. Serial phases only: the result depends on the order.
+///
+/// With `clamp`, diffused targets are clamped to [first, second]: a goal
+/// outside what the simulator can reach (a colour out of the printer's
+/// gamut) otherwise accumulates residuals without bound and smears them
+/// across the grid.
 class ErrorDiffusion final : public Coupling {
  public:
-  explicit ErrorDiffusion(int grid_width) : grid_width_(grid_width) {}
+  explicit ErrorDiffusion(int grid_width,
+                          std::optional<std::pair<double, double>> clamp = std::nullopt)
+      : grid_width_(grid_width), clamp_(clamp) {}
   std::string name() const override { return "error_diffusion"; }
   bool allows_parallel() const override { return false; }
   void begin_sweep(TunerNetwork& network, const std::vector<size_t>& tuners) override;
@@ -51,6 +59,7 @@ class ErrorDiffusion final : public Coupling {
 
  private:
   int grid_width_;
+  std::optional<std::pair<double, double>> clamp_;
 };
 
 struct Phase {

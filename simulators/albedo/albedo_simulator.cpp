@@ -1,24 +1,49 @@
 // The albedo simulator: the linear RGB diffuse reflectance of the stack of
 // materials a subtree assigns below one surface point, by the calibrated
 // Kubelka–Munk model of kubelka_munk.h.
+//
+// Tabulation: when every free parameter of the subtree is discrete (layer
+// thicknesses on the printer's layer step, material choices), setup computes
+// the albedo of every combination once and simulate becomes a table lookup —
+// the paper's lookup table over the stackings a printer can make. Tables are
+// shared between simulators whose subtrees differ only in the values of
+// their free parameters (every column of a texture), so a tree of thousands
+// of columns builds one table.
 
 #include <cmath>
+#include <map>
+#include <memory>
+#include <mutex>
 #include <vector>
+
+#include <spdlog/spdlog.h>
 
 #include "albedo/kubelka_munk.h"
 #include "tuning/parts.h"
+#include "tuning/tuner.h"
 
 namespace spec2fab {
 namespace {
 
+using AlbedoTable = std::vector<Rgb>;
+
+void collect_free_parameters(ReducerNode& node, std::vector<Parameter*>& out) {
+  node.visit_parameters([&](const std::string&, Parameter& p) {
+    if (p.is_free()) out.push_back(&p);
+  });
+  for (size_t i = 0; i < node.child_count(); ++i) collect_free_parameters(node.child(i), out);
+}
+
 class AlbedoSimulator final : public SimulatorFor<AlbedoObservation> {
  public:
-  AlbedoSimulator(const Properties& properties, const PartContext& context) {
+  AlbedoSimulator(const Properties& properties, const PartContext& context)
+      : palette_(&context.palette) {
     depth_mm_ = properties.get_in_range("depth_mm", 3.0, 1e-3, 1e3);
     step_mm_ = properties.get_in_range("step_mm", 0.005, 1e-5, depth_mm_);
     const auto at = properties.get<std::array<double, 2>>("at", {0.0, 0.0});
     lateral_a_ = at[0];
     lateral_b_ = at[1];
+    max_table_ = static_cast<long long>(properties.get_in_range("max_table", 1e6, 0, 1e8));
     for (MaterialId id = 0; id < context.palette.size(); ++id) {
       optics_.push_back(KubelkaMunkMaterial::from_material(context.palette.material(id)));
     }
@@ -27,13 +52,56 @@ class AlbedoSimulator final : public SimulatorFor<AlbedoObservation> {
 
   std::string name() const override { return "albedo"; }
 
+  void setup(const ReducerNode& subtree) override {
+    table_.reset();
+    free_.clear();
+    // Enumerating sets parameters and restores them; the subtree is unchanged after.
+    auto& node = const_cast<ReducerNode&>(subtree);
+    collect_free_parameters(node, free_);
+    long long size = 1;
+    for (const Parameter* p : free_) {
+      if (p->kind() == ParameterKind::continuous || size * p->cardinality() > max_table_) return;
+      size *= p->cardinality();
+    }
+    if (free_.empty()) return;
+    strides_.assign(free_.size(), 1);
+    for (size_t i = free_.size() - 1; i > 0; --i) strides_[i - 1] = strides_[i] * free_[i]->cardinality();
+    table_ = shared_table(node, size);
+  }
+
   using SimulatorFor::simulate;
   void simulate(const ReducerNode& subtree, AlbedoObservation& out) override {
+    if (table_) {
+      long long index = 0;
+      for (size_t i = 0; i < free_.size(); ++i) index += free_[i]->index() * strides_[i];
+      out.rgb = (*table_)[static_cast<size_t>(index)];
+      return;
+    }
+    out.rgb = compute(subtree);
+  }
+
+  static TypeDoc doc() {
+    return {
+        "Linear RGB albedo of the material stack a subtree assigns below a surface point: "
+        "Kubelka-Munk layers calibrated to each material's dipole diffusion albedo and "
+        "transport coefficient (optical data of the material library). Produces albedo. "
+        "When the subtree's free parameters are all discrete, every combination is "
+        "tabulated once at setup (shared by identical subtrees) and evaluation is a lookup.",
+        {{"depth_mm", "number (mm)", "3", "depth sampled; what lies below counts as infinitely thick"},
+         {"step_mm", "number (mm)", "0.005", "sampling step along the depth axis (finer than any layer)"},
+         {"at", "[a, b]", "[0, 0]", "lateral position in the subtree's frame"},
+         {"max_table", "integer", "1e6", "largest table to build; 0 never tabulates"}},
+        R"({"type": "albedo", "depth_mm": 2})"};
+  }
+
+ private:
+  Rgb compute(const ReducerNode& subtree) {
     for (size_t i = 0; i < samples_.size(); ++i) {
       samples_[i] = material_at(subtree, (static_cast<double>(i) + 0.5) * step_mm_);
     }
     // What lies below the sampled depth counts as infinitely thick; then each
     // run of equal samples is one layer, composed from the bottom up.
+    Rgb rgb{};
     for (int c = 0; c < 3; ++c) {
       double reflectance = optics_[samples_.back()].rgb[c].reflectance_infinite();
       size_t end = samples_.size();
@@ -44,22 +112,43 @@ class AlbedoSimulator final : public SimulatorFor<AlbedoObservation> {
         reflectance = optics_[samples_[begin]].rgb[c].reflectance_over(thickness, reflectance);
         end = begin;
       }
-      out.rgb[c] = reflectance;
+      rgb[c] = reflectance;
     }
+    return rgb;
   }
 
-  static TypeDoc doc() {
-    return {
-        "Linear RGB albedo of the material stack a subtree assigns below a surface point: "
-        "Kubelka-Munk layers calibrated to each material's dipole diffusion albedo and "
-        "transport coefficient (optical data of the material library). Produces albedo.",
-        {{"depth_mm", "number (mm)", "3", "depth sampled; what lies below counts as infinitely thick"},
-         {"step_mm", "number (mm)", "0.005", "sampling step along the depth axis (finer than any layer)"},
-         {"at", "[a, b]", "[0, 0]", "lateral position in the subtree's frame"}},
-        R"({"type": "albedo", "depth_mm": 2})"};
+  std::shared_ptr<const AlbedoTable> shared_table(ReducerNode& node, long long size) {
+    std::vector<double> saved;
+    for (const Parameter* p : free_) saved.push_back(p->value());
+    for (Parameter* p : free_) p->set(p->admissible(0));
+    evaluate_subtree(node);
+    // The key: the subtree with its free parameters at their first values,
+    // plus everything else that changes the result.
+    const std::string key = node.to_json(*palette_).dump() + "|" + std::to_string(depth_mm_) +
+                            "|" + std::to_string(step_mm_) + "|" + std::to_string(lateral_a_) +
+                            "|" + std::to_string(lateral_b_) + "|" +
+                            std::to_string(reinterpret_cast<std::uintptr_t>(palette_));
+    static std::mutex mutex;
+    static std::map<std::string, std::shared_ptr<const AlbedoTable>> cache;
+    std::lock_guard lock(mutex);
+    auto& entry = cache[key];
+    if (!entry) {
+      auto table = std::make_shared<AlbedoTable>(static_cast<size_t>(size));
+      for (long long index = 0; index < size; ++index) {
+        for (size_t i = 0; i < free_.size(); ++i) {
+          free_[i]->set(free_[i]->admissible((index / strides_[i]) % free_[i]->cardinality()));
+        }
+        evaluate_subtree(node);
+        (*table)[static_cast<size_t>(index)] = compute(node);
+      }
+      spdlog::debug("albedo: tabulated {} stackings", size);
+      entry = std::move(table);
+    }
+    for (size_t i = 0; i < free_.size(); ++i) free_[i]->set(saved[i]);
+    evaluate_subtree(node);
+    return entry;
   }
 
- private:
   MaterialId material_at(const ReducerNode& subtree, double depth) const {
     const QueryPoint point;
     LocalFrame frame{lateral_a_, lateral_b_, depth};
@@ -72,9 +161,14 @@ class AlbedoSimulator final : public SimulatorFor<AlbedoObservation> {
     return static_cast<const MaterialNode*>(node)->material(point, frame);
   }
 
+  const MaterialPalette* palette_;
   double depth_mm_ = 3, step_mm_ = 0.005, lateral_a_ = 0, lateral_b_ = 0;
+  long long max_table_ = 1000000;
   std::vector<KubelkaMunkMaterial> optics_;  ///< by material id
   std::vector<MaterialId> samples_;          ///< sized once: simulate() does not allocate
+  std::vector<Parameter*> free_;             ///< the subtree's free parameters, table axes
+  std::vector<long long> strides_;
+  std::shared_ptr<const AlbedoTable> table_;
 };
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -391,4 +392,58 @@ TEST_F(Cli, TunerMistakesAreCaughtByValidate) {
     EXPECT_EQ(r.code, 2) << r.out;
     EXPECT_THAT(single_line(r.out), HasSubstr(c.expected));
   }
+}
+
+TEST_F(Cli, ErrorDiffusionLowersTheLowPassColourErrorOfAnAlbedoPrint) {
+  // A goal image of linear blends between the two extreme printable colours
+  // of one ink over white (so every pixel is a mixture diffusion can make):
+  // 48 columns across 6 printable stacks. Nearest-stack quantisation bands;
+  // diffusion must come closer once both are blurred (what the eye sees).
+  auto albedo_of = [&](const std::string& thickness) {
+    const fs::path config = experiment(
+        "sim_" + thickness,
+        R"({"materials": ")" + (kDatasets / "materials/polyjet.json").string() +
+            R"(", "printer": ")" + (dir_ / "coarse_printer.json").string() + R"(",
+            "subtree": {"type": "layered", "layers": [{"material": "VeroCyan", "thickness_mm": )" +
+            thickness + R"(}, {"material": "VeroWhitePlus"}]}, "simulator": {"depth_mm": 0.2}})");
+    EXPECT_EQ(spec2fab("simulate albedo " + config.string() + " --out " +
+                       (dir_ / ("sim_" + thickness)).string())
+                  .code,
+              0);
+    return read_albedo_csv(dir_ / ("sim_" + thickness) / "albedo.csv");
+  };
+  const auto white = albedo_of("0"), cyan = albedo_of("0.135");
+  const int width = 48, height = 6;
+  std::string ppm = "P6\n" + std::to_string(width) + " " + std::to_string(height) + "\n255\n";
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      const double t = (x + 0.5) / width;
+      for (int c = 0; c < 3; ++c) {
+        const double linear = (1 - t) * white[c] + t * cyan[c];
+        const double encoded =
+            linear <= 0.0031308 ? 12.92 * linear : 1.055 * std::pow(linear, 1 / 2.4) - 0.055;
+        ppm += static_cast<char>(std::lround(255 * encoded));
+      }
+    }
+  }
+  std::ofstream(dir_ / "gradient.ppm", std::ios::binary) << ppm;
+  std::string body = valid_body(kTree, R"(, "output": {"slices": false, "stl": false, "3mf": false, "render": false})", "albedo");
+  const std::string goal = R"({"image": ")" + (dir_ / "gradient.ppm").string() +
+                           R"(", "inks": ["VeroCyan"], "layer_step_mm": 0.027, "max_ink_mm": 0.135})";
+  body.replace(body.find(R"({"tree": )"), std::string(R"({"tree": )").size() + std::string(kTree).size() + 1,
+               goal);
+  const Result r = spec2fab("run -q " + experiment("gradient", body).string() + " --out " +
+                            (dir_ / "run").string());
+  ASSERT_EQ(r.code, 0) << r.out << body;
+  const std::string result = read(dir_ / "run" / "result.json");
+  auto number_after = [&](const std::string& key) {
+    const size_t at = result.find("\"" + key + "\": ");
+    EXPECT_NE(at, std::string::npos) << key;
+    return std::stod(result.substr(at + key.size() + 4));
+  };
+  const double diffused = number_after("low_pass_delta_e00");
+  const double nearest = number_after("low_pass_delta_e00_nearest_only");
+  std::printf("low-pass dE00: diffused %.3f, nearest only %.3f\n", diffused, nearest);
+  EXPECT_LT(diffused, 0.7 * nearest) << "diffused " << diffused << ", nearest only " << nearest;
+  EXPECT_TRUE(fs::is_regular_file(dir_ / "run" / "preview" / "goal_vs_achieved.png"));
 }

@@ -163,6 +163,43 @@ TEST_F(AlbedoSimulatorTest, VoidBelowIsABlackBackingVoidAboveIsNothing) {
   EXPECT_NEAR(gap.rgb[0], infinite("VeroWhitePlus")[0], 1e-9);
 }
 
+TEST_F(AlbedoSimulatorTest, TheTableEqualsDirectSimulationForEveryStacking) {
+  const NodePtr node = build_node(Properties::parse(R"({"type": "layered", "layers": [
+      {"material": {"value": "VeroCyan", "choices": ["VeroCyan", "VeroYellow"]},
+       "thickness_mm": {"value": 0, "min": 0, "max": 0.108, "step": 0.027}},
+      {"material": "VeroMagenta", "thickness_mm": {"value": 0, "min": 0, "max": 0.054, "step": 0.027}},
+      {"material": "VeroWhitePlus"}]})", "subtree.json"), NodeContext{palette_});
+  const PartContext context{palette_};
+  auto tabulated = SimulatorRegistry::instance().create_named(
+      "albedo", Properties::parse(R"({"depth_mm": 1})", "a"), "simulator", context);
+  auto direct = SimulatorRegistry::instance().create_named(
+      "albedo", Properties::parse(R"({"depth_mm": 1, "max_table": 0})", "b"), "simulator", context);
+  tabulated->setup(*node);
+  direct->setup(*node);
+  std::vector<Parameter*> free;
+  node->visit_parameters([&](const std::string&, Parameter& p) {
+    if (p.is_free()) free.push_back(&p);
+  });
+  ASSERT_EQ(free.size(), 3u);
+  AlbedoObservation a, b;
+  int compared = 0;
+  for (long long m = 0; m < 2; ++m) {
+    for (long long t0 = 0; t0 < 5; ++t0) {
+      for (long long t1 = 0; t1 < 3; ++t1) {
+        free[0]->set(free[0]->admissible(m));
+        free[1]->set(free[1]->admissible(t0));
+        free[2]->set(free[2]->admissible(t1));
+        node->evaluate();
+        tabulated->simulate(*node, a);
+        direct->simulate(*node, b);
+        for (int c = 0; c < 3; ++c) EXPECT_EQ(a.rgb[c], b.rgb[c]);
+        ++compared;
+      }
+    }
+  }
+  EXPECT_EQ(compared, 30);
+}
+
 TEST(Ciede2000, MatchesTheSharmaWuDalalTestData) {
   // Table 1 of Sharma, Wu & Dalal, Color Res. Appl. 30(1), 2005: the 34 pairs.
   struct Pair {

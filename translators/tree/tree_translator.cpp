@@ -11,11 +11,9 @@
 
 #include <spdlog/spdlog.h>
 
-#include "fabrication/cross_section.h"
-#include "fabrication/fabricate.h"
-#include "reducer/census.h"
 #include "reducer/reducer_tree.h"
 #include "spec/translator.h"
+#include "spec/tree_outputs.h"
 #include "tuning/convergence_plot.h"
 #include "tuning/tuning_plan.h"
 
@@ -28,16 +26,8 @@ class TreeTranslator final : public Translator {
       : experiment_(experiment) {
     const Properties goal = experiment.goal();
     tree_ = std::make_unique<ReducerTree>(goal.object("tree"), experiment.palette());
-    const Bounds& bounds = experiment.solid().bounds();
-    const double longest = bounds.size().maxCoeff();
-    census_voxel_mm_ = goal.get_in_range("census_voxel_mm", longest / 128, longest / 2048, longest);
-    const auto output = experiment.output();
-    if (output)
-      section_pixels_ = static_cast<int>(output->get_in_range("section_pixels", 512, 16, 8192));
-    fabrication_ = FabricationOptions::from_properties(output);
     tree_->bind(experiment.solid(), experiment.geometry_spec().field_voxel_mm);
-    // Refuse an oversized print now, so that `validate` says so before any work.
-    check_fabrication(*tree_, experiment.printer(), fabrication_);
+    outputs_ = TreeOutputOptions::read(goal, experiment, *tree_);
     if (goal.has("tuners")) {
       tuning_ = build_tuning_plan(goal, *tree_, PartContext{experiment.palette()});
     } else if (const SearchSpace free = tree_->search_space(); free.dimension() > 0) {
@@ -56,53 +46,18 @@ class TreeTranslator final : public Translator {
               std::to_string(tuning_->schedule.phases().size()) + " phase(s)";
     }
     return text + "; writes tree.json, a material census on " +
-           std::to_string(census_voxel_mm_) + " mm voxels and cross-section previews";
+           std::to_string(outputs_.census_voxel_mm) + " mm voxels and cross-section previews";
   }
 
   const ReducerTree& tree() const override { return *tree_; }
 
   void run(RunContext& context) override {
     if (tuning_) tune(context);
-    const MaterialCensus census = take_census(*tree_, census_voxel_mm_);
-    nlohmann::json volumes = nlohmann::json::object();
-    const double inside_voxels = [&] {
-      long long n = 0;
-      for (size_t id = 1; id < census.voxels.size(); ++id) n += census.voxels[id];
-      return static_cast<double>(n);
-    }();
-    for (size_t id = 1; id < census.voxels.size(); ++id) {
-      const auto material = static_cast<MaterialId>(id);
-      volumes[tree_->palette().name(material)] = {
-          {"voxels", census.voxels[id]},
-          {"volume_mm3", census.volume_mm3(material)},
-          {"fraction",
-           inside_voxels > 0 ? static_cast<double>(census.voxels[id]) / inside_voxels : 0.0}};
-    }
-    context.result["tree"] = {{"nodes", tree_->node_count()},
-                              {"parameters", tree_->all_parameters().dimension()},
-                              {"free_parameters", tree_->search_space().dimension()}};
-    context.result["material_census"] = {
-        {"voxel_mm", census.voxel_mm}, {"grid", census.grid}, {"materials", volumes}};
-    const Vec3 center = experiment_.solid().bounds().center();
-    static const char* names[] = {"section_yz.png", "section_xz.png", "section_xy.png"};
-    nlohmann::json previews = nlohmann::json::array();
-    for (int axis = 0; axis < 3; ++axis) {
-      const std::string name = std::string("preview/") + names[axis];
-      write_cross_section_png(*tree_, axis, center[axis], section_pixels_,
-                              context.folder.path(name));
-      previews.push_back(name);
-    }
-    const FabricationReport print =
-        fabricate(*tree_, experiment_.printer(), fabrication_, context.folder);
-    context.result["fabrication"] = print.result;
-    if (context.timing) (*context.timing)["fabrication_seconds"] = print.seconds;
-    nlohmann::json files = {{"tree", "tree.json"}, {"previews", previews}};
-    if (print.result.contains("files")) files["print"] = print.result["files"];
-    context.result["files"] = files;
+    write_tree_outputs(*tree_, outputs_, context);
   }
 
   static TypeDoc doc() {
-    return {
+    TypeDoc doc{
         "A reducer tree, directly specified or tuned by tuners assembled from JSON. Binds it "
         "to the shape, tunes its free parameters, reports what it assigns and fabricates it.",
         {{"goal.tree", "node", "required", "the reducer tree (see `spec2fab list node`)"},
@@ -113,18 +68,11 @@ class TreeTranslator final : public Translator {
          {"goal.schedule", "array", "one serial phase of all tuners",
           "phases: {name, tuners (names), sweeps, mode: serial | parallel, coupling: none | "
           "error_diffusion, fix_after}"},
-         {"goal.census_voxel_mm", "number (mm)", "longest side / 128",
-          "voxel size of the material census in result.json"},
-         {"output.section_pixels", "integer", "512", "size of the cross-section previews"},
-         {"output.slices / stl / 3mf / render", "bool", "true",
-          "print files to write (print/slices/, print/<material>.stl, print/model.3mf, "
-          "preview/render.png)"},
-         {"output.max_voxels", "number", "5e9", "refuse to fabricate more print voxels than this"},
-         {"output.mesh_voxel_mm", "number (mm)", "0 (auto)",
-          "voxel of the STL/3MF surfaces; 0: print voxels, coarsened to <= 512 along the longest "
-          "side"}},
+        },
         R"({"translator": "tree", "goal": {"tree": {"type": "layered", "material": )"
         R"("VeroWhitePlus"}}})"};
+    for (PropertyDoc& d : TreeOutputOptions::docs()) doc.properties.push_back(std::move(d));
+    return doc;
   }
 
  private:
@@ -152,9 +100,7 @@ class TreeTranslator final : public Translator {
 
   std::unique_ptr<ReducerTree> tree_;
   std::unique_ptr<TuningPlan> tuning_;
-  double census_voxel_mm_ = 1;
-  int section_pixels_ = 512;
-  FabricationOptions fabrication_;
+  TreeOutputOptions outputs_;
 };
 
 }  // namespace

@@ -1,0 +1,84 @@
+#include "spec/tree_outputs.h"
+
+#include "fabrication/cross_section.h"
+#include "reducer/census.h"
+#include "reducer/reducer_tree.h"
+
+namespace spec2fab {
+
+TreeOutputOptions TreeOutputOptions::read(const Properties& goal, const Experiment& experiment,
+                                          const ReducerTree& tree) {
+  TreeOutputOptions options;
+  const double longest = experiment.solid().bounds().size().maxCoeff();
+  options.census_voxel_mm =
+      goal.get_in_range("census_voxel_mm", longest / 128, longest / 2048, longest);
+  const auto output = experiment.output();
+  if (output) {
+    options.section_pixels = static_cast<int>(output->get_in_range("section_pixels", 512, 16, 8192));
+  }
+  options.fabrication = FabricationOptions::from_properties(output);
+  check_fabrication(tree, experiment.printer(), options.fabrication);
+  return options;
+}
+
+std::vector<PropertyDoc> TreeOutputOptions::docs() {
+  return {{"goal.census_voxel_mm", "number (mm)", "longest side / 128",
+           "voxel size of the material census in result.json"},
+          {"output.section_pixels", "integer", "512", "size of the cross-section previews"},
+          {"output.slices / stl / 3mf / render", "bool", "true",
+           "print files to write (print/slices/, print/<material>.stl, print/model.3mf, "
+           "preview/render.png)"},
+          {"output.max_voxels", "number", "5e9", "refuse to fabricate more print voxels than this"},
+          {"output.mesh_voxel_mm", "number (mm)", "0 (auto)",
+           "voxel of the STL/3MF surfaces; 0: print voxels, coarsened to <= 512 along the longest "
+           "side"}};
+}
+
+void write_tree_outputs(ReducerTree& tree, const TreeOutputOptions& options,
+                        RunContext& context) {
+  const MaterialCensus census = take_census(tree, options.census_voxel_mm);
+  nlohmann::json volumes = nlohmann::json::object();
+  long long inside_voxels = 0;
+  for (size_t id = 1; id < census.voxels.size(); ++id) inside_voxels += census.voxels[id];
+  for (size_t id = 1; id < census.voxels.size(); ++id) {
+    const auto material = static_cast<MaterialId>(id);
+    volumes[tree.palette().name(material)] = {
+        {"voxels", census.voxels[id]},
+        {"volume_mm3", census.volume_mm3(material)},
+        {"fraction", inside_voxels > 0 ? static_cast<double>(census.voxels[id]) /
+                                             static_cast<double>(inside_voxels)
+                                       : 0.0}};
+  }
+  context.result["tree"] = {{"nodes", tree.node_count()},
+                            {"parameters", tree.all_parameters().dimension()},
+                            {"free_parameters", tree.search_space().dimension()}};
+  context.result["material_census"] = {
+      {"voxel_mm", census.voxel_mm}, {"grid", census.grid}, {"materials", volumes}};
+  const Vec3 center = context.experiment.solid().bounds().center();
+  static const char* names[] = {"section_yz.png", "section_xz.png", "section_xy.png"};
+  nlohmann::json previews = nlohmann::json::array();
+  for (int axis = 0; axis < 3; ++axis) {
+    const std::string name = std::string("preview/") + names[axis];
+    write_cross_section_png(tree, axis, center[axis], options.section_pixels,
+                            context.folder.path(name));
+    previews.push_back(name);
+  }
+  const FabricationReport print =
+      fabricate(tree, context.experiment.printer(), options.fabrication, context.folder);
+  context.result["fabrication"] = print.result;
+  if (context.timing) (*context.timing)["fabrication_seconds"] = print.seconds;
+  nlohmann::json files = {{"tree", "tree.json"}, {"previews", previews}};
+  if (print.result.contains("files")) files["print"] = print.result["files"];
+  if (context.result.contains("files")) {
+    for (auto& [key, value] : context.result["files"].items()) {
+      if (key == "previews") {
+        for (const auto& p : value) files["previews"].push_back(p);
+      } else {
+        files[key] = value;
+      }
+    }
+  }
+  context.result["files"] = files;
+}
+
+}  // namespace spec2fab

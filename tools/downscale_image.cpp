@@ -1,0 +1,28 @@
+// downscale_image IN OUT WIDTH HEIGHT: area-averaged resampling to a PNG
+// (OpenCV INTER_AREA), for making the small goal images in datasets/images/.
+
+#include <cstdio>
+#include <cstdlib>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+int main(int argc, char** argv) {
+  if (argc != 5) {
+    std::fprintf(stderr, "usage: downscale_image IN OUT WIDTH HEIGHT\n");
+    return 2;
+  }
+  const cv::Mat in = cv::imread(argv[1], cv::IMREAD_COLOR);
+  if (in.empty()) {
+    std::fprintf(stderr, "error: cannot read %s\n", argv[1]);
+    return 2;
+  }
+  cv::Mat out;
+  cv::resize(in, out, cv::Size(std::atoi(argv[3]), std::atoi(argv[4])), 0, 0, cv::INTER_AREA);
+  if (!cv::imwrite(argv[2], out, {cv::IMWRITE_PNG_COMPRESSION, 9})) {
+    std::fprintf(stderr, "error: cannot write %s\n", argv[2]);
+    return 1;
+  }
+  return 0;
+}

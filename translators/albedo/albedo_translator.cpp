@@ -1,0 +1,365 @@
+// The albedo translator (paper §7.1, Fig. 7): a print whose surface colour
+// matches a goal image. Stratum (shell) → Column (one column per image pixel
+// over the surface's (u, v)) → Layered (one layer per ink, thicknesses on the
+// printer's layer step, over the backing material). One tuner per column
+// picks the stack whose simulated albedo is closest to its pixel; the tuners
+// sit on a 4-neighbour network and, in a serial raster schedule, pass their
+// colour residual on with Floyd–Steinberg weights (error diffusion), as the
+// paper did. The albedo simulator tabulates every stacking once.
+
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <spdlog/spdlog.h>
+
+#include "core/colour.h"
+#include "reducer/reducer_tree.h"
+#include "spec/translator.h"
+#include "spec/tree_outputs.h"
+#include "tuning/convergence_plot.h"
+#include "tuning/schedule.h"
+
+namespace spec2fab {
+namespace {
+
+/// Linear RGB pixels of a goal image, resampled to the column grid by area.
+struct GoalImage {
+  int width = 0, height = 0;
+  std::vector<Rgb> pixels;  ///< row-major, row 0 at v = 0
+};
+
+GoalImage load_goal_image(const Properties& goal, std::array<int, 2>& columns) {
+  const std::filesystem::path file = goal.existing_file("image");
+  cv::Mat image = cv::imread(file.string(), cv::IMREAD_COLOR);
+  if (image.empty()) goal.fail("image", "cannot read image " + file.string());
+  if (columns[0] == 0) columns = {image.cols, image.rows};
+  cv::Mat resized;
+  cv::resize(image, resized, cv::Size(columns[0], columns[1]), 0, 0, cv::INTER_AREA);
+  GoalImage out{columns[0], columns[1], {}};
+  out.pixels.reserve(static_cast<size_t>(columns[0]) * static_cast<size_t>(columns[1]));
+  for (int y = 0; y < resized.rows; ++y) {
+    for (int x = 0; x < resized.cols; ++x) {
+      const cv::Vec3b bgr = resized.at<cv::Vec3b>(y, x);
+      out.pixels.push_back({srgb_to_linear(bgr[2] / 255.0), srgb_to_linear(bgr[1] / 255.0),
+                            srgb_to_linear(bgr[0] / 255.0)});
+    }
+  }
+  return out;
+}
+
+/// Mean ΔE00 between two images after a Gaussian low-pass in linear RGB (what
+/// the eye sees from a distance: the measure error diffusion improves).
+double low_pass_delta_e(const GoalImage& goal, const std::vector<Rgb>& achieved, double sigma) {
+  auto to_mat = [&](const std::vector<Rgb>& pixels) {
+    cv::Mat m(goal.height, goal.width, CV_64FC3);
+    for (int y = 0; y < goal.height; ++y) {
+      for (int x = 0; x < goal.width; ++x) {
+        const Rgb& p = pixels[static_cast<size_t>(y * goal.width + x)];
+        m.at<cv::Vec3d>(y, x) = cv::Vec3d(p[0], p[1], p[2]);
+      }
+    }
+    cv::Mat blurred;
+    cv::GaussianBlur(m, blurred, cv::Size(0, 0), sigma, sigma, cv::BORDER_REFLECT);
+    return blurred;
+  };
+  const cv::Mat a = to_mat(goal.pixels), b = to_mat(achieved);
+  double sum = 0;
+  for (int y = 0; y < goal.height; ++y) {
+    for (int x = 0; x < goal.width; ++x) {
+      const cv::Vec3d p = a.at<cv::Vec3d>(y, x), q = b.at<cv::Vec3d>(y, x);
+      sum += ciede2000(linear_rgb_to_lab({p[0], p[1], p[2]}), linear_rgb_to_lab({q[0], q[1], q[2]}));
+    }
+  }
+  return sum / static_cast<double>(goal.pixels.size());
+}
+
+/// The point of the convex hull of `gamut` closest to `target` (linear RGB),
+/// by Frank–Wolfe iterations with exact line search. Error diffusion can
+/// only reproduce, on average, colours inside this hull (mixtures of
+/// printable stacks); a goal colour outside it would wind residuals up.
+Rgb project_onto_hull(const std::vector<Rgb>& gamut, const Rgb& target) {
+  auto dot = [](const Rgb& a, const Rgb& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; };
+  auto sub = [](const Rgb& a, const Rgb& b) { return Rgb{a[0] - b[0], a[1] - b[1], a[2] - b[2]}; };
+  Rgb x = gamut.front();
+  for (const Rgb& c : gamut) {
+    if (dot(sub(c, target), sub(c, target)) < dot(sub(x, target), sub(x, target))) x = c;
+  }
+  for (int iteration = 0; iteration < 500; ++iteration) {
+    const Rgb gradient = sub(x, target);
+    const Rgb* best = &gamut.front();
+    double lowest = dot(gradient, *best);
+    for (const Rgb& c : gamut) {
+      const double value = dot(gradient, c);
+      if (value < lowest) lowest = value, best = &c;
+    }
+    const Rgb direction = sub(*best, x);
+    const double gap = -dot(gradient, direction);
+    if (gap < 1e-12) break;
+    const double step = std::min(1.0, gap / std::max(dot(direction, direction), 1e-300));
+    for (int c = 0; c < 3; ++c) x[c] += step * direction[c];
+  }
+  return x;
+}
+
+nlohmann::json delta_e_statistics(const std::vector<Rgb>& goal, const std::vector<Rgb>& achieved) {
+  std::vector<double> d;
+  for (size_t i = 0; i < goal.size(); ++i) {
+    d.push_back(ciede2000(linear_rgb_to_lab(goal[i]), linear_rgb_to_lab(achieved[i])));
+  }
+  std::vector<double> sorted = d;
+  std::sort(sorted.begin(), sorted.end());
+  double mean = 0;
+  for (double x : d) mean += x;
+  mean /= static_cast<double>(std::max<size_t>(d.size(), 1));
+  const auto p95 = sorted[static_cast<size_t>(std::ceil(0.95 * static_cast<double>(sorted.size()))) - 1];
+  return {{"mean", mean}, {"p95", p95}, {"max", sorted.back()}};
+}
+
+class AlbedoTranslator final : public Translator {
+ public:
+  AlbedoTranslator(const Properties& /*root*/, const Experiment& experiment) {
+    const Properties goal = experiment.goal();
+    const MaterialPalette& palette = experiment.palette();
+    const PrinterProfile& printer = experiment.printer();
+    columns_ = goal.get<std::array<int, 2>>("columns", {0, 0});
+    if (columns_[0] < 0 || columns_[1] < 0 || (columns_[0] == 0) != (columns_[1] == 0)) {
+      goal.fail("columns", "give two positive counts, or leave out for the image's size");
+    }
+    image_ = load_goal_image(goal, columns_);
+    const std::string backing = goal.get<std::string>("backing", "VeroWhitePlus");
+    palette.id(backing, goal.where("backing"));
+    std::vector<std::string> inks;
+    if (goal.has("inks")) {
+      inks = goal.get<std::vector<std::string>>("inks");
+      for (const std::string& ink : inks) palette.id(ink, goal.where("inks"));
+    } else {
+      for (const std::string& m : printer.model_materials) {
+        if (m != backing && palette.material(palette.id(m, goal.where())).kind != "transparent") inks.push_back(m);
+      }
+    }
+    if (inks.empty()) goal.fail("inks", "no ink besides the backing");
+    const double step = goal.get_in_range("layer_step_mm", printer.layer_mm, 1e-3, 10);
+    const double max_ink = goal.get_in_range("max_ink_mm", 5 * step, 0, 10);
+    const double shell = static_cast<double>(inks.size()) * max_ink + step;
+    metric_ = goal.get<std::string>("metric", "ciede2000");
+    diffusion_ = goal.get<bool>("error_diffusion", true);
+    low_pass_sigma_ = goal.get_in_range("low_pass_sigma_px", 1.5, 0.1, 100);
+
+    nlohmann::json layers = nlohmann::json::array();
+    for (const std::string& ink : inks) {
+      layers.push_back({{"material", ink},
+                        {"thickness_mm", {{"value", 0.0}, {"min", 0.0}, {"max", max_ink}, {"step", step}}}});
+    }
+    layers.push_back({{"material", backing}});
+    const nlohmann::json tree = {
+        {"type", "stratum"},
+        {"depth_mm", shell},
+        {"shell", {{"type", "column"}, {"count", columns_}, {"child", {{"type", "layered"}, {"layers", layers}}}}},
+        {"core", {{"type", "layered"}, {"material", backing}}}};
+    tree_ = std::make_unique<ReducerTree>(
+        Properties::wrap(tree, experiment.file().string() + " (albedo tree)"), palette);
+    tree_->bind(experiment.solid(), experiment.geometry_spec().field_voxel_mm);
+    outputs_ = TreeOutputOptions::read(goal, experiment, *tree_);
+
+    const nlohmann::json optimizer =
+        experiment.optimizer() ? experiment.optimizer()->value() : nlohmann::json{{"type", "exhaustive"}};
+    const PartContext context{palette};
+    auto make_tuner = [&](int i, int j, const Rgb& target) {
+      const nlohmann::json parts = {
+          {"simulator", {{"type", "albedo"}, {"depth_mm", shell}, {"step_mm", step / 8}}},
+          {"metric", {{"type", metric_}}},
+          {"goal", {{"type", "albedo"}, {"linear_rgb", target}}},
+          {"optimizer", optimizer}};
+      auto tuner = build_tuner(Properties::wrap(parts, experiment.file().string() + " (tuner)"),
+                               fmt::format("column_{}_{}", i, j), context);
+      tuner->set_node(tree_->node("shell/" + std::to_string(i + columns_[0] * j)));
+      return tuner;
+    };
+    gamut_ = printable_colours(*make_tuner(0, 0, {0.5, 0.5, 0.5}));
+    gamut_map_ = goal.get<bool>("gamut_map", diffusion_);
+    for (int j = 0; j < columns_[1]; ++j) {
+      for (int i = 0; i < columns_[0]; ++i) {
+        const Rgb& pixel = image_.pixels[static_cast<size_t>(j * columns_[0] + i)];
+        Rgb target = gamut_map_ ? gamut_map(pixel) : pixel;
+        // The goal type accepts [0, 1]; the hull lies inside up to rounding.
+        for (double& c : target) c = std::clamp(c, 0.0, 1.0);
+        network_.add(make_tuner(i, j, target));
+      }
+    }
+    network_.connect_grid(columns_[0], columns_[1], 4);
+    Phase phase;
+    phase.name = diffusion_ ? "error_diffusion" : "nearest";
+    phase.mode = diffusion_ ? Phase::Mode::serial : Phase::Mode::parallel;
+    // Albedos lie in [0, 1]; clamping the diffused targets there keeps
+    // out-of-gamut regions (deep ocean blue) from winding residuals up.
+    if (diffusion_) phase.coupling = std::make_shared<ErrorDiffusion>(columns_[0], std::pair{0.0, 1.0});
+    schedule_.add(std::move(phase));
+    inks_ = inks;
+  }
+
+  std::string summary() const override {
+    return fmt::format(
+        "albedo: {} x {} columns over the surface, each {} ink layer(s) ({}) over the backing; "
+        "one tuner per column ({}), {}",
+        columns_[0], columns_[1], inks_.size(), fmt::join(inks_, ", "), metric_,
+        diffusion_ ? "errors diffused in raster order" : "nearest stack per column");
+  }
+
+  const ReducerTree& tree() const override { return *tree_; }
+
+  void run(RunContext& context) override {
+    const RunRecord record = schedule_.run(network_, context.seed);
+    std::vector<Rgb> achieved = simulated_albedos();
+    // The baseline: each column's nearest stack alone, without diffusion.
+    std::vector<std::vector<double>> chosen;
+    for (size_t t = 0; t < network_.size(); ++t) chosen.push_back(network_.tuner(t).search_space().values());
+    std::vector<Rgb> nearest;
+    if (diffusion_) {
+      for (size_t t = 0; t < network_.size(); ++t) {
+        Tuner& tuner = network_.tuner(t);
+        const Rgb& pixel = image_.pixels[t];
+        std::copy(pixel.begin(), pixel.end(), tuner.effective_target().values().begin());
+        tuner.tune();
+      }
+      nearest = simulated_albedos();
+      for (size_t t = 0; t < network_.size(); ++t) network_.tuner(t).error_at(chosen[t]);
+    } else {
+      nearest = achieved;
+    }
+    tree_->evaluate();
+
+    context.result["albedo"] = {
+        {"columns", columns_},
+        {"inks", inks_},
+        {"metric", metric_},
+        {"error_diffusion", diffusion_},
+        {"gamut_map", gamut_map_},
+        {"printable_stacks", gamut_.size()},
+        {"delta_e00", delta_e_statistics(image_.pixels, achieved)},
+        {"delta_e00_nearest_only", delta_e_statistics(image_.pixels, nearest)},
+        {"low_pass_sigma_px", low_pass_sigma_},
+        {"low_pass_delta_e00", low_pass_delta_e(image_, achieved, low_pass_sigma_)},
+        {"low_pass_delta_e00_nearest_only", low_pass_delta_e(image_, nearest, low_pass_sigma_)}};
+    context.result["tuning"] = record.to_json(network_);
+    context.folder.write_text("convergence.csv", record.convergence_csv(network_));
+    write_convergence_plot(record, network_.size(), context.folder.path("preview/convergence.png"));
+    write_comparison(context.folder.path("preview/goal_vs_achieved.png"), achieved, nearest);
+    context.result["files"] = {{"previews", {"preview/convergence.png", "preview/goal_vs_achieved.png"}}};
+    if (context.timing) (*context.timing)["tuning_phase_seconds"] = record.phase_seconds;
+    write_tree_outputs(*tree_, outputs_, context);
+  }
+
+  static TypeDoc doc() {
+    TypeDoc doc{
+        "Spatially varying albedo (paper Fig. 7): a goal image over the surface's (u, v); "
+        "Stratum -> Column (one per pixel) -> Layered (one layer per ink over the backing), one "
+        "tuner per column with error diffusion over a 4-neighbour network.",
+        {{"goal.image", "file", "required", "goal colours (sRGB PNG/JPEG), row 0 at v = 0"},
+         {"goal.columns", "[nu, nv]", "the image's size", "columns over (u, v); the image is resampled by area"},
+         {"goal.inks", "[materials]", "printer materials but backing and clear", "one layer each, in this order from the surface"},
+         {"goal.backing", "material", "VeroWhitePlus", "below the inks and in the core"},
+         {"goal.layer_step_mm", "number (mm)", "the printer's layer", "thickness step of each ink layer"},
+         {"goal.max_ink_mm", "number (mm)", "5 steps", "thickest layer of one ink"},
+         {"goal.metric", "name", "ciede2000", "ciede2000 or rgb_mse"},
+         {"goal.error_diffusion", "bool", "true", "diffuse residuals (serial raster); false: nearest stack per column, in parallel"},
+         {"goal.gamut_map", "bool", "= error_diffusion", "first move each goal colour into the convex hull of the printable stacks' colours (what diffusion can mix)"},
+         {"goal.low_pass_sigma_px", "number", "1.5", "blur (in columns) of the low-pass error in result.json"},
+         {"optimizer", "object", "{\"type\": \"exhaustive\"}", "each column's optimizer"}},
+        R"({"translator": "albedo", "goal": {"image": "../images/earth_96x48.png"}})"};
+    for (PropertyDoc& d : TreeOutputOptions::docs()) doc.properties.push_back(std::move(d));
+    return doc;
+  }
+
+ private:
+  /// Every stack a column can be printed with, simulated (the tuner's search space enumerated).
+  static std::vector<Rgb> printable_colours(Tuner& tuner) {
+    std::vector<Parameter*> axes;
+    long long count = 1;
+    for (const auto& e : tuner.search_space().entries()) {
+      axes.push_back(e.parameter);
+      count *= e.parameter->cardinality();
+    }
+    std::vector<Rgb> out;
+    std::vector<double> x(axes.size());
+    for (long long index = 0; index < count; ++index) {
+      long long rest = index;
+      for (size_t a = 0; a < axes.size(); ++a) {
+        x[a] = axes[a]->admissible(rest % axes[a]->cardinality());
+        rest /= axes[a]->cardinality();
+      }
+      tuner.error_at(x);
+      out.push_back(static_cast<const AlbedoObservation&>(tuner.simulated()).rgb);
+    }
+    return out;
+  }
+
+  /// A goal colour diffusion can reproduce on average: its projection onto the
+  /// hull of the printable colours when that is within ΔE00 1 of it, else the printable colour nearest to it
+  /// in ΔE00 (a projection in linear RGB would turn dark out-of-gamut colours,
+  /// close in RGB, into perceptually distant ones).
+  Rgb gamut_map(const Rgb& pixel) const {
+    const Rgb projected = project_onto_hull(gamut_, pixel);
+    const Lab lab = linear_rgb_to_lab(pixel);
+    // Inside, or outside by no more than 8-bit rounding of the goal image.
+    if (ciede2000(lab, linear_rgb_to_lab(projected)) < 1.0) return projected;
+    const Rgb* best = &gamut_.front();
+    double lowest = ciede2000(lab, linear_rgb_to_lab(*best));
+    for (const Rgb& c : gamut_) {
+      const double d = ciede2000(lab, linear_rgb_to_lab(c));
+      if (d < lowest) lowest = d, best = &c;
+    }
+    return *best;
+  }
+
+  std::vector<Rgb> simulated_albedos() {
+    std::vector<Rgb> out;
+    for (size_t t = 0; t < network_.size(); ++t) {
+      Tuner& tuner = network_.tuner(t);
+      tuner.error();  // simulates at the current parameters
+      out.push_back(static_cast<const AlbedoObservation&>(tuner.simulated()).rgb);
+    }
+    return out;
+  }
+
+  void write_comparison(const std::filesystem::path& file, const std::vector<Rgb>& achieved,
+                        const std::vector<Rgb>& nearest) const {
+    const int scale = std::max(1, 256 / std::max(columns_[0], columns_[1]));
+    const int w = columns_[0] * scale, h = columns_[1] * scale, gap = 8;
+    cv::Mat image(h, 3 * w + 2 * gap, CV_8UC3, cv::Scalar(255, 255, 255));
+    const std::vector<Rgb>* panels[] = {&image_.pixels, &achieved, &nearest};
+    for (int p = 0; p < 3; ++p) {
+      for (int y = 0; y < h; ++y) {
+        for (int x = 0; x < w; ++x) {
+          const Rgb& c = (*panels[p])[static_cast<size_t>((y / scale) * columns_[0] + x / scale)];
+          image.at<cv::Vec3b>(y, p * (w + gap) + x) =
+              cv::Vec3b(static_cast<uchar>(std::lround(255 * linear_to_srgb(c[2]))),
+                        static_cast<uchar>(std::lround(255 * linear_to_srgb(c[1]))),
+                        static_cast<uchar>(std::lround(255 * linear_to_srgb(c[0]))));
+        }
+      }
+    }
+    if (!cv::imwrite(file.string(), image)) throw std::runtime_error("cannot write " + file.string());
+  }
+
+  std::array<int, 2> columns_{0, 0};
+  GoalImage image_;
+  std::vector<std::string> inks_;
+  std::string metric_;
+  bool diffusion_ = true;
+  bool gamut_map_ = true;
+  std::vector<Rgb> gamut_;  ///< albedo of every printable stack
+  double low_pass_sigma_ = 1.5;
+  std::unique_ptr<ReducerTree> tree_;
+  TreeOutputOptions outputs_;
+  TunerNetwork network_;
+  Schedule schedule_;
+};
+
+}  // namespace
+}  // namespace spec2fab
+
+SPEC2FAB_REGISTER(spec2fab::TranslatorRegistry, spec2fab::AlbedoTranslator, "albedo")
