@@ -87,7 +87,11 @@ double Tuner::error() {
 }
 
 double Tuner::error_at(std::span<const double> x) {
-  for (size_t i = 0; i < x.size(); ++i) space_.entries()[i].parameter->set(x[i]);
+  const auto& entries = space_.entries();
+  for (size_t i = 0; i < x.size(); ++i) {
+    // Optimizers often move one coordinate; snapping an unchanged one is wasted work.
+    if (Parameter& p = *entries[i].parameter; x[i] != p.value()) p.set(x[i]);
+  }
   evaluate_subtree(*node_);
   return error();
 }

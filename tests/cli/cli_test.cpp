@@ -129,7 +129,8 @@ TEST_F(Cli, BadInputIsOneLineAndExitCodeTwo) {
        "/geometry/mesh: file not found"},
       {valid_body(R"({"type": "layered", "material": "VeroMagenta"})"),
        "/goal/tree/material: material 'VeroMagenta' is not loaded in printer"},
-      {valid_body(kTree, "", "albedo"), "/translator: unknown translator 'albedo'"},
+      {valid_body(kTree, "", "albedoo"),
+       "/translator: unknown translator 'albedoo'; did you mean 'albedo'?"},
   };
   for (const Case& c : cases) {
     const fs::path file = experiment("bad", c.body);
