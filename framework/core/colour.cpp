@@ -15,6 +15,10 @@ double linear_to_srgb(double linear) {
   return linear <= 0.0031308 ? 12.92 * linear : 1.055 * std::pow(linear, 1 / 2.4) - 0.055;
 }
 
+unsigned char linear_to_srgb8(double linear) {
+  return static_cast<unsigned char>(std::lround(255 * linear_to_srgb(linear)));
+}
+
 Lab linear_rgb_to_lab(const std::array<double, 3>& rgb) {
   // IEC 61966-2-1 primaries; white (0.95047, 1, 1.08883) is their sum per row.
   const double x = 0.4124564 * rgb[0] + 0.3575761 * rgb[1] + 0.1804375 * rgb[2];

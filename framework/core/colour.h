@@ -14,6 +14,8 @@ using Lab = std::array<double, 3>;  ///< L*, a*, b*
 /// clamps its input to that range).
 double srgb_to_linear(double encoded);
 double linear_to_srgb(double linear);
+/// linear_to_srgb as an 8-bit value, for writing images.
+unsigned char linear_to_srgb8(double linear);
 
 /// Linear sRGB (D65, [0,1]) to CIELAB with the D65 reference white.
 Lab linear_rgb_to_lab(const std::array<double, 3>& rgb);

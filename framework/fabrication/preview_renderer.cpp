@@ -136,9 +136,7 @@ void render_preview(const std::vector<Mesh>& meshes, const MaterialPalette& pale
       sum /= kSamples * kSamples;
       // OpenCV stores BGR.
       image.at<cv::Vec3b>(row, col) =
-          cv::Vec3b(static_cast<uchar>(std::lround(255 * linear_to_srgb(sum.z()))),
-                    static_cast<uchar>(std::lround(255 * linear_to_srgb(sum.y()))),
-                    static_cast<uchar>(std::lround(255 * linear_to_srgb(sum.x()))));
+          cv::Vec3b(linear_to_srgb8(sum.z()), linear_to_srgb8(sum.y()), linear_to_srgb8(sum.x()));
     }
   });
   const fs::path partial = partial_name(file);

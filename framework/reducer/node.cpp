@@ -93,4 +93,14 @@ void repeated_children_to_json(const std::vector<NodePtr>& children,
   }
 }
 
+MaterialId route_to_material(const ReducerNode& subtree, const QueryPoint& point, LocalFrame frame) {
+  const ReducerNode* node = &subtree;
+  while (node->role() == ReducerNode::Role::geometry) {
+    const GeometryNode::Route route = static_cast<const GeometryNode*>(node)->route(point, frame);
+    node = &node->child(static_cast<size_t>(route.child));
+    frame = route.frame;
+  }
+  return static_cast<const MaterialNode*>(node)->material(point, frame);
+}
+
 }  // namespace spec2fab

@@ -111,6 +111,10 @@ class MaterialNode : public ReducerNode {
   MaterialNode(const MaterialNode&) = default;
 };
 
+/// The material a subtree assigns to `point`, given in `frame` (the frame the
+/// subtree's root reads): routes through geometry nodes down to a material node.
+MaterialId route_to_material(const ReducerNode& subtree, const QueryPoint& point, LocalFrame frame);
+
 /// clone() through the copy constructor.
 template <class Derived, class Base>
 class ClonableNode : public Base {

@@ -86,14 +86,7 @@ nlohmann::json ReducerTree::to_json() const { return root_->to_json(*palette_); 
 
 MaterialId ReducerTree::walk(const QueryPoint& point) const {
   if (!point.surface.inside) return kVoid;
-  const ReducerNode* node = root_.get();
-  LocalFrame frame{point.world.x(), point.world.y(), point.world.z()};
-  while (node->role() == ReducerNode::Role::geometry) {
-    const GeometryNode::Route route = static_cast<const GeometryNode*>(node)->route(point, frame);
-    node = &node->child(static_cast<size_t>(route.child));
-    frame = route.frame;
-  }
-  return static_cast<const MaterialNode*>(node)->material(point, frame);
+  return route_to_material(*root_, point, {point.world.x(), point.world.y(), point.world.z()});
 }
 
 ReducerTree::Query::Query(const ReducerTree& tree)

@@ -15,10 +15,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-uchar encode_srgb(double linear) {
-  return static_cast<uchar>(std::lround(255 * linear_to_srgb(linear)));
-}
-
 void write_text(const fs::path& file, const std::string& text) {
   std::ofstream out(file, std::ios::binary);
   out << text;
@@ -37,10 +33,10 @@ cv::Mat to_png_image(int width, int height, int channels, std::span<const double
       const size_t i = (static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x)) *
                        static_cast<size_t>(channels);
       if (channels == 1) {
-        image.at<uchar>(y, x) = encode_srgb(linear[i]);
+        image.at<uchar>(y, x) = linear_to_srgb8(linear[i]);
       } else {  // OpenCV stores BGR
         image.at<cv::Vec3b>(y, x) =
-            cv::Vec3b(encode_srgb(linear[i + 2]), encode_srgb(linear[i + 1]), encode_srgb(linear[i]));
+            cv::Vec3b(linear_to_srgb8(linear[i + 2]), linear_to_srgb8(linear[i + 1]), linear_to_srgb8(linear[i]));
       }
     }
   }
@@ -82,7 +78,7 @@ std::vector<std::string> write_observation(const Observation& observation, const
     std::string csv = "channel,linear,srgb_8bit\n";
     static const char* names[] = {"r", "g", "b"};
     for (int c = 0; c < 3; ++c) {
-      csv += fmt::format("{},{:.9g},{}\n", names[c], albedo->rgb[c], encode_srgb(albedo->rgb[c]));
+      csv += fmt::format("{},{:.9g},{}\n", names[c], albedo->rgb[c], linear_to_srgb8(albedo->rgb[c]));
     }
     write_text(folder / "albedo.csv", csv);
     std::vector<double> swatch;

@@ -16,6 +16,7 @@
 #include <mutex>
 #include <vector>
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include "albedo/kubelka_munk.h"
@@ -96,8 +97,10 @@ class AlbedoSimulator final : public SimulatorFor<AlbedoObservation> {
 
  private:
   Rgb compute(const ReducerNode& subtree) {
+    const QueryPoint no_surface;  // the subtree is read in its own frame only
     for (size_t i = 0; i < samples_.size(); ++i) {
-      samples_[i] = material_at(subtree, (static_cast<double>(i) + 0.5) * step_mm_);
+      samples_[i] = route_to_material(
+          subtree, no_surface, {lateral_a_, lateral_b_, (static_cast<double>(i) + 0.5) * step_mm_});
     }
     // What lies below the sampled depth counts as infinitely thick; then each
     // run of equal samples is one layer, composed from the bottom up.
@@ -124,10 +127,13 @@ class AlbedoSimulator final : public SimulatorFor<AlbedoObservation> {
     evaluate_subtree(node);
     // The key: the subtree with its free parameters at their first values,
     // plus everything else that changes the result.
-    const std::string key = node.to_json(*palette_).dump() + "|" + std::to_string(depth_mm_) +
-                            "|" + std::to_string(step_mm_) + "|" + std::to_string(lateral_a_) +
-                            "|" + std::to_string(lateral_b_) + "|" +
-                            std::to_string(reinterpret_cast<std::uintptr_t>(palette_));
+    // Materials are named in the JSON; their optics (which palettes may
+    // differ in) are part of the key too.
+    std::string key = node.to_json(*palette_).dump();
+    for (double v : {depth_mm_, step_mm_, lateral_a_, lateral_b_}) key += fmt::format("|{}", v);
+    for (const KubelkaMunkMaterial& m : optics_) {
+      for (const KubelkaMunkLayer& c : m.rgb) key += fmt::format("|{},{}", c.k, c.s);
+    }
     static std::mutex mutex;
     static std::map<std::string, std::shared_ptr<const AlbedoTable>> cache;
     std::lock_guard lock(mutex);
@@ -147,18 +153,6 @@ class AlbedoSimulator final : public SimulatorFor<AlbedoObservation> {
     for (size_t i = 0; i < free_.size(); ++i) free_[i]->set(saved[i]);
     evaluate_subtree(node);
     return entry;
-  }
-
-  MaterialId material_at(const ReducerNode& subtree, double depth) const {
-    const QueryPoint point;
-    LocalFrame frame{lateral_a_, lateral_b_, depth};
-    const ReducerNode* node = &subtree;
-    while (node->role() == ReducerNode::Role::geometry) {
-      const auto route = static_cast<const GeometryNode*>(node)->route(point, frame);
-      node = &node->child(static_cast<size_t>(route.child));
-      frame = route.frame;
-    }
-    return static_cast<const MaterialNode*>(node)->material(point, frame);
   }
 
   const MaterialPalette* palette_;

@@ -6,6 +6,8 @@
 
 #include <sys/wait.h>
 
+#include <nlohmann/json.hpp>
+
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -353,16 +355,19 @@ TEST_F(Cli, TunedRunRecordsEverySummaryAndFindsAReachableColour) {
   for (const char* name : {"result.json", "tree.json", "convergence.csv", "preview/convergence.png"}) {
     EXPECT_EQ(read(dir_ / "t1" / name), read(dir_ / "t2" / name)) << name;
   }
-  const std::string result = read(dir_ / "t1" / "result.json");
-  EXPECT_THAT(result, HasSubstr(R"("tuner": "exact")"));
-  EXPECT_THAT(result, HasSubstr(R"("tuner": "pale")"));
-  EXPECT_THAT(result, HasSubstr(R"("evaluations": 12)"));  // 11 thicknesses + the start
+  const auto result = nlohmann::json::parse(read(dir_ / "t1" / "result.json"));
+  const auto& runs = result["tuning"]["tuner_runs"];
+  ASSERT_EQ(runs.size(), 2u);
+  EXPECT_EQ(runs[0]["tuner"], "exact");
+  EXPECT_EQ(runs[1]["tuner"], "pale");
+  for (const auto& run : runs) EXPECT_EQ(run["evaluations"], 12);  // 11 thicknesses + the start
+  EXPECT_LT(result["tuning"]["tuners"][0]["final_error"].get<double>(), 1e-3);  // target from 6-digit CSV
   const std::string convergence = read(dir_ / "t1" / "convergence.csv");
   EXPECT_THAT(convergence, StartsWith("phase,sweep,tuner,iteration,evaluations,error,best_error\n"));
   EXPECT_THAT(convergence, HasSubstr("patches,0,exact,"));
-  // The exact patch found 0.2 mm; the pale one something thinner.
-  const std::string tuned = read(dir_ / "t1" / "tree.json");
-  EXPECT_THAT(tuned, HasSubstr(R"("value": 0.2)"));
+  // The exact patch (column 0) found the 0.2 mm the target was simulated at.
+  const auto tuned = nlohmann::json::parse(read(dir_ / "t1" / "tree.json"));
+  EXPECT_DOUBLE_EQ(tuned["shell"]["children"][0]["layers"][0]["thickness_mm"]["value"].get<double>(), 0.2);
 }
 
 TEST_F(Cli, TunerMistakesAreCaughtByValidate) {
@@ -436,14 +441,9 @@ TEST_F(Cli, ErrorDiffusionLowersTheLowPassColourErrorOfAnAlbedoPrint) {
   const Result r = spec2fab("run -q " + experiment("gradient", body).string() + " --out " +
                             (dir_ / "run").string());
   ASSERT_EQ(r.code, 0) << r.out << body;
-  const std::string result = read(dir_ / "run" / "result.json");
-  auto number_after = [&](const std::string& key) {
-    const size_t at = result.find("\"" + key + "\": ");
-    EXPECT_NE(at, std::string::npos) << key;
-    return std::stod(result.substr(at + key.size() + 4));
-  };
-  const double diffused = number_after("low_pass_delta_e00");
-  const double nearest = number_after("low_pass_delta_e00_nearest_only");
+  const auto albedo = nlohmann::json::parse(read(dir_ / "run" / "result.json"))["albedo"];
+  const double diffused = albedo["low_pass_delta_e00"].get<double>();
+  const double nearest = albedo["low_pass_delta_e00_nearest_only"].get<double>();
   std::printf("low-pass dE00: diffused %.3f, nearest only %.3f\n", diffused, nearest);
   EXPECT_LT(diffused, 0.7 * nearest) << "diffused " << diffused << ", nearest only " << nearest;
   EXPECT_TRUE(fs::is_regular_file(dir_ / "run" / "preview" / "goal_vs_achieved.png"));

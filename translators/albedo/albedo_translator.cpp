@@ -336,9 +336,7 @@ class AlbedoTranslator final : public Translator {
         for (int x = 0; x < w; ++x) {
           const Rgb& c = (*panels[p])[static_cast<size_t>((y / scale) * columns_[0] + x / scale)];
           image.at<cv::Vec3b>(y, p * (w + gap) + x) =
-              cv::Vec3b(static_cast<uchar>(std::lround(255 * linear_to_srgb(c[2]))),
-                        static_cast<uchar>(std::lround(255 * linear_to_srgb(c[1]))),
-                        static_cast<uchar>(std::lround(255 * linear_to_srgb(c[0]))));
+              cv::Vec3b(linear_to_srgb8(c[2]), linear_to_srgb8(c[1]), linear_to_srgb8(c[0]));
         }
       }
     }

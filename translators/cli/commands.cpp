@@ -158,8 +158,10 @@ int simulate_command(const SimulateArguments& arguments) {
                      " (known: " + join(simulators.names()) + ")");
   }
   const auto options = config.optional_object("simulator");
+  const Properties no_options =
+      Properties::wrap(nlohmann::json::object(), arguments.config.string() + " (simulator)");
   std::unique_ptr<Simulator> simulator = simulators.create_named(
-      arguments.simulator, options ? *options : config, "simulator", context);
+      arguments.simulator, options ? *options : no_options, "simulator", context);
   config.check_all_read();
 
   using Clock = std::chrono::steady_clock;

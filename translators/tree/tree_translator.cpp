@@ -22,8 +22,7 @@ namespace {
 
 class TreeTranslator final : public Translator {
  public:
-  TreeTranslator(const Properties& /*root*/, const Experiment& experiment)
-      : experiment_(experiment) {
+  TreeTranslator(const Properties& /*root*/, const Experiment& experiment) {
     const Properties goal = experiment.goal();
     tree_ = std::make_unique<ReducerTree>(goal.object("tree"), experiment.palette());
     tree_->bind(experiment.solid(), experiment.geometry_spec().field_voxel_mm);
@@ -76,7 +75,6 @@ class TreeTranslator final : public Translator {
   }
 
  private:
-  const Experiment& experiment_;
   void tune(RunContext& context) {
     TunerNetwork& network = tuning_->network;
     const RunRecord record = tuning_->schedule.run(network, context.seed);
