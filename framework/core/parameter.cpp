@@ -4,6 +4,8 @@
 #include <cmath>
 #include <sstream>
 
+#include <fmt/format.h>
+
 #include "core/properties.h"
 
 namespace spec2fab {
@@ -125,6 +127,22 @@ Parameter read_numeric_parameter(const Properties& properties, const std::string
   }
   const Properties spec = properties.object(key);
   const double value = spec.get<double>("value");
+  if (spec.has("choices")) {
+    if (spec.has("min") || spec.has("max") || spec.has("step")) {
+      spec.fail("choices", "give \"choices\" or a range (min, max, step), not both");
+    }
+    const auto choices = spec.get<std::vector<double>>("choices");
+    if (choices.empty()) spec.fail("choices", "no values to choose from");
+    std::vector<std::string> labels;
+    for (double c : choices) {
+      check_range(c, "choice");
+      labels.push_back(fmt::format("{:g}", c));
+    }
+    if (std::find(choices.begin(), choices.end(), value) == choices.end()) {
+      spec.fail("value", "is not among the choices");
+    }
+    return Parameter::choice(value, choices, std::move(labels), spec.get<bool>("free", true));
+  }
   const double lower = spec.get<double>("min", default_lower);
   const double upper = spec.get<double>("max", default_upper);
   const bool free = spec.get<bool>("free", true);
@@ -142,6 +160,9 @@ Parameter read_numeric_parameter(const Properties& properties, const std::string
 
 nlohmann::json numeric_parameter_to_json(const Parameter& parameter) {
   if (!parameter.is_free()) return parameter.value();
+  if (parameter.kind() == ParameterKind::choice) {
+    return {{"value", parameter.value()}, {"choices", parameter.choices()}};
+  }
   nlohmann::json out = {{"value", parameter.value()},
                         {"min", parameter.lower()},
                         {"max", parameter.upper()}};

@@ -65,6 +65,7 @@ class Parameter {
 ///   3.0                                            fixed value
 ///   {"value": 3.0, "min": 1, "max": 5}             free, continuous
 ///   {"value": 3.0, "min": 1, "max": 5, "step": 0.5, "free": false}
+///   {"value": 0.27, "choices": [0.135, 0.27, 0.54]}  free, one of a list
 /// `default_lower`/`default_upper` bound values given in the plain form and
 /// are the limits no bound may exceed.
 Parameter read_numeric_parameter(const Properties& properties, const std::string& key,

@@ -103,4 +103,12 @@ MaterialId route_to_material(const ReducerNode& subtree, const QueryPoint& point
   return static_cast<const MaterialNode*>(node)->material(point, frame);
 }
 
+void sample_along_depth(const ReducerNode& subtree, double a, double b, double step_mm,
+                        std::span<MaterialId> out) {
+  const QueryPoint no_surface;  // the subtree is read in its own frame only
+  for (size_t i = 0; i < out.size(); ++i) {
+    out[i] = route_to_material(subtree, no_surface, {a, b, (static_cast<double>(i) + 0.5) * step_mm});
+  }
+}
+
 }  // namespace spec2fab

@@ -14,6 +14,7 @@
 
 #include <functional>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -114,6 +115,12 @@ class MaterialNode : public ReducerNode {
 /// The material a subtree assigns to `point`, given in `frame` (the frame the
 /// subtree's root reads): routes through geometry nodes down to a material node.
 MaterialId route_to_material(const ReducerNode& subtree, const QueryPoint& point, LocalFrame frame);
+
+/// The materials a subtree assigns along its depth axis at lateral position
+/// (a, b) of its own frame: out[i] at depth (i + ½)·step_mm — how the layer
+/// simulators read a column's stack, whatever nodes make it.
+void sample_along_depth(const ReducerNode& subtree, double a, double b, double step_mm,
+                        std::span<MaterialId> out);
 
 /// clone() through the copy constructor.
 template <class Derived, class Base>

@@ -14,6 +14,8 @@
 #include <string_view>
 #include <vector>
 
+#include "core/radial_basis.h"
+
 namespace spec2fab {
 
 class Observation {
@@ -43,13 +45,27 @@ struct ImageObservation final : ObservationOf<ImageObservation> {
   std::span<double> values() override { return pixels; }
 };
 
-/// Radial diffuse reflectance profile R(r): `radius_mm` samples, 3 values (RGB) each.
+/// A radial diffuse reflectance profile R(r), RGB, as coefficients of an
+/// orthonormal Fourier–Bessel basis on a disc (core/radial_basis.h): the
+/// squared distance between two coefficient vectors is the area-integrated
+/// squared difference of the profiles. samples() gives R(r) at the basis's radii.
 struct RadialProfileObservation final : ObservationOf<RadialProfileObservation> {
   static constexpr std::string_view kType = "radial_profile";
-  std::vector<double> radius_mm;
-  std::vector<double> reflectance;  ///< 3·#radius_mm, RGB per sample
-  std::span<const double> values() const override { return reflectance; }
-  std::span<double> values() override { return reflectance; }
+  std::shared_ptr<const RadialBasis> basis;
+  std::vector<double> coefficients;  ///< 3 per basis function (RGB interleaved)
+
+  void reset(std::shared_ptr<const RadialBasis> b) {
+    basis = std::move(b);
+    coefficients.assign(3 * static_cast<size_t>(basis->size()), 0.0);
+  }
+  /// R(r_n) at basis->radii(), RGB interleaved.
+  std::vector<double> samples() const {
+    std::vector<double> out(coefficients.size());
+    basis->to_samples(coefficients, 3, out);
+    return out;
+  }
+  std::span<const double> values() const override { return coefficients; }
+  std::span<double> values() override { return coefficients; }
 };
 
 /// Node displacements (mm), 3 per node.

@@ -56,11 +56,13 @@ std::vector<std::string> write_observation(const Observation& observation, const
     return {"image.png"};
   }
   if (const auto* profile = dynamic_cast<const RadialProfileObservation*>(&observation)) {
+    // R(r) in 1/mm² (reflected flux per unit area per unit incident flux).
     std::string csv = "radius_mm,r,g,b\n";
-    for (size_t i = 0; i < profile->radius_mm.size(); ++i) {
-      csv += fmt::format("{:.6g},{:.9g},{:.9g},{:.9g}\n", profile->radius_mm[i],
-                         profile->reflectance[3 * i], profile->reflectance[3 * i + 1],
-                         profile->reflectance[3 * i + 2]);
+    const std::vector<double> samples = profile->samples();
+    const std::span<const double> radii = profile->basis->radii();
+    for (size_t i = 0; i < radii.size(); ++i) {
+      csv += fmt::format("{:.6g},{:.9g},{:.9g},{:.9g}\n", radii[i], samples[3 * i],
+                         samples[3 * i + 1], samples[3 * i + 2]);
     }
     write_text(folder / "profile.csv", csv);
     return {"profile.csv"};

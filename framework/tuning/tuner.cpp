@@ -45,6 +45,14 @@ class Tuner::TunerProblem final : public Problem {
   int dimension() const override { return static_cast<int>(domains_.size()); }
   const VariableDomain& domain(int i) const override { return domains_[static_cast<size_t>(i)]; }
   double error(std::span<const double> x) override { return tuner_.error_at(x); }
+  bool has(Capability capability) const override {
+    if (capability == Capability::lower_bound) return static_cast<bool>(tuner_.lower_bound_);
+    return Problem::has(capability);
+  }
+  double lower_bound(std::span<const double> x, int assigned) override {
+    if (!tuner_.lower_bound_) return Problem::lower_bound(x, assigned);
+    return tuner_.lower_bound_(x, assigned, *tuner_.effective_target_);
+  }
 
  private:
   Tuner& tuner_;

@@ -9,6 +9,7 @@
 /// `published()` is the state neighbours read.
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -41,6 +42,15 @@ class Tuner {
   double error_at(std::span<const double> x);
   /// The Problem optimizers see: error over the free parameters.
   Problem& problem();
+  /// The bound callback branch and bound needs (paper §6.2): a lower bound on
+  /// the error of every completion of a partial assignment — variables
+  /// 0..assigned-1 of the search space take x[0..assigned) — against the
+  /// effective target. Problem-specific, so a translator supplies it; with
+  /// one set, problem() has Capability::lower_bound.
+  using LowerBound =
+      std::function<double(std::span<const double> x, int assigned, const Observation& target)>;
+  void set_lower_bound(LowerBound bound) { lower_bound_ = std::move(bound); }
+
   /// Runs the optimizer from the current values and leaves the best ones set.
   /// Parameters fixed since set_node (by an earlier schedule phase) are left
   /// alone; with nothing free the summary says so and nothing runs.
@@ -70,6 +80,7 @@ class Tuner {
   std::unique_ptr<Observation> simulated_, effective_target_;
   std::unique_ptr<TunerProblem> problem_;
   std::vector<double> published_;
+  LowerBound lower_bound_;
 };
 
 /// Builds a tuner from C++ parts; does not compile when the simulator, metric

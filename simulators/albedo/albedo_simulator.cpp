@@ -97,11 +97,7 @@ class AlbedoSimulator final : public SimulatorFor<AlbedoObservation> {
 
  private:
   Rgb compute(const ReducerNode& subtree) {
-    const QueryPoint no_surface;  // the subtree is read in its own frame only
-    for (size_t i = 0; i < samples_.size(); ++i) {
-      samples_[i] = route_to_material(
-          subtree, no_surface, {lateral_a_, lateral_b_, (static_cast<double>(i) + 0.5) * step_mm_});
-    }
+    sample_along_depth(subtree, lateral_a_, lateral_b_, step_mm_, samples_);
     // What lies below the sampled depth counts as infinitely thick; then each
     // run of equal samples is one layer, composed from the bottom up.
     Rgb rgb{};

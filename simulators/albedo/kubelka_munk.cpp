@@ -4,15 +4,11 @@
 #include <limits>
 
 namespace spec2fab {
-namespace {
-
 double boundary_factor(double refractive_index) {
   const double eta = refractive_index;
   const double fdr = -1.440 / (eta * eta) + 0.710 / eta + 0.668 + 0.0636 * eta;
   return (1 + fdr) / (1 - fdr);
 }
-
-}  // namespace
 
 double dipole_albedo(double absorption_per_mm, double reduced_scattering_per_mm,
                      double refractive_index) {

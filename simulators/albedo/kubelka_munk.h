@@ -14,6 +14,11 @@
 
 namespace spec2fab {
 
+/// The diffusion boundary factor A = (1 + Fdr) / (1 − Fdr) of a boundary
+/// with relative refractive index η (Fdr: Egan & Hilgeman's fit of the diffuse
+/// Fresnel reflectance, as Jensen et al. 2001). η = 1 gives A ≈ 1.
+double boundary_factor(double refractive_index);
+
 /// Total diffuse reflectance of a semi-infinite slab in the dipole diffusion
 /// model (Jensen et al. 2001, eq. for Rd with the Fdr fit of Egan & Hilgeman).
 double dipole_albedo(double absorption_per_mm, double reduced_scattering_per_mm,

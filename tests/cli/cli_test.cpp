@@ -448,3 +448,50 @@ TEST_F(Cli, ErrorDiffusionLowersTheLowPassColourErrorOfAnAlbedoPrint) {
   EXPECT_LT(diffused, 0.7 * nearest) << "diffused " << diffused << ", nearest only " << nearest;
   EXPECT_TRUE(fs::is_regular_file(dir_ / "run" / "preview" / "goal_vs_achieved.png"));
 }
+
+TEST_F(Cli, SimulateRunsTheSubsurfaceSimulator) {
+  const Result r = spec2fab("simulate subsurface " +
+                            (kDatasets / "simulations/subsurface_white_over_cyan.json").string() +
+                            " --out " + (dir_ / "sim").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  std::ifstream in(dir_ / "sim" / "profile.csv");
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line, "radius_mm,r,g,b");
+  std::vector<std::array<double, 4>> rows;
+  while (std::getline(in, line)) {
+    std::array<double, 4> row{};
+    std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf", &row[0], &row[1], &row[2], &row[3]);
+    rows.push_back(row);
+  }
+  ASSERT_EQ(rows.size(), 400u);
+  EXPECT_GT(rows[0][1], 0);
+  // Light that reaches the cyan below loses its red: far from the beam, red is weaker than blue.
+  EXPECT_LT(rows[100][1], rows[100][3]);
+}
+
+TEST_F(Cli, SubsurfaceChessboardTunesEveryColumnAndReportsProfileErrors) {
+  const std::string body =
+      R"({"name": "board", "translator": "subsurface",
+          "geometry": {"mesh": ")" + (kDatasets / "meshes/board_60x60x8.stl").string() + R"(", "uv": "planar"},
+          "goal": {"media": ["marble", "skimmilk"], "columns": [2, 2], "layers": 2,
+                   "materials": ["VeroWhitePlus", "VeroCyan"], "thickness_steps": [1, 2],
+                   "radius_mm": 8, "samples": 128},
+          "output": {"slices": false, "stl": false, "3mf": false, "render": false},
+          "materials": ")" + (kDatasets / "materials/polyjet.json").string() + R"(",
+          "printer": ")" + (dir_ / "coarse_printer.json").string() + R"("})";
+  const Result r = spec2fab("run -q " + experiment("board", body).string() + " --out " + (dir_ / "run").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto result = nlohmann::json::parse(read(dir_ / "run" / "result.json"));
+  const auto& s = result["subsurface"];
+  EXPECT_EQ(s["stacks"].size(), 4u);
+  // Diagonal squares hold the same medium and reach the same stack and error.
+  EXPECT_EQ(s["stacks"][0]["layers"], s["stacks"][3]["layers"]);
+  EXPECT_EQ(s["stacks"][1]["layers"], s["stacks"][2]["layers"]);
+  EXPECT_GT(s["profile_rms_per_mm2"]["mean"].get<double>(), 0);
+  EXPECT_EQ(s["branch_and_bound"]["exhaustive_candidates_per_column"].get<double>(), 16);
+  EXPECT_LE(s["branch_and_bound"]["fraction_of_exhaustive"]["max"].get<double>(), 1);
+  for (const char* file : {"convergence.png", "profiles.png", "appearance.png"}) {
+    EXPECT_TRUE(fs::is_regular_file(dir_ / "run" / "preview" / file)) << file;
+  }
+}

@@ -80,6 +80,25 @@ TEST(Parameter, JsonRoundTrip) {
   EXPECT_TRUE(q.is_free());
 }
 
+TEST(Parameter, NumericChoicesReadAndRoundTrip) {
+  const Properties props = Properties::parse(
+      R"({"t": {"value": 0.27, "choices": [0.135, 0.27, 0.54]},
+          "missing": {"value": 0.3, "choices": [0.135, 0.27]},
+          "both": {"value": 0.27, "choices": [0.27], "step": 0.1}})",
+      "p.json");
+  const Parameter t = read_numeric_parameter(props, "t", 0, 0, 10);
+  EXPECT_EQ(t.kind(), ParameterKind::choice);
+  EXPECT_TRUE(t.is_free());
+  EXPECT_EQ(t.cardinality(), 3);
+  EXPECT_EQ(t.admissible(2), 0.54);
+  EXPECT_THROW(read_numeric_parameter(props, "missing", 0, 0, 10), InputError);
+  EXPECT_THROW(read_numeric_parameter(props, "both", 0, 0, 10), InputError);
+  const Properties back = Properties::wrap({{"x", numeric_parameter_to_json(t)}}, "rt");
+  const Parameter u = read_numeric_parameter(back, "x", 0, 0, 10);
+  EXPECT_EQ(u.choices(), t.choices());
+  EXPECT_EQ(u.value(), 0.27);
+}
+
 TEST(SearchSpace, GetAndSetAsVector) {
   Parameter a = Parameter::continuous(0.5, 0, 1, true);
   Parameter b = Parameter::discrete(2, 0, 4, 1, true);

@@ -18,6 +18,7 @@
 
 #include "core/colour.h"
 #include "reducer/reducer_tree.h"
+#include "spec/surface_columns.h"
 #include "spec/translator.h"
 #include "spec/tree_outputs.h"
 #include "tuning/convergence_plot.h"
@@ -154,15 +155,7 @@ class AlbedoTranslator final : public Translator {
       layers.push_back({{"material", ink},
                         {"thickness_mm", {{"value", 0.0}, {"min", 0.0}, {"max", max_ink}, {"step", step}}}});
     }
-    layers.push_back({{"material", backing}});
-    const nlohmann::json tree = {
-        {"type", "stratum"},
-        {"depth_mm", shell},
-        {"shell", {{"type", "column"}, {"count", columns_}, {"child", {{"type", "layered"}, {"layers", layers}}}}},
-        {"core", {{"type", "layered"}, {"material", backing}}}};
-    tree_ = std::make_unique<ReducerTree>(
-        Properties::wrap(tree, experiment.file().string() + " (albedo tree)"), palette);
-    tree_->bind(experiment.solid(), experiment.geometry_spec().field_voxel_mm);
+    tree_ = build_surface_column_tree(experiment, shell, columns_, std::move(layers), backing, "albedo");
     outputs_ = TreeOutputOptions::read(goal, experiment, *tree_);
 
     const nlohmann::json optimizer =

@@ -1,0 +1,160 @@
+// The goal and metric that speak radial_profile.
+
+#include "subsurface/subsurface_parts.h"
+
+#include <algorithm>
+
+#include "albedo/kubelka_munk.h"
+#include "core/strings.h"
+#include "tuning/parts.h"
+
+namespace spec2fab {
+
+ProfileGrid ProfileGrid::read(const Properties& properties) {
+  ProfileGrid grid;
+  grid.radius_mm = properties.get_in_range("radius_mm", grid.radius_mm, 0.1, 1e3);
+  grid.samples = static_cast<int>(properties.get_in_range("samples", grid.samples, 8, 4096));
+  return grid;
+}
+
+const std::vector<MeasuredMedium>& jensen2001_media() {
+  static const std::vector<MeasuredMedium> media = [] {
+    struct Row {
+      const char* name;
+      std::array<double, 3> scattering, absorption;
+    };
+    const Row rows[] = {
+        {"apple", {2.29, 2.39, 1.97}, {0.0030, 0.0034, 0.046}},
+        {"chicken1", {0.15, 0.21, 0.38}, {0.015, 0.077, 0.19}},
+        {"cream", {7.38, 5.47, 3.15}, {0.0002, 0.0028, 0.0163}},
+        {"ketchup", {0.18, 0.07, 0.03}, {0.061, 0.97, 1.45}},
+        {"marble", {2.19, 2.62, 3.00}, {0.0021, 0.0041, 0.0071}},
+        {"potato", {0.68, 0.70, 0.55}, {0.0024, 0.0090, 0.12}},
+        {"skimmilk", {0.70, 1.22, 1.90}, {0.0014, 0.0025, 0.0142}},
+        {"skin1", {0.74, 0.88, 1.01}, {0.032, 0.17, 0.48}},
+        {"skin2", {1.09, 1.59, 1.79}, {0.013, 0.070, 0.145}},
+        {"wholemilk", {2.55, 3.21, 3.77}, {0.0011, 0.0024, 0.014}},
+    };
+    std::vector<MeasuredMedium> out;
+    for (const Row& row : rows) {
+      MeasuredMedium m{row.name, {}, 1.3};
+      for (size_t c = 0; c < 3; ++c) m.rgb[c] = {row.absorption[c], row.scattering[c]};
+      out.push_back(m);
+    }
+    return out;
+  }();
+  return media;
+}
+
+MeasuredMedium read_medium(const Properties& properties, const std::string& key) {
+  if (properties.peek(key).is_string()) {
+    const std::string name = properties.get<std::string>(key);
+    std::vector<std::string> names;
+    for (const MeasuredMedium& m : jensen2001_media()) {
+      if (m.name == name) return m;
+      names.push_back(m.name);
+    }
+    properties.fail(key, "unknown medium '" + name + "'" + did_you_mean(name, names) +
+                             " (known: " + join(names) + ")");
+  }
+  const Properties spec = properties.object(key);
+  MeasuredMedium m{spec.get<std::string>("name", key), {}, spec.get_in_range("refractive_index", 1.3, 1.0, 3.0)};
+  const auto absorption = spec.get<std::array<double, 3>>("absorption_per_mm");
+  const auto scattering = spec.get<std::array<double, 3>>("reduced_scattering_per_mm");
+  for (size_t c = 0; c < 3; ++c) {
+    if (!(absorption[c] >= 0) || !(scattering[c] > 0) || !std::isfinite(absorption[c]) ||
+        !std::isfinite(scattering[c])) {
+      spec.fail("coefficients must be finite, σa ≥ 0 and σs' > 0");
+    }
+    m.rgb[c] = {absorption[c], scattering[c]};
+  }
+  return m;
+}
+
+std::vector<double> dipole_profile_coefficients(const MeasuredMedium& medium, const RadialBasis& basis) {
+  std::vector<double> out(3 * static_cast<size_t>(basis.size()));
+  const double boundary = boundary_factor(medium.refractive_index);
+  for (size_t m = 0; m < static_cast<size_t>(basis.size()); ++m) {
+    for (size_t c = 0; c < 3; ++c) {
+      out[3 * m + c] = dipole_reflectance_spectrum(medium.rgb[c], boundary, basis.frequencies()[m]) *
+                       basis.coefficient_scale()[m];
+    }
+  }
+  return out;
+}
+
+namespace {
+
+/// The profile of a homogeneous medium (semi-infinite, under air) as the target.
+class RadialProfileGoal final : public GoalFor<RadialProfileObservation> {
+ public:
+  RadialProfileGoal(const Properties& properties, const PartContext& context) {
+    const ProfileGrid grid = ProfileGrid::read(properties);
+    if (properties.has("medium") == properties.has("material")) {
+      properties.fail("give the target as \"medium\" (measured coefficients) or \"material\" (a print material)");
+    }
+    MeasuredMedium medium;
+    if (properties.has("medium")) {
+      medium = read_medium(properties, "medium");
+    } else {
+      const std::string name = properties.get<std::string>("material");
+      const Material& m = context.palette.material(context.palette.id(name, properties.where("material")));
+      medium.name = name;
+      medium.refractive_index = m.refractive_index.value;
+      for (size_t c = 0; c < 3; ++c) {
+        medium.rgb[c] = {m.absorption_per_mm.value[c], m.reduced_scattering_per_mm.value[c]};
+      }
+    }
+    target_.reset(grid.basis());
+    target_.coefficients = dipole_profile_coefficients(medium, *grid.basis());
+  }
+  std::string name() const override { return "radial_profile"; }
+  const RadialProfileObservation& typed_target() const override { return target_; }
+  static TypeDoc doc() {
+    return {"The reflectance profile of a homogeneous semi-infinite medium under air (Jensen et "
+            "al. 2001's dipole). Describes radial_profile.",
+            {{"medium", "name or object", "required (or material)",
+              "apple, chicken1, cream, ketchup, marble, potato, skimmilk, skin1, skin2, wholemilk "
+              "(Jensen et al. 2001), or {absorption_per_mm, reduced_scattering_per_mm, refractive_index}"},
+             {"material", "material name", "required (or medium)", "a material of the run's palette"},
+             {"radius_mm", "number (mm)", "16", "must match the simulator's"},
+             {"samples", "integer", "400", "must match the simulator's"}},
+            R"({"type": "radial_profile", "medium": "marble"})"};
+  }
+
+ private:
+  RadialProfileObservation target_;
+};
+
+/// ∫∫ |R_simulated − R_target|² dA summed over RGB (1/mm²): the squared
+/// coefficient distance in the orthonormal basis.
+class ProfileL2 final : public MetricFor<RadialProfileObservation> {
+ public:
+  ProfileL2(const Properties& /*properties*/, const PartContext& /*context*/) {}
+  std::string name() const override { return "profile_l2"; }
+  using MetricFor::error;
+  double error(const RadialProfileObservation& simulated, const RadialProfileObservation& target) const override {
+    if (simulated.basis->size() != target.basis->size() ||
+        simulated.basis->radius_mm() != target.basis->radius_mm()) {
+      throw InputError("profile_l2: the simulator's and the goal's profile grids differ (radius_mm, samples)");
+    }
+    double sum = 0;
+    for (size_t i = 0; i < simulated.coefficients.size(); ++i) {
+      const double d = simulated.coefficients[i] - target.coefficients[i];
+      sum += d * d;
+    }
+    return sum;
+  }
+  static TypeDoc doc() {
+    return {"Squared difference of two reflectance profiles integrated over the disc, summed over "
+            "R, G, B (1/mm^2). Compares radial_profile.",
+            {},
+            R"({"type": "profile_l2"})"};
+  }
+};
+
+}  // namespace
+}  // namespace spec2fab
+
+SPEC2FAB_REGISTER(spec2fab::GoalRegistry, spec2fab::RadialProfileGoal, "radial_profile")
+SPEC2FAB_REGISTER(spec2fab::MetricRegistry, spec2fab::ProfileL2, "profile_l2")

@@ -1,0 +1,44 @@
+#pragma once
+/// Shared pieces of the subsurface parts: the profile grid every part of a
+/// tuner must agree on, and measured media for goals.
+
+#include <array>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/properties.h"
+#include "core/radial_basis.h"
+#include "subsurface/multipole.h"
+
+namespace spec2fab {
+
+/// The disc radius and basis size of radial profiles ("radius_mm", "samples").
+struct ProfileGrid {
+  double radius_mm = 16;
+  int samples = 400;
+
+  static ProfileGrid read(const Properties& properties);
+  std::shared_ptr<const RadialBasis> basis() const { return RadialBasis::shared(samples, radius_mm); }
+};
+
+/// A homogeneous translucent medium, RGB.
+struct MeasuredMedium {
+  std::string name;
+  std::array<DiffusionMedium, 3> rgb;
+  double refractive_index = 1.3;
+};
+
+/// Jensen, Marschner, Levoy & Hanrahan 2001, "A practical model for
+/// subsurface light transport", Fig. 5: σs' and σa (1/mm) measured for
+/// R, G, B, with η = 1.3 for all.
+const std::vector<MeasuredMedium>& jensen2001_media();
+
+/// A medium from JSON: a name from jensen2001_media(), or
+/// {"absorption_per_mm": [r,g,b], "reduced_scattering_per_mm": [r,g,b], "refractive_index": η}.
+MeasuredMedium read_medium(const Properties& properties, const std::string& key);
+
+/// The semi-infinite dipole profile of a medium under air, as basis coefficients (RGB interleaved).
+std::vector<double> dipole_profile_coefficients(const MeasuredMedium& medium, const RadialBasis& basis);
+
+}  // namespace spec2fab

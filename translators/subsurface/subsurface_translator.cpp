@@ -1,0 +1,336 @@
+// The subsurface translator (paper §7.2, Fig. 8, after Hašan et al. 2010):
+// a print whose translucency — the radial reflectance profile R(r) at each
+// surface point — matches goal profiles. The same tree as the albedo
+// translator: Stratum (shell) → Column (one per goal point over the
+// surface's (u, v)) → Layered, here with four layers of tunable material and
+// thickness over a backing. One tuner per column, independent, run in
+// parallel; each searches its stacks by branch and bound with the profile
+// bound of subsurface/stack_bound.h. The goal: a chessboard of two measured
+// media (Jensen et al. 2001), one profile per column.
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include <fmt/format.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "core/colour.h"
+#include "reducer/reducer_tree.h"
+#include "spec/surface_columns.h"
+#include "spec/translator.h"
+#include "spec/tree_outputs.h"
+#include "subsurface/stack_bound.h"
+#include "subsurface/subsurface_parts.h"
+#include "tuning/convergence_plot.h"
+#include "tuning/schedule.h"
+
+namespace spec2fab {
+namespace {
+
+double rms(const std::vector<double>& a, const std::vector<double>& b) {
+  double sum = 0;
+  for (size_t i = 0; i < a.size(); ++i) sum += (a[i] - b[i]) * (a[i] - b[i]);
+  return std::sqrt(sum / static_cast<double>(a.size()));
+}
+
+class SubsurfaceTranslator final : public Translator {
+ public:
+  SubsurfaceTranslator(const Properties& /*root*/, const Experiment& experiment) {
+    const Properties goal = experiment.goal();
+    const MaterialPalette& palette = experiment.palette();
+    const PrinterProfile& printer = experiment.printer();
+    columns_ = goal.get<std::array<int, 2>>("columns", {10, 10});
+    if (columns_[0] < 1 || columns_[1] < 1) goal.fail("columns", "give two positive counts");
+    squares_ = goal.get<std::array<int, 2>>("squares", columns_);
+    if (squares_[0] < 1 || squares_[1] < 1) goal.fail("squares", "give two positive counts");
+    if (goal.peek("media").size() != 2) goal.fail("media", "give the chessboard's two media");
+    const auto media_json = goal.peek("media");
+    for (size_t i = 0; i < 2; ++i) {
+      const nlohmann::json holder = {{"medium", media_json[i]}};
+      media_.push_back(read_medium(Properties::wrap(holder, goal.where("media") + "/" + std::to_string(i)), "medium"));
+    }
+    grid_ = ProfileGrid::read(goal);
+    layer_count_ = static_cast<int>(goal.get_in_range("layers", 4, 1, 8));
+    backing_ = goal.get<std::string>("backing", "VeroWhitePlus");
+    palette.id(backing_, goal.where("backing"));
+    materials_ = goal.get<std::vector<std::string>>("materials", printer.model_materials);
+    if (materials_.empty()) goal.fail("materials", "no material to stack");
+    for (const std::string& m : materials_) palette.id(m, goal.where("materials"));
+    step_mm_ = goal.get_in_range("layer_step_mm", printer.layer_mm, 1e-3, 10);
+    thickness_steps_ = goal.get<std::vector<int>>("thickness_steps", {5, 10, 20, 40});
+    if (thickness_steps_.empty()) goal.fail("thickness_steps", "no thickness to choose from");
+    for (int s : thickness_steps_) {
+      if (s < 1) goal.fail("thickness_steps", "thicknesses are positive numbers of layer steps");
+    }
+    std::sort(thickness_steps_.begin(), thickness_steps_.end());
+    const double thickest = thickness_steps_.back() * step_mm_;
+    const double shell = layer_count_ * thickest + step_mm_;
+
+    // The tree: the albedo translator's, with material and thickness free in every layer.
+    std::vector<double> thicknesses;
+    for (int s : thickness_steps_) thicknesses.push_back(s * step_mm_);
+    nlohmann::json layers = nlohmann::json::array();
+    for (int l = 0; l < layer_count_; ++l) {
+      layers.push_back({{"material", {{"value", materials_.front()}, {"choices", materials_}}},
+                        {"thickness_mm", {{"value", thicknesses.front()}, {"choices", thicknesses}}}});
+    }
+    tree_ = build_surface_column_tree(experiment, shell, columns_, std::move(layers), backing_, "subsurface");
+    outputs_ = TreeOutputOptions::read(goal, experiment, *tree_);
+
+    const nlohmann::json simulator = {{"type", "subsurface"},
+                                      {"radius_mm", grid_.radius_mm},
+                                      {"samples", grid_.samples},
+                                      {"depth_mm", shell},
+                                      {"step_mm", step_mm_}};
+    model_ = LayerStackModel::shared(palette, grid_.basis(), step_mm_);
+    std::vector<LayerOptions> options(static_cast<size_t>(layer_count_));
+    for (LayerOptions& o : options) {
+      for (const std::string& m : materials_) o.materials.push_back(palette.id(m, goal.where("materials")));
+      o.steps = thickness_steps_;
+    }
+    bound_ = std::make_shared<StackBound>(model_, options, palette.id(backing_, goal.where("backing")));
+    const nlohmann::json optimizer =
+        experiment.optimizer() ? experiment.optimizer()->value()
+                               : nlohmann::json{{"type", "branch_and_bound"}, {"value_order", "best_bound_first"}};
+    const PartContext context{palette};
+    for (int j = 0; j < columns_[1]; ++j) {
+      for (int i = 0; i < columns_[0]; ++i) {
+        const size_t medium = square_medium(i, j);
+        const nlohmann::json parts = {
+            {"simulator", simulator},
+            {"metric", {{"type", "profile_l2"}}},
+            {"goal", {{"type", "radial_profile"}, {"medium", medium_json(medium)},
+                      {"radius_mm", grid_.radius_mm}, {"samples", grid_.samples}}},
+            {"optimizer", optimizer}};
+        auto tuner = build_tuner(Properties::wrap(parts, experiment.file().string() + " (tuner)"),
+                                 fmt::format("column_{}_{}", i, j), context);
+        tuner->set_node(tree_->node("shell/" + std::to_string(i + columns_[0] * j)));
+        tuner->set_lower_bound([bound = bound_](std::span<const double> x, int assigned, const Observation& target) {
+          return bound->lower_bound(x, assigned, static_cast<const RadialProfileObservation&>(target));
+        });
+        network_.add(std::move(tuner));
+      }
+    }
+    Phase phase;
+    phase.name = "independent_columns";
+    phase.mode = Phase::Mode::parallel;
+    schedule_.add(std::move(phase));
+  }
+
+  std::string summary() const override {
+    return fmt::format(
+        "subsurface: {} x {} columns over the surface, a chessboard of {} and {}; each column {} "
+        "layer(s) of {} material(s) x {} thickness(es) over {}; independent tuners (profile_l2)",
+        columns_[0], columns_[1], media_[0].name, media_[1].name, layer_count_, materials_.size(),
+        thickness_steps_.size(), backing_);
+  }
+
+  const ReducerTree& tree() const override { return *tree_; }
+
+  void run(RunContext& context) override {
+    const RunRecord record = schedule_.run(network_, context.seed);
+    tree_->evaluate();
+    const double candidates =
+        std::pow(static_cast<double>(materials_.size() * thickness_steps_.size()), layer_count_);
+    std::vector<double> column_rms, relative_rms, fractions, errors;
+    long long leaves = 0;
+    for (const TunerRun& run : record.runs) {
+      const double evaluated = run.summary.details.value("leaves_evaluated", static_cast<double>(run.summary.evaluations));
+      fractions.push_back(evaluated / candidates);
+      leaves += static_cast<long long>(evaluated);
+    }
+    nlohmann::json stacks = nlohmann::json::array();
+    for (size_t t = 0; t < network_.size(); ++t) {
+      Tuner& tuner = network_.tuner(t);
+      errors.push_back(tuner.error());
+      const auto& simulated = static_cast<const RadialProfileObservation&>(tuner.simulated());
+      const auto& target = static_cast<const RadialProfileObservation&>(tuner.goal().target());
+      const std::vector<double> s = simulated.samples(), g = target.samples();
+      column_rms.push_back(rms(s, g));
+      relative_rms.push_back(column_rms.back() / rms(g, std::vector<double>(g.size(), 0.0)));
+      stacks.push_back(stack_json(tuner, context));
+    }
+    auto stats = [](std::vector<double> v) {
+      const double mean = std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
+      std::sort(v.begin(), v.end());
+      return nlohmann::json{{"mean", mean}, {"max", v.back()}, {"min", v.front()}};
+    };
+    context.result["subsurface"] = {
+        {"columns", columns_},
+        {"squares", squares_},
+        {"media", {media_[0].name, media_[1].name}},
+        {"layers", layer_count_},
+        {"materials", materials_},
+        {"thickness_mm", thickness_list()},
+        {"backing", backing_},
+        {"profile_radius_mm", grid_.radius_mm},
+        {"profile_samples", grid_.samples},
+        {"profile_rms_per_mm2", stats(column_rms)},
+        {"profile_relative_rms", stats(relative_rms)},
+        {"profile_l2", stats(errors)},
+        {"branch_and_bound",
+         {{"exhaustive_candidates_per_column", candidates},
+          {"leaves_evaluated_total", leaves},
+          {"fraction_of_exhaustive", stats(fractions)}}},
+        {"stacks", stacks}};
+    context.result["tuning"] = record.to_json(network_);
+    context.folder.write_text("convergence.csv", record.convergence_csv(network_));
+    write_convergence_plot(record, network_.size(), context.folder.path("preview/convergence.png"));
+    write_profiles(context.folder.path("preview/profiles.png"));
+    write_appearance(context.folder.path("preview/appearance.png"));
+    context.result["files"] = {
+        {"previews", {"preview/convergence.png", "preview/profiles.png", "preview/appearance.png"}}};
+    if (context.timing) (*context.timing)["tuning_phase_seconds"] = record.phase_seconds;
+    write_tree_outputs(*tree_, outputs_, context);
+  }
+
+  static TypeDoc doc() {
+    TypeDoc doc{
+        "Heterogeneous subsurface scattering (paper Fig. 8): goal reflectance profiles at surface "
+        "points, a chessboard of two measured media; Stratum -> Column (one per goal point) -> "
+        "Layered (layers of tunable material and thickness over a backing), one independent "
+        "tuner per column (branch and bound with a profile bound), run in parallel.",
+        {{"goal.media", "[medium, medium]", "required",
+          "the chessboard's two media: names (marble, skimmilk, skin1, ... Jensen et al. 2001) or "
+          "{absorption_per_mm, reduced_scattering_per_mm, refractive_index}"},
+         {"goal.columns", "[nu, nv]", "[10, 10]", "columns (goal profiles) over (u, v)"},
+         {"goal.squares", "[nu, nv]", "= columns", "chessboard squares over (u, v)"},
+         {"goal.layers", "integer", "4", "layers per column"},
+         {"goal.materials", "[materials]", "the printer's model materials", "what each layer may be"},
+         {"goal.thickness_steps", "[integers]", "[5, 10, 20, 40]", "what each layer's thickness may be, in layer steps"},
+         {"goal.layer_step_mm", "number (mm)", "the printer's layer", "the thickness step"},
+         {"goal.backing", "material", "VeroWhitePlus", "below the layers and in the core"},
+         {"goal.radius_mm", "number (mm)", "16", "profiles are compared on [0, radius_mm]"},
+         {"goal.samples", "integer", "400", "coefficients (and radii) per profile and channel"},
+         {"optimizer", "object", "branch_and_bound, best_bound_first", "each column's optimizer"}},
+        R"({"translator": "subsurface", "goal": {"media": ["marble", "skimmilk"]}})"};
+    for (PropertyDoc& d : TreeOutputOptions::docs()) doc.properties.push_back(std::move(d));
+    return doc;
+  }
+
+ private:
+  size_t square_medium(int i, int j) const {
+    const int si = i * squares_[0] / columns_[0], sj = j * squares_[1] / columns_[1];
+    return static_cast<size_t>((si + sj) % 2);
+  }
+
+  nlohmann::json medium_json(size_t index) const {
+    const MeasuredMedium& m = media_[index];
+    nlohmann::json a = nlohmann::json::array(), s = nlohmann::json::array();
+    for (const DiffusionMedium& c : m.rgb) {
+      a.push_back(c.absorption_per_mm);
+      s.push_back(c.reduced_scattering_per_mm);
+    }
+    return {{"name", m.name}, {"absorption_per_mm", a}, {"reduced_scattering_per_mm", s},
+            {"refractive_index", m.refractive_index}};
+  }
+
+  std::vector<double> thickness_list() const {
+    std::vector<double> out;
+    for (int s : thickness_steps_) out.push_back(s * step_mm_);
+    return out;
+  }
+
+  nlohmann::json stack_json(Tuner& tuner, RunContext& /*context*/) const {
+    nlohmann::json layers = nlohmann::json::array();
+    const std::vector<double> x = tuner.search_space().values();
+    for (size_t l = 0; 2 * l + 1 < x.size(); ++l) {
+      layers.push_back({{"material", tree_->palette().name(static_cast<MaterialId>(std::lround(x[2 * l])))},
+                        {"thickness_mm", x[2 * l + 1]}});
+    }
+    return {{"tuner", tuner.name()}, {"layers", layers}};
+  }
+
+  /// Goal (thin) vs achieved (thick) R(r)·r — the flux per unit radius — for
+  /// one column of each medium, RGB, on a log scale.
+  void write_profiles(const std::filesystem::path& file) {
+    constexpr int kPanelW = 520, kH = 420, kLeft = 70, kBottom = 50, kTop = 40, kRight = 20;
+    cv::Mat image(kH, 2 * kPanelW, CV_8UC3, cv::Scalar(255, 255, 255));
+    const auto font = cv::FONT_HERSHEY_SIMPLEX;
+    const cv::Scalar colours[3] = {{40, 40, 220}, {40, 160, 40}, {220, 80, 40}};
+    const double r_max = grid_.radius_mm / 2;
+    for (size_t medium = 0; medium < 2; ++medium) {
+      size_t t = 0;
+      while (t < network_.size() && square_medium(static_cast<int>(t) % columns_[0],
+                                                  static_cast<int>(t) / columns_[0]) != medium) ++t;
+      if (t == network_.size()) continue;
+      Tuner& tuner = network_.tuner(t);
+      tuner.error();
+      const auto& sim = static_cast<const RadialProfileObservation&>(tuner.simulated());
+      const auto& goal = static_cast<const RadialProfileObservation&>(tuner.goal().target());
+      const std::vector<double> s = sim.samples(), g = goal.samples();
+      const std::span<const double> radii = sim.basis->radii();
+      const int x0 = static_cast<int>(medium) * kPanelW;
+      const double log_hi = 0.5, log_lo = -4.5;  // log10(R r), 1/mm
+      auto to_pixel = [&](double r, double value) {
+        const double y = std::clamp(std::log10(std::max(value, 1e-12)), log_lo, log_hi);
+        return cv::Point(x0 + kLeft + static_cast<int>(r / r_max * (kPanelW - kLeft - kRight)),
+                         kTop + static_cast<int>((log_hi - y) / (log_hi - log_lo) * (kH - kTop - kBottom)));
+      };
+      cv::rectangle(image, {x0 + kLeft, kTop}, {x0 + kPanelW - kRight, kH - kBottom}, {120, 120, 120});
+      for (int c = 0; c < 3; ++c) {
+        std::vector<cv::Point> goal_line, sim_line;
+        for (size_t i = 0; i < radii.size() && radii[i] <= r_max; ++i) {
+          goal_line.push_back(to_pixel(radii[i], g[3 * i + static_cast<size_t>(c)] * radii[i]));
+          sim_line.push_back(to_pixel(radii[i], s[3 * i + static_cast<size_t>(c)] * radii[i]));
+        }
+        cv::polylines(image, goal_line, false, colours[c], 1, cv::LINE_AA);
+        cv::polylines(image, sim_line, false, colours[c], 3, cv::LINE_AA);
+      }
+      cv::putText(image, fmt::format("{}: goal (thin) vs achieved (thick), {}", media_[medium].name, tuner.name()),
+                  {x0 + 10, 25}, font, 0.45, {40, 40, 40}, 1, cv::LINE_AA);
+      cv::putText(image, fmt::format("r (mm), 0 .. {:g}", r_max), {x0 + kLeft, kH - 15}, font, 0.45,
+                  {40, 40, 40}, 1, cv::LINE_AA);
+      cv::putText(image, "log10 R(r) r (1/mm)", {x0 + kLeft + 8, kTop + 18}, font, 0.4, {40, 40, 40}, 1,
+                  cv::LINE_AA);
+    }
+    if (!cv::imwrite(file.string(), image)) throw std::runtime_error("cannot write " + file.string());
+  }
+
+  /// The board as the eye sees it from afar: each column's total diffuse
+  /// reflectance (the profile integrated over the disc) as a colour, goal
+  /// beside achieved.
+  void write_appearance(const std::filesystem::path& file) {
+    const int scale = std::max(1, 240 / std::max(columns_[0], columns_[1]));
+    const int w = columns_[0] * scale, h = columns_[1] * scale, gap = 10;
+    cv::Mat image(h, 2 * w + gap, CV_8UC3, cv::Scalar(255, 255, 255));
+    for (int j = 0; j < columns_[1]; ++j) {
+      for (int i = 0; i < columns_[0]; ++i) {
+        Tuner& tuner = network_.tuner(static_cast<size_t>(i + columns_[0] * j));
+        tuner.error();
+        const std::array panels{&static_cast<const RadialProfileObservation&>(tuner.goal().target()),
+                                &static_cast<const RadialProfileObservation&>(tuner.simulated())};
+        for (int p = 0; p < 2; ++p) {
+          Rgb rgb{};
+          for (int c = 0; c < 3; ++c) rgb[static_cast<size_t>(c)] = panels[p]->basis->integrate(panels[p]->coefficients, 3, c);
+          const cv::Vec3b colour(linear_to_srgb8(rgb[2]), linear_to_srgb8(rgb[1]), linear_to_srgb8(rgb[0]));
+          image(cv::Rect(p * (w + gap) + i * scale, j * scale, scale, scale)).setTo(colour);
+        }
+      }
+    }
+    if (!cv::imwrite(file.string(), image)) throw std::runtime_error("cannot write " + file.string());
+  }
+
+  std::array<int, 2> columns_{10, 10}, squares_{10, 10};
+  std::vector<MeasuredMedium> media_;
+  ProfileGrid grid_;
+  int layer_count_ = 4;
+  std::string backing_;
+  std::vector<std::string> materials_;
+  double step_mm_ = 0.027;
+  std::vector<int> thickness_steps_;
+  std::shared_ptr<LayerStackModel> model_;
+  std::shared_ptr<StackBound> bound_;
+  std::unique_ptr<ReducerTree> tree_;
+  TreeOutputOptions outputs_;
+  TunerNetwork network_;
+  Schedule schedule_;
+};
+
+}  // namespace
+}  // namespace spec2fab
+
+SPEC2FAB_REGISTER(spec2fab::TranslatorRegistry, spec2fab::SubsurfaceTranslator, "subsurface")
