@@ -14,6 +14,7 @@
 #include "materials/palette.h"
 #include "materials/printer_profile.h"
 #include "reducer/node.h"
+#include "simulator_fixture.h"
 #include "tuning/parts.h"
 
 namespace spec2fab {
@@ -96,31 +97,16 @@ TEST(KubelkaMunk, SplittingALayerChangesNothing) {
   }
 }
 
-class AlbedoSimulatorTest : public ::testing::Test {
+class AlbedoSimulatorTest : public SimulatorTest {
  protected:
-  AlbedoSimulatorTest()
-      : printer_(PrinterProfile::load(SPEC2FAB_DATASETS_DIR "/printers/j750.json")),
-        palette_(polyjet(), printer_) {}
-
-  AlbedoObservation simulate(const std::string& subtree, const std::string& options = "{}") {
-    const NodePtr node =
-        build_node(Properties::parse(subtree, "subtree.json"), NodeContext{palette_});
-    const PartContext context{palette_};
-    auto simulator = SimulatorRegistry::instance().create_named(
-        "albedo", Properties::parse(options, "options.json"), "simulator", context);
-    simulator->setup(*node);
-    AlbedoObservation out;
-    simulator->simulate(*node, out);
-    return out;
+  AlbedoObservation simulate(const std::string& subtree, const std::string& options = "{}") const {
+    return SimulatorTest::simulate<AlbedoObservation>("albedo", *node(subtree), options);
   }
   Rgb infinite(const std::string& name) const {
     const auto km = KubelkaMunkMaterial::from_material(polyjet().get(name));
     return {km.rgb[0].reflectance_infinite(), km.rgb[1].reflectance_infinite(),
             km.rgb[2].reflectance_infinite()};
   }
-
-  PrinterProfile printer_;
-  MaterialPalette palette_;
 };
 
 TEST_F(AlbedoSimulatorTest, ASingleMaterialShowsItsOwnAlbedo) {

@@ -21,6 +21,7 @@
 #include "subsurface/multipole.h"
 #include "subsurface/stack_bound.h"
 #include "subsurface/subsurface_parts.h"
+#include "simulator_fixture.h"
 #include "tuning/tuner.h"
 
 namespace spec2fab {
@@ -158,29 +159,11 @@ TEST(Multipole, MeetsPublishedAndMonteCarloSlabValues) {
   EXPECT_NEAR(thick.transmittance_down, t_thick, 0.03 * t_thick + 0.002);
 }
 
-class SubsurfaceTest : public ::testing::Test {
+class SubsurfaceTest : public SimulatorTest {
  protected:
-  SubsurfaceTest()
-      : library_(MaterialLibrary::load(SPEC2FAB_DATASETS_DIR "/materials/polyjet.json")),
-        printer_(PrinterProfile::load(SPEC2FAB_DATASETS_DIR "/printers/j750.json")),
-        palette_(library_, printer_) {}
-
-  NodePtr node(const std::string& json) {
-    return build_node(Properties::parse(json, "subtree.json"), NodeContext{palette_});
+  RadialProfileObservation simulate(const ReducerNode& subtree, const std::string& options) const {
+    return SimulatorTest::simulate<RadialProfileObservation>("subsurface", subtree, options);
   }
-  RadialProfileObservation simulate(const ReducerNode& subtree, const std::string& options) {
-    const PartContext context{palette_};
-    auto simulator = SimulatorRegistry::instance().create_named(
-        "subsurface", Properties::parse(options, "options.json"), "simulator", context);
-    simulator->setup(subtree);
-    auto out = simulator->make_observation();
-    simulator->simulate(subtree, *out);
-    return static_cast<RadialProfileObservation&>(*out);
-  }
-
-  MaterialLibrary library_;
-  PrinterProfile printer_;
-  MaterialPalette palette_;
 };
 
 TEST_F(SubsurfaceTest, OneMaterialThroughoutIsItsDipole) {
