@@ -1,5 +1,6 @@
 #include "tuning/observation_io.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <stdexcept>
@@ -51,8 +52,15 @@ std::vector<std::string> write_observation(const Observation& observation, const
       throw std::runtime_error("an image observation with " + std::to_string(image->channels) +
                                " channels cannot be written as PNG");
     }
-    write_png(folder / "image.png",
-              to_png_image(image->width, image->height, image->channels, image->pixels));
+    // Values beyond 1 (a caustic concentrates light) are scaled so the
+    // brightest is white; the values themselves are in the run's JSON.
+    const double peak = image->pixels.empty()
+                            ? 1.0
+                            : *std::max_element(image->pixels.begin(), image->pixels.end());
+    std::vector<double> shown(image->pixels);
+    if (peak > 1)
+      for (double& v : shown) v /= peak;
+    write_png(folder / "image.png", to_png_image(image->width, image->height, image->channels, shown));
     return {"image.png"};
   }
   if (const auto* profile = dynamic_cast<const RadialProfileObservation*>(&observation)) {

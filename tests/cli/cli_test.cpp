@@ -470,6 +470,26 @@ TEST_F(Cli, SimulateRunsTheSubsurfaceSimulator) {
   EXPECT_LT(rows[100][1], rows[100][3]);
 }
 
+TEST_F(Cli, SimulateRunsTheCausticSimulator) {
+  const Result r = spec2fab("simulate caustics " +
+                            (kDatasets / "simulations/caustics_dome.json").string() +
+                            " --repeat 1 --out " + (dir_ / "sim").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_TRUE(fs::exists(dir_ / "sim" / "image.png"));
+  const auto simulation = nlohmann::json::parse(read(dir_ / "sim" / "simulation.json"));
+  EXPECT_EQ(simulation["produces"], "image");
+  const auto values = simulation["values"].get<std::vector<double>>();
+  ASSERT_EQ(values.size(), 240u * 240u);
+  // The dome converges the light: its 900 mm² of beam all land on the 30 mm
+  // receiver (less what the bilinear splat drops off its edge pixels), and
+  // the centre is brighter than the incident irradiance.
+  double sum = 0;
+  for (double v : values) sum += v;
+  const double pixel_area = (30.0 / 240) * (30.0 / 240);
+  EXPECT_NEAR(sum * pixel_area, 900.0, 1.0);
+  EXPECT_GT(values[120 * 240 + 120], 1.2);
+}
+
 TEST_F(Cli, SubsurfaceChessboardTunesEveryColumnAndReportsProfileErrors) {
   const std::string body =
       R"({"name": "board", "translator": "subsurface",

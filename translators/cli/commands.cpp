@@ -170,9 +170,13 @@ int simulate_command(const SimulateArguments& arguments) {
   const double setup_seconds = std::chrono::duration<double>(Clock::now() - setup_start).count();
   auto observation = simulator->make_observation();
   const auto simulate_start = Clock::now();
-  for (int i = 0; i < arguments.repeat; ++i) simulator->simulate(*subtree, *observation);
-  const double simulate_seconds =
-      std::chrono::duration<double>(Clock::now() - simulate_start).count() / arguments.repeat;
+  int evaluations = 0;
+  const auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - simulate_start).count(); };
+  do {
+    simulator->simulate(*subtree, *observation);
+    ++evaluations;
+  } while (arguments.repeat > 0 ? evaluations < arguments.repeat : evaluations < 100 && elapsed() < 2.0);
+  const double simulate_seconds = elapsed() / evaluations;
   for (double v : observation->values()) {
     if (!std::isfinite(v)) throw std::runtime_error(simulator->name() + " produced a non-finite value");
   }
@@ -191,7 +195,7 @@ int simulate_command(const SimulateArguments& arguments) {
   folder.commit();
   std::cout << "wrote " << arguments.out.string() << "/ (simulation.json, " << join(files)
             << "); setup " << format_seconds(setup_seconds) << ", simulate "
-            << format_seconds(simulate_seconds) << " per evaluation (mean of " << arguments.repeat
+            << format_seconds(simulate_seconds) << " per evaluation (mean of " << evaluations
             << ")\n";
   return 0;
 }

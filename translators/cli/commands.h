@@ -28,7 +28,7 @@ struct SimulateArguments {
   std::string simulator;         ///< a registered simulator
   std::filesystem::path config;  ///< materials, printer, subtree, simulator options
   std::filesystem::path out;
-  int repeat = 100;  ///< evaluations timed after the first
+  int repeat = 0;  ///< evaluations timed; 0: up to 100, stopping once 2 s have passed
 };
 
 int run_command(const RunArguments& arguments);

@@ -86,7 +86,7 @@ int main(int argc, char** argv) {
       ->required();
   simulate_cmd->add_option("config", simulate.config, "input description (JSON)")->required();
   simulate_cmd->add_option("--out", simulate.out, "output folder")->required();
-  simulate_cmd->add_option("--repeat", simulate.repeat, "evaluations to time (default 100)")
+  simulate_cmd->add_option("--repeat", simulate.repeat, "evaluations to time (default: up to 100, stopping after 2 s)")
       ->check(CLI::Range(1, 100000000));
   simulate_cmd->add_flag("-q,--quiet", quiet, "only warnings and errors");
   simulate_cmd->footer(

@@ -18,7 +18,7 @@ inline void cubic_basis(double t, double w[4]) {
   w[3] = t3 / 6;
 }
 
-class BSplineNode final : public ClonableNode<BSplineNode, GeometryNode> {
+class BSplineNode final : public ClonableNode<BSplineNode, GeometryNode>, public HeightSurface {
  public:
   BSplineNode(const Properties& properties, const NodeContext& context)
       : cut_(properties, context, children_) {
@@ -45,6 +45,7 @@ class BSplineNode final : public ClonableNode<BSplineNode, GeometryNode> {
         properties.fail("domain", "expected [a_min, b_min, a_max, b_max] with max > min");
       }
       explicit_domain_ = true;
+      update_spacing();
     }
     evaluate();
   }
@@ -70,9 +71,7 @@ class BSplineNode final : public ClonableNode<BSplineNode, GeometryNode> {
       lower_ = domain.min().head<2>();
       upper_ = domain.max().head<2>();
     }
-    for (int k = 0; k < 2; ++k) {
-      spacing_[k] = counts_[k] > 1 ? (upper_[k] - lower_[k]) / (counts_[k] - 1) : 1.0;
-    }
+    update_spacing();
     double low = 1e300, high = -1e300;
     for (const Parameter& h : heights_) {
       low = std::min(low, h.is_free() ? h.lower() : h.value());
@@ -100,6 +99,11 @@ class BSplineNode final : public ClonableNode<BSplineNode, GeometryNode> {
   Route route(const QueryPoint& /*point*/, const LocalFrame& frame) const override {
     const Vec3 p = cut_.to_cut_axes(frame);
     return cut_.route(p, height(p.x(), p.y()));
+  }
+
+  int height_axis() const override { return cut_.axis(); }
+  double surface_height(double lateral_1, double lateral_2) const override {
+    return height(lateral_1, lateral_2);
   }
 
   nlohmann::json to_json(const MaterialPalette& palette) const override {
@@ -135,6 +139,12 @@ class BSplineNode final : public ClonableNode<BSplineNode, GeometryNode> {
   }
 
  private:
+  void update_spacing() {
+    for (int k = 0; k < 2; ++k) {
+      spacing_[k] = counts_[k] > 1 ? (upper_[k] - lower_[k]) / (counts_[k] - 1) : 1.0;
+    }
+  }
+
   void locate(double x, int axis, int& index, double weights[4]) const {
     double s = (x - lower_[axis]) / spacing_[axis];
     s = std::clamp(s, 0.0, static_cast<double>(counts_[axis] - 1));

@@ -4,6 +4,7 @@
 // (child 1). Each side's frame is (lateral, lateral, distance from the cut),
 // so a Layered child counts its layers from the cut surface.
 
+#include "reducer/height_surface.h"
 #include "reducer/node.h"
 
 namespace spec2fab {
@@ -40,6 +41,7 @@ class HeightCut {
                nlohmann::json& out) const;
 
   static std::string child_label(size_t i) { return i == 0 ? "below" : "above"; }
+  int axis() const { return axis_; }
   static std::vector<PropertyDoc> property_docs();
 
  private:

@@ -6,7 +6,7 @@
 namespace spec2fab {
 namespace {
 
-class PlaneNode final : public ClonableNode<PlaneNode, GeometryNode> {
+class PlaneNode final : public ClonableNode<PlaneNode, GeometryNode>, public HeightSurface {
  public:
   PlaneNode(const Properties& properties, const NodeContext& context)
       : cut_(properties, context, children_),
@@ -18,6 +18,7 @@ class PlaneNode final : public ClonableNode<PlaneNode, GeometryNode> {
       center_ = Vec2(center[0], center[1]);
       explicit_center_ = true;
     }
+    evaluate();
   }
 
   std::string type_name() const override { return "plane"; }
@@ -48,6 +49,11 @@ class PlaneNode final : public ClonableNode<PlaneNode, GeometryNode> {
   Route route(const QueryPoint& /*point*/, const LocalFrame& frame) const override {
     const Vec3 p = cut_.to_cut_axes(frame);
     return cut_.route(p, height(p));
+  }
+
+  int height_axis() const override { return cut_.axis(); }
+  double surface_height(double lateral_1, double lateral_2) const override {
+    return height(Vec3(lateral_1, lateral_2, 0));
   }
 
   nlohmann::json to_json(const MaterialPalette& palette) const override {

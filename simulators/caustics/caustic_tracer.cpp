@@ -1,0 +1,336 @@
+#include "caustics/caustic_tracer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include <Eigen/Geometry>
+#include <embree3/rtcore.h>
+#include <tbb/parallel_for.h>
+
+#include "core/error.h"
+
+namespace spec2fab {
+namespace {
+
+using Vec3 = Eigen::Vector3d;
+
+enum Fate : int { kReceived, kReturned, kLost };
+
+// Stateless per-ray random numbers: the same ray gets the same jitter
+// whatever thread traces it.
+inline double hash_uniform(unsigned long long key) {
+  key += 0x9e3779b97f4a7c15ULL;
+  key = (key ^ (key >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  key = (key ^ (key >> 27)) * 0x94d049bb133111ebULL;
+  key ^= key >> 31;
+  return static_cast<double>(key >> 11) * 0x1.0p-53;
+}
+
+// Unpolarised Fresnel reflectance for cosines of incidence and transmission.
+inline double fresnel_reflectance(double eta_i, double eta_t, double cos_i, double cos_t) {
+  const double rs = (eta_i * cos_i - eta_t * cos_t) / (eta_i * cos_i + eta_t * cos_t);
+  const double rp = (eta_t * cos_i - eta_i * cos_t) / (eta_t * cos_i + eta_i * cos_t);
+  return 0.5 * (rs * rs + rp * rp);
+}
+
+}  // namespace
+
+void CausticSetup::validate() const {
+  auto fail = [](const std::string& what) { throw InputError("caustics: " + what); };
+  if (!(width_mm > 0) || !(depth_mm > 0)) fail("slab size must be positive");
+  if (vertices_x < 2 || vertices_y < 2 || static_cast<long long>(vertices_x) * vertices_y > 16'000'000)
+    fail("the height-field grid needs 2 to 16 million vertices, at least 2 per side");
+  if (!(refractive_index >= 1) || !(refractive_index < 10)) fail("refractive index must be in [1, 10)");
+  if (!light_direction.allFinite() || !(light_direction.z() < -1e-6 * light_direction.norm()))
+    fail("the light must travel downwards (light_direction z < 0), towards the receiver");
+  if (!(receiver_distance_mm > 0)) fail("receiver distance must be positive (below the slab)");
+  if (!(receiver_width_mm > 0) || !(receiver_depth_mm > 0)) fail("receiver size must be positive");
+  if (!receiver_centre_mm.allFinite()) fail("receiver centre must be finite");
+  if (image_width < 1 || image_height < 1 ||
+      static_cast<long long>(image_width) * image_height > 64'000'000)
+    fail("image size must be 1 to 64 million pixels");
+  if (rays_x < 1 || rays_y < 1 || static_cast<long long>(rays_x) * rays_y > 256'000'000)
+    fail("rays must be 1 to 256 million");
+  if (max_segments < 2 || max_segments > 1000) fail("max_segments must be in [2, 1000]");
+}
+
+struct CausticTracer::Scene {
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+  RTCGeometry geometry = nullptr;
+  float* vertex_buffer = nullptr;
+  ~Scene() {
+    if (scene) rtcReleaseScene(scene);
+    if (device) rtcReleaseDevice(device);
+  }
+};
+
+CausticTracer::CausticTracer(const CausticSetup& setup) : setup_(setup) {
+  setup_.validate();
+  setup_.light_direction.normalize();
+  const int nx = setup_.vertices_x, ny = setup_.vertices_y;
+  const auto top = [nx](int i, int j) { return j * nx + i; };
+
+  // Top grid, then the bottom ring (copies of the top's boundary at z = 0,
+  // counter-clockwise seen from above), then the bottom's centre.
+  std::vector<int> ring;
+  for (int i = 0; i < nx - 1; ++i) ring.push_back(top(i, 0));
+  for (int j = 0; j < ny - 1; ++j) ring.push_back(top(nx - 1, j));
+  for (int i = nx - 1; i > 0; --i) ring.push_back(top(i, ny - 1));
+  for (int j = ny - 1; j > 0; --j) ring.push_back(top(0, j));
+  const int top_count = nx * ny, ring_count = static_cast<int>(ring.size());
+  vertices_.resize(static_cast<size_t>(top_count + ring_count + 1));
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) vertices_[static_cast<size_t>(top(i, j))] << vertex_xy(i, j), 1.0;
+  for (int k = 0; k < ring_count; ++k) {
+    const Vec3& above = vertices_[static_cast<size_t>(ring[static_cast<size_t>(k)])];
+    vertices_[static_cast<size_t>(top_count + k)] = Vec3(above.x(), above.y(), 0);
+  }
+  const int centre = top_count + ring_count;
+  vertices_[static_cast<size_t>(centre)] = Vec3::Zero();
+
+  for (int j = 0; j + 1 < ny; ++j) {
+    for (int i = 0; i + 1 < nx; ++i) {
+      triangles_.emplace_back(top(i, j), top(i + 1, j), top(i + 1, j + 1));
+      triangles_.emplace_back(top(i, j), top(i + 1, j + 1), top(i, j + 1));
+    }
+  }
+  for (int k = 0; k < ring_count; ++k) {
+    const int next = (k + 1) % ring_count;
+    const int a = ring[static_cast<size_t>(k)], b = ring[static_cast<size_t>(next)];
+    const int a_low = top_count + k, b_low = top_count + next;
+    triangles_.emplace_back(a, a_low, b_low);
+    triangles_.emplace_back(a, b_low, b);
+    triangles_.emplace_back(centre, b_low, a_low);
+  }
+  normals_.resize(triangles_.size());
+  results_.resize(static_cast<size_t>(setup_.rays_x) * static_cast<size_t>(setup_.rays_y));
+  heights_.assign(static_cast<size_t>(top_count), 1.0);
+
+  scene_ = std::make_unique<Scene>();
+  Scene& s = *scene_;
+  s.device = rtcNewDevice(nullptr);
+  if (!s.device) throw std::runtime_error("cannot create an Embree device");
+  s.scene = rtcNewScene(s.device);
+  // Heights change every evaluation: refit the BVH instead of rebuilding it.
+  rtcSetSceneFlags(s.scene, RTC_SCENE_FLAG_DYNAMIC);
+  rtcSetSceneBuildQuality(s.scene, RTC_BUILD_QUALITY_LOW);
+  s.geometry = rtcNewGeometry(s.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  rtcSetGeometryBuildQuality(s.geometry, RTC_BUILD_QUALITY_REFIT);
+  s.vertex_buffer = static_cast<float*>(rtcSetNewGeometryBuffer(
+      s.geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), vertices_.size()));
+  auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+      s.geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), triangles_.size()));
+  if (!s.vertex_buffer || !indices) throw std::runtime_error("Embree: cannot allocate the slab's buffers");
+  for (size_t t = 0; t < triangles_.size(); ++t)
+    for (int k = 0; k < 3; ++k) indices[3 * t + static_cast<size_t>(k)] = static_cast<unsigned>(triangles_[t][k]);
+  update_vertex_buffer();
+  rtcCommitGeometry(s.geometry);
+  rtcAttachGeometry(s.scene, s.geometry);
+  rtcReleaseGeometry(s.geometry);
+  rtcCommitScene(s.scene);
+  if (rtcGetDeviceError(s.device) != RTC_ERROR_NONE) throw std::runtime_error("Embree: cannot build the slab");
+}
+
+CausticTracer::~CausticTracer() = default;
+
+Eigen::Vector2d CausticTracer::vertex_xy(int i, int j) const {
+  return {setup_.width_mm * (static_cast<double>(i) / (setup_.vertices_x - 1) - 0.5),
+          setup_.depth_mm * (static_cast<double>(j) / (setup_.vertices_y - 1) - 0.5)};
+}
+
+void CausticTracer::set_heights(std::span<const double> heights_mm) {
+  if (heights_mm.size() != heights_.size())
+    throw std::invalid_argument("CausticTracer::set_heights: expected " +
+                                std::to_string(heights_.size()) + " heights, got " +
+                                std::to_string(heights_mm.size()));
+  for (double h : heights_mm) {
+    if (!(h > 0) || !std::isfinite(h))
+      throw InputError("caustics: the slab's top surface must stay above its bottom (heights > 0 mm)");
+  }
+  std::copy(heights_mm.begin(), heights_mm.end(), heights_.begin());
+  update_vertex_buffer();
+  rtcUpdateGeometryBuffer(scene_->geometry, RTC_BUFFER_TYPE_VERTEX, 0);
+  rtcCommitGeometry(scene_->geometry);
+  rtcCommitScene(scene_->scene);
+}
+
+void CausticTracer::update_vertex_buffer() {
+  top_z_ = 0;
+  for (size_t v = 0; v < heights_.size(); ++v) {
+    vertices_[v].z() = heights_[v];
+    top_z_ = std::max(top_z_, heights_[v]);
+  }
+  for (size_t v = 0; v < vertices_.size(); ++v)
+    for (int k = 0; k < 3; ++k) scene_->vertex_buffer[3 * v + static_cast<size_t>(k)] = static_cast<float>(vertices_[v][k]);
+  for (size_t t = 0; t < triangles_.size(); ++t) {
+    const Eigen::Vector3i& f = triangles_[t];
+    const Vec3 n = (vertices_[static_cast<size_t>(f[1])] - vertices_[static_cast<size_t>(f[0])])
+                       .cross(vertices_[static_cast<size_t>(f[2])] - vertices_[static_cast<size_t>(f[0])]);
+    normals_[t] = n.normalized();
+  }
+}
+
+void CausticTracer::trace_block(int begin, int end) {
+  constexpr int kBlock = 256;
+  const CausticSetup& s = setup_;
+  const double cell_x = s.width_mm / s.rays_x, cell_y = s.depth_mm / s.rays_y;
+  // Power through a cell's horizontal area of a beam of unit irradiance.
+  const double power = cell_x * cell_y * -s.light_direction.z();
+  // Rays start just above the highest point: the beam's cross-section at the
+  // slab is the footprint.
+  const double start_z = top_z_ + 1e-3 * (s.width_mm + s.depth_mm) + 1e-3;
+  const double epsilon = 1e-5 * (s.width_mm + s.depth_mm + top_z_);
+  const double eta = s.refractive_index;
+  const auto seed = static_cast<unsigned long long>(s.seed) << 40;
+
+  RTCRayHit hits[kBlock];
+  Vec3 origin[kBlock], direction[kBlock];
+  int active[kBlock];
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+
+  for (int first = begin; first < end; first += kBlock) {
+    const int count = std::min(kBlock, end - first);
+    for (int k = 0; k < count; ++k) {
+      const int ray = first + k;
+      const auto key = 2ULL * static_cast<unsigned long long>(ray) + seed;
+      const double jx = s.jitter ? hash_uniform(key) : 0.5, jy = s.jitter ? hash_uniform(key + 1) : 0.5;
+      origin[k] = Vec3(-0.5 * s.width_mm + (ray % s.rays_x + jx) * cell_x,
+                       -0.5 * s.depth_mm + (ray / s.rays_x + jy) * cell_y, start_z);
+      direction[k] = s.light_direction;
+      results_[static_cast<size_t>(ray)] = RayResult{0, 0, power, 0, kLost};
+      active[k] = k;
+    }
+    int in_flight = count;
+    for (int segment = 0; segment < s.max_segments && in_flight > 0; ++segment) {
+      for (int n = 0; n < in_flight; ++n) {
+        const int k = active[n];
+        RTCRayHit& hit = hits[n];
+        hit.ray.org_x = static_cast<float>(origin[k].x());
+        hit.ray.org_y = static_cast<float>(origin[k].y());
+        hit.ray.org_z = static_cast<float>(origin[k].z());
+        hit.ray.dir_x = static_cast<float>(direction[k].x());
+        hit.ray.dir_y = static_cast<float>(direction[k].y());
+        hit.ray.dir_z = static_cast<float>(direction[k].z());
+        hit.ray.tnear = static_cast<float>(segment == 0 ? 0.0 : epsilon);
+        hit.ray.tfar = std::numeric_limits<float>::infinity();
+        hit.ray.mask = 0xFFFFFFFFu;
+        hit.ray.flags = 0;
+        hit.ray.time = 0;
+        hit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+      }
+      rtcIntersect1M(scene_->scene, &context, hits, static_cast<unsigned>(in_flight), sizeof(RTCRayHit));
+      int still = 0;
+      for (int n = 0; n < in_flight; ++n) {
+        const int k = active[n];
+        RayResult& result = results_[static_cast<size_t>(first + k)];
+        Vec3& o = origin[k];
+        Vec3& d = direction[k];
+        const RTCRayHit& hit = hits[n];
+        if (hit.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
+          // In air with nothing ahead (a miss from inside the slab is a crack
+          // at float precision; it leaves the same way).
+          if (d.z() >= 0) {
+            result.fate = kReturned;
+          } else {
+            const double t = (-s.receiver_distance_mm - o.z()) / d.z();
+            result.x = o.x() + t * d.x();
+            result.y = o.y() + t * d.y();
+            result.fate = kReceived;
+          }
+          continue;
+        }
+        o += static_cast<double>(hit.ray.tfar) * d;
+        const Vec3& outward = normals_[hit.hit.primID];
+        const double cos_outward = d.dot(outward);
+        // Entering when the ray runs against the outward normal.
+        const bool entering = cos_outward < 0;
+        const Vec3 normal = entering ? outward : Vec3(-outward);  // faces the incoming ray
+        const double ratio = entering ? 1.0 / eta : eta;           // n_incident / n_transmitted
+        const double cos_i = std::min(1.0, std::abs(cos_outward));
+        const double sin2_t = ratio * ratio * (1 - cos_i * cos_i);
+        if (sin2_t >= 1) {
+          d += 2 * cos_i * normal;  // total internal reflection
+        } else {
+          const double cos_t = std::sqrt(1 - sin2_t);
+          if (s.fresnel) {
+            const double f = entering ? fresnel_reflectance(1, eta, cos_i, cos_t)
+                                      : fresnel_reflectance(eta, 1, cos_i, cos_t);
+            result.reflected += f * result.power;
+            result.power *= 1 - f;
+          }
+          d = ratio * d + (ratio * cos_i - cos_t) * normal;
+        }
+        d.normalize();
+        active[still++] = k;
+      }
+      in_flight = still;
+    }
+  }
+}
+
+CausticFlux CausticTracer::render(std::span<double> irradiance) {
+  const CausticSetup& s = setup_;
+  const size_t pixels = static_cast<size_t>(s.image_width) * static_cast<size_t>(s.image_height);
+  if (irradiance.size() != pixels)
+    throw std::invalid_argument("CausticTracer::render: image has the wrong size");
+  const int rays = s.rays_x * s.rays_y;
+  tbb::parallel_for(tbb::blocked_range<int>(0, rays, 1024),
+                    [&](const tbb::blocked_range<int>& r) { trace_block(r.begin(), r.end()); });
+
+  // Splat in ray order (bilinear), so the sums do not depend on threads.
+  std::fill(irradiance.begin(), irradiance.end(), 0.0);
+  const double pixel_x = s.receiver_width_mm / s.image_width, pixel_y = s.receiver_depth_mm / s.image_height;
+  const double left = s.receiver_centre_mm.x() - 0.5 * s.receiver_width_mm;
+  const double top = s.receiver_centre_mm.y() + 0.5 * s.receiver_depth_mm;
+  const double per_area = 1.0 / (pixel_x * pixel_y);
+  CausticFlux flux;
+  for (const RayResult& ray : results_) {
+    flux.emitted += ray.power + ray.reflected;
+    flux.reflected += ray.reflected;
+    if (ray.fate == kReturned) {
+      flux.returned += ray.power;
+      continue;
+    }
+    if (ray.fate == kLost) {
+      flux.lost += ray.power;
+      continue;
+    }
+    const double u = (ray.x - left) / pixel_x - 0.5, v = (top - ray.y) / pixel_y - 0.5;
+    if (!(u > -1 && v > -1 && u < s.image_width && v < s.image_height)) {
+      flux.missed += ray.power;
+      continue;
+    }
+    const int col = static_cast<int>(std::floor(u)), row = static_cast<int>(std::floor(v));
+    const double fu = u - col, fv = v - row;
+    double deposited = 0;
+    for (int dy = 0; dy < 2; ++dy) {
+      const int y = row + dy;
+      if (y < 0 || y >= s.image_height) continue;
+      const double wy = dy ? fv : 1 - fv;
+      for (int dx = 0; dx < 2; ++dx) {
+        const int x = col + dx;
+        if (x < 0 || x >= s.image_width) continue;
+        const double w = wy * (dx ? fu : 1 - fu);
+        irradiance[static_cast<size_t>(y) * static_cast<size_t>(s.image_width) + static_cast<size_t>(x)] +=
+            w * ray.power * per_area;
+        deposited += w;
+      }
+    }
+    flux.received += deposited * ray.power;
+    flux.missed += (1 - deposited) * ray.power;
+  }
+  return flux;
+}
+
+void CausticTracer::mesh(std::vector<Eigen::Vector3d>& vertices, std::vector<Eigen::Vector3i>& triangles) const {
+  vertices = vertices_;
+  triangles = triangles_;
+}
+
+}  // namespace spec2fab

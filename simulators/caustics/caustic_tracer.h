@@ -1,0 +1,98 @@
+#pragma once
+/// Caustics by ray tracing: collimated light passes through a transparent
+/// slab — flat bottom at z = 0, top a height field z = h(x, y) > 0 over a
+/// rectangle centred on the origin — refracting at every surface it crosses
+/// (vector Snell's law, total internal reflection followed, Fresnel losses
+/// optional), and lands on a receiver plane z = -distance below the slab.
+/// The output is the irradiance image on the receiver, in units of the
+/// incident irradiance (a flat slab under normal light gives 1 everywhere it
+/// covers).
+///
+/// The slab is one closed triangle mesh traced with Embree; the scene is
+/// built once, and set_heights only moves the top vertices and refits the
+/// BVH. Rays are stratified over the slab's footprint, one per cell, jittered
+/// by a hash of the cell index: the same heights give the same image, bit for
+/// bit, for any thread count (rays are traced in parallel, splatted in order).
+
+#include <memory>
+#include <span>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace spec2fab {
+
+struct CausticSetup {
+  double width_mm = 50, depth_mm = 50;  ///< slab footprint along x and y, centred on the origin
+  int vertices_x = 61, vertices_y = 61; ///< top height-field grid (corners included)
+  double refractive_index = 1.5;
+  Eigen::Vector3d light_direction{0, 0, -1};  ///< direction the light travels (normalised on use)
+  double receiver_distance_mm = 100;          ///< receiver plane z = -distance
+  double receiver_width_mm = 50, receiver_depth_mm = 50;
+  Eigen::Vector2d receiver_centre_mm{0, 0};
+  int image_width = 240, image_height = 240;
+  int rays_x = 480, rays_y = 480;  ///< source samples over the footprint
+  bool jitter = true;              ///< jitter each sample within its stratum
+  unsigned seed = 1;
+  bool fresnel = false;            ///< weight transmissions by unpolarised Fresnel
+  int max_segments = 16;           ///< segments traced per ray before it counts as lost
+
+  /// Throws InputError naming the first inconsistent field.
+  void validate() const;
+};
+
+/// Where the emitted light went, in units of incident irradiance × mm².
+struct CausticFlux {
+  double emitted = 0;
+  double received = 0;     ///< deposited on the image
+  double missed = 0;       ///< reached the receiver plane outside the image
+  double returned = 0;     ///< left the slab travelling away from the receiver (e.g. TIR back out)
+  double reflected = 0;    ///< Fresnel reflections, when enabled
+  double lost = 0;         ///< still bouncing after max_segments
+};
+
+class CausticTracer {
+ public:
+  explicit CausticTracer(const CausticSetup& setup);
+  ~CausticTracer();
+  CausticTracer(const CausticTracer&) = delete;
+  CausticTracer& operator=(const CausticTracer&) = delete;
+
+  const CausticSetup& setup() const { return setup_; }
+  /// Lateral position of top vertex (i, j), i along x.
+  Eigen::Vector2d vertex_xy(int i, int j) const;
+
+  /// Heights (mm, > 0) of the top vertices, row by row (x fastest).
+  void set_heights(std::span<const double> heights_mm);
+  std::span<const double> heights() const { return heights_; }
+
+  /// Traces every ray through the current surface into `irradiance`
+  /// (image_width × image_height, row 0 at +y); does not allocate.
+  CausticFlux render(std::span<double> irradiance);
+
+  /// The slab as a closed, outward-oriented triangle mesh (vertices in mm):
+  /// what is traced.
+  void mesh(std::vector<Eigen::Vector3d>& vertices, std::vector<Eigen::Vector3i>& triangles) const;
+
+ private:
+  struct Scene;
+  struct RayResult {
+    double x = 0, y = 0, power = 0, reflected = 0;
+    int fate = 0;
+  };
+  /// Traces rays [begin, end) together: each segment of all rays still in
+  /// flight is one coherent Embree stream query.
+  void trace_block(int begin, int end);
+  void update_vertex_buffer();
+
+  CausticSetup setup_;
+  std::vector<double> heights_;
+  std::vector<Eigen::Vector3d> vertices_;
+  std::vector<Eigen::Vector3i> triangles_;
+  std::vector<Eigen::Vector3d> normals_;  ///< outward unit normal per triangle
+  std::vector<RayResult> results_;
+  std::unique_ptr<Scene> scene_;
+  double top_z_ = 0;
+};
+
+}  // namespace spec2fab

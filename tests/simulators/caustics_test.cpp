@@ -1,0 +1,314 @@
+// The caustic tracer against optics that needs no simulator to know: a flat
+// slab transmits a collimated beam unchanged in irradiance (any angle of
+// incidence), Fresnel's normal-incidence transmission (1 - R)² with
+// R = ((n-1)/(n+1))², the paraxial back focal distance of a thick
+// plano-convex lens f - t/n with f = R/(n-1), and flux conservation.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <vector>
+
+#include <Eigen/Geometry>
+#include <tbb/global_control.h>
+
+#include "caustics/caustic_tracer.h"
+#include "core/error.h"
+#include "simulator_fixture.h"
+
+namespace spec2fab {
+namespace {
+
+std::vector<double> heights_of(const CausticTracer& tracer, const auto& height) {
+  const CausticSetup& s = tracer.setup();
+  std::vector<double> h;
+  for (int j = 0; j < s.vertices_y; ++j)
+    for (int i = 0; i < s.vertices_x; ++i) {
+      const Eigen::Vector2d p = tracer.vertex_xy(i, j);
+      h.push_back(height(p.x(), p.y()));
+    }
+  return h;
+}
+
+double total(const std::vector<double>& image, const CausticSetup& s) {
+  const double pixel_area = s.receiver_width_mm / s.image_width * s.receiver_depth_mm / s.image_height;
+  return std::accumulate(image.begin(), image.end(), 0.0) * pixel_area;
+}
+
+double accounted(const CausticFlux& f) { return f.received + f.missed + f.returned + f.reflected + f.lost; }
+
+CausticSetup flat_setup() {
+  CausticSetup s;
+  s.width_mm = s.depth_mm = 20;
+  s.vertices_x = s.vertices_y = 11;
+  s.receiver_distance_mm = 30;
+  s.receiver_width_mm = s.receiver_depth_mm = 12;
+  s.image_width = s.image_height = 48;
+  s.rays_x = s.rays_y = 320;  // 4 rays per pixel pitch along each axis
+  return s;
+}
+
+TEST(CausticTracer, SlabMeshIsClosedAndEnclosesTheHeightField) {
+  CausticSetup s = flat_setup();
+  CausticTracer tracer(s);
+  tracer.set_heights(heights_of(tracer, [](double x, double y) { return 2 + 0.1 * x + 0.05 * y; }));
+  std::vector<Eigen::Vector3d> v;
+  std::vector<Eigen::Vector3i> t;
+  tracer.mesh(v, t);
+  double volume = 0;
+  std::map<std::pair<int, int>, int> directed;
+  for (const auto& f : t) {
+    volume += v[static_cast<size_t>(f[0])].dot(v[static_cast<size_t>(f[1])].cross(v[static_cast<size_t>(f[2])])) / 6;
+    for (int k = 0; k < 3; ++k) ++directed[{f[k], f[(k + 1) % 3]}];
+  }
+  // Each directed edge once, and its reverse once: closed, consistently oriented.
+  for (const auto& [edge, count] : directed) {
+    EXPECT_EQ(count, 1);
+    EXPECT_EQ(directed.count({edge.second, edge.first}), 1u);
+  }
+  // A linear height field is represented exactly: volume = area × mean height.
+  EXPECT_NEAR(volume, 20.0 * 20.0 * 2.0, 1e-9);
+}
+
+TEST(CausticTracer, FlatSlabGivesUniformImageAtAnyIncidence) {
+  for (double degrees : {0.0, 20.0, 40.0}) {
+    for (bool jitter : {false, true}) {
+      CausticSetup s = flat_setup();
+      const double a = degrees * M_PI / 180;
+      s.light_direction = Eigen::Vector3d(std::sin(a), 0, -std::cos(a));
+      s.jitter = jitter;
+      // Centre the receiver on where the beam lands: through the slab at the
+      // refracted angle, then on at the incident angle.
+      const double thickness = 3, sin_t = std::sin(a) / s.refractive_index;
+      const double shift = thickness * sin_t / std::sqrt(1 - sin_t * sin_t) +
+                           s.receiver_distance_mm * std::tan(a);
+      s.receiver_centre_mm = Eigen::Vector2d(shift, 0);
+      CausticTracer tracer(s);
+      tracer.set_heights(std::vector<double>(tracer.heights().size(), thickness));
+      std::vector<double> image(static_cast<size_t>(s.image_width * s.image_height));
+      const CausticFlux flux = tracer.render(image);
+      SCOPED_TRACE(testing::Message() << degrees << " degrees, jitter " << jitter);
+      // Irradiance on a horizontal plane from a beam of unit irradiance: cos θ.
+      const double expected = std::cos(a);
+      double worst = 0, sum = 0;
+      for (int row = 1; row + 1 < s.image_height; ++row)
+        for (int col = 1; col + 1 < s.image_width; ++col) {
+          const double e = image[static_cast<size_t>(row * s.image_width + col)];
+          worst = std::max(worst, std::abs(e / expected - 1));
+          sum += e;
+        }
+      const double mean = sum / ((s.image_width - 2) * (s.image_height - 2));
+      EXPECT_NEAR(mean / expected, 1.0, jitter ? 2e-3 : 1e-5);
+      // A regular grid of rays four to a pixel splats exactly (up to Embree's
+      // single-precision hit points); jitter adds noise.
+      EXPECT_LT(worst, jitter ? 0.15 : 1e-5);
+      EXPECT_EQ(flux.returned, 0.0);
+      EXPECT_EQ(flux.lost, 0.0);
+      EXPECT_NEAR(accounted(flux), flux.emitted, 1e-9 * flux.emitted);
+    }
+  }
+}
+
+TEST(CausticTracer, FresnelTransmissionAtNormalIncidence) {
+  CausticSetup s = flat_setup();
+  s.fresnel = true;
+  s.receiver_width_mm = s.receiver_depth_mm = 40;  // catches every ray
+  CausticTracer tracer(s);
+  tracer.set_heights(std::vector<double>(tracer.heights().size(), 2.0));
+  std::vector<double> image(static_cast<size_t>(s.image_width * s.image_height));
+  const CausticFlux flux = tracer.render(image);
+  const double r = std::pow((s.refractive_index - 1) / (s.refractive_index + 1), 2);
+  EXPECT_NEAR(flux.emitted, 400.0, 1e-9);
+  EXPECT_NEAR(flux.received / flux.emitted, (1 - r) * (1 - r), 1e-9);
+  EXPECT_NEAR(total(image, s), flux.received, 1e-9 * flux.received);
+}
+
+// Spot size (RMS radius about the centroid) on a receiver at `distance`.
+double rms_spot_radius(const CausticSetup& base, const std::vector<double>& heights, double distance) {
+  CausticSetup s = base;
+  s.receiver_distance_mm = distance;
+  CausticTracer tracer(s);
+  tracer.set_heights(heights);
+  std::vector<double> image(static_cast<size_t>(s.image_width * s.image_height));
+  tracer.render(image);
+  double w = 0, mx = 0, my = 0, mxx = 0;
+  for (int row = 0; row < s.image_height; ++row)
+    for (int col = 0; col < s.image_width; ++col) {
+      const double e = image[static_cast<size_t>(row * s.image_width + col)];
+      const double x = (col + 0.5) * s.receiver_width_mm / s.image_width, y = (row + 0.5) * s.receiver_depth_mm / s.image_height;
+      w += e;
+      mx += e * x;
+      my += e * y;
+      mxx += e * (x * x + y * y);
+    }
+  mx /= w;
+  my /= w;
+  return std::sqrt(mxx / w - mx * mx - my * my);
+}
+
+TEST(CausticTracer, PlanoConvexHeightFieldFocusesAtItsBackFocalDistance) {
+  // A spherical cap of radius R on a slab of centre thickness t, light from
+  // the curved side: f = R/(n-1), focus f - t/n below the flat face.
+  const double R = 100, t = 2, n = 1.5;
+  CausticSetup s;
+  s.width_mm = s.depth_mm = 8;  // semi-aperture 4 mm ≪ R: paraxial
+  s.vertices_x = s.vertices_y = 81;
+  s.refractive_index = n;
+  s.receiver_width_mm = s.receiver_depth_mm = 4;
+  s.image_width = s.image_height = 200;
+  s.rays_x = s.rays_y = 200;
+  CausticTracer probe(s);
+  const std::vector<double> lens =
+      heights_of(probe, [&](double x, double y) { return t - R + std::sqrt(R * R - x * x - y * y); });
+
+  // Golden-section search for the smallest spot.
+  double lo = 150, hi = 250;
+  const double g = (std::sqrt(5.0) - 1) / 2;
+  double a = hi - g * (hi - lo), b = lo + g * (hi - lo);
+  double fa = rms_spot_radius(s, lens, a), fb = rms_spot_radius(s, lens, b);
+  while (hi - lo > 0.05) {
+    if (fa < fb) {
+      hi = b; b = a; fb = fa; a = hi - g * (hi - lo); fa = rms_spot_radius(s, lens, a);
+    } else {
+      lo = a; a = b; fa = fb; b = lo + g * (hi - lo); fb = rms_spot_radius(s, lens, b);
+    }
+  }
+  const double focus = 0.5 * (lo + hi);
+  const double expected = R / (n - 1) - t / n;  // 198.67 mm
+  // Paraxial theory; the 4 mm aperture's spherical aberration moves the
+  // smallest spot by ~0.1 mm (longitudinal aberration ≈ 1.1·h²/f), the
+  // faceted cap a little less: 0.5 % covers both.
+  EXPECT_NEAR(focus, expected, 0.005 * expected);
+  // And it does focus: the spot there is far smaller than the aperture.
+  EXPECT_LT(rms_spot_radius(s, lens, focus), 0.05);
+  EXPECT_GT(rms_spot_radius(s, lens, 150), 0.5);
+}
+
+TEST(CausticTracer, FluxIsConservedWithTotalInternalReflection) {
+  CausticSetup s = flat_setup();
+  s.fresnel = true;
+  s.vertices_x = s.vertices_y = 41;
+  s.light_direction = Eigen::Vector3d(std::sin(0.9), 0, -std::cos(0.9));
+  CausticTracer tracer(s);
+  // Oblique light on steep ripples: some of it meets a surface from inside
+  // beyond the critical angle and is turned back up.
+  tracer.set_heights(heights_of(tracer, [](double x, double y) {
+    return 4 + 2.5 * std::sin(2.2 * x) * std::cos(1.7 * y);
+  }));
+  std::vector<double> image(static_cast<size_t>(s.image_width * s.image_height));
+  const CausticFlux flux = tracer.render(image);
+  EXPECT_NEAR(flux.emitted, 400.0 * std::cos(0.9), 1e-9);  // beam through the footprint
+  EXPECT_NEAR(accounted(flux), flux.emitted, 1e-9 * flux.emitted);
+  EXPECT_NEAR(total(image, s), flux.received, 1e-9 * flux.received);
+  EXPECT_GT(flux.returned, 0.0);
+  EXPECT_GT(flux.missed, 0.0);
+  EXPECT_GT(flux.received, 0.0);
+}
+
+TEST(CausticTracer, SameImageForAnyThreadCountAndAfterRefits) {
+  CausticSetup s = flat_setup();
+  CausticTracer tracer(s);
+  const auto wave = heights_of(tracer, [](double x, double y) { return 3 + 0.3 * std::sin(x) * std::sin(0.7 * y); });
+  std::vector<double> one(static_cast<size_t>(s.image_width * s.image_height)), two(one.size()), again(one.size());
+  {
+    tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+    tracer.set_heights(wave);
+    tracer.render(one);
+  }
+  tracer.set_heights(std::vector<double>(wave.size(), 1.0));  // refit to something else and back
+  tracer.render(two);
+  tracer.set_heights(wave);
+  tracer.render(two);
+  EXPECT_EQ(one, two);
+  CausticTracer fresh(s);
+  fresh.set_heights(wave);
+  fresh.render(again);
+  EXPECT_EQ(one, again);
+}
+
+TEST(CausticTracer, RejectsImpossibleSetups) {
+  CausticSetup s = flat_setup();
+  s.light_direction = Eigen::Vector3d(0, 0, 1);
+  EXPECT_THROW(CausticTracer{s}, InputError);
+  s = flat_setup();
+  CausticTracer tracer(s);
+  std::vector<double> below(tracer.heights().size(), 1.0);
+  below[3] = -0.1;
+  EXPECT_THROW(tracer.set_heights(below), InputError);
+}
+
+class CausticSimulatorTest : public SimulatorTest {
+ protected:
+  ImageObservation simulate(const ReducerNode& subtree, const std::string& options) const {
+    return SimulatorTest::simulate<ImageObservation>("caustics", subtree, options);
+  }
+  static Eigen::Vector2d centroid(const ImageObservation& image, double width_mm, double depth_mm,
+                                  Eigen::Vector2d centre) {
+    double w = 0, x = 0, y = 0;
+    for (int row = 0; row < image.height; ++row)
+      for (int col = 0; col < image.width; ++col) {
+        const double e = image.pixels[static_cast<size_t>(row * image.width + col)];
+        w += e;
+        x += e * (centre.x() + ((col + 0.5) / image.width - 0.5) * width_mm);
+        y += e * (centre.y() - ((row + 0.5) / image.height - 0.5) * depth_mm);
+      }
+    return {x / w, y / w};
+  }
+};
+
+TEST_F(CausticSimulatorTest, WedgeDeflectsTheBeamByRefractionAtBothFaces) {
+  // A wedge rising along a with slope s: refraction at the tilted top turns the
+  // beam by δ = θi − asin(sin θi / n), θi = atan s; the flat bottom turns it
+  // on to φ = asin(n sin δ). A ray entering at x (height h(x)) lands at
+  // x + h tan δ + D tan φ — unless it meets the side wall at x = 10 first,
+  // where it is totally reflected (90° − δ is beyond the critical angle) and
+  // leaves mirrored. The expected centroid averages that over the rays'
+  // entry points (unjittered: the centres of 200 strata across).
+  const double s = 0.1, n = 1.5, distance = 100;
+  const double theta_i = std::atan(s), delta = theta_i - std::asin(std::sin(theta_i) / n);
+  const double phi = std::asin(n * std::sin(delta));
+  double expected = 0;
+  const int samples = 200;
+  for (int k = 0; k < samples; ++k) {
+    const double x = -10 + 20 * (k + 0.5) / samples, h = 3 + s * x;
+    const double at_bottom = x + h * std::tan(delta);
+    expected += at_bottom <= 10 ? at_bottom + distance * std::tan(phi)
+                                : 20 - at_bottom - distance * std::tan(phi);
+  }
+  expected /= samples;
+  const auto wedge = node(R"({"type": "plane", "offset_mm": 3, "slope_a": 0.1, "center": [10, 10],
+      "below": {"type": "layered", "material": "VeroClear"}, "above": {"type": "layered", "material": "void"}})");
+  const ImageObservation image = simulate(*wedge, R"({"size_mm": [20, 20], "vertices": [21, 21],
+      "distance_mm": 100, "receiver_mm": [30, 30], "receiver_centre_mm": [5, 0], "image": [120, 120],
+      "rays": [200, 200], "jitter": false})");
+  const Eigen::Vector2d c = centroid(image, 30, 30, Eigen::Vector2d(5, 0));
+  EXPECT_NEAR(c.x(), expected, 2e-4);  // 5.03 mm
+  EXPECT_NEAR(c.y(), 0.0, 1e-4);
+  // All of the beam arrives: 400 mm² of unit irradiance.
+  double sum = 0;
+  for (double e : image.pixels) sum += e;
+  EXPECT_NEAR(sum * (30.0 / 120) * (30.0 / 120), 400.0, 1e-6);
+}
+
+TEST_F(CausticSimulatorTest, AnySubtreeIsReadByItsMaterialsAsAHeightSurfaceIs) {
+  // A Layered root (no height surface: searched with material queries) and
+  // a B-spline root (read directly) describing the same 2.5 mm flat slab.
+  const std::string options = R"({"size_mm": [20, 20], "thickness_mm": 6, "vertices": [11, 11],
+      "distance_mm": 40, "receiver_mm": [16, 16], "image": [32, 32], "rays": [160, 160]})";
+  const auto layered = node(R"({"type": "layered", "layers": [
+      {"material": "VeroClear", "thickness_mm": 2.5}, {"material": "void"}]})");
+  const auto spline = node(R"({"type": "bspline", "control": [4, 4], "heights_mm": 2.5,
+      "domain": [0, 0, 20, 20], "below": {"type": "layered", "material": "VeroClear"},
+      "above": {"type": "layered", "material": "void"}})");
+  const ImageObservation searched = simulate(*layered, options), direct = simulate(*spline, options);
+  ASSERT_EQ(searched.pixels.size(), direct.pixels.size());
+  for (size_t i = 0; i < direct.pixels.size(); ++i) {
+    EXPECT_NEAR(searched.pixels[i], direct.pixels[i], 1e-5);
+    EXPECT_NEAR(direct.pixels[i], 1.0, 0.2);  // flat: uniform up to jitter noise
+  }
+}
+
+}  // namespace
+}  // namespace spec2fab
