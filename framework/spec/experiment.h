@@ -46,6 +46,15 @@ class Experiment {
   Properties goal() const { return root_.object("goal"); }
   std::optional<Properties> simulation() const { return root_.optional_object("simulation"); }
   std::optional<Properties> optimizer() const { return root_.optional_object("optimizer"); }
+  /// What a translator hands its tuners: the "optimizer" section as JSON —
+  /// its keys are checked where the tuner is built (build_tuner), so they
+  /// are marked read here — or `fallback` when there is none.
+  nlohmann::json optimizer_or(nlohmann::json fallback) const {
+    const auto section = optimizer();
+    if (!section) return fallback;
+    for (const std::string& key : section->keys()) section->raw(key);
+    return section->value();
+  }
   std::optional<Properties> output() const { return root_.optional_object("output"); }
 
   const Solid& solid() const { return *solid_; }

@@ -1,7 +1,7 @@
 // The caustic simulator: the irradiance image a subtree's slab casts
-// (caustic_tracer.h). The subtree's frame is the slab's: (a, b) from the
-// footprint's corner, w the height above the slab's flat bottom; whatever
-// the subtree assigns below its top surface is the slab, void above it.
+// (caustic_tracer.h). The slab's bottom corner sits at origin_mm in the
+// subtree's frame, (a, b) along its footprint and w up from its flat bottom;
+// whatever the subtree assigns below its top surface is the slab, void above.
 
 #include <cmath>
 
@@ -20,6 +20,9 @@ class CausticSimulator final : public SimulatorFor<ImageObservation> {
     s.width_mm = size[0];
     s.depth_mm = size[1];
     thickness_mm_ = properties.get_in_range("thickness_mm", 10.0, 1e-3, 1e4);
+    const auto origin = properties.get<std::array<double, 3>>("origin_mm", {0.0, 0.0, 0.0});
+    origin_ = Eigen::Vector3d(origin[0], origin[1], origin[2]);
+    if (!origin_.allFinite()) properties.fail("origin_mm", "expected three finite numbers");
     const auto vertices = properties.get<std::array<int, 2>>("vertices", {121, 121});
     s.vertices_x = vertices[0];
     s.vertices_y = vertices[1];
@@ -73,6 +76,7 @@ class CausticSimulator final : public SimulatorFor<ImageObservation> {
         "optional Fresnel); stratified, deterministic rays. Plane and B-spline roots give their "
         "height directly; any other subtree is searched along w with material queries.",
         {{"size_mm", "[x, y]", "[50, 50]", "slab footprint; the subtree's (a, b) run from its corner"},
+         {"origin_mm", "[a, b, w]", "[0, 0, 0]", "the subtree's coordinates of the slab's bottom corner"},
          {"thickness_mm", "number (mm)", "10", "highest the top may be (search range along w)"},
          {"vertices", "[nx, ny]", "[121, 121]", "top-surface mesh vertices, corners included"},
          {"refractive_index", "number", "1.5", "of the slab's material"},
@@ -105,8 +109,8 @@ class CausticSimulator final : public SimulatorFor<ImageObservation> {
     for (int j = 0; j < s.vertices_y; ++j) {
       for (int i = 0; i < s.vertices_x; ++i, ++k) {
         const Eigen::Vector2d xy = tracer_->vertex_xy(i, j);
-        const double a = xy.x() + 0.5 * s.width_mm, b = xy.y() + 0.5 * s.depth_mm;
-        heights_[k] = direct ? surface->surface_height(a, b) : search_height(subtree, a, b);
+        const double a = origin_.x() + xy.x() + 0.5 * s.width_mm, b = origin_.y() + xy.y() + 0.5 * s.depth_mm;
+        heights_[k] = (direct ? surface->surface_height(a, b) : search_height(subtree, a, b)) - origin_.z();
       }
     }
   }
@@ -116,8 +120,9 @@ class CausticSimulator final : public SimulatorFor<ImageObservation> {
   double search_height(const ReducerNode& subtree, double a, double b) const {
     const QueryPoint point;
     auto solid_at = [&](double w) { return route_to_material(subtree, point, LocalFrame{a, b, w}) != kVoid; };
-    if (solid_at(thickness_mm_)) return thickness_mm_;
-    double low = 0, high = thickness_mm_;
+    const double bottom = origin_.z(), top = origin_.z() + thickness_mm_;
+    if (solid_at(top)) return top;
+    double low = bottom, high = top;
     while (high - low > 1e-7 * thickness_mm_) {
       const double mid = 0.5 * (low + high);
       (solid_at(mid) ? low : high) = mid;
@@ -127,6 +132,7 @@ class CausticSimulator final : public SimulatorFor<ImageObservation> {
 
   std::unique_ptr<CausticTracer> tracer_;
   double thickness_mm_ = 10;
+  Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();
   std::vector<double> heights_;
   CausticFlux flux_;
 };

@@ -490,6 +490,36 @@ TEST_F(Cli, SimulateRunsTheCausticSimulator) {
   EXPECT_GT(values[120 * 240 + 120], 1.2);
 }
 
+TEST_F(Cli, SmoothCausticsTunesTheSurfaceAndReportsImageErrors) {
+  const std::string body =
+      R"({"name": "lens", "translator": "smooth_caustics",
+          "geometry": {"mesh": ")" + (kDatasets / "meshes/board_60x60x8.stl").string() + R"(", "uv": "planar"},
+          "goal": {"image": ")" + (kDatasets / "images/caustic_ring_120.png").string() + R"(",
+                   "control": [6, 6], "image_size": [48, 48], "rays": [96, 96], "distance_mm": 60},
+          "optimizer": {"type": "spsa", "iterations": 5, "c": 0.01, "seed": 3},
+          "output": {"slices": false, "stl": false, "3mf": false, "render": false},
+          "materials": ")" + (kDatasets / "materials/polyjet.json").string() + R"(",
+          "printer": ")" + (dir_ / "clear_printer.json").string() + R"("})";
+  std::ofstream(dir_ / "clear_printer.json")
+      << R"({"name": "coarse-clear", "technology": "polyjet", "resolution_dpi": [63.5, 63.5],
+             "layer_mm": 0.4, "build_volume_mm": [200, 200, 200], "model_materials": ["VeroClear"],
+             "source": "test"})";
+  const Result r = spec2fab("run -q " + experiment("lens", body).string() + " --out " + (dir_ / "run").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto result = nlohmann::json::parse(read(dir_ / "run" / "result.json"));
+  const auto& caustics = result["caustics"];
+  EXPECT_GT(caustics["rmse"].get<double>(), 0.0);
+  EXPECT_LE(caustics["rmse"].get<double>(), caustics["initial_rmse"].get<double>());  // best seen
+  EXPECT_GT(caustics["ssim"].get<double>(), -1.0);
+  EXPECT_LT(caustics["ssim"].get<double>(), 1.0);
+  EXPECT_EQ(result["tuning"]["tuner_runs"][0]["iterations"], 5);
+  for (const char* file : {"preview/goal_vs_simulated.png", "preview/height_map.png", "preview/convergence.png"})
+    EXPECT_TRUE(fs::exists(dir_ / "run" / file)) << file;
+  const auto tree = nlohmann::json::parse(read(dir_ / "run" / "tree.json"));
+  EXPECT_EQ(tree["type"], "bspline");
+  EXPECT_EQ(tree["heights_mm"].size(), 36u);
+}
+
 TEST_F(Cli, SubsurfaceChessboardTunesEveryColumnAndReportsProfileErrors) {
   const std::string body =
       R"({"name": "board", "translator": "subsurface",

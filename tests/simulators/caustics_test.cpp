@@ -14,6 +14,7 @@
 #include <Eigen/Geometry>
 #include <tbb/global_control.h>
 
+#include "caustics/caustic_parts.h"
 #include "caustics/caustic_tracer.h"
 #include "core/error.h"
 #include "simulator_fixture.h"
@@ -308,6 +309,48 @@ TEST_F(CausticSimulatorTest, AnySubtreeIsReadByItsMaterialsAsAHeightSurfaceIs) {
     EXPECT_NEAR(searched.pixels[i], direct.pixels[i], 1e-5);
     EXPECT_NEAR(direct.pixels[i], 1.0, 0.2);  // flat: uniform up to jitter noise
   }
+}
+
+TEST(CausticImages, SsimOfConstantImagesIsTheLuminanceTermAndOfEqualImagesOne) {
+  // Zero variance leaves SSIM's luminance term: (2 μx μy + C1) / (μx² + μy² + C1),
+  // C1 = (0.01 L)², L the larger peak.
+  const int w = 32, h = 24;
+  const std::vector<double> a(w * h, 2.0), b(w * h, 3.0);
+  const double c1 = std::pow(0.01 * 3.0, 2);
+  EXPECT_NEAR(image_ssim(a, b, w, h), (2 * 2.0 * 3.0 + c1) / (4.0 + 9.0 + c1), 1e-12);
+  std::vector<double> ramp(w * h);
+  for (size_t i = 0; i < ramp.size(); ++i) ramp[i] = std::sin(0.37 * static_cast<double>(i)) + 1.5;
+  EXPECT_NEAR(image_ssim(ramp, ramp, w, h), 1.0, 1e-12);
+  std::vector<double> noisy = ramp;
+  for (size_t i = 0; i < noisy.size(); ++i) noisy[i] += 0.3 * std::cos(1.91 * static_cast<double>(i * i));
+  EXPECT_LT(image_ssim(ramp, noisy, w, h), 0.95);
+  EXPECT_NEAR(image_rmse(a, b), 1.0, 1e-15);
+}
+
+TEST_F(CausticSimulatorTest, GoalPictureCarriesTheGivenFluxAndMseComparesPixels) {
+  const PartContext context{palette_};
+  auto goal = GoalRegistry::instance().create_named(
+      "caustic_image",
+      Properties::parse(R"({"image": ")" SPEC2FAB_DATASETS_DIR R"(/images/caustic_ring_120.png",
+          "size": [60, 40], "receiver_mm": [30, 20], "flux_mm2": 500})", "goal.json"),
+      "goal", context);
+  const auto& target = static_cast<const ImageObservation&>(goal->target());
+  ASSERT_EQ(target.width, 60);
+  ASSERT_EQ(target.height, 40);
+  double sum = 0;
+  for (double v : target.pixels) sum += v;
+  EXPECT_NEAR(sum * 0.5 * 0.5, 500.0, 1e-9);
+  // The ring is brighter than the ground between it and the dot.
+  EXPECT_GT(target.pixels[20 * 60 + 30 + 19], 2 * target.pixels[20 * 60 + 30 + 10]);
+
+  auto metric = MetricRegistry::instance().create_named("image_mse", Properties::parse("{}", "m.json"),
+                                                        "metric", context);
+  ImageObservation shifted = target;
+  for (double& v : shifted.pixels) v += 0.5;
+  EXPECT_NEAR(metric->error(shifted, target), 0.25, 1e-12);
+  ImageObservation small = target;
+  small.pixels.resize(10);
+  EXPECT_THROW(metric->error(small, target), InputError);
 }
 
 }  // namespace

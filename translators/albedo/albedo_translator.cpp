@@ -21,7 +21,7 @@
 #include "spec/surface_columns.h"
 #include "spec/translator.h"
 #include "spec/tree_outputs.h"
-#include "tuning/convergence_plot.h"
+#include "spec/tuning_outputs.h"
 #include "tuning/schedule.h"
 
 namespace spec2fab {
@@ -159,7 +159,7 @@ class AlbedoTranslator final : public Translator {
     outputs_ = TreeOutputOptions::read(goal, experiment, *tree_);
 
     const nlohmann::json optimizer =
-        experiment.optimizer() ? experiment.optimizer()->value() : nlohmann::json{{"type", "exhaustive"}};
+        experiment.optimizer_or(nlohmann::json{{"type", "exhaustive"}});
     const PartContext context{palette};
     auto make_tuner = [&](int i, int j, const Rgb& target) {
       const nlohmann::json parts = {
@@ -237,12 +237,9 @@ class AlbedoTranslator final : public Translator {
         {"low_pass_sigma_px", low_pass_sigma_},
         {"low_pass_delta_e00", low_pass_delta_e(image_, achieved, low_pass_sigma_)},
         {"low_pass_delta_e00_nearest_only", low_pass_delta_e(image_, nearest, low_pass_sigma_)}};
-    context.result["tuning"] = record.to_json(network_);
-    context.folder.write_text("convergence.csv", record.convergence_csv(network_));
-    write_convergence_plot(record, network_.size(), context.folder.path("preview/convergence.png"));
+    write_tuning_outputs(record, network_, context);
     write_comparison(context.folder.path("preview/goal_vs_achieved.png"), achieved, nearest);
     context.result["files"] = {{"previews", {"preview/convergence.png", "preview/goal_vs_achieved.png"}}};
-    if (context.timing) (*context.timing)["tuning_phase_seconds"] = record.phase_seconds;
     write_tree_outputs(*tree_, outputs_, context);
   }
 

@@ -22,9 +22,9 @@
 #include "spec/surface_columns.h"
 #include "spec/translator.h"
 #include "spec/tree_outputs.h"
+#include "spec/tuning_outputs.h"
 #include "subsurface/stack_bound.h"
 #include "subsurface/subsurface_parts.h"
-#include "tuning/convergence_plot.h"
 #include "tuning/schedule.h"
 
 namespace spec2fab {
@@ -93,8 +93,7 @@ class SubsurfaceTranslator final : public Translator {
     }
     bound_ = std::make_shared<StackBound>(model_, options, palette.id(backing_, goal.where("backing")));
     const nlohmann::json optimizer =
-        experiment.optimizer() ? experiment.optimizer()->value()
-                               : nlohmann::json{{"type", "branch_and_bound"}, {"value_order", "best_bound_first"}};
+        experiment.optimizer_or(nlohmann::json{{"type", "branch_and_bound"}, {"value_order", "best_bound_first"}});
     const PartContext context{palette};
     for (int j = 0; j < columns_[1]; ++j) {
       for (int i = 0; i < columns_[0]; ++i) {
@@ -176,14 +175,11 @@ class SubsurfaceTranslator final : public Translator {
           {"leaves_evaluated_total", leaves},
           {"fraction_of_exhaustive", stats(fractions)}}},
         {"stacks", stacks}};
-    context.result["tuning"] = record.to_json(network_);
-    context.folder.write_text("convergence.csv", record.convergence_csv(network_));
-    write_convergence_plot(record, network_.size(), context.folder.path("preview/convergence.png"));
+    write_tuning_outputs(record, network_, context);
     write_profiles(context.folder.path("preview/profiles.png"));
     write_appearance(context.folder.path("preview/appearance.png"));
     context.result["files"] = {
         {"previews", {"preview/convergence.png", "preview/profiles.png", "preview/appearance.png"}}};
-    if (context.timing) (*context.timing)["tuning_phase_seconds"] = record.phase_seconds;
     write_tree_outputs(*tree_, outputs_, context);
   }
 

@@ -14,7 +14,7 @@
 #include "reducer/reducer_tree.h"
 #include "spec/translator.h"
 #include "spec/tree_outputs.h"
-#include "tuning/convergence_plot.h"
+#include "spec/tuning_outputs.h"
 #include "tuning/tuning_plan.h"
 
 namespace spec2fab {
@@ -85,15 +85,12 @@ class TreeTranslator final : public Translator {
       tuner.reset_target();  // report against the goal, not a diffused target
       tuners.push_back({{"name", tuner.name()}, {"final_error", tuner.error()}});
     }
-    context.result["tuning"] = record.to_json(network);
+    write_tuning_outputs(record, network, context);
     context.result["tuning"]["tuners"] = tuners;
-    context.folder.write_text("convergence.csv", record.convergence_csv(network));
-    write_convergence_plot(record, network.size(), context.folder.path("preview/convergence.png"));
     for (const TunerRun& run : record.runs) {
       spdlog::debug("{} ({}, sweep {}): {}", network.tuner(run.tuner).name(),
                     record.phase_names[run.phase], run.sweep + 1, run.summary.brief_report());
     }
-    if (context.timing) (*context.timing)["tuning_phase_seconds"] = record.phase_seconds;
   }
 
   std::unique_ptr<ReducerTree> tree_;

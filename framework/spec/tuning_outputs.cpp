@@ -1,0 +1,15 @@
+#include "spec/tuning_outputs.h"
+
+#include "spec/run_folder.h"
+#include "tuning/convergence_plot.h"
+
+namespace spec2fab {
+
+void write_tuning_outputs(const RunRecord& record, TunerNetwork& network, RunContext& context) {
+  context.result["tuning"] = record.to_json(network);
+  context.folder.write_text("convergence.csv", record.convergence_csv(network));
+  write_convergence_plot(record, network.size(), context.folder.path("preview/convergence.png"));
+  if (context.timing) (*context.timing)["tuning_phase_seconds"] = record.phase_seconds;
+}
+
+}  // namespace spec2fab

@@ -1,0 +1,123 @@
+// Parts that speak caustic images: the goal "caustic_image" (a picture read
+// as the irradiance it asks for) and the metric "image_mse".
+
+#include "caustics/caustic_parts.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "core/colour.h"
+#include "core/error.h"
+#include "tuning/parts.h"
+
+namespace spec2fab {
+
+double image_rmse(std::span<const double> a, std::span<const double> b) {
+  if (a.size() != b.size() || a.empty()) throw std::invalid_argument("image_rmse: sizes differ");
+  double sum = 0;
+  for (size_t i = 0; i < a.size(); ++i) sum += (a[i] - b[i]) * (a[i] - b[i]);
+  return std::sqrt(sum / static_cast<double>(a.size()));
+}
+
+double image_ssim(std::span<const double> a, std::span<const double> b, int width, int height) {
+  if (a.size() != b.size() || a.size() != static_cast<size_t>(width) * static_cast<size_t>(height))
+    throw std::invalid_argument("image_ssim: sizes differ");
+  const cv::Mat x(height, width, CV_64F, const_cast<double*>(a.data()));
+  const cv::Mat y(height, width, CV_64F, const_cast<double*>(b.data()));
+  double peak_x = 0, peak_y = 0;
+  cv::minMaxLoc(x, nullptr, &peak_x);
+  cv::minMaxLoc(y, nullptr, &peak_y);
+  const double range = std::max({peak_x, peak_y, 1e-12});
+  const double c1 = std::pow(0.01 * range, 2), c2 = std::pow(0.03 * range, 2);
+  const auto blur = [](const cv::Mat& in) {
+    cv::Mat out;
+    cv::GaussianBlur(in, out, cv::Size(11, 11), 1.5, 1.5, cv::BORDER_REFLECT);
+    return out;
+  };
+  const cv::Mat mx = blur(x), my = blur(y);
+  const cv::Mat sxx = blur(x.mul(x)) - mx.mul(mx), syy = blur(y.mul(y)) - my.mul(my),
+                sxy = blur(x.mul(y)) - mx.mul(my);
+  const cv::Mat numerator = (2 * mx.mul(my) + c1).mul(2 * sxy + c2);
+  const cv::Mat denominator = (mx.mul(mx) + my.mul(my) + c1).mul(sxx + syy + c2);
+  cv::Mat map;
+  cv::divide(numerator, denominator, map);
+  return cv::mean(map)[0];
+}
+
+namespace {
+
+/// A goal picture as irradiance: read (grey), resized to the simulator's
+/// image by area averaging, decoded from sRGB to linear, and scaled so it
+/// carries `flux_mm2` — the light the slab lets through — over the receiver.
+class CausticImageGoal final : public GoalFor<ImageObservation> {
+ public:
+  CausticImageGoal(const Properties& properties, const PartContext& /*context*/) {
+    const auto file = properties.existing_file("image");
+    const cv::Mat picture = cv::imread(file.string(), cv::IMREAD_GRAYSCALE);
+    if (picture.empty()) throw InputError(properties.where("image") + ": cannot read " + file.string() + " as an image");
+    const auto size = properties.get<std::array<int, 2>>("size", {240, 240});
+    if (size[0] < 1 || size[1] < 1 || static_cast<long long>(size[0]) * size[1] > 64'000'000)
+      properties.fail("size", "expected [width, height], 1 to 64 million pixels");
+    const auto receiver = properties.get<std::array<double, 2>>("receiver_mm");
+    if (!(receiver[0] > 0 && receiver[1] > 0)) properties.fail("receiver_mm", "expected a positive size");
+    const double flux = properties.get<double>("flux_mm2");
+    if (!(flux > 0) || !std::isfinite(flux)) properties.fail("flux_mm2", "expected a positive amount of light");
+    cv::Mat resized;
+    cv::resize(picture, resized, cv::Size(size[0], size[1]), 0, 0, cv::INTER_AREA);
+    target_.width = size[0];
+    target_.height = size[1];
+    target_.channels = 1;
+    target_.pixels.resize(static_cast<size_t>(size[0]) * static_cast<size_t>(size[1]));
+    for (int row = 0; row < size[1]; ++row)
+      for (int col = 0; col < size[0]; ++col)
+        target_.pixels[static_cast<size_t>(row * size[0] + col)] = srgb_to_linear(resized.at<unsigned char>(row, col) / 255.0);
+    const double total = std::accumulate(target_.pixels.begin(), target_.pixels.end(), 0.0);
+    if (!(total > 0)) throw InputError(properties.where("image") + ": the goal image is black: it asks for no light");
+    const double pixel_area = receiver[0] / size[0] * receiver[1] / size[1];
+    for (double& v : target_.pixels) v *= flux / (total * pixel_area);
+  }
+
+  std::string name() const override { return "caustic_image"; }
+  const ImageObservation& typed_target() const override { return target_; }
+
+  static TypeDoc doc() {
+    return {"A picture read as the irradiance a caustic should cast: grey levels decoded from "
+            "sRGB, resized to the simulator's image, scaled to carry flux_mm2 over the receiver.",
+            {{"image", "file", "required", "the picture (any format OpenCV reads)"},
+             {"size", "[width, height]", "[240, 240]", "the simulator's image size"},
+             {"receiver_mm", "[x, y]", "required", "the receiver's extent"},
+             {"flux_mm2", "number", "required", "light to distribute: incident irradiance x area"}},
+            R"({"type": "caustic_image", "image": "ring.png", "receiver_mm": [60, 60], "flux_mm2": 3600})"};
+  }
+
+ private:
+  ImageObservation target_;
+};
+
+class ImageMse final : public MetricFor<ImageObservation> {
+ public:
+  ImageMse(const Properties& /*properties*/, const PartContext& /*context*/) {}
+  std::string name() const override { return "image_mse"; }
+  double error(const ImageObservation& simulated, const ImageObservation& target) const override {
+    if (simulated.pixels.size() != target.pixels.size())
+      throw InputError("image_mse: the simulated image (" + std::to_string(simulated.width) + " x " +
+                       std::to_string(simulated.height) + ") and the goal (" + std::to_string(target.width) +
+                       " x " + std::to_string(target.height) + ") differ in size");
+    const double rmse = image_rmse(simulated.pixels, target.pixels);
+    return rmse * rmse;
+  }
+  static TypeDoc doc() {
+    return {"Mean squared difference of two images, pixel by pixel.", {}, R"({"type": "image_mse"})"};
+  }
+};
+
+}  // namespace
+}  // namespace spec2fab
+
+SPEC2FAB_REGISTER(spec2fab::GoalRegistry, spec2fab::CausticImageGoal, "caustic_image")
+SPEC2FAB_REGISTER(spec2fab::MetricRegistry, spec2fab::ImageMse, "image_mse")

@@ -1,0 +1,209 @@
+// The smooth-caustics translator (paper §7.3, Fig. 9 right, after Finckh et
+// al. 2010): a clear slab whose top is a B-spline height surface, tuned so
+// that collimated light through it casts a goal image on a receiver below.
+// The tree is one B-spline node over the solid's footprint (clear below,
+// void above); one tuner — the caustic simulator, image MSE against the
+// goal picture, SPSA by default as the paper — tunes every control height.
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include <fmt/format.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "caustics/caustic_parts.h"
+#include "core/colour.h"
+#include "reducer/reducer_tree.h"
+#include "spec/translator.h"
+#include "spec/tree_outputs.h"
+#include "spec/tuning_outputs.h"
+#include "tuning/schedule.h"
+
+namespace spec2fab {
+namespace {
+
+class SmoothCausticsTranslator final : public Translator {
+ public:
+  SmoothCausticsTranslator(const Properties& /*root*/, const Experiment& experiment) {
+    const Properties goal = experiment.goal();
+    const MaterialPalette& palette = experiment.palette();
+    const Bounds bounds = experiment.solid().bounds();
+    const Vec3 size = bounds.size();
+    control_ = goal.get<std::array<int, 2>>("control", {60, 60});
+    if (control_[0] < 2 || control_[1] < 2 || control_[0] * control_[1] > 1'000'000)
+      goal.fail("control", "expected [na, nb], at least 2 each");
+    material_ = goal.get<std::string>("material", "VeroClear");
+    palette.id(material_, goal.where("material"));
+    const double low = goal.get_in_range("min_height_mm", 0.25 * size.z(), 1e-3, size.z());
+    const double start = goal.get_in_range("start_height_mm", 0.75 * size.z(), low, size.z());
+    image_ = goal.get<std::array<int, 2>>("image_size", {240, 240});
+    receiver_ = goal.get<std::array<double, 2>>("receiver_mm", {size.x(), size.y()});
+    distance_mm_ = goal.get_in_range("distance_mm", 200, 1e-3, 1e6);
+    const int per_span = static_cast<int>(goal.get_in_range("vertices_per_span", 3, 1, 16));
+    const std::array<int, 2> vertices{per_span * (control_[0] - 1) + 1, per_span * (control_[1] - 1) + 1};
+    const auto rays = goal.get<std::array<int, 2>>("rays", {2 * image_[0], 2 * image_[1]});
+    const double eta = goal.get_in_range("refractive_index", 1.5, 1.0, 4.0);
+
+    const nlohmann::json tree = {
+        {"type", "bspline"},
+        {"axis", "z"},
+        {"control", control_},
+        {"heights_mm", {{"value", bounds.lower.z() + start}, {"min", bounds.lower.z() + low}, {"max", bounds.upper.z()}}},
+        {"domain", {bounds.lower.x(), bounds.lower.y(), bounds.upper.x(), bounds.upper.y()}},
+        {"below", {{"type", "layered"}, {"material", material_}}},
+        {"above", {{"type", "layered"}, {"material", "void"}}}};
+    tree_ = std::make_unique<ReducerTree>(
+        Properties::wrap(tree, experiment.file().string() + " (smooth caustics tree)"), palette);
+    tree_->bind(experiment.solid(), experiment.geometry_spec().field_voxel_mm);
+    outputs_ = TreeOutputOptions::read(goal, experiment, *tree_);
+
+    const nlohmann::json simulator = {
+        {"type", "caustics"},
+        {"size_mm", {size.x(), size.y()}},
+        {"origin_mm", {bounds.lower.x(), bounds.lower.y(), bounds.lower.z()}},
+        {"thickness_mm", size.z()},
+        {"vertices", vertices},
+        {"refractive_index", eta},
+        {"distance_mm", distance_mm_},
+        {"receiver_mm", receiver_},
+        {"image", image_},
+        {"rays", rays}};
+    const nlohmann::json goal_part = {{"type", "caustic_image"},
+                                      {"image", goal.existing_file("image").string()},
+                                      {"size", image_},
+                                      {"receiver_mm", receiver_},
+                                      {"flux_mm2", size.x() * size.y()}};
+    const nlohmann::json optimizer =
+        experiment.optimizer_or({{"type", "spsa"}, {"iterations", 400}, {"c", 0.02}});
+    const nlohmann::json parts = {{"simulator", simulator},
+                                  {"metric", {{"type", "image_mse"}}},
+                                  {"goal", goal_part},
+                                  {"optimizer", optimizer}};
+    auto tuner = build_tuner(Properties::wrap(parts, experiment.file().string() + " (tuner)"), "surface",
+                             PartContext{palette});
+    tuner->set_node(tree_->root());
+    network_.add(std::move(tuner));
+    Phase phase;
+    phase.name = "surface";
+    schedule_.add(std::move(phase));
+  }
+
+  std::string summary() const override {
+    return fmt::format(
+        "smooth caustics: a {} slab, top a {} x {} B-spline; collimated light casts the goal "
+        "image {} mm below on a {:g} x {:g} mm receiver ({} x {} px); one tuner (caustics, "
+        "image_mse)",
+        material_, control_[0], control_[1], distance_mm_, receiver_[0], receiver_[1], image_[0], image_[1]);
+  }
+
+  const ReducerTree& tree() const override { return *tree_; }
+
+  void run(RunContext& context) override {
+    Tuner& tuner = network_.tuner(0);
+    tuner.error();
+    const auto& target = static_cast<const ImageObservation&>(tuner.goal().target());
+    const std::vector<double> initial = static_cast<const ImageObservation&>(tuner.simulated()).pixels;
+
+    const RunRecord record = schedule_.run(network_, context.seed);
+    tree_->evaluate();
+    tuner.error();
+    const auto& achieved = static_cast<const ImageObservation&>(tuner.simulated());
+    const double goal_rms = image_rmse(target.pixels, std::vector<double>(target.pixels.size(), 0.0));
+    const double rmse = image_rmse(achieved.pixels, target.pixels);
+    const double initial_rmse = image_rmse(initial, target.pixels);
+    context.result["caustics"] = {
+        {"control", control_},
+        {"image_size", image_},
+        {"receiver_mm", receiver_},
+        {"distance_mm", distance_mm_},
+        {"rmse", rmse},
+        {"relative_rmse", rmse / goal_rms},
+        {"ssim", image_ssim(achieved.pixels, target.pixels, target.width, target.height)},
+        {"initial_rmse", initial_rmse},
+        {"initial_ssim", image_ssim(initial, target.pixels, target.width, target.height)}};
+    write_tuning_outputs(record, network_, context);
+    write_goal_vs_simulated(target, achieved, context.folder.path("preview/goal_vs_simulated.png"));
+    write_height_map(context.folder.path("preview/height_map.png"));
+    context.result["files"] = {
+        {"previews", {"preview/convergence.png", "preview/goal_vs_simulated.png", "preview/height_map.png"}}};
+    write_tree_outputs(*tree_, outputs_, context);
+  }
+
+  static TypeDoc doc() {
+    TypeDoc doc{
+        "Smooth caustics (paper Fig. 9, after Finckh et al. 2010): a clear slab over the solid's "
+        "footprint whose top is a B-spline height surface, tuned so that collimated light from "
+        "above casts the goal image on a receiver below. One tuner: the caustics simulator, "
+        "image_mse against the goal picture, SPSA unless `optimizer` says otherwise.",
+        {{"goal.image", "file", "required", "the picture to cast (grey levels)"},
+         {"goal.control", "[na, nb]", "[60, 60]", "B-spline control points"},
+         {"goal.material", "material", "VeroClear", "the slab's material"},
+         {"goal.min_height_mm", "number (mm)", "1/4 of the solid's height", "lowest the top may go"},
+         {"goal.start_height_mm", "number (mm)", "3/4 of the solid's height", "the flat start"},
+         {"goal.distance_mm", "number (mm)", "200", "receiver below the slab's bottom"},
+         {"goal.receiver_mm", "[x, y]", "the footprint", "receiver extent"},
+         {"goal.image_size", "[width, height]", "[240, 240]", "simulated image"},
+         {"goal.vertices_per_span", "integer", "3", "mesh vertices per control span"},
+         {"goal.rays", "[nx, ny]", "2 x image_size", "stratified rays"},
+         {"goal.refractive_index", "number", "1.5", "of the slab's material"},
+         {"optimizer", "object", "spsa, 400 iterations, c 0.02", "the surface's optimizer"}},
+        R"({"translator": "smooth_caustics", "goal": {"image": "ring.png", "distance_mm": 200}})"};
+    for (PropertyDoc& d : TreeOutputOptions::docs()) doc.properties.push_back(std::move(d));
+    return doc;
+  }
+
+ private:
+  /// Goal | simulated, both on the goal's scale (its peak white), sRGB grey.
+  static void write_goal_vs_simulated(const ImageObservation& goal, const ImageObservation& simulated,
+                                      const std::filesystem::path& file) {
+    const double peak = std::max(1e-12, *std::max_element(goal.pixels.begin(), goal.pixels.end()));
+    const int gap = 8;
+    cv::Mat image(goal.height, 2 * goal.width + gap, CV_8UC1, cv::Scalar(255));
+    for (int p = 0; p < 2; ++p) {
+      const std::vector<double>& v = p == 0 ? goal.pixels : simulated.pixels;
+      for (int row = 0; row < goal.height; ++row)
+        for (int col = 0; col < goal.width; ++col)
+          image.at<unsigned char>(row, p * (goal.width + gap) + col) =
+              linear_to_srgb8(std::min(1.0, v[static_cast<size_t>(row * goal.width + col)] / peak));
+    }
+    if (!cv::imwrite(file.string(), image)) throw std::runtime_error("cannot write " + file.string());
+  }
+
+  /// The tuned surface's height above its lowest point, as a colour map
+  /// (blue low, yellow high), one pixel per control point scaled up.
+  void write_height_map(const std::filesystem::path& file) {
+    const std::vector<double> heights = network_.tuner(0).search_space().values();
+    const auto [lo, hi] = std::minmax_element(heights.begin(), heights.end());
+    const double span = std::max(1e-9, *hi - *lo);
+    cv::Mat grey(control_[1], control_[0], CV_8UC1);
+    for (int j = 0; j < control_[1]; ++j)
+      for (int i = 0; i < control_[0]; ++i)
+        // Row 0 at +y, as in the caustic images.
+        grey.at<unsigned char>(control_[1] - 1 - j, i) = static_cast<unsigned char>(
+            std::lround(255 * (heights[static_cast<size_t>(j * control_[0] + i)] - *lo) / span));
+    cv::Mat scaled, coloured;
+    const int scale = std::max(1, 240 / std::max(control_[0], control_[1]));
+    cv::resize(grey, scaled, cv::Size(), scale, scale, cv::INTER_NEAREST);
+    cv::applyColorMap(scaled, coloured, cv::COLORMAP_VIRIDIS);
+    cv::putText(coloured, fmt::format("relief {:.3f} mm", span), {6, 16}, cv::FONT_HERSHEY_SIMPLEX, 0.45,
+                {255, 255, 255}, 1, cv::LINE_AA);
+    if (!cv::imwrite(file.string(), coloured)) throw std::runtime_error("cannot write " + file.string());
+  }
+
+  std::array<int, 2> control_{60, 60}, image_{240, 240};
+  std::array<double, 2> receiver_{50, 50};
+  double distance_mm_ = 200;
+  std::string material_;
+  std::unique_ptr<ReducerTree> tree_;
+  TreeOutputOptions outputs_;
+  TunerNetwork network_;
+  Schedule schedule_;
+};
+
+}  // namespace
+}  // namespace spec2fab
+
+SPEC2FAB_REGISTER(spec2fab::TranslatorRegistry, spec2fab::SmoothCausticsTranslator, "smooth_caustics")
