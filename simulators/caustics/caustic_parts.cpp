@@ -12,17 +12,11 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/colour.h"
+#include "core/distance.h"
 #include "core/error.h"
 #include "tuning/parts.h"
 
 namespace spec2fab {
-
-double image_rmse(std::span<const double> a, std::span<const double> b) {
-  if (a.size() != b.size() || a.empty()) throw std::invalid_argument("image_rmse: sizes differ");
-  double sum = 0;
-  for (size_t i = 0; i < a.size(); ++i) sum += (a[i] - b[i]) * (a[i] - b[i]);
-  return std::sqrt(sum / static_cast<double>(a.size()));
-}
 
 double image_ssim(std::span<const double> a, std::span<const double> b, int width, int height) {
   if (a.size() != b.size() || a.size() != static_cast<size_t>(width) * static_cast<size_t>(height))
@@ -108,8 +102,7 @@ class ImageMse final : public MetricFor<ImageObservation> {
       throw InputError("image_mse: the simulated image (" + std::to_string(simulated.width) + " x " +
                        std::to_string(simulated.height) + ") and the goal (" + std::to_string(target.width) +
                        " x " + std::to_string(target.height) + ") differ in size");
-    const double rmse = image_rmse(simulated.pixels, target.pixels);
-    return rmse * rmse;
+    return squared_distance(simulated.pixels, target.pixels) / static_cast<double>(target.pixels.size());
   }
   static TypeDoc doc() {
     return {"Mean squared difference of two images, pixel by pixel.", {}, R"({"type": "image_mse"})"};

@@ -5,6 +5,7 @@
 #include <algorithm>
 
 #include "albedo/kubelka_munk.h"
+#include "core/distance.h"
 #include "core/strings.h"
 #include "tuning/parts.h"
 
@@ -138,12 +139,7 @@ class ProfileL2 final : public MetricFor<RadialProfileObservation> {
         simulated.basis->radius_mm() != target.basis->radius_mm()) {
       throw InputError("profile_l2: the simulator's and the goal's profile grids differ (radius_mm, samples)");
     }
-    double sum = 0;
-    for (size_t i = 0; i < simulated.coefficients.size(); ++i) {
-      const double d = simulated.coefficients[i] - target.coefficients[i];
-      sum += d * d;
-    }
-    return sum;
+    return squared_distance(simulated.coefficients, target.coefficients);
   }
   static TypeDoc doc() {
     return {"Squared difference of two reflectance profiles integrated over the disc, summed over "

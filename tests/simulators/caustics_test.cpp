@@ -16,6 +16,7 @@
 
 #include "caustics/caustic_parts.h"
 #include "caustics/caustic_tracer.h"
+#include "core/distance.h"
 #include "core/error.h"
 #include "simulator_fixture.h"
 
@@ -324,7 +325,7 @@ TEST(CausticImages, SsimOfConstantImagesIsTheLuminanceTermAndOfEqualImagesOne) {
   std::vector<double> noisy = ramp;
   for (size_t i = 0; i < noisy.size(); ++i) noisy[i] += 0.3 * std::cos(1.91 * static_cast<double>(i * i));
   EXPECT_LT(image_ssim(ramp, noisy, w, h), 0.95);
-  EXPECT_NEAR(image_rmse(a, b), 1.0, 1e-15);
+  EXPECT_NEAR(rms_difference(a, b), 1.0, 1e-15);
 }
 
 TEST_F(CausticSimulatorTest, GoalPictureCarriesTheGivenFluxAndMseComparesPixels) {

@@ -16,6 +16,7 @@
 
 #include "caustics/caustic_parts.h"
 #include "core/colour.h"
+#include "core/distance.h"
 #include "reducer/reducer_tree.h"
 #include "spec/translator.h"
 #include "spec/tree_outputs.h"
@@ -111,9 +112,9 @@ class SmoothCausticsTranslator final : public Translator {
     tree_->evaluate();
     tuner.error();
     const auto& achieved = static_cast<const ImageObservation&>(tuner.simulated());
-    const double goal_rms = image_rmse(target.pixels, std::vector<double>(target.pixels.size(), 0.0));
-    const double rmse = image_rmse(achieved.pixels, target.pixels);
-    const double initial_rmse = image_rmse(initial, target.pixels);
+    const double goal_rms = rms_difference(target.pixels, std::vector<double>(target.pixels.size(), 0.0));
+    const double rmse = rms_difference(achieved.pixels, target.pixels);
+    const double initial_rmse = rms_difference(initial, target.pixels);
     context.result["caustics"] = {
         {"control", control_},
         {"image_size", image_},

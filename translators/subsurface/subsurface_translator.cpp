@@ -18,6 +18,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/colour.h"
+#include "core/distance.h"
 #include "reducer/reducer_tree.h"
 #include "spec/surface_columns.h"
 #include "spec/translator.h"
@@ -29,12 +30,6 @@
 
 namespace spec2fab {
 namespace {
-
-double rms(const std::vector<double>& a, const std::vector<double>& b) {
-  double sum = 0;
-  for (size_t i = 0; i < a.size(); ++i) sum += (a[i] - b[i]) * (a[i] - b[i]);
-  return std::sqrt(sum / static_cast<double>(a.size()));
-}
 
 class SubsurfaceTranslator final : public Translator {
  public:
@@ -148,8 +143,8 @@ class SubsurfaceTranslator final : public Translator {
       const auto& simulated = static_cast<const RadialProfileObservation&>(tuner.simulated());
       const auto& target = static_cast<const RadialProfileObservation&>(tuner.goal().target());
       const std::vector<double> s = simulated.samples(), g = target.samples();
-      column_rms.push_back(rms(s, g));
-      relative_rms.push_back(column_rms.back() / rms(g, std::vector<double>(g.size(), 0.0)));
+      column_rms.push_back(rms_difference(s, g));
+      relative_rms.push_back(column_rms.back() / rms_difference(g, std::vector<double>(g.size(), 0.0)));
       stacks.push_back(stack_json(tuner, context));
     }
     auto stats = [](std::vector<double> v) {
