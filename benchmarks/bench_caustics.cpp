@@ -59,6 +59,29 @@ void BM_CausticEvaluation(benchmark::State& state) {
 }
 BENCHMARK(BM_CausticEvaluation)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+// An evaluation with its derivative, as a gradient-based optimizer pays for
+// it: render, then carry ∂E/∂pixel of an image MSE (against a uniform goal)
+// back to every vertex height.
+void BM_CausticEvaluationWithGradient(benchmark::State& state) {
+  tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
+                              static_cast<size_t>(state.range(0)));
+  CausticTracer tracer(smooth_setup());
+  std::vector<double> heights(tracer.heights().size()), d_heights(heights.size());
+  std::vector<double> image(240 * 240), d_image(image.size());
+  int step = 0;
+  for (auto _ : state) {
+    bump_field(tracer, 0.1 * step++, heights);
+    tracer.set_heights(heights);
+    tracer.render(image);
+    for (size_t p = 0; p < image.size(); ++p) d_image[p] = 2 * (image[p] - 1.0) / static_cast<double>(image.size());
+    tracer.pull_back(d_image, d_heights);
+    benchmark::DoNotOptimize(d_heights.data());
+  }
+  state.counters["evaluations/s"] = benchmark::Counter(static_cast<double>(state.iterations()),
+                                                       benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_CausticEvaluationWithGradient)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
 // The refit alone (heights moved, normals recomputed, BVH refitted): the part
 // of an evaluation that is not tracing.
 void BM_CausticRefitOnly(benchmark::State& state) {

@@ -6,7 +6,11 @@
 /// queries (route_to_material), which works for any subtree but costs ~25
 /// queries per point.
 
+#include <functional>
+
 namespace spec2fab {
+
+class Parameter;
 
 class HeightSurface {
  public:
@@ -15,6 +19,13 @@ class HeightSurface {
   /// The surface's height at the two other incoming coordinates, in order
   /// (for axis w: at (a, b)).
   virtual double surface_height(double lateral_1, double lateral_2) const = 0;
+  /// The height is linear in the node's own parameters: calls visit(p, ∂h/∂p)
+  /// for each parameter p the height at (lateral_1, lateral_2) depends on (a
+  /// parameter may come more than once; the contributions add). Simulators
+  /// with derivatives carry their gradient to the node's parameters through it.
+  using HeightDerivativeVisitor = std::function<void(const Parameter&, double)>;
+  virtual void visit_height_derivatives(double lateral_1, double lateral_2,
+                                        const HeightDerivativeVisitor& visit) const = 0;
 
  protected:
   ~HeightSurface() = default;

@@ -1,6 +1,7 @@
 #include "tuning/convergence_plot.h"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -62,6 +63,52 @@ void write_convergence_plot(const RunRecord& record, size_t tuner_count,
               {kWidth - kRight - 170, kHeight - kBottom + 25}, font, 0.45, axis, 1, cv::LINE_AA);
   cv::putText(image, fmt::format("final {:.4g}", total), {kLeft + 10, kHeight - 15}, font, 0.5,
               line, 1, cv::LINE_AA);
+  if (!cv::imwrite(file.string(), image)) throw std::runtime_error("cannot write " + file.string());
+}
+
+void write_optimizer_comparison_plot(const std::vector<LabelledRun>& runs, const std::filesystem::path& file) {
+  double max_evaluations = 1, low = HUGE_VAL, high = 0;
+  for (const LabelledRun& run : runs) {
+    max_evaluations = std::max(max_evaluations, static_cast<double>(run.summary->evaluations));
+    for (const IterationRecord& row : run.summary->trace) {
+      if (row.best_error > 0) low = std::min(low, row.best_error);
+      high = std::max(high, row.best_error);
+    }
+    if (run.summary->initial_error > 0) high = std::max(high, run.summary->initial_error);
+  }
+  if (!(high > 0)) high = 1;
+  if (!(low < high)) low = high / 10;
+  const double log_low = std::floor(std::log10(low) * 10) / 10, log_high = std::ceil(std::log10(high) * 10) / 10;
+
+  constexpr int kWidth = 800, kHeight = 500, kLeft = 90, kRight = 20, kTop = 40, kBottom = 60;
+  cv::Mat image(kHeight, kWidth, CV_8UC3, cv::Scalar(255, 255, 255));
+  auto to_pixel = [&](double evaluations, double error) {
+    const double y = (std::log10(std::max(error, low)) - log_low) / std::max(1e-9, log_high - log_low);
+    return cv::Point(kLeft + static_cast<int>(std::lround(evaluations / max_evaluations * (kWidth - kLeft - kRight))),
+                     kHeight - kBottom - static_cast<int>(std::lround(y * (kHeight - kTop - kBottom))));
+  };
+  const cv::Scalar axis(60, 60, 60);
+  const cv::Scalar colours[] = {{180, 90, 20}, {40, 40, 200}, {40, 150, 40}, {150, 40, 150}};
+  cv::line(image, to_pixel(0, low), to_pixel(max_evaluations, low), axis, 1);
+  cv::line(image, to_pixel(0, low), to_pixel(0, high), axis, 1);
+  const auto font = cv::FONT_HERSHEY_SIMPLEX;
+  for (size_t r = 0; r < runs.size(); ++r) {
+    const Summary& s = *runs[r].summary;
+    const cv::Scalar colour = colours[r % std::size(colours)];
+    std::vector<cv::Point> points{to_pixel(0, s.initial_error)};
+    for (const IterationRecord& row : s.trace)
+      points.push_back(to_pixel(static_cast<double>(row.evaluations), row.best_error));
+    points.push_back(to_pixel(static_cast<double>(s.evaluations), s.final_error));
+    cv::polylines(image, points, false, colour, 2, cv::LINE_AA);
+    cv::putText(image, fmt::format("{}: {:.4g} after {} evaluations", runs[r].label, s.final_error, s.evaluations),
+                {kLeft + 250, kTop + 120 + 22 * static_cast<int>(r)}, font, 0.5, colour, 1, cv::LINE_AA);
+  }
+  cv::putText(image, "best error vs. evaluations (log scale)", {kLeft, 25}, font, 0.6, axis, 1, cv::LINE_AA);
+  cv::putText(image, fmt::format("{:.3g}", std::pow(10.0, log_high)), {5, kTop + 5}, font, 0.45, axis, 1, cv::LINE_AA);
+  cv::putText(image, fmt::format("{:.3g}", std::pow(10.0, log_low)), {5, kHeight - kBottom + 5}, font, 0.45, axis, 1,
+              cv::LINE_AA);
+  cv::putText(image, fmt::format("{:.0f} evaluations", max_evaluations), {kWidth - kRight - 170, kHeight - kBottom + 25},
+              font, 0.45, axis, 1, cv::LINE_AA);
   if (!cv::imwrite(file.string(), image)) throw std::runtime_error("cannot write " + file.string());
 }
 

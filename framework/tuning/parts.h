@@ -12,11 +12,14 @@
 
 #include <concepts>
 #include <memory>
+#include <span>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 
 #include "core/registry.h"
 #include "materials/palette.h"
+#include "core/search_space.h"
 #include "reducer/node.h"
 #include "tuning/observation.h"
 
@@ -33,6 +36,17 @@ class Simulator {
   /// Simulates the subtree at its current parameters into `out` (made by
   /// make_observation); called thousands of times, so it must not allocate.
   virtual void simulate(const ReducerNode& subtree, Observation& out) = 0;
+
+  /// Reverse-mode derivative, for simulators that have one for this subtree
+  /// (gradient-based optimizers need it; see Capability::gradient).
+  virtual bool differentiable(const ReducerNode& /*subtree*/) const { return false; }
+  /// Right after simulate(subtree, out): given `sensitivity`, ∂E/∂v for every
+  /// value v of out (Observation::values order), adds ∂E/∂p to gradient[i]
+  /// for the parameter of `space` entry i.
+  virtual void pull_back(const ReducerNode& /*subtree*/, std::span<const double> /*sensitivity*/,
+                         const SearchSpace& /*space*/, std::span<double> /*gradient*/) {
+    throw std::logic_error("simulator '" + name() + "' has no derivative");
+  }
 };
 
 class ErrorMetric {
@@ -41,6 +55,14 @@ class ErrorMetric {
   virtual std::string name() const = 0;
   virtual std::string_view compares() const = 0;
   virtual double error(const Observation& simulated, const Observation& target) const = 0;
+
+  /// Metrics with a derivative say so and write ∂error/∂v for every value v
+  /// of `simulated` (Observation::values order) into `sensitivity`.
+  virtual bool differentiable() const { return false; }
+  virtual void error_gradient(const Observation& /*simulated*/, const Observation& /*target*/,
+                              std::span<double> /*sensitivity*/) const {
+    throw std::logic_error("metric '" + name() + "' has no derivative");
+  }
 };
 
 class Goal {

@@ -1,5 +1,7 @@
 #include "tuning/tuner.h"
 
+#include <algorithm>
+
 namespace spec2fab {
 
 void evaluate_subtree(ReducerNode& node) {
@@ -47,7 +49,12 @@ class Tuner::TunerProblem final : public Problem {
   double error(std::span<const double> x) override { return tuner_.error_at(x); }
   bool has(Capability capability) const override {
     if (capability == Capability::lower_bound) return static_cast<bool>(tuner_.lower_bound_);
+    if (capability == Capability::gradient)
+      return tuner_.metric_->differentiable() && tuner_.simulator_->differentiable(*tuner_.node_);
     return Problem::has(capability);
+  }
+  double error_and_gradient(std::span<const double> x, std::span<double> gradient) override {
+    return tuner_.error_and_gradient_at(x, gradient);
   }
   double lower_bound(std::span<const double> x, int assigned) override {
     if (!tuner_.lower_bound_) return Problem::lower_bound(x, assigned);
@@ -102,6 +109,15 @@ double Tuner::error_at(std::span<const double> x) {
   }
   evaluate_subtree(*node_);
   return error();
+}
+
+double Tuner::error_and_gradient_at(std::span<const double> x, std::span<double> gradient) {
+  const double e = error_at(x);
+  sensitivity_.resize(simulated_->values().size());
+  metric_->error_gradient(*simulated_, *effective_target_, sensitivity_);
+  std::fill(gradient.begin(), gradient.end(), 0.0);
+  simulator_->pull_back(*node_, sensitivity_, space_, gradient);
+  return e;
 }
 
 Problem& Tuner::problem() { return *problem_; }

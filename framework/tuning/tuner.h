@@ -40,6 +40,9 @@ class Tuner {
   double error();
   /// The same at parameter values x (leaves them set).
   double error_at(std::span<const double> x);
+  /// The same with ∂error/∂x (simulator and metric both differentiable;
+  /// problem() then has Capability::gradient).
+  double error_and_gradient_at(std::span<const double> x, std::span<double> gradient);
   /// The Problem optimizers see: error over the free parameters.
   Problem& problem();
   /// The bound callback branch and bound needs (paper §6.2): a lower bound on
@@ -80,6 +83,7 @@ class Tuner {
   std::unique_ptr<Observation> simulated_, effective_target_;
   std::unique_ptr<TunerProblem> problem_;
   std::vector<double> published_;
+  std::vector<double> sensitivity_;  ///< ∂error/∂(simulated values), reused
   LowerBound lower_bound_;
 };
 

@@ -27,6 +27,7 @@ class Spsa final : public Optimizer {
   struct Options {
     int iterations = 1000;
     double a = 0;     ///< step gain; 0: calibrated at the start (see doc)
+    double first_step = 0.1;  ///< calibration's first step, as a fraction of each range
     double c = 0.05;  ///< perturbation, as a fraction of each range
     double A = -1;    ///< stability constant; < 0: 10% of iterations
     double alpha = 0.602;
@@ -41,6 +42,8 @@ class Spsa final : public Optimizer {
         *why = "iterations: must be positive";
       } else if (!(a >= 0) || !std::isfinite(a)) {
         *why = "a: must not be negative (0 calibrates it)";
+      } else if (!(first_step > 0 && first_step <= 1)) {
+        *why = "first_step: must lie in (0, 1]";
       } else if (!(c > 0) || !std::isfinite(c)) {
         *why = "c: must be positive";
       } else if (!std::isfinite(A)) {
@@ -69,7 +72,10 @@ class Spsa final : public Optimizer {
         {{"iterations", "integer", "1000", "gradient estimates and steps"},
          {"a", "number", "0",
           "step gain a; 0 calibrates it from 4 gradient estimates at the start so that the "
-          "first step moves about 10% of each range"},
+          "first step moves about first_step of each range"},
+         {"first_step", "number", "0.1",
+          "calibrated first step, as a fraction of each range (small for sensitive errors, e.g. "
+          "caustics, where a micrometre of height moves light by a pixel)"},
          {"c", "number", "0.05", "perturbation c, as a fraction of each variable's range"},
          {"A", "number", "-1", "stability constant A; negative means 10% of iterations"},
          {"alpha", "number", "0.602", "decay exponent of a_k"},
@@ -148,7 +154,7 @@ class Spsa final : public Optimizer {
         for (double g : gradient) magnitude += std::abs(g);
       }
       magnitude /= samples * std::max<double>(1.0, static_cast<double>(n));
-      a = 0.1 * std::pow(big_a + 1, options_.alpha) / (magnitude > 0 ? magnitude : 1.0);
+      a = options_.first_step * std::pow(big_a + 1, options_.alpha) / (magnitude > 0 ? magnitude : 1.0);
       summary.details["calibration_evaluations"] = 2 * samples;
     }
 
@@ -186,6 +192,7 @@ class Spsa final : public Optimizer {
     Options o;
     o.iterations = properties.get<int>("iterations", o.iterations);
     o.a = properties.get<double>("a", o.a);
+    o.first_step = properties.get<double>("first_step", o.first_step);
     o.c = properties.get<double>("c", o.c);
     o.A = properties.get<double>("A", o.A);
     o.alpha = properties.get<double>("alpha", o.alpha);

@@ -14,6 +14,7 @@
 #include "core/colour.h"
 #include "core/distance.h"
 #include "core/error.h"
+#include "core/properties.h"
 #include "tuning/parts.h"
 
 namespace spec2fab {
@@ -41,6 +42,57 @@ double image_ssim(std::span<const double> a, std::span<const double> b, int widt
   cv::Mat map;
   cv::divide(numerator, denominator, map);
   return cv::mean(map)[0];
+}
+
+CausticSlabConfig CausticSlabConfig::read(const Properties& properties) {
+  CausticSlabConfig config;
+  CausticSetup& s = config.setup;
+  const auto size = properties.get<std::array<double, 2>>("size_mm", {50.0, 50.0});
+  s.width_mm = size[0];
+  s.depth_mm = size[1];
+  config.thickness_mm = properties.get_in_range("thickness_mm", 10.0, 1e-3, 1e4);
+  const auto origin = properties.get<std::array<double, 3>>("origin_mm", {0.0, 0.0, 0.0});
+  config.origin_mm = Eigen::Vector3d(origin[0], origin[1], origin[2]);
+  if (!config.origin_mm.allFinite()) properties.fail("origin_mm", "expected three finite numbers");
+  const auto vertices = properties.get<std::array<int, 2>>("vertices", {121, 121});
+  s.vertices_x = vertices[0];
+  s.vertices_y = vertices[1];
+  s.refractive_index = properties.get_in_range("refractive_index", 1.5, 1.0, 4.0);
+  const auto light = properties.get<std::array<double, 3>>("light", {0.0, 0.0, -1.0});
+  s.light_direction = Eigen::Vector3d(light[0], light[1], light[2]);
+  s.receiver_distance_mm = properties.get_in_range("distance_mm", 100.0, 1e-3, 1e6);
+  const auto receiver = properties.get<std::array<double, 2>>("receiver_mm", size);
+  s.receiver_width_mm = receiver[0];
+  s.receiver_depth_mm = receiver[1];
+  const auto centre = properties.get<std::array<double, 2>>("receiver_centre_mm", {0.0, 0.0});
+  s.receiver_centre_mm = Eigen::Vector2d(centre[0], centre[1]);
+  const auto image = properties.get<std::array<int, 2>>("image", {240, 240});
+  s.image_width = image[0];
+  s.image_height = image[1];
+  const auto rays = properties.get<std::array<int, 2>>("rays", {2 * image[0], 2 * image[1]});
+  s.rays_x = rays[0];
+  s.rays_y = rays[1];
+  s.jitter = properties.get<bool>("jitter", true);
+  s.fresnel = properties.get<bool>("fresnel", false);
+  s.seed = static_cast<unsigned>(properties.get_in_range("seed", 1, 0, 4294967295.0));
+  return config;
+}
+
+Mesh caustic_slab_mesh(const CausticSetup& setup, const HeightSurface& surface, const Eigen::Vector3d& origin_mm) {
+  if (surface.height_axis() != 2) throw InputError("caustics: the slab's surface must give heights along w");
+  CausticTracer tracer(setup);
+  const Eigen::Vector3d offset = slab_offset(setup, origin_mm);
+  std::vector<double> heights;
+  for (int j = 0; j < setup.vertices_y; ++j)
+    for (int i = 0; i < setup.vertices_x; ++i) {
+      const Eigen::Vector2d xy = tracer.vertex_xy(i, j) + offset.head<2>();
+      heights.push_back(surface.surface_height(xy.x(), xy.y()) - origin_mm.z());
+    }
+  tracer.set_heights(heights);
+  Mesh mesh;
+  tracer.mesh(mesh.vertices, mesh.triangles);
+  for (Vec3& v : mesh.vertices) v += offset;
+  return mesh;
 }
 
 namespace {
@@ -103,6 +155,13 @@ class ImageMse final : public MetricFor<ImageObservation> {
                        std::to_string(simulated.height) + ") and the goal (" + std::to_string(target.width) +
                        " x " + std::to_string(target.height) + ") differ in size");
     return squared_distance(simulated.pixels, target.pixels) / static_cast<double>(target.pixels.size());
+  }
+  bool differentiable() const override { return true; }
+  void error_gradient(const Observation& simulated, const Observation& target,
+                      std::span<double> sensitivity) const override {
+    const std::span<const double> s = simulated.values(), t = target.values();
+    const double scale = 2.0 / static_cast<double>(t.size());
+    for (size_t i = 0; i < t.size(); ++i) sensitivity[i] = scale * (s[i] - t[i]);
   }
   static TypeDoc doc() {
     return {"Mean squared difference of two images, pixel by pixel.", {}, R"({"type": "image_mse"})"};

@@ -5,11 +5,40 @@
 
 #include <span>
 
+#include <Eigen/Core>
+
+#include "caustics/caustic_tracer.h"
+#include "geometry/mesh.h"
+#include "reducer/height_surface.h"
+
 namespace spec2fab {
 
 /// Structural similarity (Wang et al. 2004) of two single-channel images of
 /// the same size: 11 × 11 Gaussian window (σ = 1.5), K1 = 0.01, K2 = 0.03,
 /// dynamic range L = the larger of the two images' peaks. 1 for identical images.
 double image_ssim(std::span<const double> a, std::span<const double> b, int width, int height);
+
+class Properties;
+
+/// What the "caustics" simulator reads (its documented properties): the
+/// tracer's setup, and where the slab sits in the subtree's coordinates.
+struct CausticSlabConfig {
+  CausticSetup setup;
+  double thickness_mm = 10;  ///< highest the top may be (height search range)
+  Eigen::Vector3d origin_mm = Eigen::Vector3d::Zero();  ///< the slab's bottom corner
+  static CausticSlabConfig read(const Properties& properties);
+};
+
+/// Where the tracer's frame (footprint centred on the origin, bottom at
+/// z = 0) sits in the subtree's coordinates when the slab's bottom corner is
+/// at origin_mm: tracer point + offset = subtree point.
+inline Eigen::Vector3d slab_offset(const CausticSetup& setup, const Eigen::Vector3d& origin_mm) {
+  return origin_mm + Eigen::Vector3d(0.5 * setup.width_mm, 0.5 * setup.depth_mm, 0);
+}
+
+/// The closed slab a height surface (axis w) describes, meshed exactly as
+/// the caustics simulator meshes it (setup's footprint and vertex grid), in
+/// the subtree's coordinates: what print/surface.stl holds.
+Mesh caustic_slab_mesh(const CausticSetup& setup, const HeightSurface& surface, const Eigen::Vector3d& origin_mm);
 
 }  // namespace spec2fab

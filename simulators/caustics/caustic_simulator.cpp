@@ -5,7 +5,14 @@
 
 #include <cmath>
 
+#include <Eigen/SparseCore>
+
+#include <unordered_map>
+
+#include "caustics/caustic_parts.h"
 #include "caustics/caustic_tracer.h"
+#include "core/error.h"
+#include "core/parameter.h"
 #include "reducer/height_surface.h"
 #include "tuning/parts.h"
 
@@ -15,36 +22,10 @@ namespace {
 class CausticSimulator final : public SimulatorFor<ImageObservation> {
  public:
   CausticSimulator(const Properties& properties, const PartContext& /*context*/) {
-    CausticSetup s;
-    const auto size = properties.get<std::array<double, 2>>("size_mm", {50.0, 50.0});
-    s.width_mm = size[0];
-    s.depth_mm = size[1];
-    thickness_mm_ = properties.get_in_range("thickness_mm", 10.0, 1e-3, 1e4);
-    const auto origin = properties.get<std::array<double, 3>>("origin_mm", {0.0, 0.0, 0.0});
-    origin_ = Eigen::Vector3d(origin[0], origin[1], origin[2]);
-    if (!origin_.allFinite()) properties.fail("origin_mm", "expected three finite numbers");
-    const auto vertices = properties.get<std::array<int, 2>>("vertices", {121, 121});
-    s.vertices_x = vertices[0];
-    s.vertices_y = vertices[1];
-    s.refractive_index = properties.get_in_range("refractive_index", 1.5, 1.0, 4.0);
-    const auto light = properties.get<std::array<double, 3>>("light", {0.0, 0.0, -1.0});
-    s.light_direction = Eigen::Vector3d(light[0], light[1], light[2]);
-    s.receiver_distance_mm = properties.get_in_range("distance_mm", 100.0, 1e-3, 1e6);
-    const auto receiver = properties.get<std::array<double, 2>>("receiver_mm", size);
-    s.receiver_width_mm = receiver[0];
-    s.receiver_depth_mm = receiver[1];
-    const auto centre = properties.get<std::array<double, 2>>("receiver_centre_mm", {0.0, 0.0});
-    s.receiver_centre_mm = Eigen::Vector2d(centre[0], centre[1]);
-    const auto image = properties.get<std::array<int, 2>>("image", {240, 240});
-    s.image_width = image[0];
-    s.image_height = image[1];
-    const auto rays = properties.get<std::array<int, 2>>("rays", {2 * image[0], 2 * image[1]});
-    s.rays_x = rays[0];
-    s.rays_y = rays[1];
-    s.jitter = properties.get<bool>("jitter", true);
-    s.fresnel = properties.get<bool>("fresnel", false);
-    s.seed = static_cast<unsigned>(properties.get_in_range("seed", 1, 0, 4294967295.0));
-    tracer_ = std::make_unique<CausticTracer>(s);
+    const CausticSlabConfig config = CausticSlabConfig::read(properties);
+    thickness_mm_ = config.thickness_mm;
+    origin_ = config.origin_mm;
+    tracer_ = std::make_unique<CausticTracer>(config.setup);
     heights_.resize(tracer_->heights().size());
   }
 
@@ -62,6 +43,24 @@ class CausticSimulator final : public SimulatorFor<ImageObservation> {
     tracer_->set_heights(heights_);
     shape(out);
     flux_ = tracer_->render(out.pixels);
+  }
+
+  // Derivatives need the heights as functions of parameters: a Plane or
+  // B-spline root cutting along w.
+  bool differentiable(const ReducerNode& subtree) const override {
+    const auto* surface = dynamic_cast<const HeightSurface*>(&subtree);
+    return surface != nullptr && surface->height_axis() == 2;
+  }
+
+  void pull_back(const ReducerNode& subtree, std::span<const double> sensitivity, const SearchSpace& space,
+                 std::span<double> gradient) override {
+    if (!differentiable(subtree))
+      throw InputError("caustics: derivatives need a Plane or B-spline node (axis w) at the tuned subtree's root");
+    d_heights_.resize(heights_.size());
+    tracer_->pull_back(sensitivity, d_heights_);
+    const Eigen::SparseMatrix<double, Eigen::RowMajor>& jacobian = height_jacobian(subtree, space);
+    Eigen::Map<Eigen::VectorXd>(gradient.data(), static_cast<Eigen::Index>(gradient.size())) +=
+        jacobian.transpose() * Eigen::Map<const Eigen::VectorXd>(d_heights_.data(), static_cast<Eigen::Index>(d_heights_.size()));
   }
 
   const CausticTracer& tracer() const { return *tracer_; }
@@ -105,14 +104,46 @@ class CausticSimulator final : public SimulatorFor<ImageObservation> {
     const CausticSetup& s = tracer_->setup();
     const auto* surface = dynamic_cast<const HeightSurface*>(&subtree);
     const bool direct = surface != nullptr && surface->height_axis() == 2;
+    const Eigen::Vector2d offset = slab_offset(s, origin_).head<2>();
     size_t k = 0;
     for (int j = 0; j < s.vertices_y; ++j) {
       for (int i = 0; i < s.vertices_x; ++i, ++k) {
-        const Eigen::Vector2d xy = tracer_->vertex_xy(i, j);
-        const double a = origin_.x() + xy.x() + 0.5 * s.width_mm, b = origin_.y() + xy.y() + 0.5 * s.depth_mm;
-        heights_[k] = (direct ? surface->surface_height(a, b) : search_height(subtree, a, b)) - origin_.z();
+        const Eigen::Vector2d ab = tracer_->vertex_xy(i, j) + offset;
+        heights_[k] = (direct ? surface->surface_height(ab.x(), ab.y()) : search_height(subtree, ab.x(), ab.y())) -
+                      origin_.z();
       }
     }
+  }
+
+  // ∂(vertex height)/∂(free parameter), vertices × parameters; the heights
+  // are linear in the surface's parameters, so it is built once per subtree
+  // and search space.
+  const Eigen::SparseMatrix<double, Eigen::RowMajor>& height_jacobian(const ReducerNode& subtree,
+                                                                      const SearchSpace& space) {
+    std::vector<const Parameter*> parameters;
+    for (const SearchSpace::Entry& e : space.entries()) parameters.push_back(e.parameter);
+    if (&subtree == jacobian_subtree_ && parameters == jacobian_parameters_) return jacobian_;
+    std::unordered_map<const Parameter*, int> column;
+    for (size_t i = 0; i < parameters.size(); ++i) column.emplace(parameters[i], static_cast<int>(i));
+    const CausticSetup& s = tracer_->setup();
+    const auto& surface = dynamic_cast<const HeightSurface&>(subtree);
+    std::vector<Eigen::Triplet<double>> entries;
+    const Eigen::Vector2d offset = slab_offset(s, origin_).head<2>();
+    int row = 0;
+    for (int j = 0; j < s.vertices_y; ++j) {
+      for (int i = 0; i < s.vertices_x; ++i, ++row) {
+        const Eigen::Vector2d ab = tracer_->vertex_xy(i, j) + offset;
+        surface.visit_height_derivatives(ab.x(), ab.y(), [&](const Parameter& p, double weight) {
+                                           const auto found = column.find(&p);
+                                           if (found != column.end()) entries.emplace_back(row, found->second, weight);
+                                         });
+      }
+    }
+    jacobian_.resize(row, static_cast<Eigen::Index>(parameters.size()));
+    jacobian_.setFromTriplets(entries.begin(), entries.end());
+    jacobian_subtree_ = &subtree;
+    jacobian_parameters_ = std::move(parameters);
+    return jacobian_;
   }
 
   // The top of the material below (a, b): bisection on [0, thickness] for
@@ -135,6 +166,10 @@ class CausticSimulator final : public SimulatorFor<ImageObservation> {
   Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();
   std::vector<double> heights_;
   CausticFlux flux_;
+  std::vector<double> d_heights_;
+  Eigen::SparseMatrix<double, Eigen::RowMajor> jacobian_;
+  const ReducerNode* jacobian_subtree_ = nullptr;
+  std::vector<const Parameter*> jacobian_parameters_;
 };
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <string>
 
 #include <Eigen/Geometry>
+#include <ceres/jet.h>
 #include <embree3/rtcore.h>
 #include <tbb/parallel_for.h>
 
@@ -34,6 +35,36 @@ inline double fresnel_reflectance(double eta_i, double eta_t, double cos_i, doub
   const double rs = (eta_i * cos_i - eta_t * cos_t) / (eta_i * cos_i + eta_t * cos_t);
   const double rp = (eta_t * cos_i - eta_i * cos_t) / (eta_t * cos_i + eta_i * cos_t);
   return 0.5 * (rs * rs + rp * rp);
+}
+
+// Where a ray from `origin` along `direction` lands on the receiver plane
+// z = receiver_z after entering the top triangle with lateral corners `xy`
+// and heights `h` and leaving through the flat bottom z = 0: the same
+// refractions the tracer performs, written for any scalar so that
+// ceres::Jet carries ∂/∂h through them.
+template <class T>
+Eigen::Matrix<T, 2, 1> receiver_point(const Vec3& origin, const Vec3& direction, const Eigen::Vector2d xy[3],
+                                      const T h[3], double eta, double receiver_z) {
+  using std::sqrt;
+  using V = Eigen::Matrix<T, 3, 1>;
+  const V p0(T(xy[0].x()), T(xy[0].y()), h[0]), p1(T(xy[1].x()), T(xy[1].y()), h[1]),
+      p2(T(xy[2].x()), T(xy[2].y()), h[2]);
+  V n = (p1 - p0).cross(p2 - p0);
+  n /= sqrt(n.dot(n));
+  const V o = origin.cast<T>(), d = direction.cast<T>();
+  const V hit = o + (n.dot(p0 - o) / n.dot(d)) * d;
+  // Into the slab: the outward normal n faces the incoming ray.
+  const T ratio(1.0 / eta);
+  const T cos_i = -d.dot(n);
+  const T cos_t = sqrt(T(1.0) - ratio * ratio * (T(1.0) - cos_i * cos_i));
+  const V inside = ratio * d + (ratio * cos_i - cos_t) * n;
+  // Out through the bottom, whose normal facing the ray is +z.
+  const V bottom = hit - (hit.z() / inside.z()) * inside;
+  const T cos_b = -inside.z();
+  const T cos_out = sqrt(T(1.0) - T(eta * eta) * (T(1.0) - cos_b * cos_b));
+  V out = T(eta) * inside;
+  out.z() += T(eta) * cos_b - cos_out;
+  return (bottom + ((T(receiver_z) - bottom.z()) / out.z()) * out).template head<2>();
 }
 
 }  // namespace
@@ -98,6 +129,7 @@ CausticTracer::CausticTracer(const CausticSetup& setup) : setup_(setup) {
       triangles_.emplace_back(top(i, j), top(i + 1, j + 1), top(i, j + 1));
     }
   }
+  top_triangles_ = static_cast<int>(triangles_.size());
   for (int k = 0; k < ring_count; ++k) {
     const int next = (k + 1) % ring_count;
     const int a = ring[static_cast<size_t>(k)], b = ring[static_cast<size_t>(next)];
@@ -106,10 +138,24 @@ CausticTracer::CausticTracer(const CausticSetup& setup) : setup_(setup) {
     triangles_.emplace_back(a, b_low, b);
     triangles_.emplace_back(centre, b_low, a_low);
   }
+  heights_.assign(static_cast<size_t>(top_count), 1.0);
+  build_scene();
+}
+
+CausticTracer::CausticTracer(const CausticSetup& setup, std::vector<Eigen::Vector3d> vertices,
+                             std::vector<Eigen::Vector3i> triangles)
+    : setup_(setup), vertices_(std::move(vertices)), triangles_(std::move(triangles)) {
+  setup_.validate();
+  setup_.light_direction.normalize();
+  for (const Eigen::Vector3i& t : triangles_)
+    if ((t.array() < 0).any() || (t.array() >= static_cast<int>(vertices_.size())).any())
+      throw InputError("caustics: a mesh triangle names a vertex that does not exist");
+  build_scene();
+}
+
+void CausticTracer::build_scene() {
   normals_.resize(triangles_.size());
   results_.resize(static_cast<size_t>(setup_.rays_x) * static_cast<size_t>(setup_.rays_y));
-  heights_.assign(static_cast<size_t>(top_count), 1.0);
-
   scene_ = std::make_unique<Scene>();
   Scene& s = *scene_;
   s.device = rtcNewDevice(nullptr);
@@ -159,13 +205,12 @@ void CausticTracer::set_heights(std::span<const double> heights_mm) {
 }
 
 void CausticTracer::update_vertex_buffer() {
+  for (size_t v = 0; v < heights_.size(); ++v) vertices_[v].z() = heights_[v];
   top_z_ = 0;
-  for (size_t v = 0; v < heights_.size(); ++v) {
-    vertices_[v].z() = heights_[v];
-    top_z_ = std::max(top_z_, heights_[v]);
-  }
-  for (size_t v = 0; v < vertices_.size(); ++v)
+  for (size_t v = 0; v < vertices_.size(); ++v) {
+    top_z_ = std::max(top_z_, vertices_[v].z());
     for (int k = 0; k < 3; ++k) scene_->vertex_buffer[3 * v + static_cast<size_t>(k)] = static_cast<float>(vertices_[v][k]);
+  }
   for (size_t t = 0; t < triangles_.size(); ++t) {
     const Eigen::Vector3i& f = triangles_[t];
     const Vec3 n = (vertices_[static_cast<size_t>(f[1])] - vertices_[static_cast<size_t>(f[0])])
@@ -177,15 +222,15 @@ void CausticTracer::update_vertex_buffer() {
 void CausticTracer::trace_block(int begin, int end) {
   constexpr int kBlock = 256;
   const CausticSetup& s = setup_;
-  const double cell_x = s.width_mm / s.rays_x, cell_y = s.depth_mm / s.rays_y;
   // Power through a cell's horizontal area of a beam of unit irradiance.
-  const double power = cell_x * cell_y * -s.light_direction.z();
-  // Rays start just above the highest point: the beam's cross-section at the
-  // slab is the footprint.
-  const double start_z = top_z_ + 1e-3 * (s.width_mm + s.depth_mm) + 1e-3;
+  const double power = s.width_mm / s.rays_x * s.depth_mm / s.rays_y * -s.light_direction.z();
   const double epsilon = 1e-5 * (s.width_mm + s.depth_mm + top_z_);
   const double eta = s.refractive_index;
-  const auto seed = static_cast<unsigned long long>(s.seed) << 40;
+  // A ray enters the top, leaves by the bottom and nothing else: the path
+  // pull_back differentiates.
+  const auto bottom = [this](unsigned triangle) {
+    return static_cast<int>(triangle) >= top_triangles_ && (static_cast<int>(triangle) - top_triangles_) % 3 == 2;
+  };
 
   RTCRayHit hits[kBlock];
   Vec3 origin[kBlock], direction[kBlock];
@@ -198,10 +243,7 @@ void CausticTracer::trace_block(int begin, int end) {
     const int count = std::min(kBlock, end - first);
     for (int k = 0; k < count; ++k) {
       const int ray = first + k;
-      const auto key = 2ULL * static_cast<unsigned long long>(ray) + seed;
-      const double jx = s.jitter ? hash_uniform(key) : 0.5, jy = s.jitter ? hash_uniform(key + 1) : 0.5;
-      origin[k] = Vec3(-0.5 * s.width_mm + (ray % s.rays_x + jx) * cell_x,
-                       -0.5 * s.depth_mm + (ray / s.rays_x + jy) * cell_y, start_z);
+      origin[k] = ray_origin(ray);
       direction[k] = s.light_direction;
       results_[static_cast<size_t>(ray)] = RayResult{0, 0, power, 0, kLost};
       active[k] = k;
@@ -242,11 +284,18 @@ void CausticTracer::trace_block(int begin, int end) {
             result.x = o.x() + t * d.x();
             result.y = o.y() + t * d.y();
             result.fate = kReceived;
+            if (segment != 2) result.entry = -1;
           }
           continue;
         }
+        const unsigned triangle = hit.hit.primID;
+        if (segment == 0) {
+          result.entry = static_cast<int>(triangle) < top_triangles_ ? static_cast<int>(triangle) : -1;
+        } else if (segment != 1 || !bottom(triangle)) {
+          result.entry = -1;
+        }
         o += static_cast<double>(hit.ray.tfar) * d;
-        const Vec3& outward = normals_[hit.hit.primID];
+        const Vec3& outward = normals_[triangle];
         const double cos_outward = d.dot(outward);
         // Entering when the ray runs against the outward normal.
         const bool entering = cos_outward < 0;
@@ -256,6 +305,7 @@ void CausticTracer::trace_block(int begin, int end) {
         const double sin2_t = ratio * ratio * (1 - cos_i * cos_i);
         if (sin2_t >= 1) {
           d += 2 * cos_i * normal;  // total internal reflection
+          result.entry = -1;
         } else {
           const double cos_t = std::sqrt(1 - sin2_t);
           if (s.fresnel) {
@@ -280,15 +330,15 @@ CausticFlux CausticTracer::render(std::span<double> irradiance) {
   if (irradiance.size() != pixels)
     throw std::invalid_argument("CausticTracer::render: image has the wrong size");
   const int rays = s.rays_x * s.rays_y;
+  // Rays start just above the highest point: the beam's cross-section at the
+  // slab is the footprint.
+  start_z_ = top_z_ + 1e-3 * (s.width_mm + s.depth_mm) + 1e-3;
   tbb::parallel_for(tbb::blocked_range<int>(0, rays, 1024),
                     [&](const tbb::blocked_range<int>& r) { trace_block(r.begin(), r.end()); });
 
   // Splat in ray order (bilinear), so the sums do not depend on threads.
   std::fill(irradiance.begin(), irradiance.end(), 0.0);
-  const double pixel_x = s.receiver_width_mm / s.image_width, pixel_y = s.receiver_depth_mm / s.image_height;
-  const double left = s.receiver_centre_mm.x() - 0.5 * s.receiver_width_mm;
-  const double top = s.receiver_centre_mm.y() + 0.5 * s.receiver_depth_mm;
-  const double per_area = 1.0 / (pixel_x * pixel_y);
+  const double per_area = s.image_width / s.receiver_width_mm * s.image_height / s.receiver_depth_mm;
   CausticFlux flux;
   for (const RayResult& ray : results_) {
     flux.emitted += ray.power + ray.reflected;
@@ -301,7 +351,8 @@ CausticFlux CausticTracer::render(std::span<double> irradiance) {
       flux.lost += ray.power;
       continue;
     }
-    const double u = (ray.x - left) / pixel_x - 0.5, v = (top - ray.y) / pixel_y - 0.5;
+    const Eigen::Vector2d uv = pixel_coordinates(ray);
+    const double u = uv.x(), v = uv.y();
     if (!(u > -1 && v > -1 && u < s.image_width && v < s.image_height)) {
       flux.missed += ray.power;
       continue;
@@ -326,6 +377,77 @@ CausticFlux CausticTracer::render(std::span<double> irradiance) {
     flux.missed += (1 - deposited) * ray.power;
   }
   return flux;
+}
+
+Eigen::Vector3d CausticTracer::ray_origin(int ray) const {
+  const CausticSetup& s = setup_;
+  const auto key = 2ULL * static_cast<unsigned long long>(ray) + (static_cast<unsigned long long>(s.seed) << 40);
+  const double jx = s.jitter ? hash_uniform(key) : 0.5, jy = s.jitter ? hash_uniform(key + 1) : 0.5;
+  return {-0.5 * s.width_mm + (ray % s.rays_x + jx) * s.width_mm / s.rays_x,
+          -0.5 * s.depth_mm + (ray / s.rays_x + jy) * s.depth_mm / s.rays_y, start_z_};
+}
+
+Eigen::Vector2d CausticTracer::pixel_coordinates(const RayResult& ray) const {
+  const CausticSetup& s = setup_;
+  const double left = s.receiver_centre_mm.x() - 0.5 * s.receiver_width_mm;
+  const double top = s.receiver_centre_mm.y() + 0.5 * s.receiver_depth_mm;
+  return {(ray.x - left) * s.image_width / s.receiver_width_mm - 0.5,
+          (top - ray.y) * s.image_height / s.receiver_depth_mm - 0.5};
+}
+
+void CausticTracer::pull_back(std::span<const double> d_irradiance, std::span<double> d_heights) {
+  const CausticSetup& s = setup_;
+  if (d_irradiance.size() != static_cast<size_t>(s.image_width) * static_cast<size_t>(s.image_height) ||
+      d_heights.size() != heights_.size())
+    throw std::invalid_argument("CausticTracer::pull_back: wrong sizes");
+  const double per_area = s.image_width / s.receiver_width_mm * s.image_height / s.receiver_depth_mm;
+  const double du_dx = s.image_width / s.receiver_width_mm, dv_dy = -s.image_height / s.receiver_depth_mm;
+  ray_gradients_.resize(results_.size());
+  using Jet = ceres::Jet<double, 3>;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, results_.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) {
+      const RayResult& ray = results_[i];
+      ray_gradients_[i].setZero();
+      if (ray.fate != kReceived || ray.entry < 0) continue;
+      // ∂E/∂(u, v) of the bilinear splat at the ray's receiver point.
+      const Eigen::Vector2d uv = pixel_coordinates(ray);
+      const int col = static_cast<int>(std::floor(uv.x())), row = static_cast<int>(std::floor(uv.y()));
+      const double fu = uv.x() - col, fv = uv.y() - row;
+      double d_u = 0, d_v = 0;
+      for (int dy = 0; dy < 2; ++dy) {
+        const int y = row + dy;
+        if (y < 0 || y >= s.image_height) continue;
+        for (int dx = 0; dx < 2; ++dx) {
+          const int x = col + dx;
+          if (x < 0 || x >= s.image_width) continue;
+          const double g = d_irradiance[static_cast<size_t>(y) * static_cast<size_t>(s.image_width) +
+                                        static_cast<size_t>(x)] * ray.power * per_area;
+          d_u += g * (dx ? 1.0 : -1.0) * (dy ? fv : 1 - fv);
+          d_v += g * (dx ? fu : 1 - fu) * (dy ? 1.0 : -1.0);
+        }
+      }
+      if (d_u == 0 && d_v == 0) continue;
+      const Eigen::Vector3i& f = triangles_[static_cast<size_t>(ray.entry)];
+      Eigen::Vector2d xy[3];
+      Jet h[3];
+      for (int k = 0; k < 3; ++k) {
+        const Vec3& v = vertices_[static_cast<size_t>(f[k])];
+        xy[k] = v.head<2>();
+        h[k] = Jet(v.z(), k);
+      }
+      const Eigen::Matrix<Jet, 2, 1> point = receiver_point(ray_origin(static_cast<int>(i)), s.light_direction, xy, h,
+                                                            s.refractive_index, -s.receiver_distance_mm);
+      ray_gradients_[i] = d_u * du_dx * point.x().v + d_v * dv_dy * point.y().v;
+    }
+  });
+  // Summed in ray order: the same gradient for any thread count.
+  std::fill(d_heights.begin(), d_heights.end(), 0.0);
+  for (size_t i = 0; i < results_.size(); ++i) {
+    const RayResult& ray = results_[i];
+    if (ray.fate != kReceived || ray.entry < 0) continue;
+    const Eigen::Vector3i& f = triangles_[static_cast<size_t>(ray.entry)];
+    for (int k = 0; k < 3; ++k) d_heights[static_cast<size_t>(f[k])] += ray_gradients_[i][k];
+  }
 }
 
 void CausticTracer::mesh(std::vector<Eigen::Vector3d>& vertices, std::vector<Eigen::Vector3i>& triangles) const {

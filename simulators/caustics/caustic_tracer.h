@@ -54,6 +54,11 @@ struct CausticFlux {
 class CausticTracer {
  public:
   explicit CausticTracer(const CausticSetup& setup);
+  /// Traces a given closed, outward-oriented mesh instead (an exported STL,
+  /// moved so that the slab's footprint is centred on the origin): no height
+  /// field, so set_heights and pull_back do not apply.
+  CausticTracer(const CausticSetup& setup, std::vector<Eigen::Vector3d> vertices,
+                std::vector<Eigen::Vector3i> triangles);
   ~CausticTracer();
   CausticTracer(const CausticTracer&) = delete;
   CausticTracer& operator=(const CausticTracer&) = delete;
@@ -70,6 +75,15 @@ class CausticTracer {
   /// (image_width × image_height, row 0 at +y); does not allocate.
   CausticFlux render(std::span<double> irradiance);
 
+  /// Reverse mode: given ∂E/∂pixel for the image the last render made,
+  /// writes ∂E/∂height of every top vertex into `d_heights` (heights()
+  /// order). Exact for that render's rays as traced: a ray's receiver point
+  /// moves with the heights of the top triangle it entered (its plane and
+  /// normal), bilinear splat weights move with the point. Rays that did more
+  /// than enter the top and leave by the flat bottom (side walls, total
+  /// internal reflection) are held fixed, as is Fresnel transmittance.
+  void pull_back(std::span<const double> d_irradiance, std::span<double> d_heights);
+
   /// The slab as a closed, outward-oriented triangle mesh (vertices in mm):
   /// what is traced.
   void mesh(std::vector<Eigen::Vector3d>& vertices, std::vector<Eigen::Vector3i>& triangles) const;
@@ -79,11 +93,16 @@ class CausticTracer {
   struct RayResult {
     double x = 0, y = 0, power = 0, reflected = 0;
     int fate = 0;
+    int entry = -1;  ///< top triangle entered, when the path was top → bottom → receiver
   };
+  Eigen::Vector3d ray_origin(int ray) const;
   /// Traces rays [begin, end) together: each segment of all rays still in
   /// flight is one coherent Embree stream query.
   void trace_block(int begin, int end);
+  void build_scene();
   void update_vertex_buffer();
+  /// Receiver point (u, v) in pixels of a received ray (the splat's frame).
+  Eigen::Vector2d pixel_coordinates(const RayResult& ray) const;
 
   CausticSetup setup_;
   std::vector<double> heights_;
@@ -91,8 +110,11 @@ class CausticTracer {
   std::vector<Eigen::Vector3i> triangles_;
   std::vector<Eigen::Vector3d> normals_;  ///< outward unit normal per triangle
   std::vector<RayResult> results_;
+  std::vector<Eigen::Vector3d> ray_gradients_;  ///< ∂E/∂h of each ray's entry triangle's vertices
+  int top_triangles_ = 0;
   std::unique_ptr<Scene> scene_;
   double top_z_ = 0;
+  double start_z_ = 0;  ///< rays start here, just above the highest point
 };
 
 }  // namespace spec2fab

@@ -496,7 +496,8 @@ TEST_F(Cli, SmoothCausticsTunesTheSurfaceAndReportsImageErrors) {
           "geometry": {"mesh": ")" + (kDatasets / "meshes/board_60x60x8.stl").string() + R"(", "uv": "planar"},
           "goal": {"image": ")" + (kDatasets / "images/caustic_ring_120.png").string() + R"(",
                    "control": [6, 6], "image_size": [48, 48], "rays": [96, 96], "distance_mm": 60},
-          "optimizer": {"type": "spsa", "iterations": 5, "c": 0.01, "seed": 3},
+          "optimizer": {"type": "nlopt", "algorithm": "LD_LBFGS", "max_evaluations": 15},
+          "compare_optimizers": [{"type": "spsa", "iterations": 5, "c": 0.01, "seed": 3}],
           "output": {"slices": false, "stl": false, "3mf": false, "render": false},
           "materials": ")" + (kDatasets / "materials/polyjet.json").string() + R"(",
           "printer": ")" + (dir_ / "clear_printer.json").string() + R"("})";
@@ -509,11 +510,19 @@ TEST_F(Cli, SmoothCausticsTunesTheSurfaceAndReportsImageErrors) {
   const auto result = nlohmann::json::parse(read(dir_ / "run" / "result.json"));
   const auto& caustics = result["caustics"];
   EXPECT_GT(caustics["rmse"].get<double>(), 0.0);
-  EXPECT_LE(caustics["rmse"].get<double>(), caustics["initial_rmse"].get<double>());  // best seen
+  // L-BFGS on the tracer's derivative lowers the error from the flat start.
+  EXPECT_LT(caustics["rmse"].get<double>(), 0.95 * caustics["initial_rmse"].get<double>());
   EXPECT_GT(caustics["ssim"].get<double>(), -1.0);
   EXPECT_LT(caustics["ssim"].get<double>(), 1.0);
-  EXPECT_EQ(result["tuning"]["tuner_runs"][0]["iterations"], 5);
-  for (const char* file : {"preview/goal_vs_simulated.png", "preview/height_map.png", "preview/convergence.png"})
+  EXPECT_EQ(result["tuning"]["tuner_runs"][0]["optimizer"], "nlopt");
+  // SPSA ran first from the same start, for the comparison.
+  ASSERT_EQ(caustics["optimizers"].size(), 2u);
+  EXPECT_EQ(caustics["optimizers"][1]["optimizer"], "spsa");
+  EXPECT_EQ(caustics["optimizers"][1]["initial_error"], caustics["optimizers"][0]["initial_error"]);
+  // The smooth slab STL, traced back, casts the simulated image.
+  EXPECT_LT(caustics["surface_stl"]["traced_relative_rmse_vs_simulated"].get<double>(), 1e-3);
+  for (const char* file : {"preview/goal_vs_simulated.png", "preview/height_map.png", "preview/convergence.png",
+                           "preview/optimizer_comparison.png", "print/surface.stl"})
     EXPECT_TRUE(fs::exists(dir_ / "run" / file)) << file;
   const auto tree = nlohmann::json::parse(read(dir_ / "run" / "tree.json"));
   EXPECT_EQ(tree["type"], "bspline");

@@ -19,6 +19,9 @@
 #include "core/distance.h"
 #include "core/error.h"
 #include "simulator_fixture.h"
+#include "fabrication/material_surfaces.h"
+#include "geometry/mesh_io.h"
+#include "tuning/tuner.h"
 
 namespace spec2fab {
 namespace {
@@ -352,6 +355,96 @@ TEST_F(CausticSimulatorTest, GoalPictureCarriesTheGivenFluxAndMseComparesPixels)
   ImageObservation small = target;
   small.pixels.resize(10);
   EXPECT_THROW(metric->error(small, target), InputError);
+}
+
+// The derivative the caustic tuner gives gradient-based optimizers, against
+// central finite differences of the error itself: for a B-spline surface
+// (heights through its basis) and a plane (offset and slopes).
+TEST_F(CausticSimulatorTest, GradientOfImageErrorMatchesFiniteDifferences) {
+  const std::string material = R"("below": {"type": "layered", "material": "VeroClear"},
+      "above": {"type": "layered", "material": "void"})";
+  const auto spline = node(R"({"type": "bspline", "control": [4, 4], "domain": [0, 0, 20, 20],
+      "heights_mm": {"value": 2.5, "min": 1, "max": 5}, )" + material + "}");
+  const auto plane = node(R"({"type": "plane", "center": [10, 10], "offset_mm": {"value": 2.5, "min": 1, "max": 5},
+      "slope_a": {"value": 0, "min": -0.2, "max": 0.2}, "slope_b": {"value": 0, "min": -0.2, "max": 0.2}, )" +
+                          material + "}");
+  const auto layered = node(R"({"type": "layered", "layers": [
+      {"material": "VeroClear", "thickness_mm": {"value": 2.5, "min": 1, "max": 5}}, {"material": "void"}]})");
+  const std::string parts = R"({
+      "simulator": {"type": "caustics", "size_mm": [20, 20], "thickness_mm": 6, "vertices": [13, 13],
+                    "distance_mm": 40, "receiver_mm": [24, 24], "image": [40, 40], "rays": [160, 160]},
+      "metric": {"type": "image_mse"},
+      "goal": {"type": "caustic_image", "image": ")" SPEC2FAB_DATASETS_DIR R"(/images/caustic_ring_120.png",
+               "size": [40, 40], "receiver_mm": [24, 24], "flux_mm2": 400},
+      "optimizer": {"type": "nlopt", "algorithm": "LD_LBFGS"}})";
+  const auto check = [&](ReducerNode& subtree, std::vector<double> x, double step) {
+    auto tuner = build_tuner(Properties::parse(parts, "tuner.json"), "t", PartContext{palette_});
+    tuner->set_node(subtree);
+    Problem& problem = tuner->problem();
+    ASSERT_TRUE(problem.has(Capability::gradient));
+    ASSERT_EQ(problem.dimension(), static_cast<int>(x.size()));
+    std::vector<double> gradient(x.size());
+    problem.error_and_gradient(x, gradient);
+    std::vector<double> differences(x.size());
+    for (size_t i = 0; i < x.size(); ++i) {
+      std::vector<double> plus = x, minus = x;
+      plus[i] += step;
+      minus[i] -= step;
+      differences[i] = (problem.error(plus) - problem.error(minus)) / (2 * step);
+    }
+    const Eigen::Map<const Eigen::VectorXd> g(gradient.data(), static_cast<Eigen::Index>(x.size())),
+        d(differences.data(), static_cast<Eigen::Index>(x.size()));
+    ASSERT_GT(d.norm(), 0);
+    EXPECT_GT(g.dot(d) / (g.norm() * d.norm()), 0.999);
+    EXPECT_LT((g - d).lpNorm<Eigen::Infinity>(), 0.02 * d.lpNorm<Eigen::Infinity>());
+  };
+  std::vector<double> bumps(16);
+  for (size_t k = 0; k < bumps.size(); ++k) bumps[k] = 2.5 + 0.15 * std::sin(1.7 * static_cast<double>(k));
+  check(*spline, bumps, 1e-4);
+  // Untilted: a tilted slab bends the rays along one edge into its side
+  // wall, and where that starts is a jump the derivative does not carry
+  // (pull_back holds wall-touching rays fixed); flat, the jump is zero.
+  check(*plane, {2.5, 0.0, 0.0}, 1e-6);
+
+  auto tuner = build_tuner(Properties::parse(parts, "tuner.json"), "t", PartContext{palette_});
+  tuner->set_node(*layered);
+  EXPECT_FALSE(tuner->problem().has(Capability::gradient));
+}
+
+// What goes to the printer is an STL: read back from disk (float vertices,
+// welded by the loader) and traced as a plain mesh, the slab casts the image
+// the simulator computed from the B-spline itself.
+TEST_F(CausticSimulatorTest, ExportedSlabStlCastsTheSimulatedImage) {
+  const auto spline = node(R"({"type": "bspline", "control": [5, 5], "domain": [10, 20, 40, 50],
+      "heights_mm": [3.0, 3.2, 3.1, 3.3, 3.0, 3.1, 3.6, 3.4, 3.5, 3.2, 3.2, 3.4, 4.0, 3.3, 3.1,
+                     3.0, 3.5, 3.3, 3.7, 3.2, 3.1, 3.2, 3.0, 3.3, 3.1],
+      "below": {"type": "layered", "material": "VeroClear"}, "above": {"type": "layered", "material": "void"}})");
+  const std::string options = R"({"size_mm": [30, 30], "origin_mm": [10, 20, 1], "thickness_mm": 6,
+      "vertices": [41, 41], "distance_mm": 60, "receiver_mm": [36, 36], "image": [96, 96], "rays": [240, 240]})";
+  const ImageObservation simulated = simulate(*spline, options);
+
+  const CausticSlabConfig config = CausticSlabConfig::read(Properties::parse(options, "options.json"));
+  const auto& surface = dynamic_cast<const HeightSurface&>(*spline);
+  const Mesh slab = caustic_slab_mesh(config.setup, surface, config.origin_mm);
+  // In the subtree's coordinates: bottom at w = 1, footprint from (10, 20).
+  EXPECT_NEAR(slab.bounds().lower.z(), 1.0, 1e-12);
+  EXPECT_NEAR(slab.bounds().lower.x(), 10.0, 1e-12);
+  EXPECT_NEAR(slab.bounds().upper.y(), 50.0, 1e-12);
+  EXPECT_GT(slab.signed_volume(), 0);
+  const std::filesystem::path file = std::filesystem::path(::testing::TempDir()) / "caustic_slab.stl";
+  write_stl(slab, file);
+  Mesh loaded = load_mesh(file);
+  std::filesystem::remove(file);
+  EXPECT_EQ(loaded.triangles.size(), slab.triangles.size());
+  EXPECT_NEAR(loaded.signed_volume(), slab.signed_volume(), 1e-4 * slab.signed_volume());
+  for (Vec3& v : loaded.vertices) v -= slab_offset(config.setup, config.origin_mm);
+  CausticTracer tracer(config.setup, std::move(loaded.vertices), std::move(loaded.triangles));
+  std::vector<double> traced(simulated.pixels.size());
+  tracer.render(traced);
+  const double scale = rms_difference(simulated.pixels, std::vector<double>(simulated.pixels.size(), 0.0));
+  EXPECT_LT(rms_difference(traced, simulated.pixels), 1e-3 * scale);
+  // The surface focuses: a flat slab would give 1 everywhere under it.
+  EXPECT_GT(*std::max_element(simulated.pixels.begin(), simulated.pixels.end()), 2.0);
 }
 
 }  // namespace

@@ -3,7 +3,10 @@
 // that collimated light through it casts a goal image on a receiver below.
 // The tree is one B-spline node over the solid's footprint (clear below,
 // void above); one tuner — the caustic simulator, image MSE against the
-// goal picture, SPSA by default as the paper — tunes every control height.
+// goal picture — tunes every control height: by default with L-BFGS on the
+// tracer's derivative, which beats the paper's SPSA by two orders of
+// magnitude in time (benchmarks/RESULTS.md); SPSA can run alongside for
+// comparison ("compare_optimizers").
 
 #include <algorithm>
 #include <cmath>
@@ -13,14 +16,18 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <spdlog/spdlog.h>
 
 #include "caustics/caustic_parts.h"
 #include "core/colour.h"
 #include "core/distance.h"
+#include "fabrication/material_surfaces.h"
+#include "geometry/mesh_io.h"
 #include "reducer/reducer_tree.h"
 #include "spec/translator.h"
 #include "spec/tree_outputs.h"
 #include "spec/tuning_outputs.h"
+#include "tuning/convergence_plot.h"
 #include "tuning/schedule.h"
 
 namespace spec2fab {
@@ -72,17 +79,29 @@ class SmoothCausticsTranslator final : public Translator {
         {"receiver_mm", receiver_},
         {"image", image_},
         {"rays", rays}};
+    slab_ = CausticSlabConfig::read(Properties::wrap(simulator, experiment.file().string() + " (simulator)"));
     const nlohmann::json goal_part = {{"type", "caustic_image"},
                                       {"image", goal.existing_file("image").string()},
                                       {"size", image_},
                                       {"receiver_mm", receiver_},
                                       {"flux_mm2", size.x() * size.y()}};
     const nlohmann::json optimizer =
-        experiment.optimizer_or({{"type", "spsa"}, {"iterations", 400}, {"c", 0.02}});
+        experiment.optimizer_or({{"type", "nlopt"}, {"algorithm", "LD_LBFGS"}, {"max_evaluations", 1000}});
     const nlohmann::json parts = {{"simulator", simulator},
                                   {"metric", {{"type", "image_mse"}}},
                                   {"goal", goal_part},
                                   {"optimizer", optimizer}};
+    // Other optimizers run from the same flat start before the main one, for
+    // the comparison the paper's SPSA invites (preview/optimizer_comparison.png).
+    if (experiment.root().has("compare_optimizers")) {
+      for (const Properties& p : experiment.root().objects("compare_optimizers")) {
+        std::string label = p.get<std::string>("type");
+        if (p.has("algorithm")) label += " " + p.get<std::string>("algorithm");
+        compared_.push_back({std::move(label), build_optimizer(p)});
+      }
+    }
+    main_label_ = optimizer.value("type", "optimizer");
+    if (optimizer.contains("algorithm")) main_label_ += " " + optimizer["algorithm"].get<std::string>();
     auto tuner = build_tuner(Properties::wrap(parts, experiment.file().string() + " (tuner)"), "surface",
                              PartContext{palette});
     tuner->set_node(tree_->root());
@@ -93,11 +112,14 @@ class SmoothCausticsTranslator final : public Translator {
   }
 
   std::string summary() const override {
+    std::string compared;
+    for (const auto& [label, optimizer] : compared_) compared += (compared.empty() ? "; compared with " : ", ") + label;
     return fmt::format(
         "smooth caustics: a {} slab, top a {} x {} B-spline; collimated light casts the goal "
         "image {} mm below on a {:g} x {:g} mm receiver ({} x {} px); one tuner (caustics, "
-        "image_mse)",
-        material_, control_[0], control_[1], distance_mm_, receiver_[0], receiver_[1], image_[0], image_[1]);
+        "image_mse, {}{})",
+        material_, control_[0], control_[1], distance_mm_, receiver_[0], receiver_[1], image_[0], image_[1],
+        main_label_, compared);
   }
 
   const ReducerTree& tree() const override { return *tree_; }
@@ -108,6 +130,16 @@ class SmoothCausticsTranslator final : public Translator {
     const auto& target = static_cast<const ImageObservation&>(tuner.goal().target());
     const std::vector<double> initial = static_cast<const ImageObservation&>(tuner.simulated()).pixels;
 
+    const std::vector<double> start = tuner.search_space().values();
+    std::vector<Summary> compared;
+    for (auto& [label, optimizer] : compared_) {
+      spdlog::info("comparison: {} from the flat start", label);
+      optimizer->set_seed(context.seed);
+      std::vector<double> x = start;
+      compared.push_back(optimizer->minimize(tuner.problem(), x));
+      spdlog::info("  {}", compared.back().brief_report());
+      tuner.error_at(start);
+    }
     const RunRecord record = schedule_.run(network_, context.seed);
     tree_->evaluate();
     tuner.error();
@@ -126,10 +158,14 @@ class SmoothCausticsTranslator final : public Translator {
         {"initial_rmse", initial_rmse},
         {"initial_ssim", image_ssim(initial, target.pixels, target.width, target.height)}};
     write_tuning_outputs(record, network_, context);
+    if (!compared.empty()) report_comparison(record.runs.front().summary, compared, context);
     write_goal_vs_simulated(target, achieved, context.folder.path("preview/goal_vs_simulated.png"));
     write_height_map(context.folder.path("preview/height_map.png"));
     context.result["files"] = {
         {"previews", {"preview/convergence.png", "preview/goal_vs_simulated.png", "preview/height_map.png"}}};
+    if (!compared.empty()) context.result["files"]["previews"].push_back("preview/optimizer_comparison.png");
+    context.result["caustics"]["surface_stl"] = write_surface_stl(achieved, context);
+    context.result["files"]["surface"] = "print/surface.stl";
     write_tree_outputs(*tree_, outputs_, context);
   }
 
@@ -138,7 +174,9 @@ class SmoothCausticsTranslator final : public Translator {
         "Smooth caustics (paper Fig. 9, after Finckh et al. 2010): a clear slab over the solid's "
         "footprint whose top is a B-spline height surface, tuned so that collimated light from "
         "above casts the goal image on a receiver below. One tuner: the caustics simulator, "
-        "image_mse against the goal picture, SPSA unless `optimizer` says otherwise.",
+        "image_mse against the goal picture, L-BFGS on the tracer's derivative unless `optimizer` "
+        "says otherwise (the paper's SPSA: {\"type\": \"spsa\", \"c\": 0.002, \"first_step\": 0.01}). "
+        "Writes the smooth slab as print/surface.stl besides the voxel outputs.",
         {{"goal.image", "file", "required", "the picture to cast (grey levels)"},
          {"goal.control", "[na, nb]", "[60, 60]", "B-spline control points"},
          {"goal.material", "material", "VeroClear", "the slab's material"},
@@ -150,13 +188,66 @@ class SmoothCausticsTranslator final : public Translator {
          {"goal.vertices_per_span", "integer", "3", "mesh vertices per control span"},
          {"goal.rays", "[nx, ny]", "2 x image_size", "stratified rays"},
          {"goal.refractive_index", "number", "1.5", "of the slab's material"},
-         {"optimizer", "object", "spsa, 400 iterations, c 0.02", "the surface's optimizer"}},
+         {"optimizer", "object", "nlopt LD_LBFGS, 1000 evaluations", "the surface's optimizer"},
+         {"compare_optimizers", "array of optimizers", "none",
+          "also run each from the same start first; reports and plots them against the main one"}},
         R"({"translator": "smooth_caustics", "goal": {"image": "ring.png", "distance_mm": 200}})"};
     for (PropertyDoc& d : TreeOutputOptions::docs()) doc.properties.push_back(std::move(d));
     return doc;
   }
 
  private:
+  /// print/surface.stl: the tuned slab as one smooth closed mesh — the
+  /// simulator's own triangles — for printers that take a surface (the
+  /// per-material STLs come from print voxels, whose 27 µm terraces would
+  /// scatter the light). Read back and traced, it must cast what the
+  /// simulator cast; the difference is reported.
+  nlohmann::json write_surface_stl(const ImageObservation& simulated, RunContext& context) const {
+    const auto& surface = dynamic_cast<const HeightSurface&>(tree_->root());
+    const std::filesystem::path file = context.folder.path("print/surface.stl");
+    const Mesh slab = caustic_slab_mesh(slab_.setup, surface, slab_.origin_mm);
+    write_stl(slab, file);
+    Mesh loaded = load_mesh(file);
+    const Eigen::Vector3d offset = slab_offset(slab_.setup, slab_.origin_mm);
+    for (Vec3& v : loaded.vertices) v -= offset;
+    CausticTracer tracer(slab_.setup, std::move(loaded.vertices), std::move(loaded.triangles));
+    std::vector<double> traced(simulated.pixels.size());
+    tracer.render(traced);
+    const double rms = rms_difference(simulated.pixels, std::vector<double>(simulated.pixels.size(), 0.0));
+    return {{"file", "print/surface.stl"},
+            {"triangles", slab.triangles.size()},
+            {"traced_relative_rmse_vs_simulated", rms_difference(traced, simulated.pixels) / rms}};
+  }
+
+  /// result.json "optimizers" (errors, evaluations), timing.json the wall
+  /// times and when each run first reached every other run's final error,
+  /// and the comparison plot.
+  void report_comparison(const Summary& main, const std::vector<Summary>& compared, RunContext& context) const {
+    std::vector<LabelledRun> runs{{main_label_, &main}};
+    for (size_t k = 0; k < compared.size(); ++k) runs.push_back({compared_[k].first, &compared[k]});
+    nlohmann::json summaries = nlohmann::json::array(), times = nlohmann::json::array();
+    for (const LabelledRun& run : runs) {
+      summaries.push_back({{"optimizer", run.label},
+                           {"initial_error", run.summary->initial_error},
+                           {"final_error", run.summary->final_error},
+                           {"evaluations", run.summary->evaluations}});
+      nlohmann::json reached = nlohmann::json::object();
+      for (const LabelledRun& other : runs) {
+        if (&other == &run) continue;
+        // First trace row at or below the other run's final error.
+        const auto row = std::find_if(run.summary->trace.begin(), run.summary->trace.end(),
+                                      [&](const IterationRecord& r) { return r.best_error <= other.summary->final_error; });
+        reached[other.label] = row == run.summary->trace.end() ? nlohmann::json(nullptr) : nlohmann::json(row->seconds);
+      }
+      times.push_back({{"optimizer", run.label},
+                       {"seconds", run.summary->seconds},
+                       {"seconds_to_reach_final_error_of", reached}});
+    }
+    context.result["caustics"]["optimizers"] = summaries;
+    if (context.timing) (*context.timing)["optimizers"] = times;
+    write_optimizer_comparison_plot(runs, context.folder.path("preview/optimizer_comparison.png"));
+  }
+
   /// Goal | simulated, both on the goal's scale (its peak white), sRGB grey.
   static void write_goal_vs_simulated(const ImageObservation& goal, const ImageObservation& simulated,
                                       const std::filesystem::path& file) {
@@ -198,6 +289,9 @@ class SmoothCausticsTranslator final : public Translator {
   std::array<double, 2> receiver_{50, 50};
   double distance_mm_ = 200;
   std::string material_;
+  std::string main_label_;
+  CausticSlabConfig slab_;
+  std::vector<std::pair<std::string, std::unique_ptr<Optimizer>>> compared_;
   std::unique_ptr<ReducerTree> tree_;
   TreeOutputOptions outputs_;
   TunerNetwork network_;

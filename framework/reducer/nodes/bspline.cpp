@@ -105,6 +105,18 @@ class BSplineNode final : public ClonableNode<BSplineNode, GeometryNode>, public
   double surface_height(double lateral_1, double lateral_2) const override {
     return height(lateral_1, lateral_2);
   }
+  void visit_height_derivatives(double lateral_1, double lateral_2,
+                                const HeightDerivativeVisitor& visit) const override {
+    double wa[4], wb[4];
+    int ia, ib;
+    locate(lateral_1, 0, ia, wa);
+    locate(lateral_2, 1, ib, wb);
+    for (int j = 0; j < 4; ++j) {
+      const int row = std::clamp(ib + j - 1, 0, counts_[1] - 1) * counts_[0];
+      for (int i = 0; i < 4; ++i)
+        visit(heights_[static_cast<size_t>(row + std::clamp(ia + i - 1, 0, counts_[0] - 1))], wa[i] * wb[j]);
+    }
+  }
 
   nlohmann::json to_json(const MaterialPalette& palette) const override {
     nlohmann::json out = {{"type", type_name()}, {"control", counts_}};

@@ -55,6 +55,12 @@ class PlaneNode final : public ClonableNode<PlaneNode, GeometryNode>, public Hei
   double surface_height(double lateral_1, double lateral_2) const override {
     return height(Vec3(lateral_1, lateral_2, 0));
   }
+  void visit_height_derivatives(double lateral_1, double lateral_2,
+                                const HeightDerivativeVisitor& visit) const override {
+    visit(offset_mm_, 1.0);
+    visit(slope_a_, lateral_1 - center_.x());
+    visit(slope_b_, lateral_2 - center_.y());
+  }
 
   nlohmann::json to_json(const MaterialPalette& palette) const override {
     nlohmann::json out = {{"type", type_name()},
