@@ -24,4 +24,11 @@ inline double rms_difference(std::span<const double> a, std::span<const double> 
   return std::sqrt(squared_distance(a, b) / static_cast<double>(a.size()));
 }
 
+/// √(Σ a_i² / n): the root-mean-square value.
+inline double root_mean_square(std::span<const double> a) {
+  if (a.empty()) throw std::invalid_argument("root_mean_square: no values");
+  return Eigen::Map<const Eigen::VectorXd>(a.data(), static_cast<Eigen::Index>(a.size())).norm() /
+         std::sqrt(static_cast<double>(a.size()));
+}
+
 }  // namespace spec2fab

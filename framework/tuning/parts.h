@@ -18,8 +18,8 @@
 #include <string_view>
 
 #include "core/registry.h"
-#include "materials/palette.h"
 #include "core/search_space.h"
+#include "materials/palette.h"
 #include "reducer/node.h"
 #include "tuning/observation.h"
 

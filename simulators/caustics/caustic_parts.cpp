@@ -81,17 +81,14 @@ CausticSlabConfig CausticSlabConfig::read(const Properties& properties) {
 Mesh caustic_slab_mesh(const CausticSetup& setup, const HeightSurface& surface, const Eigen::Vector3d& origin_mm) {
   if (surface.height_axis() != 2) throw InputError("caustics: the slab's surface must give heights along w");
   CausticTracer tracer(setup);
-  const Eigen::Vector3d offset = slab_offset(setup, origin_mm);
-  std::vector<double> heights;
-  for (int j = 0; j < setup.vertices_y; ++j)
-    for (int i = 0; i < setup.vertices_x; ++i) {
-      const Eigen::Vector2d xy = tracer.vertex_xy(i, j) + offset.head<2>();
-      heights.push_back(surface.surface_height(xy.x(), xy.y()) - origin_mm.z());
-    }
+  std::vector<double> heights(tracer.heights().size());
+  for_each_slab_vertex(tracer, origin_mm, [&](size_t k, double a, double b) {
+    heights[k] = surface.surface_height(a, b) - origin_mm.z();
+  });
   tracer.set_heights(heights);
   Mesh mesh;
   tracer.mesh(mesh.vertices, mesh.triangles);
-  for (Vec3& v : mesh.vertices) v += offset;
+  for (Vec3& v : mesh.vertices) v += slab_offset(setup, origin_mm);
   return mesh;
 }
 

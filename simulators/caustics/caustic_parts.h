@@ -36,6 +36,21 @@ inline Eigen::Vector3d slab_offset(const CausticSetup& setup, const Eigen::Vecto
   return origin_mm + Eigen::Vector3d(0.5 * setup.width_mm, 0.5 * setup.depth_mm, 0);
 }
 
+/// Calls visit(k, a, b) for every top vertex k of `tracer`'s grid, (a, b)
+/// its position in the subtree's coordinates: where the slab's heights are
+/// read, their derivatives taken and its mesh written.
+template <class Visit>
+void for_each_slab_vertex(const CausticTracer& tracer, const Eigen::Vector3d& origin_mm, Visit&& visit) {
+  const CausticSetup& s = tracer.setup();
+  const Eigen::Vector2d offset = slab_offset(s, origin_mm).head<2>();
+  size_t k = 0;
+  for (int j = 0; j < s.vertices_y; ++j)
+    for (int i = 0; i < s.vertices_x; ++i, ++k) {
+      const Eigen::Vector2d ab = tracer.vertex_xy(i, j) + offset;
+      visit(k, ab.x(), ab.y());
+    }
+}
+
 /// The closed slab a height surface (axis w) describes, meshed exactly as
 /// the caustics simulator meshes it (setup's footprint and vertex grid), in
 /// the subtree's coordinates: what print/surface.stl holds.

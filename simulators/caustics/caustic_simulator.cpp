@@ -3,11 +3,11 @@
 // subtree's frame, (a, b) along its footprint and w up from its flat bottom;
 // whatever the subtree assigns below its top surface is the slab, void above.
 
+#include <algorithm>
 #include <cmath>
+#include <unordered_map>
 
 #include <Eigen/SparseCore>
-
-#include <unordered_map>
 
 #include "caustics/caustic_parts.h"
 #include "caustics/caustic_tracer.h"
@@ -101,18 +101,11 @@ class CausticSimulator final : public SimulatorFor<ImageObservation> {
   }
 
   void read_heights(const ReducerNode& subtree) {
-    const CausticSetup& s = tracer_->setup();
     const auto* surface = dynamic_cast<const HeightSurface*>(&subtree);
     const bool direct = surface != nullptr && surface->height_axis() == 2;
-    const Eigen::Vector2d offset = slab_offset(s, origin_).head<2>();
-    size_t k = 0;
-    for (int j = 0; j < s.vertices_y; ++j) {
-      for (int i = 0; i < s.vertices_x; ++i, ++k) {
-        const Eigen::Vector2d ab = tracer_->vertex_xy(i, j) + offset;
-        heights_[k] = (direct ? surface->surface_height(ab.x(), ab.y()) : search_height(subtree, ab.x(), ab.y())) -
-                      origin_.z();
-      }
-    }
+    for_each_slab_vertex(*tracer_, origin_, [&](size_t k, double a, double b) {
+      heights_[k] = (direct ? surface->surface_height(a, b) : search_height(subtree, a, b)) - origin_.z();
+    });
   }
 
   // ∂(vertex height)/∂(free parameter), vertices × parameters; the heights
@@ -120,29 +113,28 @@ class CausticSimulator final : public SimulatorFor<ImageObservation> {
   // and search space.
   const Eigen::SparseMatrix<double, Eigen::RowMajor>& height_jacobian(const ReducerNode& subtree,
                                                                       const SearchSpace& space) {
-    std::vector<const Parameter*> parameters;
-    for (const SearchSpace::Entry& e : space.entries()) parameters.push_back(e.parameter);
-    if (&subtree == jacobian_subtree_ && parameters == jacobian_parameters_) return jacobian_;
+    const auto& entries = space.entries();
+    const bool cached = &subtree == jacobian_subtree_ && entries.size() == jacobian_parameters_.size() &&
+                        std::equal(entries.begin(), entries.end(), jacobian_parameters_.begin(),
+                                   [](const SearchSpace::Entry& e, const Parameter* p) { return e.parameter == p; });
+    if (cached) return jacobian_;
+    jacobian_parameters_.clear();
     std::unordered_map<const Parameter*, int> column;
-    for (size_t i = 0; i < parameters.size(); ++i) column.emplace(parameters[i], static_cast<int>(i));
-    const CausticSetup& s = tracer_->setup();
-    const auto& surface = dynamic_cast<const HeightSurface&>(subtree);
-    std::vector<Eigen::Triplet<double>> entries;
-    const Eigen::Vector2d offset = slab_offset(s, origin_).head<2>();
-    int row = 0;
-    for (int j = 0; j < s.vertices_y; ++j) {
-      for (int i = 0; i < s.vertices_x; ++i, ++row) {
-        const Eigen::Vector2d ab = tracer_->vertex_xy(i, j) + offset;
-        surface.visit_height_derivatives(ab.x(), ab.y(), [&](const Parameter& p, double weight) {
-                                           const auto found = column.find(&p);
-                                           if (found != column.end()) entries.emplace_back(row, found->second, weight);
-                                         });
-      }
+    for (const SearchSpace::Entry& e : entries) {
+      column.emplace(e.parameter, static_cast<int>(jacobian_parameters_.size()));
+      jacobian_parameters_.push_back(e.parameter);
     }
-    jacobian_.resize(row, static_cast<Eigen::Index>(parameters.size()));
-    jacobian_.setFromTriplets(entries.begin(), entries.end());
+    const auto& surface = dynamic_cast<const HeightSurface&>(subtree);
+    std::vector<Eigen::Triplet<double>> triplets;
+    for_each_slab_vertex(*tracer_, origin_, [&](size_t k, double a, double b) {
+      surface.visit_height_derivatives(a, b, [&](const Parameter& p, double weight) {
+        const auto found = column.find(&p);
+        if (found != column.end()) triplets.emplace_back(static_cast<int>(k), found->second, weight);
+      });
+    });
+    jacobian_.resize(static_cast<Eigen::Index>(heights_.size()), static_cast<Eigen::Index>(entries.size()));
+    jacobian_.setFromTriplets(triplets.begin(), triplets.end());
     jacobian_subtree_ = &subtree;
-    jacobian_parameters_ = std::move(parameters);
     return jacobian_;
   }
 

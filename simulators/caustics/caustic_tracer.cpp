@@ -324,6 +324,30 @@ void CausticTracer::trace_block(int begin, int end) {
   }
 }
 
+double CausticTracer::pixels_per_mm2() const {
+  const CausticSetup& s = setup_;
+  return s.image_width / s.receiver_width_mm * s.image_height / s.receiver_depth_mm;
+}
+
+template <class Visit>
+bool CausticTracer::for_each_splat_corner(const Eigen::Vector2d& uv, Visit&& visit) const {
+  const CausticSetup& s = setup_;
+  if (!(uv.x() > -1 && uv.y() > -1 && uv.x() < s.image_width && uv.y() < s.image_height)) return false;
+  const int col = static_cast<int>(std::floor(uv.x())), row = static_cast<int>(std::floor(uv.y()));
+  const double fu = uv.x() - col, fv = uv.y() - row;
+  for (int dy = 0; dy < 2; ++dy) {
+    const int y = row + dy;
+    if (y < 0 || y >= s.image_height) continue;
+    for (int dx = 0; dx < 2; ++dx) {
+      const int x = col + dx;
+      if (x < 0 || x >= s.image_width) continue;
+      visit(static_cast<size_t>(y) * static_cast<size_t>(s.image_width) + static_cast<size_t>(x), dx ? fu : 1 - fu,
+            dy ? fv : 1 - fv, dx ? 1.0 : -1.0, dy ? 1.0 : -1.0);
+    }
+  }
+  return true;
+}
+
 CausticFlux CausticTracer::render(std::span<double> irradiance) {
   const CausticSetup& s = setup_;
   const size_t pixels = static_cast<size_t>(s.image_width) * static_cast<size_t>(s.image_height);
@@ -338,7 +362,7 @@ CausticFlux CausticTracer::render(std::span<double> irradiance) {
 
   // Splat in ray order (bilinear), so the sums do not depend on threads.
   std::fill(irradiance.begin(), irradiance.end(), 0.0);
-  const double per_area = s.image_width / s.receiver_width_mm * s.image_height / s.receiver_depth_mm;
+  const double per_area = pixels_per_mm2();
   CausticFlux flux;
   for (const RayResult& ray : results_) {
     flux.emitted += ray.power + ray.reflected;
@@ -351,28 +375,11 @@ CausticFlux CausticTracer::render(std::span<double> irradiance) {
       flux.lost += ray.power;
       continue;
     }
-    const Eigen::Vector2d uv = pixel_coordinates(ray);
-    const double u = uv.x(), v = uv.y();
-    if (!(u > -1 && v > -1 && u < s.image_width && v < s.image_height)) {
-      flux.missed += ray.power;
-      continue;
-    }
-    const int col = static_cast<int>(std::floor(u)), row = static_cast<int>(std::floor(v));
-    const double fu = u - col, fv = v - row;
     double deposited = 0;
-    for (int dy = 0; dy < 2; ++dy) {
-      const int y = row + dy;
-      if (y < 0 || y >= s.image_height) continue;
-      const double wy = dy ? fv : 1 - fv;
-      for (int dx = 0; dx < 2; ++dx) {
-        const int x = col + dx;
-        if (x < 0 || x >= s.image_width) continue;
-        const double w = wy * (dx ? fu : 1 - fu);
-        irradiance[static_cast<size_t>(y) * static_cast<size_t>(s.image_width) + static_cast<size_t>(x)] +=
-            w * ray.power * per_area;
-        deposited += w;
-      }
-    }
+    for_each_splat_corner(pixel_coordinates(ray), [&](size_t pixel, double weight_u, double weight_v, double, double) {
+      irradiance[pixel] += weight_u * weight_v * ray.power * per_area;
+      deposited += weight_u * weight_v;
+    });
     flux.received += deposited * ray.power;
     flux.missed += (1 - deposited) * ray.power;
   }
@@ -400,7 +407,7 @@ void CausticTracer::pull_back(std::span<const double> d_irradiance, std::span<do
   if (d_irradiance.size() != static_cast<size_t>(s.image_width) * static_cast<size_t>(s.image_height) ||
       d_heights.size() != heights_.size())
     throw std::invalid_argument("CausticTracer::pull_back: wrong sizes");
-  const double per_area = s.image_width / s.receiver_width_mm * s.image_height / s.receiver_depth_mm;
+  const double per_area = pixels_per_mm2();
   const double du_dx = s.image_width / s.receiver_width_mm, dv_dy = -s.image_height / s.receiver_depth_mm;
   ray_gradients_.resize(results_.size());
   using Jet = ceres::Jet<double, 3>;
@@ -410,22 +417,12 @@ void CausticTracer::pull_back(std::span<const double> d_irradiance, std::span<do
       ray_gradients_[i].setZero();
       if (ray.fate != kReceived || ray.entry < 0) continue;
       // ∂E/∂(u, v) of the bilinear splat at the ray's receiver point.
-      const Eigen::Vector2d uv = pixel_coordinates(ray);
-      const int col = static_cast<int>(std::floor(uv.x())), row = static_cast<int>(std::floor(uv.y()));
-      const double fu = uv.x() - col, fv = uv.y() - row;
       double d_u = 0, d_v = 0;
-      for (int dy = 0; dy < 2; ++dy) {
-        const int y = row + dy;
-        if (y < 0 || y >= s.image_height) continue;
-        for (int dx = 0; dx < 2; ++dx) {
-          const int x = col + dx;
-          if (x < 0 || x >= s.image_width) continue;
-          const double g = d_irradiance[static_cast<size_t>(y) * static_cast<size_t>(s.image_width) +
-                                        static_cast<size_t>(x)] * ray.power * per_area;
-          d_u += g * (dx ? 1.0 : -1.0) * (dy ? fv : 1 - fv);
-          d_v += g * (dx ? fu : 1 - fu) * (dy ? 1.0 : -1.0);
-        }
-      }
+      for_each_splat_corner(pixel_coordinates(ray), [&](size_t pixel, double weight_u, double weight_v, double sign_u, double sign_v) {
+        const double g = d_irradiance[pixel] * ray.power * per_area;
+        d_u += g * sign_u * weight_v;
+        d_v += g * weight_u * sign_v;
+      });
       if (d_u == 0 && d_v == 0) continue;
       const Eigen::Vector3i& f = triangles_[static_cast<size_t>(ray.entry)];
       Eigen::Vector2d xy[3];

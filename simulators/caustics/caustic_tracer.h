@@ -103,6 +103,14 @@ class CausticTracer {
   void update_vertex_buffer();
   /// Receiver point (u, v) in pixels of a received ray (the splat's frame).
   Eigen::Vector2d pixel_coordinates(const RayResult& ray) const;
+  double pixels_per_mm2() const;
+  /// The bilinear splat at (u, v): visit(pixel, weight_u, weight_v, sign_u,
+  /// sign_v) for each in-image corner; its weight is weight_u · weight_v and
+  /// ∂weight/∂u = sign_u · weight_v (∂/∂v likewise). False, visiting
+  /// nothing, when no corner is on the image. Render and pull_back share it,
+  /// so the derivative is of the splat actually drawn.
+  template <class Visit>
+  bool for_each_splat_corner(const Eigen::Vector2d& uv, Visit&& visit) const;
 
   CausticSetup setup_;
   std::vector<double> heights_;

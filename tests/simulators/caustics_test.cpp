@@ -329,6 +329,7 @@ TEST(CausticImages, SsimOfConstantImagesIsTheLuminanceTermAndOfEqualImagesOne) {
   for (size_t i = 0; i < noisy.size(); ++i) noisy[i] += 0.3 * std::cos(1.91 * static_cast<double>(i * i));
   EXPECT_LT(image_ssim(ramp, noisy, w, h), 0.95);
   EXPECT_NEAR(rms_difference(a, b), 1.0, 1e-15);
+  EXPECT_NEAR(root_mean_square(std::vector<double>{3.0, -4.0, 0.0, 0.0}), 2.5, 1e-15);
 }
 
 TEST_F(CausticSimulatorTest, GoalPictureCarriesTheGivenFluxAndMseComparesPixels) {
@@ -441,7 +442,7 @@ TEST_F(CausticSimulatorTest, ExportedSlabStlCastsTheSimulatedImage) {
   CausticTracer tracer(config.setup, std::move(loaded.vertices), std::move(loaded.triangles));
   std::vector<double> traced(simulated.pixels.size());
   tracer.render(traced);
-  const double scale = rms_difference(simulated.pixels, std::vector<double>(simulated.pixels.size(), 0.0));
+  const double scale = root_mean_square(simulated.pixels);
   EXPECT_LT(rms_difference(traced, simulated.pixels), 1e-3 * scale);
   // The surface focuses: a flat slab would give 1 everywhere under it.
   EXPECT_GT(*std::max_element(simulated.pixels.begin(), simulated.pixels.end()), 2.0);

@@ -95,15 +95,13 @@ class SmoothCausticsTranslator final : public Translator {
     // the comparison the paper's SPSA invites (preview/optimizer_comparison.png).
     if (experiment.root().has("compare_optimizers")) {
       for (const Properties& p : experiment.root().objects("compare_optimizers")) {
-        std::string label = p.get<std::string>("type");
-        if (p.has("algorithm")) label += " " + p.get<std::string>("algorithm");
-        compared_.push_back({std::move(label), build_optimizer(p)});
+        auto built = build_optimizer(p);  // first: it names a malformed type properly
+        compared_.push_back({optimizer_label(p.value()), std::move(built)});
       }
     }
-    main_label_ = optimizer.value("type", "optimizer");
-    if (optimizer.contains("algorithm")) main_label_ += " " + optimizer["algorithm"].get<std::string>();
     auto tuner = build_tuner(Properties::wrap(parts, experiment.file().string() + " (tuner)"), "surface",
                              PartContext{palette});
+    main_label_ = optimizer_label(optimizer);
     tuner->set_node(tree_->root());
     network_.add(std::move(tuner));
     Phase phase;
@@ -144,7 +142,7 @@ class SmoothCausticsTranslator final : public Translator {
     tree_->evaluate();
     tuner.error();
     const auto& achieved = static_cast<const ImageObservation&>(tuner.simulated());
-    const double goal_rms = rms_difference(target.pixels, std::vector<double>(target.pixels.size(), 0.0));
+    const double goal_rms = root_mean_square(target.pixels);
     const double rmse = rms_difference(achieved.pixels, target.pixels);
     const double initial_rmse = rms_difference(initial, target.pixels);
     context.result["caustics"] = {
@@ -197,6 +195,14 @@ class SmoothCausticsTranslator final : public Translator {
   }
 
  private:
+  /// "nlopt LD_LBFGS", "spsa": the optimizer's type and, for the adapters, algorithm.
+  static std::string optimizer_label(const nlohmann::json& optimizer) {
+    std::string label = optimizer.value("type", "optimizer");
+    if (optimizer.contains("algorithm") && optimizer["algorithm"].is_string())
+      label += " " + optimizer["algorithm"].get<std::string>();
+    return label;
+  }
+
   /// print/surface.stl: the tuned slab as one smooth closed mesh — the
   /// simulator's own triangles — for printers that take a surface (the
   /// per-material STLs come from print voxels, whose 27 µm terraces would
@@ -213,7 +219,7 @@ class SmoothCausticsTranslator final : public Translator {
     CausticTracer tracer(slab_.setup, std::move(loaded.vertices), std::move(loaded.triangles));
     std::vector<double> traced(simulated.pixels.size());
     tracer.render(traced);
-    const double rms = rms_difference(simulated.pixels, std::vector<double>(simulated.pixels.size(), 0.0));
+    const double rms = root_mean_square(simulated.pixels);
     return {{"file", "print/surface.stl"},
             {"triangles", slab.triangles.size()},
             {"traced_relative_rmse_vs_simulated", rms_difference(traced, simulated.pixels) / rms}};

@@ -144,7 +144,7 @@ class SubsurfaceTranslator final : public Translator {
       const auto& target = static_cast<const RadialProfileObservation&>(tuner.goal().target());
       const std::vector<double> s = simulated.samples(), g = target.samples();
       column_rms.push_back(rms_difference(s, g));
-      relative_rms.push_back(column_rms.back() / rms_difference(g, std::vector<double>(g.size(), 0.0)));
+      relative_rms.push_back(column_rms.back() / root_mean_square(g));
       stacks.push_back(stack_json(tuner, context));
     }
     auto stats = [](std::vector<double> v) {
