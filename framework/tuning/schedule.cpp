@@ -11,6 +11,7 @@
 #include <tbb/parallel_for.h>
 
 #include "core/log.h"
+#include "core/properties.h"
 
 namespace spec2fab {
 
@@ -59,6 +60,28 @@ void ErrorDiffusion::after_tune(TunerNetwork& network, size_t t, const std::vect
   }
 }
 
+void NeighbourSwaps::begin_sweep(TunerNetwork& network, const std::vector<size_t>& tuners) {
+  if (energy_) energies_.push_back(energy_(network));
+  std::vector<bool> in_phase(network.size(), false);
+  for (size_t t : tuners) in_phase[t] = true;
+  for (size_t t : tuners) {
+    Tuner::NeighbourMoves moves;
+    std::vector<size_t> others;
+    for (size_t n : network.neighbours(t)) {
+      if (!in_phase[n]) continue;
+      moves.neighbours.push_back(&network.tuner(n));
+      others.push_back(n);
+    }
+    moves.delta = [this, &network, t, others](size_t k) { return delta_(network, t, others[k]); };
+    network.tuner(t).set_neighbour_moves(std::move(moves));
+  }
+}
+
+void NeighbourSwaps::end_phase(TunerNetwork& network, const std::vector<size_t>& tuners) {
+  if (energy_) energies_.push_back(energy_(network));
+  for (size_t t : tuners) network.tuner(t).set_neighbour_moves(std::nullopt);
+}
+
 Schedule& Schedule::add(Phase phase) {
   phases_.push_back(std::move(phase));
   return *this;
@@ -93,8 +116,13 @@ RunRecord Schedule::run(TunerNetwork& network, std::uint64_t seed) const {
     record.phase_names.push_back(phase.name);
     const auto start = std::chrono::steady_clock::now();
     const auto classes = parallel ? network.colour_classes(tuners) : std::vector<std::vector<size_t>>{};
+    std::vector<std::unique_ptr<Optimizer>> own_optimizers;
+    if (!phase.optimizer.is_null()) {
+      const Properties properties = Properties::wrap(phase.optimizer, "schedule phase '" + phase.name + "' optimizer");
+      for (size_t t : tuners) own_optimizers.push_back(network.tuner(t).exchange_optimizer(build_optimizer(properties)));
+    }
     Progress progress(phase.name, static_cast<long long>(tuners.size()) * phase.sweeps);
-    long long done = 0;
+    long long done = 0, evaluations = 0;
     for (int sweep = 0; sweep < phase.sweeps; ++sweep) {
       if (phase.coupling) phase.coupling->begin_sweep(network, tuners);
       std::vector<bool> tuned(network.size(), false);
@@ -127,9 +155,15 @@ RunRecord Schedule::run(TunerNetwork& network, std::uint64_t seed) const {
           progress.update(++done, progress_detail(sweep, sweep_error, ++swept));
         }
       }
-      for (size_t t : tuners) record.runs.push_back({p, sweep, t, std::move(summaries[t])});
+      for (size_t t : tuners) evaluations += summaries[t].evaluations;
+      if (phase.record_every_sweep || sweep + 1 == phase.sweeps)
+        for (size_t t : tuners) record.runs.push_back({p, sweep, t, std::move(summaries[t])});
     }
+    if (phase.coupling) phase.coupling->end_phase(network, tuners);
+    for (size_t k = 0; k < own_optimizers.size(); ++k) network.tuner(tuners[k]).exchange_optimizer(std::move(own_optimizers[k]));
     progress.finish();
+    record.phase_tuner_runs.push_back(done);
+    record.phase_evaluations.push_back(evaluations);
     if (phase.fix_after) {
       for (size_t t : tuners) {
         for (const auto& e : network.tuner(t).search_space().entries()) e.parameter->set_free(false);
@@ -152,6 +186,11 @@ nlohmann::json RunRecord::to_json(TunerNetwork& network) const {
       final_error += run.summary.final_error;
       evaluations += run.summary.evaluations;
       ++runs_in_phase;
+    }
+    // Phases that keep only their last sweep count every run and evaluation.
+    if (p < phase_tuner_runs.size()) {
+      runs_in_phase = phase_tuner_runs[p];
+      evaluations = phase_evaluations[p];
     }
     phases.push_back({{"name", phase_names[p]},
                       {"tuner_runs", runs_in_phase},

@@ -10,6 +10,7 @@
 /// what it tuned so that a later phase tunes something else on top.
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -33,6 +34,8 @@ class Coupling {
   /// already tuned in this sweep (t included).
   virtual void after_tune(TunerNetwork& /*network*/, size_t /*t*/,
                           const std::vector<bool>& /*tuned*/) {}
+  /// Called once after the phase's last sweep.
+  virtual void end_phase(TunerNetwork& /*network*/, const std::vector<size_t>& /*tuners*/) {}
 };
 
 /// Error diffusion over a grid network (tuners row-major, `grid_width` per
@@ -62,6 +65,33 @@ class ErrorDiffusion final : public Coupling {
   std::optional<std::pair<double, double>> clamp_;
 };
 
+/// Lets each tuner of a phase exchange its state (effective target and
+/// parameter values, Tuner::exchange_state) with its network neighbours in
+/// the phase: their problems gain Capability::neighbour_moves for the phase,
+/// and an optimizer that uses them (annealing) accepts an exchange on
+/// `delta(network, a, b)`, the change of an energy the translator defines —
+/// for facet caustics, the roughness of the surface. Serial only: an
+/// exchange changes a neighbour, which a parallel colour class may be
+/// running. `energy`, when given, is recorded before every sweep and after
+/// the last (energies()).
+class NeighbourSwaps final : public Coupling {
+ public:
+  using Delta = std::function<double(TunerNetwork& network, size_t a, size_t b)>;
+  using Energy = std::function<double(TunerNetwork& network)>;
+  explicit NeighbourSwaps(Delta delta, Energy energy = {})
+      : delta_(std::move(delta)), energy_(std::move(energy)) {}
+  std::string name() const override { return "neighbour_swaps"; }
+  bool allows_parallel() const override { return false; }
+  void begin_sweep(TunerNetwork& network, const std::vector<size_t>& tuners) override;
+  void end_phase(TunerNetwork& network, const std::vector<size_t>& tuners) override;
+  const std::vector<double>& energies() const { return energies_; }
+
+ private:
+  Delta delta_;
+  Energy energy_;
+  std::vector<double> energies_;
+};
+
 struct Phase {
   enum class Mode { serial, parallel };
   std::string name = "phase";
@@ -70,6 +100,14 @@ struct Phase {
   Mode mode = Mode::serial;
   std::shared_ptr<Coupling> coupling;  ///< none when null
   bool fix_after = false;              ///< fix the parameters this phase tuned
+  /// Keep every sweep's tuner runs in the RunRecord; false keeps only the
+  /// last sweep's (a phase of thousands of short sweeps — annealing swaps —
+  /// would otherwise hold millions of summaries). Evaluations are counted either way.
+  bool record_every_sweep = true;
+  /// When not null, every tuner of the phase tunes with its own copy of this
+  /// optimizer (built once per phase, kept over its sweeps) instead of its
+  /// own — annealing swaps first, a local solver after, say.
+  nlohmann::json optimizer;
 };
 
 /// One tuner run of a schedule.
@@ -84,6 +122,8 @@ struct RunRecord {
   std::vector<std::string> phase_names;
   std::vector<TunerRun> runs;         ///< in schedule order (deterministic)
   std::vector<double> phase_seconds;  ///< wall time per phase (not deterministic)
+  /// Per phase: tuner runs made and evaluations spent, recorded or not.
+  std::vector<long long> phase_tuner_runs, phase_evaluations;
 
   /// Per-run summaries and per-phase totals, without wall times.
   nlohmann::json to_json(TunerNetwork& network) const;

@@ -49,6 +49,7 @@ class Tuner::TunerProblem final : public Problem {
   double error(std::span<const double> x) override { return tuner_.error_at(x); }
   bool has(Capability capability) const override {
     if (capability == Capability::lower_bound) return static_cast<bool>(tuner_.lower_bound_);
+    if (capability == Capability::neighbour_moves) return tuner_.moves_.has_value();
     if (capability == Capability::gradient)
       return tuner_.metric_->differentiable() && tuner_.simulator_->differentiable(*tuner_.node_);
     return Problem::has(capability);
@@ -59,6 +60,20 @@ class Tuner::TunerProblem final : public Problem {
   double lower_bound(std::span<const double> x, int assigned) override {
     if (!tuner_.lower_bound_) return Problem::lower_bound(x, assigned);
     return tuner_.lower_bound_(x, assigned, *tuner_.effective_target_);
+  }
+  int neighbour_count() const override {
+    return tuner_.moves_ ? static_cast<int>(tuner_.moves_->neighbours.size()) : 0;
+  }
+  double swap_delta(std::span<const double> x, int k) override {
+    if (!tuner_.moves_) return Problem::swap_delta(x, k);
+    tuner_.error_at(x);
+    return tuner_.moves_->delta(static_cast<size_t>(k));
+  }
+  std::vector<double> commit_swap(std::span<const double> x, int k) override {
+    if (!tuner_.moves_) return Problem::commit_swap(x, k);
+    tuner_.error_at(x);
+    tuner_.exchange_state(*tuner_.moves_->neighbours[static_cast<size_t>(k)]);
+    return tuner_.space_.values();
   }
 
  private:
@@ -121,6 +136,16 @@ double Tuner::error_and_gradient_at(std::span<const double> x, std::span<double>
 }
 
 Problem& Tuner::problem() { return *problem_; }
+
+void Tuner::exchange_state(Tuner& other) {
+  const auto mine = effective_target_->values(), theirs = other.effective_target_->values();
+  if (mine.size() != theirs.size() || space_.dimension() != other.space_.dimension())
+    throw std::logic_error("tuners '" + name_ + "' and '" + other.name_ + "' cannot exchange states: different shapes");
+  std::swap_ranges(mine.begin(), mine.end(), theirs.begin());
+  const std::vector<double> own = space_.values();
+  error_at(other.space_.values());
+  other.error_at(own);
+}
 
 Summary Tuner::tune(const IterationCallback& callback) {
   collect_search_space();

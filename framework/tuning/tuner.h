@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -54,6 +55,21 @@ class Tuner {
       std::function<double(std::span<const double> x, int assigned, const Observation& target)>;
   void set_lower_bound(LowerBound bound) { lower_bound_ = std::move(bound); }
 
+  /// Exchanges of state with network neighbours (paper §7.3, facet caustics:
+  /// tuners swap their micro-lenses' kernels): with moves set, problem() has
+  /// Capability::neighbour_moves. A NeighbourSwaps coupling (schedule.h)
+  /// installs them for the phase it couples.
+  struct NeighbourMoves {
+    std::vector<Tuner*> neighbours;
+    /// Change of the network's energy if this tuner and neighbours[k]
+    /// exchanged states; accepted or not by the optimizer.
+    std::function<double(size_t k)> delta;
+  };
+  void set_neighbour_moves(std::optional<NeighbourMoves> moves) { moves_ = std::move(moves); }
+  /// Exchanges state with `other`: effective targets and the values of the
+  /// free parameters (both tuners' subtrees must have the same shape).
+  void exchange_state(Tuner& other);
+
   /// Runs the optimizer from the current values and leaves the best ones set.
   /// Parameters fixed since set_node (by an earlier schedule phase) are left
   /// alone; with nothing free the summary says so and nothing runs.
@@ -63,6 +79,12 @@ class Tuner {
   Observation& effective_target() { return *effective_target_; }
   const Goal& goal() const { return *goal_; }
   Optimizer& optimizer() { return *optimizer_; }
+  /// Puts `optimizer` in place of the tuner's own and returns the one it had
+  /// (a schedule phase may tune with another optimizer; Phase::optimizer).
+  std::unique_ptr<Optimizer> exchange_optimizer(std::unique_ptr<Optimizer> optimizer) {
+    std::swap(optimizer, optimizer_);
+    return optimizer;
+  }
   /// Resets the effective target to the goal's.
   void reset_target();
 
@@ -85,6 +107,7 @@ class Tuner {
   std::vector<double> published_;
   std::vector<double> sensitivity_;  ///< ∂error/∂(simulated values), reused
   LowerBound lower_bound_;
+  std::optional<NeighbourMoves> moves_;
 };
 
 /// Builds a tuner from C++ parts; does not compile when the simulator, metric

@@ -8,7 +8,9 @@
 //     neighbour moves, exchange states with a random neighbouring tuner
 //     (accepted on swap_delta, performed by commit_swap).
 // Temperature schedules: exponential T0·cooling^k, linear T0·(1 − k/iterations),
-// logarithmic T0/log(k + 2). Returns the best point seen since the last
+// logarithmic T0/log(k + 2). With schedule_iterations longer than iterations
+// the schedule spans successive runs of the optimizer — a tuner network runs
+// each tuner many times, and its temperature should keep falling. Returns the best point seen since the last
 // committed swap (a neighbour already holds the state given away).
 //
 //   {"type": "annealing", "iterations": 10000, "initial_temperature": 1.0,
@@ -30,6 +32,7 @@ class Annealing final : public Optimizer {
  public:
   struct Options {
     int iterations = 10000;
+    int schedule_iterations = 0;  ///< 0: iterations (each run anneals from T0)
     double initial_temperature = 1.0;
     double cooling = 0.999;  ///< alpha of the exponential schedule
     std::string schedule = "exponential";
@@ -41,6 +44,8 @@ class Annealing final : public Optimizer {
       const std::vector<std::string> schedules = {"exponential", "linear", "logarithmic"};
       if (iterations < 1) {
         *why = "iterations: must be positive";
+      } else if (schedule_iterations != 0 && schedule_iterations < iterations) {
+        *why = "schedule_iterations: must be at least iterations";
       } else if (!(initial_temperature > 0) || !std::isfinite(initial_temperature)) {
         *why = "initial_temperature: must be positive";
       } else if (!(cooling > 0 && cooling <= 1)) {
@@ -69,6 +74,9 @@ class Annealing final : public Optimizer {
         "Simulated annealing over continuous, discrete and choice variables, with optional "
         "state swaps between neighbouring tuners.",
         {{"iterations", "integer", "10000", "moves proposed (one error evaluation each)"},
+         {"schedule_iterations", "integer", "0",
+          "length of the temperature schedule (0: iterations); longer than iterations, it continues "
+          "over successive runs (a tuner run once per sweep cools over the sweeps)"},
          {"initial_temperature", "number", "1", "T0, in units of the error"},
          {"cooling", "number in (0, 1]", "0.999", "alpha of the exponential schedule"},
          {"schedule", "string", "\"exponential\"", "exponential, linear or logarithmic"},
@@ -109,12 +117,13 @@ class Annealing final : public Optimizer {
     double best = error;
     long long accepted = 0, rejected = 0, swaps_proposed = 0, swaps_accepted = 0;
     double temperature = options_.initial_temperature;
+    if (schedule_length() == options_.iterations) scheduled_ = 0;
     const auto metropolis = [&](double delta) {
       return delta <= 0 || random.uniform() < std::exp(-delta / temperature);
     };
 
     for (int k = 0; k < options_.iterations; ++k) {
-      temperature = temperature_at(k);
+      temperature = temperature_at(scheduled_++);
       if (swaps && (movable.empty() || random.uniform() < options_.swap_probability)) {
         ++swaps_proposed;
         const int neighbour = static_cast<int>(random.index(problem.neighbour_count()));
@@ -168,6 +177,7 @@ class Annealing final : public Optimizer {
   static Options read(const Properties& properties) {
     Options o;
     o.iterations = properties.get<int>("iterations", o.iterations);
+    o.schedule_iterations = properties.get<int>("schedule_iterations", o.schedule_iterations);
     o.initial_temperature = properties.get<double>("initial_temperature", o.initial_temperature);
     o.cooling = properties.get<double>("cooling", o.cooling);
     o.schedule = properties.get<std::string>("schedule", o.schedule);
@@ -177,13 +187,19 @@ class Annealing final : public Optimizer {
     return o;
   }
 
-  double temperature_at(int k) const {
+  long long schedule_length() const {
+    return options_.schedule_iterations > 0 ? options_.schedule_iterations : options_.iterations;
+  }
+  // k counts iterations since the schedule began (over runs, for a long schedule).
+  double temperature_at(long long k) const {
+    const long long length = schedule_length();
+    k = std::min(k, length - 1);
     const double t0 = options_.initial_temperature;
     if (options_.schedule == "linear") {
-      return t0 * (1.0 - static_cast<double>(k) / options_.iterations);
+      return t0 * (1.0 - static_cast<double>(k) / static_cast<double>(length));
     }
     if (options_.schedule == "logarithmic") return t0 / std::log(k + 2.0);
-    return t0 * std::pow(options_.cooling, k);
+    return t0 * std::pow(options_.cooling, static_cast<double>(k));
   }
 
   double propose(const VariableDomain& d, double value, Random& random) const {
@@ -205,6 +221,7 @@ class Annealing final : public Optimizer {
   }
 
   Options options_;
+  long long scheduled_ = 0;  ///< iterations into the temperature schedule
 };
 
 }  // namespace spec2fab

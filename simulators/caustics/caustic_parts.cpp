@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <stdexcept>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -90,6 +91,72 @@ Mesh caustic_slab_mesh(const CausticSetup& setup, const HeightSurface& surface, 
   tracer.mesh(mesh.vertices, mesh.triangles);
   for (Vec3& v : mesh.vertices) v += slab_offset(setup, origin_mm);
   return mesh;
+}
+
+namespace {
+
+/// Collects unshared triangles, each turned to face `outward`.
+struct TriangleSoup {
+  Mesh mesh;
+  void add(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& outward) {
+    const Vec3 normal = (b - a).cross(c - a);
+    if (normal.squaredNorm() < 1e-24) return;  // degenerate: a wall of zero height
+    const int k = static_cast<int>(mesh.vertices.size());
+    mesh.vertices.insert(mesh.vertices.end(), {a, b, c});
+    mesh.triangles.emplace_back(k, normal.dot(outward) >= 0 ? k + 1 : k + 2, normal.dot(outward) >= 0 ? k + 2 : k + 1);
+  }
+  /// The vertical wall over the segment p → q between side A (top heights
+  /// a_p, a_q) and side B (b_p, b_q): it faces from A to B (`a_to_b`) where
+  /// A is higher and back where B is; a crossing splits it in two.
+  void wall(const Vec2& p, const Vec2& q, double a_p, double a_q, double b_p, double b_q, const Vec3& a_to_b) {
+    const double dp = a_p - b_p, dq = a_q - b_q;
+    const auto at = [](const Vec2& xy, double z) { return Vec3(xy.x(), xy.y(), z); };
+    if (dp * dq >= 0) {
+      const Vec3 facing = dp + dq >= 0 ? a_to_b : Vec3(-a_to_b);
+      add(at(p, b_p), at(q, b_q), at(q, a_q), facing);
+      add(at(p, b_p), at(q, a_q), at(p, a_p), facing);
+      return;
+    }
+    const double t = dp / (dp - dq);
+    const Vec2 xy = p + t * (q - p);
+    const Vec3 crossing = at(xy, a_p + t * (a_q - a_p));
+    add(at(p, a_p), at(p, b_p), crossing, dp > 0 ? a_to_b : Vec3(-a_to_b));
+    add(at(q, a_q), at(q, b_q), crossing, dq > 0 ? a_to_b : Vec3(-a_to_b));
+  }
+};
+
+}  // namespace
+
+Mesh faceted_slab_mesh(const CausticSetup& setup, int nx, int ny, std::span<const std::array<double, 4>> corner_heights) {
+  if (nx < 1 || ny < 1 || corner_heights.size() != static_cast<size_t>(nx) * static_cast<size_t>(ny))
+    throw std::invalid_argument("faceted_slab_mesh: expected nx · ny facets");
+  const auto x = [&](int i) { return setup.width_mm * (static_cast<double>(i) / nx - 0.5); };
+  const auto y = [&](int j) { return setup.depth_mm * (static_cast<double>(j) / ny - 0.5); };
+  const auto facet = [&](int i, int j) -> const std::array<double, 4>& {
+    return corner_heights[static_cast<size_t>(i) + static_cast<size_t>(nx) * static_cast<size_t>(j)];
+  };
+  const Vec3 up(0, 0, 1), down(0, 0, -1), east(1, 0, 0), north(0, 1, 0);
+  TriangleSoup soup;
+  for (int j = 0; j < ny; ++j) {
+    for (int i = 0; i < nx; ++i) {
+      const auto& h = facet(i, j);
+      const Vec2 c00(x(i), y(j)), c10(x(i + 1), y(j)), c11(x(i + 1), y(j + 1)), c01(x(i), y(j + 1));
+      const auto top = [](const Vec2& xy, double z) { return Vec3(xy.x(), xy.y(), z); };
+      soup.add(top(c00, h[0]), top(c10, h[1]), top(c11, h[2]), up);
+      soup.add(top(c00, h[0]), top(c11, h[2]), top(c01, h[3]), up);
+      soup.add(top(c00, 0), top(c10, 0), top(c11, 0), down);
+      soup.add(top(c00, 0), top(c11, 0), top(c01, 0), down);
+      // East edge: against the next facet, or the slab's side (height 0 beyond).
+      const bool east_edge = i + 1 == nx, north_edge = j + 1 == ny;
+      const auto& e = east_edge ? h : facet(i + 1, j);
+      soup.wall(c10, c11, h[1], h[2], east_edge ? 0 : e[0], east_edge ? 0 : e[3], east);
+      const auto& n = north_edge ? h : facet(i, j + 1);
+      soup.wall(c01, c11, h[3], h[2], north_edge ? 0 : n[0], north_edge ? 0 : n[1], north);
+      if (i == 0) soup.wall(c00, c01, h[0], h[3], 0, 0, -east);
+      if (j == 0) soup.wall(c00, c10, h[0], h[1], 0, 0, -north);
+    }
+  }
+  return std::move(soup.mesh);
 }
 
 namespace {

@@ -3,6 +3,7 @@
 /// irradiance in units of the incident irradiance), and SSIM for reports
 /// (RMSE: core/distance.h).
 
+#include <array>
 #include <span>
 
 #include <Eigen/Core>
@@ -55,5 +56,15 @@ void for_each_slab_vertex(const CausticTracer& tracer, const Eigen::Vector3d& or
 /// the caustics simulator meshes it (setup's footprint and vertex grid), in
 /// the subtree's coordinates: what print/surface.stl holds.
 Mesh caustic_slab_mesh(const CausticSetup& setup, const HeightSurface& surface, const Eigen::Vector3d& origin_mm);
+
+/// A slab whose top is nx × ny planar facets over the setup's footprint
+/// (tracer frame: centred on the origin, flat bottom at z = 0), closed by
+/// vertical walls wherever neighbouring facets meet at different heights and
+/// around the sides: the surface facet caustics print, traced exactly.
+/// `corner_heights[i + nx·j]` are facet (i, j)'s heights (> 0) at its
+/// corners (x0, y0), (x1, y0), (x1, y1), (x0, y1); facet (0, 0) has the
+/// lowest x and y. Triangles face outwards; vertices are not shared.
+Mesh faceted_slab_mesh(const CausticSetup& setup, int nx, int ny,
+                       std::span<const std::array<double, 4>> corner_heights);
 
 }  // namespace spec2fab

@@ -37,36 +37,6 @@ inline double fresnel_reflectance(double eta_i, double eta_t, double cos_i, doub
   return 0.5 * (rs * rs + rp * rp);
 }
 
-// Where a ray from `origin` along `direction` lands on the receiver plane
-// z = receiver_z after entering the top triangle with lateral corners `xy`
-// and heights `h` and leaving through the flat bottom z = 0: the same
-// refractions the tracer performs, written for any scalar so that
-// ceres::Jet carries ∂/∂h through them.
-template <class T>
-Eigen::Matrix<T, 2, 1> receiver_point(const Vec3& origin, const Vec3& direction, const Eigen::Vector2d xy[3],
-                                      const T h[3], double eta, double receiver_z) {
-  using std::sqrt;
-  using V = Eigen::Matrix<T, 3, 1>;
-  const V p0(T(xy[0].x()), T(xy[0].y()), h[0]), p1(T(xy[1].x()), T(xy[1].y()), h[1]),
-      p2(T(xy[2].x()), T(xy[2].y()), h[2]);
-  V n = (p1 - p0).cross(p2 - p0);
-  n /= sqrt(n.dot(n));
-  const V o = origin.cast<T>(), d = direction.cast<T>();
-  const V hit = o + (n.dot(p0 - o) / n.dot(d)) * d;
-  // Into the slab: the outward normal n faces the incoming ray.
-  const T ratio(1.0 / eta);
-  const T cos_i = -d.dot(n);
-  const T cos_t = sqrt(T(1.0) - ratio * ratio * (T(1.0) - cos_i * cos_i));
-  const V inside = ratio * d + (ratio * cos_i - cos_t) * n;
-  // Out through the bottom, whose normal facing the ray is +z.
-  const V bottom = hit - (hit.z() / inside.z()) * inside;
-  const T cos_b = -inside.z();
-  const T cos_out = sqrt(T(1.0) - T(eta * eta) * (T(1.0) - cos_b * cos_b));
-  V out = T(eta) * inside;
-  out.z() += T(eta) * cos_b - cos_out;
-  return (bottom + ((T(receiver_z) - bottom.z()) / out.z()) * out).template head<2>();
-}
-
 }  // namespace
 
 void CausticSetup::validate() const {
@@ -432,7 +402,7 @@ void CausticTracer::pull_back(std::span<const double> d_irradiance, std::span<do
         xy[k] = v.head<2>();
         h[k] = Jet(v.z(), k);
       }
-      const Eigen::Matrix<Jet, 2, 1> point = receiver_point(ray_origin(static_cast<int>(i)), s.light_direction, xy, h,
+      const Eigen::Matrix<Jet, 2, 1> point = slab_receiver_point(ray_origin(static_cast<int>(i)), s.light_direction, xy, h,
                                                             s.refractive_index, -s.receiver_distance_mm);
       ray_gradients_[i] = d_u * du_dx * point.x().v + d_v * dv_dy * point.y().v;
     }

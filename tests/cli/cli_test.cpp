@@ -490,6 +490,12 @@ TEST_F(Cli, SimulateRunsTheCausticSimulator) {
   EXPECT_GT(values[120 * 240 + 120], 1.2);
 }
 
+// A coarse printer with clear material only, for the caustic translators.
+static void write_clear_printer(const fs::path& file) {
+  std::ofstream(file) << R"({"name": "coarse-clear", "technology": "polyjet", "resolution_dpi": [63.5, 63.5],
+      "layer_mm": 0.4, "build_volume_mm": [200, 200, 200], "model_materials": ["VeroClear"], "source": "test"})";
+}
+
 TEST_F(Cli, SmoothCausticsTunesTheSurfaceAndReportsImageErrors) {
   const std::string body =
       R"({"name": "lens", "translator": "smooth_caustics",
@@ -501,10 +507,7 @@ TEST_F(Cli, SmoothCausticsTunesTheSurfaceAndReportsImageErrors) {
           "output": {"slices": false, "stl": false, "3mf": false, "render": false},
           "materials": ")" + (kDatasets / "materials/polyjet.json").string() + R"(",
           "printer": ")" + (dir_ / "clear_printer.json").string() + R"("})";
-  std::ofstream(dir_ / "clear_printer.json")
-      << R"({"name": "coarse-clear", "technology": "polyjet", "resolution_dpi": [63.5, 63.5],
-             "layer_mm": 0.4, "build_volume_mm": [200, 200, 200], "model_materials": ["VeroClear"],
-             "source": "test"})";
+  write_clear_printer(dir_ / "clear_printer.json");
   const Result r = spec2fab("run -q " + experiment("lens", body).string() + " --out " + (dir_ / "run").string());
   ASSERT_EQ(r.code, 0) << r.out;
   const auto result = nlohmann::json::parse(read(dir_ / "run" / "result.json"));
@@ -527,6 +530,44 @@ TEST_F(Cli, SmoothCausticsTunesTheSurfaceAndReportsImageErrors) {
   const auto tree = nlohmann::json::parse(read(dir_ / "run" / "tree.json"));
   EXPECT_EQ(tree["type"], "bspline");
   EXPECT_EQ(tree["heights_mm"].size(), 36u);
+}
+
+TEST_F(Cli, FacetCausticsAimsEveryFacetAtItsKernelAndReportsImageErrors) {
+  const std::string body =
+      R"({"name": "facets", "translator": "facet_caustics",
+          "geometry": {"mesh": ")" + (kDatasets / "meshes/board_60x60x8.stl").string() + R"(", "uv": "planar"},
+          "goal": {"image": ")" + (kDatasets / "images/caustic_ring_120.png").string() + R"(",
+                   "facets": [12, 12], "image_size": [48, 48], "rays": [144, 144], "distance_mm": 200, "max_slope": 0.5,
+                   "min_height_mm": 2, "start_height_mm": 5, "assignment_sweeps": 20},
+          "swap_optimizer": {"type": "annealing", "iterations": 5, "schedule_iterations": 100,
+                             "swap_probability": 1, "initial_temperature": 1, "cooling": 0.95},
+          "output": {"slices": false, "stl": false, "3mf": false, "render": false},
+          "materials": ")" + (kDatasets / "materials/polyjet.json").string() + R"(",
+          "printer": ")" + (dir_ / "clear_printer.json").string() + R"("})";
+  write_clear_printer(dir_ / "clear_printer.json");
+  const Result r = spec2fab("run -q " + experiment("facets", body).string() + " --out " + (dir_ / "run").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto result = nlohmann::json::parse(read(dir_ / "run" / "result.json"));
+  const auto& caustics = result["caustics"];
+  EXPECT_EQ(caustics["kernels"]["count"], 144);
+  // Every plane reaches its kernel to a fraction of a pixel (1.25 mm here).
+  EXPECT_LT(caustics["aim"]["max_miss_mm"].get<double>(), 0.3);
+  // The traced facets cast the goal far better than the flat start.
+  EXPECT_LT(caustics["rmse"].get<double>(), 0.8 * caustics["initial_rmse"].get<double>());
+  EXPECT_GT(caustics["ssim"].get<double>(), caustics["initial_ssim"].get<double>());
+  // Swaps never leave the surface rougher than annealing found it at its end.
+  const auto& energies = caustics["assignment"]["roughness_mm2_per_sweep"];
+  ASSERT_EQ(energies.size(), 21u);
+  EXPECT_LE(caustics["assignment"]["roughness_mm2_final"].get<double>(), energies.front().get<double>() * 1.05);
+  // Both phases ran: 20 swap sweeps counted, one aiming run per facet recorded.
+  EXPECT_EQ(result["tuning"]["phases"][0]["tuner_runs"], 20 * 144);
+  EXPECT_EQ(result["tuning"]["phases"][1]["tuner_runs"], 144);
+  EXPECT_EQ(result["tuning"]["tuner_runs"].back()["optimizer"], "nlopt");
+  for (const char* file : {"preview/goal_vs_simulated.png", "preview/height_map.png", "preview/convergence.png",
+                           "print/surface.stl"})
+    EXPECT_TRUE(fs::exists(dir_ / "run" / file)) << file;
+  const auto tree = nlohmann::json::parse(read(dir_ / "run" / "tree.json"));
+  EXPECT_EQ(tree["type"], "column");
 }
 
 TEST_F(Cli, SubsurfaceChessboardTunesEveryColumnAndReportsProfileErrors) {

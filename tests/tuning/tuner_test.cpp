@@ -251,5 +251,64 @@ TEST(Schedule, LaterPhaseSeesWhatAnEarlierPhaseFixed) {
   EXPECT_THROW(bad.run(network, 1), std::invalid_argument);
 }
 
+// Neighbour swaps: six cells on a chain hold targets 5..0 in reverse; an
+// energy Σ (target − position)² rewards each target reaching its own
+// position. Annealing (a phase optimizer in place of the tuners' own) swaps
+// neighbours' states until every target is home; states travel with their
+// parameter values.
+TEST(Schedule, NeighbourSwapsExchangeTargetsAndValuesUntilTheEnergyIsLowest) {
+  const auto p = palette();
+  const int n = 6;
+  auto tree = halftone_tree(*p, n, 1);
+  TunerNetwork network;
+  for (int i = 0; i < n; ++i) {
+    auto tuner = make_tuner("cell" + std::to_string(i), std::make_unique<testing::CoverageSimulator>(1),
+                            std::make_unique<testing::SquaredError>(),
+                            std::make_unique<testing::ConstantGoal>(std::vector<double>{double(n - 1 - i)}),
+                            optimizer(R"({"type": "exhaustive"})"));
+    tuner->set_node(tree->node(std::to_string(i)));
+    network.add(std::move(tuner));
+  }
+  network.connect_grid(n, 1, 4);
+  const double paper = network.tuner(0).problem().domain(0).smallest(), ink = network.tuner(0).problem().domain(0).largest();
+  network.tuner(0).error_at(std::vector<double>{ink});  // cell 0 (target 5) is ink, the others paper
+  const auto target = [&](size_t t) { return network.tuner(t).effective_target().values()[0]; };
+  const auto energy = [&](TunerNetwork&) {
+    double e = 0;
+    for (size_t t = 0; t < network.size(); ++t) e += (target(t) - double(t)) * (target(t) - double(t));
+    return e;
+  };
+  auto swaps = std::make_shared<NeighbourSwaps>(
+      [&](TunerNetwork&, size_t a, size_t b) {
+        const auto cost = [](double value, size_t at) { return (value - double(at)) * (value - double(at)); };
+        return cost(target(a), b) + cost(target(b), a) - cost(target(a), a) - cost(target(b), b);
+      },
+      energy);
+  Phase phase;
+  phase.name = "swap";
+  phase.sweeps = 30;
+  phase.coupling = swaps;
+  phase.record_every_sweep = false;
+  phase.optimizer = nlohmann::json::parse(R"({"type": "annealing", "iterations": 3, "schedule_iterations": 90,
+      "swap_probability": 1, "initial_temperature": 0.5, "cooling": 0.9})");
+  Schedule schedule;
+  schedule.add(phase);
+  const RunRecord record = schedule.run(network, 7);
+  for (size_t t = 0; t < network.size(); ++t) EXPECT_EQ(target(t), double(t)) << t;
+  EXPECT_EQ(swaps->energies().front(), 70.0);
+  EXPECT_EQ(swaps->energies().back(), 0.0);
+  EXPECT_EQ(swaps->energies().size(), 31u);
+  // The ink went with target 5 to the far end.
+  EXPECT_EQ(network.tuner(n - 1).search_space().values(), std::vector<double>{ink});
+  EXPECT_EQ(network.tuner(0).search_space().values(), std::vector<double>{paper});
+  // Only the last sweep's runs are kept, every run is counted; the tuners have
+  // their own optimizers back and no neighbour moves outside the phase.
+  EXPECT_EQ(record.runs.size(), size_t(n));
+  EXPECT_EQ(record.phase_tuner_runs, std::vector<long long>{30 * n});
+  EXPECT_EQ(record.to_json(network)["phases"][0]["tuner_runs"], 30 * n);
+  EXPECT_EQ(network.tuner(0).optimizer().name(), "exhaustive");
+  EXPECT_FALSE(network.tuner(0).problem().has(Capability::neighbour_moves));
+}
+
 }  // namespace
 }  // namespace spec2fab

@@ -5,6 +5,7 @@
 #include "core/properties.h"
 #include "reducer/node.h"
 #include "tuning/parts.h"
+#include "tuning/vector_parts.h"
 
 namespace spec2fab::testing {
 
@@ -48,26 +49,9 @@ class FirstLayerSimulator final : public SimulatorFor<VectorObservation> {
   }
 };
 
-class SquaredError final : public MetricFor<VectorObservation> {
- public:
-  std::string name() const override { return "squared_error"; }
-  using MetricFor::error;
-  double error(const VectorObservation& a, const VectorObservation& b) const override {
-    double sum = 0;
-    for (size_t i = 0; i < a.data.size(); ++i) sum += (a.data[i] - b.data[i]) * (a.data[i] - b.data[i]);
-    return sum;
-  }
-};
-
-class ConstantGoal final : public GoalFor<VectorObservation> {
- public:
-  explicit ConstantGoal(std::vector<double> value) { target_.data = std::move(value); }
-  std::string name() const override { return "constant"; }
-  const VectorObservation& typed_target() const override { return target_; }
-
- private:
-  VectorObservation target_;
-};
+// The framework's vector parts serve the tests' vector tuners.
+using SquaredError = SquaredDistance;
+using ConstantGoal = FixedValuesGoal;
 
 /// A displacement simulator and an image metric: parts that must not combine.
 class ZeroDisplacements final : public SimulatorFor<DisplacementsObservation> {

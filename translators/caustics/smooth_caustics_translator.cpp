@@ -13,13 +13,10 @@
 #include <numeric>
 
 #include <fmt/format.h>
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 #include <spdlog/spdlog.h>
 
+#include "caustic_previews.h"
 #include "caustics/caustic_parts.h"
-#include "core/colour.h"
 #include "core/distance.h"
 #include "fabrication/material_surfaces.h"
 #include "geometry/mesh_io.h"
@@ -142,23 +139,21 @@ class SmoothCausticsTranslator final : public Translator {
     tree_->evaluate();
     tuner.error();
     const auto& achieved = static_cast<const ImageObservation&>(tuner.simulated());
-    const double goal_rms = root_mean_square(target.pixels);
-    const double rmse = rms_difference(achieved.pixels, target.pixels);
-    const double initial_rmse = rms_difference(initial, target.pixels);
-    context.result["caustics"] = {
-        {"control", control_},
-        {"image_size", image_},
-        {"receiver_mm", receiver_},
-        {"distance_mm", distance_mm_},
-        {"rmse", rmse},
-        {"relative_rmse", rmse / goal_rms},
-        {"ssim", image_ssim(achieved.pixels, target.pixels, target.width, target.height)},
-        {"initial_rmse", initial_rmse},
-        {"initial_ssim", image_ssim(initial, target.pixels, target.width, target.height)}};
+    nlohmann::json report = caustic_image_errors(achieved.pixels, target);
+    const nlohmann::json at_start = caustic_image_errors(initial, target);
+    report["initial_rmse"] = at_start["rmse"];
+    report["initial_ssim"] = at_start["ssim"];
+    report["control"] = control_;
+    report["image_size"] = image_;
+    report["receiver_mm"] = receiver_;
+    report["distance_mm"] = distance_mm_;
+    context.result["caustics"] = report;
     write_tuning_outputs(record, network_, context);
     if (!compared.empty()) report_comparison(record.runs.front().summary, compared, context);
-    write_goal_vs_simulated(target, achieved, context.folder.path("preview/goal_vs_simulated.png"));
-    write_height_map(context.folder.path("preview/height_map.png"));
+    write_caustic_panels({target.pixels, achieved.pixels}, target.width, target.height,
+                         context.folder.path("preview/goal_vs_simulated.png"));
+    write_height_map(network_.tuner(0).search_space().values(), control_[0], control_[1],
+                     context.folder.path("preview/height_map.png"));
     context.result["files"] = {
         {"previews", {"preview/convergence.png", "preview/goal_vs_simulated.png", "preview/height_map.png"}}};
     if (!compared.empty()) context.result["files"]["previews"].push_back("preview/optimizer_comparison.png");
@@ -175,21 +170,15 @@ class SmoothCausticsTranslator final : public Translator {
         "image_mse against the goal picture, L-BFGS on the tracer's derivative unless `optimizer` "
         "says otherwise (the paper's SPSA: {\"type\": \"spsa\", \"c\": 0.002, \"first_step\": 0.01}). "
         "Writes the smooth slab as print/surface.stl besides the voxel outputs.",
-        {{"goal.image", "file", "required", "the picture to cast (grey levels)"},
-         {"goal.control", "[na, nb]", "[60, 60]", "B-spline control points"},
-         {"goal.material", "material", "VeroClear", "the slab's material"},
+        {{"goal.control", "[na, nb]", "[60, 60]", "B-spline control points"},
          {"goal.min_height_mm", "number (mm)", "1/4 of the solid's height", "lowest the top may go"},
          {"goal.start_height_mm", "number (mm)", "3/4 of the solid's height", "the flat start"},
-         {"goal.distance_mm", "number (mm)", "200", "receiver below the slab's bottom"},
-         {"goal.receiver_mm", "[x, y]", "the footprint", "receiver extent"},
-         {"goal.image_size", "[width, height]", "[240, 240]", "simulated image"},
          {"goal.vertices_per_span", "integer", "3", "mesh vertices per control span"},
-         {"goal.rays", "[nx, ny]", "2 x image_size", "stratified rays"},
-         {"goal.refractive_index", "number", "1.5", "of the slab's material"},
          {"optimizer", "object", "nlopt LD_LBFGS, 1000 evaluations", "the surface's optimizer"},
          {"compare_optimizers", "array of optimizers", "none",
           "also run each from the same start first; reports and plots them against the main one"}},
         R"({"translator": "smooth_caustics", "goal": {"image": "ring.png", "distance_mm": 200}})"};
+    for (PropertyDoc& d : caustic_goal_docs()) doc.properties.push_back(std::move(d));
     for (PropertyDoc& d : TreeOutputOptions::docs()) doc.properties.push_back(std::move(d));
     return doc;
   }
@@ -252,43 +241,6 @@ class SmoothCausticsTranslator final : public Translator {
     context.result["caustics"]["optimizers"] = summaries;
     if (context.timing) (*context.timing)["optimizers"] = times;
     write_optimizer_comparison_plot(runs, context.folder.path("preview/optimizer_comparison.png"));
-  }
-
-  /// Goal | simulated, both on the goal's scale (its peak white), sRGB grey.
-  static void write_goal_vs_simulated(const ImageObservation& goal, const ImageObservation& simulated,
-                                      const std::filesystem::path& file) {
-    const double peak = std::max(1e-12, *std::max_element(goal.pixels.begin(), goal.pixels.end()));
-    const int gap = 8;
-    cv::Mat image(goal.height, 2 * goal.width + gap, CV_8UC1, cv::Scalar(255));
-    for (int p = 0; p < 2; ++p) {
-      const std::vector<double>& v = p == 0 ? goal.pixels : simulated.pixels;
-      for (int row = 0; row < goal.height; ++row)
-        for (int col = 0; col < goal.width; ++col)
-          image.at<unsigned char>(row, p * (goal.width + gap) + col) =
-              linear_to_srgb8(std::min(1.0, v[static_cast<size_t>(row * goal.width + col)] / peak));
-    }
-    if (!cv::imwrite(file.string(), image)) throw std::runtime_error("cannot write " + file.string());
-  }
-
-  /// The tuned surface's height above its lowest point, as a colour map
-  /// (blue low, yellow high), one pixel per control point scaled up.
-  void write_height_map(const std::filesystem::path& file) {
-    const std::vector<double> heights = network_.tuner(0).search_space().values();
-    const auto [lo, hi] = std::minmax_element(heights.begin(), heights.end());
-    const double span = std::max(1e-9, *hi - *lo);
-    cv::Mat grey(control_[1], control_[0], CV_8UC1);
-    for (int j = 0; j < control_[1]; ++j)
-      for (int i = 0; i < control_[0]; ++i)
-        // Row 0 at +y, as in the caustic images.
-        grey.at<unsigned char>(control_[1] - 1 - j, i) = static_cast<unsigned char>(
-            std::lround(255 * (heights[static_cast<size_t>(j * control_[0] + i)] - *lo) / span));
-    cv::Mat scaled, coloured;
-    const int scale = std::max(1, 240 / std::max(control_[0], control_[1]));
-    cv::resize(grey, scaled, cv::Size(), scale, scale, cv::INTER_NEAREST);
-    cv::applyColorMap(scaled, coloured, cv::COLORMAP_VIRIDIS);
-    cv::putText(coloured, fmt::format("relief {:.3f} mm", span), {6, 16}, cv::FONT_HERSHEY_SIMPLEX, 0.45,
-                {255, 255, 255}, 1, cv::LINE_AA);
-    if (!cv::imwrite(file.string(), coloured)) throw std::runtime_error("cannot write " + file.string());
   }
 
   std::array<int, 2> control_{60, 60}, image_{240, 240};

@@ -1,0 +1,449 @@
+// The facet-caustics translator (paper §7.3, Fig. 9 left, after Papas et
+// al. 2011): a clear slab whose top is a grid of planar facets, each a
+// micro-lens sending its patch of collimated light to one Gaussian kernel of
+// the goal image.
+//
+//   tree     Column (facets[0] × facets[1]) → Plane per column (clear below,
+//            void above); the planes' slopes are the free parameters.
+//   kernels  the goal decomposed into as many equal-flux Gaussians as there
+//            are facets (simulators/caustics/gaussian_kernels.h); kernel
+//            (i, j) starts on facet (i, j).
+//   tuners   one per facet: facet_beam (where its plane sends the light) +
+//            squared_distance to its kernel (the effective target) + the
+//            aiming optimizer; a 4-neighbour network.
+//   schedule "assign": annealing on the network, each tuner deciding at
+//            random whether to swap kernels with a neighbour, judged by the
+//            roughness of the surface the assignment asks for (below);
+//            serial sweeps, 2000 moves per tuner as in the paper.
+//            "aim": every tuner orients its plane at its kernel (parallel).
+//   stitch   the facets' offsets by least squares so that neighbours meet
+//            with the smallest steps (Eigen sparse Cholesky), then fitted
+//            into the slab.
+//
+// Roughness: a facet deflecting light by d needs a slope roughly
+// proportional to d, so Σ over neighbouring facets of |d_a − d_b|² measures
+// how much neighbouring slopes differ — the steps and creases of the print.
+// The finished surface is meshed exactly (facets and the walls between
+// them), traced by the caustic tracer, written as print/surface.stl.
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include <Eigen/SparseCholesky>
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include "caustic_previews.h"
+#include "caustics/caustic_parts.h"
+#include "caustics/gaussian_kernels.h"
+#include "core/distance.h"
+#include "fabrication/material_surfaces.h"
+#include "reducer/height_surface.h"
+#include "reducer/reducer_tree.h"
+#include "spec/translator.h"
+#include "spec/tree_outputs.h"
+#include "spec/tuning_outputs.h"
+#include "tuning/schedule.h"
+
+namespace spec2fab {
+namespace {
+
+class FacetCausticsTranslator final : public Translator {
+ public:
+  FacetCausticsTranslator(const Properties& root, const Experiment& experiment) {
+    const Properties goal = experiment.goal();
+    const MaterialPalette& palette = experiment.palette();
+    bounds_ = experiment.solid().bounds();
+    const Vec3 size = bounds_.size();
+    facets_ = goal.get<std::array<int, 2>>("facets", {45, 45});
+    if (facets_[0] < 1 || facets_[1] < 1 || facets_[0] * facets_[1] > 250'000)
+      goal.fail("facets", "expected [nx, ny], at least 1 each and at most 250,000 facets");
+    material_ = goal.get<std::string>("material", "VeroClear");
+    palette.id(material_, goal.where("material"));
+    low_mm_ = goal.get_in_range("min_height_mm", 0.25 * size.z(), 1e-3, size.z());
+    start_mm_ = goal.get_in_range("start_height_mm", 0.75 * size.z(), low_mm_, size.z());
+    max_slope_ = goal.get_in_range("max_slope", 1.0, 1e-3, 10.0);
+    facet_mm_ = {size.x() / facets_[0], size.y() / facets_[1]};
+    if (max_slope_ * (facet_mm_[0] + facet_mm_[1]) > size.z() - low_mm_)
+      goal.fail("max_slope", fmt::format("a facet {:.3g} x {:.3g} mm at slope {:g} rises more than the {:.3g} mm "
+                                         "between min_height_mm and the top",
+                                         facet_mm_[0], facet_mm_[1], max_slope_, size.z() - low_mm_));
+    image_ = goal.get<std::array<int, 2>>("image_size", {240, 240});
+    receiver_ = goal.get<std::array<double, 2>>("receiver_mm", {size.x(), size.y()});
+    distance_mm_ = goal.get_in_range("distance_mm", 200, 1e-3, 1e6);
+    eta_ = goal.get_in_range("refractive_index", 1.5, 1.0, 4.0);
+    const auto rays = goal.get<std::array<int, 2>>("rays", {2 * image_[0], 2 * image_[1]});
+    const int kernel_iterations = static_cast<int>(goal.get_in_range("kernel_iterations", 20, 0, 1000));
+    sweeps_ = static_cast<int>(goal.get_in_range("assignment_sweeps", 200, 0, 1e6));
+
+    setup_.width_mm = size.x();
+    setup_.depth_mm = size.y();
+    setup_.refractive_index = eta_;
+    setup_.receiver_distance_mm = distance_mm_;
+    setup_.receiver_width_mm = receiver_[0];
+    setup_.receiver_depth_mm = receiver_[1];
+    setup_.image_width = image_[0];
+    setup_.image_height = image_[1];
+    setup_.rays_x = rays[0];
+    setup_.rays_y = rays[1];
+    setup_.validate();
+
+    // The goal as irradiance (the caustic_image goal: grey, linear, carrying
+    // the light the footprint lets through), then as kernels.
+    const nlohmann::json goal_part = {{"type", "caustic_image"},
+                                      {"image", goal.existing_file("image").string()},
+                                      {"size", image_},
+                                      {"receiver_mm", receiver_},
+                                      {"flux_mm2", size.x() * size.y()}};
+    image_goal_ = GoalRegistry::instance().create(
+        Properties::wrap(goal_part, experiment.file().string() + " (goal image)"), "goal", PartContext{palette});
+    raster_.width = image_[0];
+    raster_.height = image_[1];
+    raster_.size_mm = {receiver_[0], receiver_[1]};
+    raster_.centre_mm = bounds_.center().head<2>();
+    kernels_ = fit_equal_mass_kernels(target().pixels, raster_, facets_[0], facets_[1], kernel_iterations);
+
+    const nlohmann::json slope = {{"value", 0.0}, {"min", -max_slope_}, {"max", max_slope_}};
+    const nlohmann::json tree = {
+        {"type", "column"},
+        {"count", facets_},
+        {"domain", {bounds_.lower.x(), bounds_.lower.y(), bounds_.upper.x(), bounds_.upper.y()}},
+        {"child",
+         {{"type", "plane"},
+          {"axis", "z"},
+          {"offset_mm", bounds_.lower.z() + start_mm_},
+          {"slope_a", slope},
+          {"slope_b", slope},
+          {"below", {{"type", "layered"}, {"material", material_}}},
+          {"above", {{"type", "layered"}, {"material", "void"}}}}}};
+    tree_ = std::make_unique<ReducerTree>(
+        Properties::wrap(tree, experiment.file().string() + " (facet caustics tree)"), palette);
+    tree_->bind(experiment.solid(), experiment.geometry_spec().field_voxel_mm);
+    outputs_ = TreeOutputOptions::read(goal, experiment, *tree_);
+
+    const nlohmann::json aim = experiment.optimizer_or(
+        {{"type", "nlopt"}, {"algorithm", "LN_BOBYQA"}, {"max_evaluations", 200}, {"xtol_rel", 1e-10}});
+    // Built once here so that a malformed one is reported before the run.
+    if (root.has("swap_optimizer")) {
+      const Properties swap = root.object("swap_optimizer");
+      build_optimizer(swap);
+      swap_optimizer_ = swap.value();
+    } else {
+      swap_optimizer_ = {{"type", "annealing"},      {"iterations", 10},           {"schedule_iterations", 2000},
+                         {"swap_probability", 1.0}, {"initial_temperature", 1.0}, {"cooling", 0.9966}};
+    }
+    for (int j = 0; j < facets_[1]; ++j) {
+      for (int i = 0; i < facets_[0]; ++i) {
+        const size_t k = facet_index(i, j);
+        centres_.push_back(facet_centre(i, j));
+        const nlohmann::json parts = {
+            {"simulator",
+             {{"type", "facet_beam"},
+              {"facet_mm", facet_mm_},
+              {"facet_origin_mm", {bounds_.lower.x() + i * facet_mm_[0], bounds_.lower.y() + j * facet_mm_[1]}},
+              {"bottom_mm", bounds_.lower.z()},
+              {"refractive_index", eta_},
+              {"distance_mm", distance_mm_}}},
+            {"metric", {{"type", "squared_distance"}}},
+            {"goal", {{"type", "values"}, {"values", {kernels_[k].centre_mm.x(), kernels_[k].centre_mm.y()}}}},
+            {"optimizer", aim}};
+        auto tuner = build_tuner(Properties::wrap(parts, experiment.file().string() + " (facet tuner)"),
+                                 fmt::format("facet_{}_{}", i, j), PartContext{palette});
+        tuner->set_node(tree_->root().child(k));
+        network_.add(std::move(tuner));
+      }
+    }
+    network_.connect_grid(facets_[0], facets_[1], 4);
+
+    swaps_ = std::make_shared<NeighbourSwaps>(
+        [this](TunerNetwork& network, size_t a, size_t b) { return swap_delta(network, a, b); },
+        [this](TunerNetwork& network) { return roughness(network); });
+    Phase assign;
+    assign.name = "assign";
+    assign.sweeps = sweeps_;
+    assign.coupling = swaps_;
+    assign.optimizer = swap_optimizer_;
+    assign.record_every_sweep = false;
+    Phase orient;
+    orient.name = "aim";
+    orient.mode = Phase::Mode::parallel;
+    if (sweeps_ > 0) schedule_.add(std::move(assign));
+    schedule_.add(std::move(orient));
+    aim_label_ = aim.value("type", "optimizer") + (aim.contains("algorithm") ? " " + aim["algorithm"].get<std::string>() : "");
+  }
+
+  std::string summary() const override {
+    return fmt::format(
+        "facet caustics: a {} slab, top {} x {} planar facets ({:.3g} x {:.3g} mm); the goal as {} "
+        "equal-flux Gaussian kernels; annealing swaps kernels between neighbouring facets for a "
+        "smooth surface ({} sweeps), then each facet's tuner (facet_beam, squared_distance, {}) "
+        "aims its plane; light cast {} mm below on a {:g} x {:g} mm receiver ({} x {} px)",
+        material_, facets_[0], facets_[1], facet_mm_[0], facet_mm_[1], kernels_.size(), sweeps_, aim_label_,
+        distance_mm_, receiver_[0], receiver_[1], image_[0], image_[1]);
+  }
+
+  const ReducerTree& tree() const override { return *tree_; }
+
+  void run(RunContext& context) override {
+    const ImageObservation& goal = target();
+    const double flux = setup_.width_mm * setup_.depth_mm;
+    const std::vector<double> kernel_image = render_kernels(kernels_, flux, raster_);
+    const std::vector<double> flat = trace_surface(nullptr);
+
+    const RunRecord record = schedule_.run(network_, context.seed);
+    const StitchReport stitch = stitch_offsets();
+    tree_->evaluate();
+
+    Mesh slab;
+    const std::vector<double> achieved = trace_surface(&slab);
+    const double energy_start = swaps_->energies().empty() ? roughness(network_) : swaps_->energies().front();
+    nlohmann::json report = caustic_image_errors(achieved, goal);
+    const nlohmann::json at_start = caustic_image_errors(flat, goal);
+    report["initial_rmse"] = at_start["rmse"];
+    report["initial_ssim"] = at_start["ssim"];
+    report["kernels"] = caustic_image_errors(kernel_image, goal);
+    report["kernels"]["count"] = kernels_.size();
+    report["facets"] = facets_;
+    report["facet_mm"] = facet_mm_;
+    report["image_size"] = image_;
+    report["receiver_mm"] = receiver_;
+    report["distance_mm"] = distance_mm_;
+    report["assignment"] = {{"sweeps", sweeps_},
+                            {"roughness_mm2_start", energy_start},
+                            {"roughness_mm2_final", roughness(network_)},
+                            {"roughness_mm2_per_sweep", swaps_->energies()}};
+    report["aim"] = aim_report();
+    report["stitch"] = {{"rms_step_mm", stitch.rms_step_mm},
+                        {"max_step_mm", stitch.max_step_mm},
+                        {"facets_lowered_to_fit", stitch.lowered}};
+    context.result["caustics"] = report;
+
+    write_tuning_outputs(record, network_, context);
+    write_caustic_panels({goal.pixels, kernel_image, achieved}, goal.width, goal.height,
+                         context.folder.path("preview/goal_vs_simulated.png"));
+    std::vector<double> centre_heights;
+    for (size_t k = 0; k < network_.size(); ++k)
+      centre_heights.push_back(plane(k).surface_height(0.5 * facet_mm_[0], 0.5 * facet_mm_[1]));
+    write_height_map(centre_heights, facets_[0], facets_[1], context.folder.path("preview/height_map.png"));
+    context.result["files"] = {
+        {"previews", {"preview/convergence.png", "preview/goal_vs_simulated.png", "preview/height_map.png"}},
+        {"surface", "print/surface.stl"}};
+    write_stl(slab, context.folder.path("print/surface.stl"));
+    write_tree_outputs(*tree_, outputs_, context);
+  }
+
+  static TypeDoc doc() {
+    TypeDoc doc{
+        "Facet caustics (paper Fig. 9 left, after Papas et al. 2011): a clear slab over the solid's "
+        "footprint whose top is a grid of planar facets (Column -> Plane), each a micro-lens sending "
+        "its light to one of as many equal-flux Gaussian kernels of the goal image. Annealing swaps "
+        "kernels between neighbouring facets' tuners for a smoother surface (phase \"assign\"), then "
+        "every facet's tuner aims its plane (facet_beam simulator, squared_distance, phase \"aim\"); "
+        "offsets are stitched by least squares. Writes the faceted slab, walls included, as "
+        "print/surface.stl besides the voxel outputs; result.json reports RMSE and SSIM of the "
+        "traced surface, of the kernels themselves, and the roughness the swaps removed.",
+        {{"goal.facets", "[nx, ny]", "[45, 45]", "facets (and kernels)"},
+         {"goal.min_height_mm", "number (mm)", "1/4 of the solid's height", "lowest a facet may go"},
+         {"goal.start_height_mm", "number (mm)", "3/4 of the solid's height", "facets' mean height"},
+         {"goal.max_slope", "number", "1", "steepest facet (|dh/dx|, |dh/dy|)"},
+         {"goal.kernel_iterations", "integer", "20", "EM iterations refining the kernels"},
+         {"goal.assignment_sweeps", "integer", "200", "serial sweeps of the swap phase (0: no swaps)"},
+         {"swap_optimizer", "optimizer", "annealing, 10 swaps per run, 2000 over the sweeps, T 1 -> 0.001 mm^2",
+          "the swap phase's optimizer (each tuner's own copy)"},
+         {"optimizer", "optimizer", "nlopt LN_BOBYQA, 200 evaluations", "each facet's aiming optimizer"}},
+        R"({"translator": "facet_caustics", "goal": {"image": "ring.png", "facets": [45, 45]}})"};
+    for (PropertyDoc& d : caustic_goal_docs()) doc.properties.push_back(std::move(d));
+    for (PropertyDoc& d : TreeOutputOptions::docs()) doc.properties.push_back(std::move(d));
+    return doc;
+  }
+
+ private:
+  struct StitchReport {
+    double rms_step_mm = 0, max_step_mm = 0;
+    int lowered = 0;
+  };
+
+  const ImageObservation& target() const { return static_cast<const ImageObservation&>(image_goal_->target()); }
+  size_t facet_index(int i, int j) const { return static_cast<size_t>(i) + static_cast<size_t>(facets_[0]) * static_cast<size_t>(j); }
+  Eigen::Vector2d facet_centre(int i, int j) const {
+    return {bounds_.lower.x() + (i + 0.5) * facet_mm_[0], bounds_.lower.y() + (j + 0.5) * facet_mm_[1]};
+  }
+  const HeightSurface& plane(size_t k) const { return dynamic_cast<const HeightSurface&>(tree_->root().child(k)); }
+
+  /// The kernel tuner t aims at (its effective target, which swaps exchange).
+  static Eigen::Vector2d kernel(TunerNetwork& network, size_t t) {
+    const auto target = network.tuner(t).effective_target().values();
+    return {target[0], target[1]};
+  }
+
+  double roughness(TunerNetwork& network) const {
+    double sum = 0;
+    for (size_t t = 0; t < network.size(); ++t)
+      for (size_t n : network.neighbours(t))
+        if (n > t) sum += pair_roughness(t, kernel(network, t), n, kernel(network, n));
+    return sum;
+  }
+
+  /// |d_t − d_n|², d the deflection each facet's kernel asks for.
+  double pair_roughness(size_t t, const Eigen::Vector2d& kernel_t, size_t n, const Eigen::Vector2d& kernel_n) const {
+    return ((kernel_t - centres_[t]) - (kernel_n - centres_[n])).squaredNorm();
+  }
+
+  /// Change of roughness if tuners a and b exchanged kernels: only pairs
+  /// touching a or b change.
+  double swap_delta(TunerNetwork& network, size_t a, size_t b) const {
+    const Eigen::Vector2d ka = kernel(network, a), kb = kernel(network, b);
+    const auto swapped = [&](size_t t) { return t == a ? kb : t == b ? ka : kernel(network, t); };
+    double delta = 0;
+    for (const size_t t : {a, b})
+      for (size_t n : network.neighbours(t)) {
+        if (t == b && n == a) continue;  // the pair (a, b) once
+        delta += pair_roughness(t, swapped(t), n, swapped(n)) - pair_roughness(t, kernel(network, t), n, kernel(network, n));
+      }
+    return delta;
+  }
+
+  /// Offsets so that neighbouring facets meet with the least squared steps
+  /// at their shared corners (slopes as aimed), a faint pull to the start
+  /// height fixing the free constant; then shifted so the lowest corner sits
+  /// at min_height, and facets poking above the top lowered into the slab.
+  StitchReport stitch_offsets() {
+    const size_t n = network_.size();
+    std::vector<std::array<double, 4>> shape(n);  // corner heights above the plane's offset
+    std::vector<Parameter*> offsets(n);
+    for (size_t k = 0; k < n; ++k) {
+      tree_->root().child(k).visit_parameters([&](const std::string& name, Parameter& p) {
+        if (name == "offset_mm") offsets[k] = &p;
+      });
+      const auto corners = corner_heights(k);
+      for (int c = 0; c < 4; ++c) shape[k][static_cast<size_t>(c)] = corners[static_cast<size_t>(c)] - offsets[k]->value();
+    }
+    std::vector<Eigen::Triplet<double>> entries;
+    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(n));
+    const double pull = 1e-6;
+    const double start = bounds_.lower.z() + start_mm_;
+    // Corner c of facet k meets corner d of its neighbour m: (o_k + s_kc) − (o_m + s_md).
+    const auto seam = [&](size_t k, size_t m, int c, int d) {
+      const double gap = shape[k][static_cast<size_t>(c)] - shape[m][static_cast<size_t>(d)];
+      const auto ik = static_cast<int>(k), im = static_cast<int>(m);
+      entries.emplace_back(ik, ik, 1.0);
+      entries.emplace_back(im, im, 1.0);
+      entries.emplace_back(ik, im, -1.0);
+      entries.emplace_back(im, ik, -1.0);
+      rhs[ik] -= gap;
+      rhs[im] += gap;
+    };
+    for (int j = 0; j < facets_[1]; ++j)
+      for (int i = 0; i < facets_[0]; ++i) {
+        const size_t k = facet_index(i, j);
+        if (i + 1 < facets_[0]) seam(k, facet_index(i + 1, j), 1, 0), seam(k, facet_index(i + 1, j), 2, 3);
+        if (j + 1 < facets_[1]) seam(k, facet_index(i, j + 1), 3, 0), seam(k, facet_index(i, j + 1), 2, 1);
+        entries.emplace_back(static_cast<int>(k), static_cast<int>(k), pull);
+        rhs[static_cast<Eigen::Index>(k)] += pull * start;
+      }
+    Eigen::SparseMatrix<double> normal(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
+    normal.setFromTriplets(entries.begin(), entries.end());
+    const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(normal);
+    Eigen::VectorXd solved = solver.solve(rhs);
+    if (solver.info() != Eigen::Success || !solved.allFinite()) throw std::runtime_error("facet caustics: offset stitching failed");
+    double lowest = HUGE_VAL;
+    for (size_t k = 0; k < n; ++k)
+      for (double s : shape[k]) lowest = std::min(lowest, solved[static_cast<Eigen::Index>(k)] + s);
+    StitchReport report;
+    const double floor = bounds_.lower.z() + low_mm_, top = bounds_.upper.z();
+    for (size_t k = 0; k < n; ++k) {
+      double o = solved[static_cast<Eigen::Index>(k)] + floor - lowest;
+      const double highest = o + *std::max_element(shape[k].begin(), shape[k].end());
+      if (highest > top) {
+        o -= highest - top;
+        ++report.lowered;
+      }
+      offsets[k]->set(o);
+    }
+    tree_->evaluate();
+    double sum = 0;
+    long long count = 0;
+    for (int j = 0; j < facets_[1]; ++j)
+      for (int i = 0; i < facets_[0]; ++i) {
+        const auto h = corner_heights(facet_index(i, j));
+        const auto step = [&](double a, double b) {
+          sum += (a - b) * (a - b);
+          ++count;
+          report.max_step_mm = std::max(report.max_step_mm, std::abs(a - b));
+        };
+        if (i + 1 < facets_[0]) {
+          const auto e = corner_heights(facet_index(i + 1, j));
+          step(h[1], e[0]), step(h[2], e[3]);
+        }
+        if (j + 1 < facets_[1]) {
+          const auto u = corner_heights(facet_index(i, j + 1));
+          step(h[3], u[0]), step(h[2], u[1]);
+        }
+      }
+    report.rms_step_mm = count > 0 ? std::sqrt(sum / static_cast<double>(count)) : 0.0;
+    return report;
+  }
+
+  /// Facet k's world heights at its corners (x0, y0), (x1, y0), (x1, y1), (x0, y1).
+  std::array<double, 4> corner_heights(size_t k) const {
+    const HeightSurface& p = plane(k);
+    const double a = facet_mm_[0], b = facet_mm_[1];
+    return {p.surface_height(0, 0), p.surface_height(a, 0), p.surface_height(a, b), p.surface_height(0, b)};
+  }
+
+  /// The faceted slab as it stands, traced; `mesh` (when given) receives it
+  /// in world coordinates.
+  std::vector<double> trace_surface(Mesh* mesh) const {
+    std::vector<std::array<double, 4>> heights(network_.size());
+    for (size_t k = 0; k < heights.size(); ++k) {
+      heights[k] = corner_heights(k);
+      for (double& h : heights[k]) h -= bounds_.lower.z();
+    }
+    Mesh slab = faceted_slab_mesh(setup_, facets_[0], facets_[1], heights);
+    std::vector<double> image(static_cast<size_t>(image_[0]) * static_cast<size_t>(image_[1]));
+    CausticTracer tracer(setup_, slab.vertices, slab.triangles);
+    tracer.render(image);
+    if (mesh != nullptr) {
+      const Eigen::Vector3d offset = slab_offset(setup_, bounds_.lower);
+      for (Vec3& v : slab.vertices) v += offset;
+      *mesh = std::move(slab);
+    }
+    return image;
+  }
+
+  /// How well the planes reached their kernels: RMS and largest miss (mm).
+  nlohmann::json aim_report() {
+    double sum = 0, worst = 0;
+    for (size_t t = 0; t < network_.size(); ++t) {
+      Tuner& tuner = network_.tuner(t);
+      const double e = tuner.error();
+      sum += e;
+      worst = std::max(worst, std::sqrt(e));
+    }
+    return {{"rms_miss_mm", std::sqrt(sum / static_cast<double>(network_.size()))}, {"max_miss_mm", worst}};
+  }
+
+  Bounds bounds_;
+  std::array<int, 2> facets_{45, 45}, image_{240, 240};
+  std::array<double, 2> facet_mm_{1, 1}, receiver_{50, 50};
+  double low_mm_ = 2, start_mm_ = 6, max_slope_ = 1, distance_mm_ = 200, eta_ = 1.5;
+  int sweeps_ = 200;
+  std::string material_, aim_label_;
+  CausticSetup setup_;
+  ReceiverRaster raster_;
+  std::unique_ptr<Goal> image_goal_;
+  std::vector<GaussianKernel> kernels_;
+  std::vector<Eigen::Vector2d> centres_;
+  nlohmann::json swap_optimizer_;
+  std::shared_ptr<NeighbourSwaps> swaps_;
+  std::unique_ptr<ReducerTree> tree_;
+  TreeOutputOptions outputs_;
+  TunerNetwork network_;
+  Schedule schedule_;
+};
+
+}  // namespace
+}  // namespace spec2fab
+
+SPEC2FAB_REGISTER(spec2fab::TranslatorRegistry, spec2fab::FacetCausticsTranslator, "facet_caustics")
