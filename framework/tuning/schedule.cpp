@@ -62,6 +62,8 @@ void ErrorDiffusion::after_tune(TunerNetwork& network, size_t t, const std::vect
 
 void NeighbourSwaps::begin_sweep(TunerNetwork& network, const std::vector<size_t>& tuners) {
   if (energy_) energies_.push_back(energy_(network));
+  if (installed_) return;  // the moves stay for the whole phase
+  installed_ = true;
   std::vector<bool> in_phase(network.size(), false);
   for (size_t t : tuners) in_phase[t] = true;
   for (size_t t : tuners) {
@@ -80,6 +82,7 @@ void NeighbourSwaps::begin_sweep(TunerNetwork& network, const std::vector<size_t
 void NeighbourSwaps::end_phase(TunerNetwork& network, const std::vector<size_t>& tuners) {
   if (energy_) energies_.push_back(energy_(network));
   for (size_t t : tuners) network.tuner(t).set_neighbour_moves(std::nullopt);
+  installed_ = false;
 }
 
 Schedule& Schedule::add(Phase phase) {

@@ -90,6 +90,7 @@ class NeighbourSwaps final : public Coupling {
   Delta delta_;
   Energy energy_;
   std::vector<double> energies_;
+  bool installed_ = false;
 };
 
 struct Phase {

@@ -66,12 +66,12 @@ class Tuner::TunerProblem final : public Problem {
   }
   double swap_delta(std::span<const double> x, int k) override {
     if (!tuner_.moves_) return Problem::swap_delta(x, k);
-    tuner_.error_at(x);
+    tuner_.set_values(x);  // the energy reads states, not simulations
     return tuner_.moves_->delta(static_cast<size_t>(k));
   }
   std::vector<double> commit_swap(std::span<const double> x, int k) override {
     if (!tuner_.moves_) return Problem::commit_swap(x, k);
-    tuner_.error_at(x);
+    tuner_.set_values(x);
     tuner_.exchange_state(*tuner_.moves_->neighbours[static_cast<size_t>(k)]);
     return tuner_.space_.values();
   }
@@ -116,13 +116,17 @@ double Tuner::error() {
   return metric_->error(*simulated_, *effective_target_);
 }
 
-double Tuner::error_at(std::span<const double> x) {
+void Tuner::set_values(std::span<const double> x) {
   const auto& entries = space_.entries();
   for (size_t i = 0; i < x.size(); ++i) {
     // Optimizers often move one coordinate; snapping an unchanged one is wasted work.
     if (Parameter& p = *entries[i].parameter; x[i] != p.value()) p.set(x[i]);
   }
   evaluate_subtree(*node_);
+}
+
+double Tuner::error_at(std::span<const double> x) {
+  set_values(x);
   return error();
 }
 

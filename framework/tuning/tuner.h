@@ -41,6 +41,9 @@ class Tuner {
   double error();
   /// The same at parameter values x (leaves them set).
   double error_at(std::span<const double> x);
+  /// Sets the free parameters to x and refreshes the subtree, simulating
+  /// nothing (simulated() is then stale until the next error()).
+  void set_values(std::span<const double> x);
   /// The same with ∂error/∂x (simulator and metric both differentiable;
   /// problem() then has Capability::gradient).
   double error_and_gradient_at(std::span<const double> x, std::span<double> gradient);

@@ -45,15 +45,11 @@ class FacetBeamSimulator final : public SimulatorFor<VectorObservation> {
     return out;
   }
 
-  void setup(const ReducerNode& subtree) override {
-    const auto* surface = dynamic_cast<const HeightSurface*>(&subtree);
-    if (surface == nullptr || surface->height_axis() != 2)
-      throw InputError("facet_beam: the tuned subtree must be a Plane or B-spline cutting along w (a facet)");
-  }
+  void setup(const ReducerNode& subtree) override { surface_of(subtree); }
 
   using SimulatorFor::simulate;
   void simulate(const ReducerNode& subtree, VectorObservation& out) override {
-    const auto& surface = dynamic_cast<const HeightSurface&>(subtree);
+    const HeightSurface& surface = surface_of(subtree);
     // The facet's plane through three points around its centre, in the
     // column's frame (a, b from its corner); world xy for the tracer.
     const Eigen::Vector2d centre = 0.5 * size_;
@@ -88,6 +84,21 @@ class FacetBeamSimulator final : public SimulatorFor<VectorObservation> {
   }
 
  private:
+  // The subtree as a height surface; the cast is remembered, since the swap
+  // phase simulates millions of times.
+  const HeightSurface& surface_of(const ReducerNode& subtree) {
+    if (&subtree != node_) {
+      const auto* surface = dynamic_cast<const HeightSurface*>(&subtree);
+      if (surface == nullptr || surface->height_axis() != 2)
+        throw InputError("facet_beam: the tuned subtree must be a Plane or B-spline cutting along w (a facet)");
+      node_ = &subtree;
+      surface_ = surface;
+    }
+    return *surface_;
+  }
+
+  const ReducerNode* node_ = nullptr;
+  const HeightSurface* surface_ = nullptr;
   Eigen::Vector2d size_, origin_;
   double bottom_ = 0, eta_ = 1.5, distance_ = 100;
   Eigen::Vector3d light_{0, 0, -1};

@@ -34,7 +34,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
-#include "caustic_previews.h"
+#include "caustic_translation.h"
 #include "caustics/caustic_parts.h"
 #include "caustics/gaussian_kernels.h"
 #include "core/distance.h"
@@ -54,13 +54,11 @@ class FacetCausticsTranslator final : public Translator {
   FacetCausticsTranslator(const Properties& root, const Experiment& experiment) {
     const Properties goal = experiment.goal();
     const MaterialPalette& palette = experiment.palette();
-    bounds_ = experiment.solid().bounds();
-    const Vec3 size = bounds_.size();
+    settings_ = CausticGoalSettings::read(goal, experiment);
+    const Vec3 size = settings_.slab.size();
     facets_ = goal.get<std::array<int, 2>>("facets", {45, 45});
     if (facets_[0] < 1 || facets_[1] < 1 || facets_[0] * facets_[1] > 250'000)
       goal.fail("facets", "expected [nx, ny], at least 1 each and at most 250,000 facets");
-    material_ = goal.get<std::string>("material", "VeroClear");
-    palette.id(material_, goal.where("material"));
     low_mm_ = goal.get_in_range("min_height_mm", 0.25 * size.z(), 1e-3, size.z());
     start_mm_ = goal.get_in_range("start_height_mm", 0.75 * size.z(), low_mm_, size.z());
     max_slope_ = goal.get_in_range("max_slope", 1.0, 1e-3, 10.0);
@@ -69,53 +67,37 @@ class FacetCausticsTranslator final : public Translator {
       goal.fail("max_slope", fmt::format("a facet {:.3g} x {:.3g} mm at slope {:g} rises more than the {:.3g} mm "
                                          "between min_height_mm and the top",
                                          facet_mm_[0], facet_mm_[1], max_slope_, size.z() - low_mm_));
-    image_ = goal.get<std::array<int, 2>>("image_size", {240, 240});
-    receiver_ = goal.get<std::array<double, 2>>("receiver_mm", {size.x(), size.y()});
-    distance_mm_ = goal.get_in_range("distance_mm", 200, 1e-3, 1e6);
-    eta_ = goal.get_in_range("refractive_index", 1.5, 1.0, 4.0);
-    const auto rays = goal.get<std::array<int, 2>>("rays", {2 * image_[0], 2 * image_[1]});
     const int kernel_iterations = static_cast<int>(goal.get_in_range("kernel_iterations", 20, 0, 1000));
     sweeps_ = static_cast<int>(goal.get_in_range("assignment_sweeps", 200, 0, 1e6));
-
-    setup_.width_mm = size.x();
-    setup_.depth_mm = size.y();
-    setup_.refractive_index = eta_;
-    setup_.receiver_distance_mm = distance_mm_;
-    setup_.receiver_width_mm = receiver_[0];
-    setup_.receiver_depth_mm = receiver_[1];
-    setup_.image_width = image_[0];
-    setup_.image_height = image_[1];
-    setup_.rays_x = rays[0];
-    setup_.rays_y = rays[1];
+    // The caustics simulator's slab and light (the top's vertex grid unused:
+    // the faceted slab is meshed exactly).
+    setup_ = CausticSlabConfig::read(
+                 Properties::wrap(settings_.simulator({2, 2}), experiment.file().string() + " (simulator)"))
+                 .setup;
     setup_.validate();
 
-    // The goal as irradiance (the caustic_image goal: grey, linear, carrying
-    // the light the footprint lets through), then as kernels.
-    const nlohmann::json goal_part = {{"type", "caustic_image"},
-                                      {"image", goal.existing_file("image").string()},
-                                      {"size", image_},
-                                      {"receiver_mm", receiver_},
-                                      {"flux_mm2", size.x() * size.y()}};
+    // The goal as irradiance, then as kernels.
     image_goal_ = GoalRegistry::instance().create(
-        Properties::wrap(goal_part, experiment.file().string() + " (goal image)"), "goal", PartContext{palette});
-    raster_.width = image_[0];
-    raster_.height = image_[1];
-    raster_.size_mm = {receiver_[0], receiver_[1]};
-    raster_.centre_mm = bounds_.center().head<2>();
+        Properties::wrap(settings_.image_goal(), experiment.file().string() + " (goal image)"), "goal",
+        PartContext{palette});
+    raster_.width = settings_.image[0];
+    raster_.height = settings_.image[1];
+    raster_.size_mm = {settings_.receiver_mm[0], settings_.receiver_mm[1]};
+    raster_.centre_mm = slab().center().head<2>();
     kernels_ = fit_equal_mass_kernels(target().pixels, raster_, facets_[0], facets_[1], kernel_iterations);
 
     const nlohmann::json slope = {{"value", 0.0}, {"min", -max_slope_}, {"max", max_slope_}};
     const nlohmann::json tree = {
         {"type", "column"},
         {"count", facets_},
-        {"domain", {bounds_.lower.x(), bounds_.lower.y(), bounds_.upper.x(), bounds_.upper.y()}},
+        {"domain", {slab().lower.x(), slab().lower.y(), slab().upper.x(), slab().upper.y()}},
         {"child",
          {{"type", "plane"},
           {"axis", "z"},
-          {"offset_mm", bounds_.lower.z() + start_mm_},
+          {"offset_mm", slab().lower.z() + start_mm_},
           {"slope_a", slope},
           {"slope_b", slope},
-          {"below", {{"type", "layered"}, {"material", material_}}},
+          {"below", {{"type", "layered"}, {"material", settings_.material}}},
           {"above", {{"type", "layered"}, {"material", "void"}}}}}};
     tree_ = std::make_unique<ReducerTree>(
         Properties::wrap(tree, experiment.file().string() + " (facet caustics tree)"), palette);
@@ -125,12 +107,13 @@ class FacetCausticsTranslator final : public Translator {
     const nlohmann::json aim = experiment.optimizer_or(
         {{"type", "nlopt"}, {"algorithm", "LN_BOBYQA"}, {"max_evaluations", 200}, {"xtol_rel", 1e-10}});
     // Built once here so that a malformed one is reported before the run.
+    nlohmann::json swap_optimizer;
     if (root.has("swap_optimizer")) {
       const Properties swap = root.object("swap_optimizer");
       build_optimizer(swap);
-      swap_optimizer_ = swap.value();
+      swap_optimizer = swap.value();
     } else {
-      swap_optimizer_ = {{"type", "annealing"},      {"iterations", 10},           {"schedule_iterations", 2000},
+      swap_optimizer = {{"type", "annealing"},      {"iterations", 10},           {"schedule_iterations", 2000},
                          {"swap_probability", 1.0}, {"initial_temperature", 1.0}, {"cooling", 0.9966}};
     }
     for (int j = 0; j < facets_[1]; ++j) {
@@ -141,10 +124,10 @@ class FacetCausticsTranslator final : public Translator {
             {"simulator",
              {{"type", "facet_beam"},
               {"facet_mm", facet_mm_},
-              {"facet_origin_mm", {bounds_.lower.x() + i * facet_mm_[0], bounds_.lower.y() + j * facet_mm_[1]}},
-              {"bottom_mm", bounds_.lower.z()},
-              {"refractive_index", eta_},
-              {"distance_mm", distance_mm_}}},
+              {"facet_origin_mm", {slab().lower.x() + i * facet_mm_[0], slab().lower.y() + j * facet_mm_[1]}},
+              {"bottom_mm", slab().lower.z()},
+              {"refractive_index", settings_.refractive_index},
+              {"distance_mm", settings_.distance_mm}}},
             {"metric", {{"type", "squared_distance"}}},
             {"goal", {{"type", "values"}, {"values", {kernels_[k].centre_mm.x(), kernels_[k].centre_mm.y()}}}},
             {"optimizer", aim}};
@@ -163,14 +146,14 @@ class FacetCausticsTranslator final : public Translator {
     assign.name = "assign";
     assign.sweeps = sweeps_;
     assign.coupling = swaps_;
-    assign.optimizer = swap_optimizer_;
+    assign.optimizer = swap_optimizer;
     assign.record_every_sweep = false;
     Phase orient;
     orient.name = "aim";
     orient.mode = Phase::Mode::parallel;
     if (sweeps_ > 0) schedule_.add(std::move(assign));
     schedule_.add(std::move(orient));
-    aim_label_ = aim.value("type", "optimizer") + (aim.contains("algorithm") ? " " + aim["algorithm"].get<std::string>() : "");
+    aim_label_ = optimizer_label(aim);
   }
 
   std::string summary() const override {
@@ -179,8 +162,9 @@ class FacetCausticsTranslator final : public Translator {
         "equal-flux Gaussian kernels; annealing swaps kernels between neighbouring facets for a "
         "smooth surface ({} sweeps), then each facet's tuner (facet_beam, squared_distance, {}) "
         "aims its plane; light cast {} mm below on a {:g} x {:g} mm receiver ({} x {} px)",
-        material_, facets_[0], facets_[1], facet_mm_[0], facet_mm_[1], kernels_.size(), sweeps_, aim_label_,
-        distance_mm_, receiver_[0], receiver_[1], image_[0], image_[1]);
+        settings_.material, facets_[0], facets_[1], facet_mm_[0], facet_mm_[1], kernels_.size(), sweeps_,
+        aim_label_, settings_.distance_mm, settings_.receiver_mm[0], settings_.receiver_mm[1], settings_.image[0],
+        settings_.image[1]);
   }
 
   const ReducerTree& tree() const override { return *tree_; }
@@ -193,7 +177,6 @@ class FacetCausticsTranslator final : public Translator {
 
     const RunRecord record = schedule_.run(network_, context.seed);
     const StitchReport stitch = stitch_offsets();
-    tree_->evaluate();
 
     Mesh slab;
     const std::vector<double> achieved = trace_surface(&slab);
@@ -206,9 +189,9 @@ class FacetCausticsTranslator final : public Translator {
     report["kernels"]["count"] = kernels_.size();
     report["facets"] = facets_;
     report["facet_mm"] = facet_mm_;
-    report["image_size"] = image_;
-    report["receiver_mm"] = receiver_;
-    report["distance_mm"] = distance_mm_;
+    report["image_size"] = settings_.image;
+    report["receiver_mm"] = settings_.receiver_mm;
+    report["distance_mm"] = settings_.distance_mm;
     report["assignment"] = {{"sweeps", sweeps_},
                             {"roughness_mm2_start", energy_start},
                             {"roughness_mm2_final", roughness(network_)},
@@ -253,7 +236,7 @@ class FacetCausticsTranslator final : public Translator {
           "the swap phase's optimizer (each tuner's own copy)"},
          {"optimizer", "optimizer", "nlopt LN_BOBYQA, 200 evaluations", "each facet's aiming optimizer"}},
         R"({"translator": "facet_caustics", "goal": {"image": "ring.png", "facets": [45, 45]}})"};
-    for (PropertyDoc& d : caustic_goal_docs()) doc.properties.push_back(std::move(d));
+    for (PropertyDoc& d : CausticGoalSettings::docs()) doc.properties.push_back(std::move(d));
     for (PropertyDoc& d : TreeOutputOptions::docs()) doc.properties.push_back(std::move(d));
     return doc;
   }
@@ -264,10 +247,11 @@ class FacetCausticsTranslator final : public Translator {
     int lowered = 0;
   };
 
+  const Bounds& slab() const { return settings_.slab; }
   const ImageObservation& target() const { return static_cast<const ImageObservation&>(image_goal_->target()); }
   size_t facet_index(int i, int j) const { return static_cast<size_t>(i) + static_cast<size_t>(facets_[0]) * static_cast<size_t>(j); }
   Eigen::Vector2d facet_centre(int i, int j) const {
-    return {bounds_.lower.x() + (i + 0.5) * facet_mm_[0], bounds_.lower.y() + (j + 0.5) * facet_mm_[1]};
+    return {slab().lower.x() + (i + 0.5) * facet_mm_[0], slab().lower.y() + (j + 0.5) * facet_mm_[1]};
   }
   const HeightSurface& plane(size_t k) const { return dynamic_cast<const HeightSurface&>(tree_->root().child(k)); }
 
@@ -304,6 +288,19 @@ class FacetCausticsTranslator final : public Translator {
     return delta;
   }
 
+  /// visit(k, m, c, d) for every shared corner: corner c of facet k meets
+  /// corner d of its east or north neighbour m (corners numbered as in
+  /// corner_heights).
+  template <class Visit>
+  void for_each_seam(Visit&& visit) const {
+    for (int j = 0; j < facets_[1]; ++j)
+      for (int i = 0; i < facets_[0]; ++i) {
+        const size_t k = facet_index(i, j);
+        if (i + 1 < facets_[0]) visit(k, facet_index(i + 1, j), 1, 0), visit(k, facet_index(i + 1, j), 2, 3);
+        if (j + 1 < facets_[1]) visit(k, facet_index(i, j + 1), 3, 0), visit(k, facet_index(i, j + 1), 2, 1);
+      }
+  }
+
   /// Offsets so that neighbouring facets meet with the least squared steps
   /// at their shared corners (slopes as aimed), a faint pull to the start
   /// height fixing the free constant; then shifted so the lowest corner sits
@@ -322,9 +319,9 @@ class FacetCausticsTranslator final : public Translator {
     std::vector<Eigen::Triplet<double>> entries;
     Eigen::VectorXd rhs = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(n));
     const double pull = 1e-6;
-    const double start = bounds_.lower.z() + start_mm_;
-    // Corner c of facet k meets corner d of its neighbour m: (o_k + s_kc) − (o_m + s_md).
-    const auto seam = [&](size_t k, size_t m, int c, int d) {
+    const double start = slab().lower.z() + start_mm_;
+    // Each seam's step (o_k + s_kc) − (o_m + s_md) in the least squares.
+    for_each_seam([&](size_t k, size_t m, int c, int d) {
       const double gap = shape[k][static_cast<size_t>(c)] - shape[m][static_cast<size_t>(d)];
       const auto ik = static_cast<int>(k), im = static_cast<int>(m);
       entries.emplace_back(ik, ik, 1.0);
@@ -333,15 +330,11 @@ class FacetCausticsTranslator final : public Translator {
       entries.emplace_back(im, ik, -1.0);
       rhs[ik] -= gap;
       rhs[im] += gap;
-    };
-    for (int j = 0; j < facets_[1]; ++j)
-      for (int i = 0; i < facets_[0]; ++i) {
-        const size_t k = facet_index(i, j);
-        if (i + 1 < facets_[0]) seam(k, facet_index(i + 1, j), 1, 0), seam(k, facet_index(i + 1, j), 2, 3);
-        if (j + 1 < facets_[1]) seam(k, facet_index(i, j + 1), 3, 0), seam(k, facet_index(i, j + 1), 2, 1);
-        entries.emplace_back(static_cast<int>(k), static_cast<int>(k), pull);
-        rhs[static_cast<Eigen::Index>(k)] += pull * start;
-      }
+    });
+    for (size_t k = 0; k < n; ++k) {
+      entries.emplace_back(static_cast<int>(k), static_cast<int>(k), pull);
+      rhs[static_cast<Eigen::Index>(k)] += pull * start;
+    }
     Eigen::SparseMatrix<double> normal(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
     normal.setFromTriplets(entries.begin(), entries.end());
     const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(normal);
@@ -351,7 +344,7 @@ class FacetCausticsTranslator final : public Translator {
     for (size_t k = 0; k < n; ++k)
       for (double s : shape[k]) lowest = std::min(lowest, solved[static_cast<Eigen::Index>(k)] + s);
     StitchReport report;
-    const double floor = bounds_.lower.z() + low_mm_, top = bounds_.upper.z();
+    const double floor = slab().lower.z() + low_mm_, top = slab().upper.z();
     for (size_t k = 0; k < n; ++k) {
       double o = solved[static_cast<Eigen::Index>(k)] + floor - lowest;
       const double highest = o + *std::max_element(shape[k].begin(), shape[k].end());
@@ -362,25 +355,16 @@ class FacetCausticsTranslator final : public Translator {
       offsets[k]->set(o);
     }
     tree_->evaluate();
+    std::vector<std::array<double, 4>> corners(n);
+    for (size_t k = 0; k < n; ++k) corners[k] = corner_heights(k);
     double sum = 0;
     long long count = 0;
-    for (int j = 0; j < facets_[1]; ++j)
-      for (int i = 0; i < facets_[0]; ++i) {
-        const auto h = corner_heights(facet_index(i, j));
-        const auto step = [&](double a, double b) {
-          sum += (a - b) * (a - b);
-          ++count;
-          report.max_step_mm = std::max(report.max_step_mm, std::abs(a - b));
-        };
-        if (i + 1 < facets_[0]) {
-          const auto e = corner_heights(facet_index(i + 1, j));
-          step(h[1], e[0]), step(h[2], e[3]);
-        }
-        if (j + 1 < facets_[1]) {
-          const auto u = corner_heights(facet_index(i, j + 1));
-          step(h[3], u[0]), step(h[2], u[1]);
-        }
-      }
+    for_each_seam([&](size_t k, size_t m, int c, int d) {
+      const double step = std::abs(corners[k][static_cast<size_t>(c)] - corners[m][static_cast<size_t>(d)]);
+      sum += step * step;
+      ++count;
+      report.max_step_mm = std::max(report.max_step_mm, step);
+    });
     report.rms_step_mm = count > 0 ? std::sqrt(sum / static_cast<double>(count)) : 0.0;
     return report;
   }
@@ -398,16 +382,16 @@ class FacetCausticsTranslator final : public Translator {
     std::vector<std::array<double, 4>> heights(network_.size());
     for (size_t k = 0; k < heights.size(); ++k) {
       heights[k] = corner_heights(k);
-      for (double& h : heights[k]) h -= bounds_.lower.z();
+      for (double& h : heights[k]) h -= slab().lower.z();
     }
-    Mesh slab = faceted_slab_mesh(setup_, facets_[0], facets_[1], heights);
-    std::vector<double> image(static_cast<size_t>(image_[0]) * static_cast<size_t>(image_[1]));
-    CausticTracer tracer(setup_, slab.vertices, slab.triangles);
+    Mesh faceted = faceted_slab_mesh(setup_, facets_[0], facets_[1], heights);
+    std::vector<double> image(static_cast<size_t>(setup_.image_width) * static_cast<size_t>(setup_.image_height));
+    CausticTracer tracer(setup_, faceted.vertices, faceted.triangles);
     tracer.render(image);
     if (mesh != nullptr) {
-      const Eigen::Vector3d offset = slab_offset(setup_, bounds_.lower);
-      for (Vec3& v : slab.vertices) v += offset;
-      *mesh = std::move(slab);
+      const Eigen::Vector3d offset = slab_offset(setup_, slab().lower);
+      for (Vec3& v : faceted.vertices) v += offset;
+      *mesh = std::move(faceted);
     }
     return image;
   }
@@ -424,18 +408,17 @@ class FacetCausticsTranslator final : public Translator {
     return {{"rms_miss_mm", std::sqrt(sum / static_cast<double>(network_.size()))}, {"max_miss_mm", worst}};
   }
 
-  Bounds bounds_;
-  std::array<int, 2> facets_{45, 45}, image_{240, 240};
-  std::array<double, 2> facet_mm_{1, 1}, receiver_{50, 50};
-  double low_mm_ = 2, start_mm_ = 6, max_slope_ = 1, distance_mm_ = 200, eta_ = 1.5;
+  std::array<int, 2> facets_{45, 45};
+  std::array<double, 2> facet_mm_{1, 1};
+  double low_mm_ = 2, start_mm_ = 6, max_slope_ = 1;
   int sweeps_ = 200;
-  std::string material_, aim_label_;
+  std::string aim_label_;
+  CausticGoalSettings settings_;
   CausticSetup setup_;
   ReceiverRaster raster_;
   std::unique_ptr<Goal> image_goal_;
   std::vector<GaussianKernel> kernels_;
   std::vector<Eigen::Vector2d> centres_;
-  nlohmann::json swap_optimizer_;
   std::shared_ptr<NeighbourSwaps> swaps_;
   std::unique_ptr<ReducerTree> tree_;
   TreeOutputOptions outputs_;

@@ -15,7 +15,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
-#include "caustic_previews.h"
+#include "caustic_translation.h"
 #include "caustics/caustic_parts.h"
 #include "core/distance.h"
 #include "fabrication/material_surfaces.h"
@@ -40,17 +40,11 @@ class SmoothCausticsTranslator final : public Translator {
     control_ = goal.get<std::array<int, 2>>("control", {60, 60});
     if (control_[0] < 2 || control_[1] < 2 || control_[0] * control_[1] > 1'000'000)
       goal.fail("control", "expected [na, nb], at least 2 each");
-    material_ = goal.get<std::string>("material", "VeroClear");
-    palette.id(material_, goal.where("material"));
+    settings_ = CausticGoalSettings::read(goal, experiment);
     const double low = goal.get_in_range("min_height_mm", 0.25 * size.z(), 1e-3, size.z());
     const double start = goal.get_in_range("start_height_mm", 0.75 * size.z(), low, size.z());
-    image_ = goal.get<std::array<int, 2>>("image_size", {240, 240});
-    receiver_ = goal.get<std::array<double, 2>>("receiver_mm", {size.x(), size.y()});
-    distance_mm_ = goal.get_in_range("distance_mm", 200, 1e-3, 1e6);
     const int per_span = static_cast<int>(goal.get_in_range("vertices_per_span", 3, 1, 16));
     const std::array<int, 2> vertices{per_span * (control_[0] - 1) + 1, per_span * (control_[1] - 1) + 1};
-    const auto rays = goal.get<std::array<int, 2>>("rays", {2 * image_[0], 2 * image_[1]});
-    const double eta = goal.get_in_range("refractive_index", 1.5, 1.0, 4.0);
 
     const nlohmann::json tree = {
         {"type", "bspline"},
@@ -58,35 +52,20 @@ class SmoothCausticsTranslator final : public Translator {
         {"control", control_},
         {"heights_mm", {{"value", bounds.lower.z() + start}, {"min", bounds.lower.z() + low}, {"max", bounds.upper.z()}}},
         {"domain", {bounds.lower.x(), bounds.lower.y(), bounds.upper.x(), bounds.upper.y()}},
-        {"below", {{"type", "layered"}, {"material", material_}}},
+        {"below", {{"type", "layered"}, {"material", settings_.material}}},
         {"above", {{"type", "layered"}, {"material", "void"}}}};
     tree_ = std::make_unique<ReducerTree>(
         Properties::wrap(tree, experiment.file().string() + " (smooth caustics tree)"), palette);
     tree_->bind(experiment.solid(), experiment.geometry_spec().field_voxel_mm);
     outputs_ = TreeOutputOptions::read(goal, experiment, *tree_);
 
-    const nlohmann::json simulator = {
-        {"type", "caustics"},
-        {"size_mm", {size.x(), size.y()}},
-        {"origin_mm", {bounds.lower.x(), bounds.lower.y(), bounds.lower.z()}},
-        {"thickness_mm", size.z()},
-        {"vertices", vertices},
-        {"refractive_index", eta},
-        {"distance_mm", distance_mm_},
-        {"receiver_mm", receiver_},
-        {"image", image_},
-        {"rays", rays}};
+    const nlohmann::json simulator = settings_.simulator(vertices);
     slab_ = CausticSlabConfig::read(Properties::wrap(simulator, experiment.file().string() + " (simulator)"));
-    const nlohmann::json goal_part = {{"type", "caustic_image"},
-                                      {"image", goal.existing_file("image").string()},
-                                      {"size", image_},
-                                      {"receiver_mm", receiver_},
-                                      {"flux_mm2", size.x() * size.y()}};
     const nlohmann::json optimizer =
         experiment.optimizer_or({{"type", "nlopt"}, {"algorithm", "LD_LBFGS"}, {"max_evaluations", 1000}});
     const nlohmann::json parts = {{"simulator", simulator},
                                   {"metric", {{"type", "image_mse"}}},
-                                  {"goal", goal_part},
+                                  {"goal", settings_.image_goal()},
                                   {"optimizer", optimizer}};
     // Other optimizers run from the same flat start before the main one, for
     // the comparison the paper's SPSA invites (preview/optimizer_comparison.png).
@@ -113,7 +92,8 @@ class SmoothCausticsTranslator final : public Translator {
         "smooth caustics: a {} slab, top a {} x {} B-spline; collimated light casts the goal "
         "image {} mm below on a {:g} x {:g} mm receiver ({} x {} px); one tuner (caustics, "
         "image_mse, {}{})",
-        material_, control_[0], control_[1], distance_mm_, receiver_[0], receiver_[1], image_[0], image_[1],
+        settings_.material, control_[0], control_[1], settings_.distance_mm, settings_.receiver_mm[0],
+        settings_.receiver_mm[1], settings_.image[0], settings_.image[1],
         main_label_, compared);
   }
 
@@ -144,9 +124,9 @@ class SmoothCausticsTranslator final : public Translator {
     report["initial_rmse"] = at_start["rmse"];
     report["initial_ssim"] = at_start["ssim"];
     report["control"] = control_;
-    report["image_size"] = image_;
-    report["receiver_mm"] = receiver_;
-    report["distance_mm"] = distance_mm_;
+    report["image_size"] = settings_.image;
+    report["receiver_mm"] = settings_.receiver_mm;
+    report["distance_mm"] = settings_.distance_mm;
     context.result["caustics"] = report;
     write_tuning_outputs(record, network_, context);
     if (!compared.empty()) report_comparison(record.runs.front().summary, compared, context);
@@ -178,20 +158,12 @@ class SmoothCausticsTranslator final : public Translator {
          {"compare_optimizers", "array of optimizers", "none",
           "also run each from the same start first; reports and plots them against the main one"}},
         R"({"translator": "smooth_caustics", "goal": {"image": "ring.png", "distance_mm": 200}})"};
-    for (PropertyDoc& d : caustic_goal_docs()) doc.properties.push_back(std::move(d));
+    for (PropertyDoc& d : CausticGoalSettings::docs()) doc.properties.push_back(std::move(d));
     for (PropertyDoc& d : TreeOutputOptions::docs()) doc.properties.push_back(std::move(d));
     return doc;
   }
 
  private:
-  /// "nlopt LD_LBFGS", "spsa": the optimizer's type and, for the adapters, algorithm.
-  static std::string optimizer_label(const nlohmann::json& optimizer) {
-    std::string label = optimizer.value("type", "optimizer");
-    if (optimizer.contains("algorithm") && optimizer["algorithm"].is_string())
-      label += " " + optimizer["algorithm"].get<std::string>();
-    return label;
-  }
-
   /// print/surface.stl: the tuned slab as one smooth closed mesh — the
   /// simulator's own triangles — for printers that take a surface (the
   /// per-material STLs come from print voxels, whose 27 µm terraces would
@@ -243,10 +215,8 @@ class SmoothCausticsTranslator final : public Translator {
     write_optimizer_comparison_plot(runs, context.folder.path("preview/optimizer_comparison.png"));
   }
 
-  std::array<int, 2> control_{60, 60}, image_{240, 240};
-  std::array<double, 2> receiver_{50, 50};
-  double distance_mm_ = 200;
-  std::string material_;
+  std::array<int, 2> control_{60, 60};
+  CausticGoalSettings settings_;
   std::string main_label_;
   CausticSlabConfig slab_;
   std::vector<std::pair<std::string, std::unique_ptr<Optimizer>>> compared_;

@@ -1,4 +1,4 @@
-#include "caustic_previews.h"
+#include "caustic_translation.h"
 
 #include <algorithm>
 #include <cmath>
@@ -11,10 +11,27 @@
 #include "caustics/caustic_parts.h"
 #include "core/colour.h"
 #include "core/distance.h"
+#include "core/properties.h"
+#include "spec/experiment.h"
 
 namespace spec2fab {
 
-std::vector<PropertyDoc> caustic_goal_docs() {
+CausticGoalSettings CausticGoalSettings::read(const Properties& goal, const Experiment& experiment) {
+  CausticGoalSettings s;
+  s.slab = experiment.solid().bounds();
+  const Vec3 size = s.slab.size();
+  s.image_file = goal.existing_file("image");
+  s.material = goal.get<std::string>("material", s.material);
+  experiment.palette().id(s.material, goal.where("material"));
+  s.image = goal.get<std::array<int, 2>>("image_size", s.image);
+  s.receiver_mm = goal.get<std::array<double, 2>>("receiver_mm", {size.x(), size.y()});
+  s.distance_mm = goal.get_in_range("distance_mm", s.distance_mm, 1e-3, 1e6);
+  s.rays = goal.get<std::array<int, 2>>("rays", {2 * s.image[0], 2 * s.image[1]});
+  s.refractive_index = goal.get_in_range("refractive_index", s.refractive_index, 1.0, 4.0);
+  return s;
+}
+
+std::vector<PropertyDoc> CausticGoalSettings::docs() {
   return {{"goal.image", "file", "required", "the picture to cast (grey levels)"},
           {"goal.material", "material", "VeroClear", "the slab's material"},
           {"goal.distance_mm", "number (mm)", "200", "receiver below the slab's bottom"},
@@ -22,6 +39,37 @@ std::vector<PropertyDoc> caustic_goal_docs() {
           {"goal.image_size", "[width, height]", "[240, 240]", "simulated image"},
           {"goal.rays", "[nx, ny]", "2 x image_size", "stratified rays"},
           {"goal.refractive_index", "number", "1.5", "of the slab's material"}};
+}
+
+nlohmann::json CausticGoalSettings::simulator(std::array<int, 2> vertices) const {
+  const Vec3 size = slab.size();
+  return {{"type", "caustics"},
+          {"size_mm", {size.x(), size.y()}},
+          {"origin_mm", {slab.lower.x(), slab.lower.y(), slab.lower.z()}},
+          {"thickness_mm", size.z()},
+          {"vertices", vertices},
+          {"refractive_index", refractive_index},
+          {"distance_mm", distance_mm},
+          {"receiver_mm", receiver_mm},
+          {"image", image},
+          {"rays", rays}};
+}
+
+nlohmann::json CausticGoalSettings::image_goal() const {
+  return {{"type", "caustic_image"},
+          {"image", image_file.string()},
+          {"size", image},
+          {"receiver_mm", receiver_mm},
+          {"flux_mm2", slab.size().x() * slab.size().y()}};
+}
+
+std::string optimizer_label(const nlohmann::json& optimizer) {
+  std::string label = optimizer.value("type", "optimizer");
+  if (optimizer.contains("algorithm") && optimizer["algorithm"].is_string()) {
+    label += ' ';
+    label += optimizer["algorithm"].get_ref<const std::string&>();
+  }
+  return label;
 }
 
 void write_caustic_panels(const std::vector<std::span<const double>>& images, int width, int height,

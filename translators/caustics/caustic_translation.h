@@ -1,0 +1,60 @@
+#pragma once
+/// What both caustic translators share: the goal keys that describe the
+/// slab, light and receiver (read, documented, turned into the caustics
+/// simulator's and the caustic_image goal's properties), and the pictures
+/// and figures they report.
+
+#include <array>
+#include <filesystem>
+#include <string>
+#include <span>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/registry.h"
+#include "geometry/mesh.h"
+#include "tuning/observation.h"
+
+namespace spec2fab {
+
+class Experiment;
+class Properties;
+
+/// The goal keys both read: image, material, distance, receiver, image size,
+/// rays, refractive index. The slab is the solid's bounding box; the
+/// receiver is centred below it.
+struct CausticGoalSettings {
+  std::filesystem::path image_file;
+  std::string material = "VeroClear";
+  std::array<int, 2> image{240, 240}, rays{480, 480};
+  std::array<double, 2> receiver_mm{50, 50};
+  double distance_mm = 200, refractive_index = 1.5;
+  Bounds slab;
+
+  static CausticGoalSettings read(const Properties& goal, const Experiment& experiment);
+  static std::vector<PropertyDoc> docs();
+  /// The "caustics" simulator's properties for this slab, its top meshed
+  /// with `vertices`.
+  nlohmann::json simulator(std::array<int, 2> vertices) const;
+  /// The "caustic_image" goal: the picture carrying the light the slab's
+  /// footprint lets through.
+  nlohmann::json image_goal() const;
+};
+
+/// "nlopt LD_LBFGS", "spsa": an optimizer's type and, for the adapters, algorithm.
+std::string optimizer_label(const nlohmann::json& optimizer);
+
+/// Images side by side (each width × height, row 0 at +y), all on the
+/// first's scale (its peak white), sRGB grey: goal | … | simulated.
+void write_caustic_panels(const std::vector<std::span<const double>>& images, int width, int height,
+                          const std::filesystem::path& file);
+
+/// A height field's relief above its lowest point as a colour map (blue low,
+/// yellow high), nx × ny values row by row from the lowest y, scaled up.
+void write_height_map(std::span<const double> heights, int nx, int ny, const std::filesystem::path& file);
+
+/// {"rmse", "relative_rmse", "ssim"} of an image against the goal.
+nlohmann::json caustic_image_errors(std::span<const double> image, const ImageObservation& goal);
+
+}  // namespace spec2fab
