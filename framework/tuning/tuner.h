@@ -81,6 +81,9 @@ class Tuner {
   const Observation& simulated() const { return *simulated_; }
   Observation& effective_target() { return *effective_target_; }
   const Goal& goal() const { return *goal_; }
+  /// The simulator, for state an earlier phase hands it (a caustic tuner
+  /// learns the texture a first phase printed over its exit face).
+  Simulator& simulator() { return *simulator_; }
   Optimizer& optimizer() { return *optimizer_; }
   /// Puts `optimizer` in place of the tuner's own and returns the one it had
   /// (a schedule phase may tune with another optimizer; Phase::optimizer).

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <unordered_map>
 
 #include <Eigen/SparseCore>
@@ -64,6 +65,7 @@ class CausticSimulator final : public SimulatorFor<ImageObservation> {
   }
 
   const CausticTracer& tracer() const { return *tracer_; }
+  CausticTracer& tracer() { return *tracer_; }
   const CausticFlux& last_flux() const { return flux_; }
 
   static TypeDoc doc() {
@@ -165,6 +167,15 @@ class CausticSimulator final : public SimulatorFor<ImageObservation> {
 };
 
 }  // namespace
+
+void set_caustic_exit_transmittance(Simulator& simulator, std::array<int, 2> cells,
+                                    std::vector<double> transmittance) {
+  auto* caustics = dynamic_cast<CausticSimulator*>(&simulator);
+  if (caustics == nullptr)
+    throw std::invalid_argument("set_caustic_exit_transmittance: '" + simulator.name() + "' is not the caustics simulator");
+  caustics->tracer().set_exit_transmittance(cells, std::move(transmittance));
+}
+
 }  // namespace spec2fab
 
 SPEC2FAB_REGISTER(spec2fab::SimulatorRegistry, spec2fab::CausticSimulator, "caustics")

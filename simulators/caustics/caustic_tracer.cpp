@@ -56,6 +56,13 @@ void CausticSetup::validate() const {
   if (rays_x < 1 || rays_y < 1 || static_cast<long long>(rays_x) * rays_y > 256'000'000)
     fail("rays must be 1 to 256 million");
   if (max_segments < 2 || max_segments > 1000) fail("max_segments must be in [2, 1000]");
+  if (!exit_transmittance.empty() || exit_cells[0] != 0 || exit_cells[1] != 0) {
+    if (exit_cells[0] < 1 || exit_cells[1] < 1 ||
+        exit_transmittance.size() != static_cast<size_t>(exit_cells[0]) * static_cast<size_t>(exit_cells[1]))
+      fail("the exit transmittance needs one value per cell of its grid");
+    for (double t : exit_transmittance)
+      if (!(t >= 0 && t <= 1)) fail("exit transmittances must lie in [0, 1]");
+  }
 }
 
 struct CausticTracer::Scene {
@@ -215,7 +222,7 @@ void CausticTracer::trace_block(int begin, int end) {
       const int ray = first + k;
       origin[k] = ray_origin(ray);
       direction[k] = s.light_direction;
-      results_[static_cast<size_t>(ray)] = RayResult{0, 0, power, 0, kLost};
+      results_[static_cast<size_t>(ray)] = RayResult{.power = power, .fate = kLost};
       active[k] = k;
     }
     int in_flight = count;
@@ -287,11 +294,34 @@ void CausticTracer::trace_block(int begin, int end) {
           d = ratio * d + (ratio * cos_i - cos_t) * normal;
         }
         d.normalize();
+        // Leaving through the flat bottom: the exit filter takes its share.
+        if (!entering && !s.exit_transmittance.empty() && outward.z() < -0.5 && std::abs(o.z()) < epsilon) {
+          const double kept = exit_transmittance_at(o.x(), o.y());
+          result.absorbed += (1 - kept) * result.power;
+          result.power *= kept;
+        }
         active[still++] = k;
       }
       in_flight = still;
     }
   }
+}
+
+void CausticTracer::set_exit_transmittance(std::array<int, 2> cells, std::vector<double> transmittance) {
+  CausticSetup changed = setup_;
+  changed.exit_cells = cells;
+  changed.exit_transmittance = std::move(transmittance);
+  changed.validate();
+  setup_ = std::move(changed);
+}
+
+double CausticTracer::exit_transmittance_at(double x, double y) const {
+  const CausticSetup& s = setup_;
+  const auto cell = [](double t, double extent, int count) {
+    return std::clamp(static_cast<int>(std::floor((t / extent + 0.5) * count)), 0, count - 1);
+  };
+  const int i = cell(x, s.width_mm, s.exit_cells[0]), j = cell(y, s.depth_mm, s.exit_cells[1]);
+  return s.exit_transmittance[static_cast<size_t>(j) * static_cast<size_t>(s.exit_cells[0]) + static_cast<size_t>(i)];
 }
 
 double CausticTracer::pixels_per_mm2() const {
@@ -335,8 +365,9 @@ CausticFlux CausticTracer::render(std::span<double> irradiance) {
   const double per_area = pixels_per_mm2();
   CausticFlux flux;
   for (const RayResult& ray : results_) {
-    flux.emitted += ray.power + ray.reflected;
+    flux.emitted += ray.power + ray.reflected + ray.absorbed;
     flux.reflected += ray.reflected;
+    flux.absorbed += ray.absorbed;
     if (ray.fate == kReturned) {
       flux.returned += ray.power;
       continue;

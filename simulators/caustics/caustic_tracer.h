@@ -14,6 +14,7 @@
 /// by a hash of the cell index: the same heights give the same image, bit for
 /// bit, for any thread count (rays are traced in parallel, splatted in order).
 
+#include <array>
 #include <memory>
 #include <span>
 #include <vector>
@@ -36,6 +37,12 @@ struct CausticSetup {
   unsigned seed = 1;
   bool fresnel = false;            ///< weight transmissions by unpolarised Fresnel
   int max_segments = 16;           ///< segments traced per ray before it counts as lost
+  /// A filter printed on the flat bottom face (a texture): light leaving the
+  /// slab there keeps this fraction of its power, per cell of an
+  /// exit_cells[0] × exit_cells[1] grid over the footprint (row by row from
+  /// the lowest y, x fastest). Empty: nothing absorbs.
+  std::vector<double> exit_transmittance;
+  std::array<int, 2> exit_cells{0, 0};
 
   /// Throws InputError naming the first inconsistent field.
   void validate() const;
@@ -48,6 +55,7 @@ struct CausticFlux {
   double missed = 0;       ///< reached the receiver plane outside the image
   double returned = 0;     ///< left the slab travelling away from the receiver (e.g. TIR back out)
   double reflected = 0;    ///< Fresnel reflections, when enabled
+  double absorbed = 0;     ///< taken by the exit filter (CausticSetup::exit_transmittance)
   double lost = 0;         ///< still bouncing after max_segments
 };
 
@@ -100,6 +108,10 @@ class CausticTracer {
   /// Lateral position of top vertex (i, j), i along x.
   Eigen::Vector2d vertex_xy(int i, int j) const;
 
+  /// Replaces the exit filter (CausticSetup::exit_transmittance); validated
+  /// as the setup is.
+  void set_exit_transmittance(std::array<int, 2> cells, std::vector<double> transmittance);
+
   /// Heights (mm, > 0) of the top vertices, row by row (x fastest).
   void set_heights(std::span<const double> heights_mm);
   std::span<const double> heights() const { return heights_; }
@@ -124,11 +136,13 @@ class CausticTracer {
  private:
   struct Scene;
   struct RayResult {
-    double x = 0, y = 0, power = 0, reflected = 0;
+    double x = 0, y = 0, power = 0, reflected = 0, absorbed = 0;
     int fate = 0;
     int entry = -1;  ///< top triangle entered, when the path was top → bottom → receiver
   };
   Eigen::Vector3d ray_origin(int ray) const;
+  /// The exit filter's transmittance where a ray leaves the bottom at (x, y).
+  double exit_transmittance_at(double x, double y) const;
   /// Traces rays [begin, end) together: each segment of all rays still in
   /// flight is one coherent Embree stream query.
   void trace_block(int begin, int end);

@@ -573,6 +573,70 @@ TEST_F(Cli, FacetCausticsAimsEveryFacetAtItsKernelAndReportsImageErrors) {
   EXPECT_EQ(tree["type"], "column");
 }
 
+TEST_F(Cli, CausticsTextureTunesTheTextureThenTheBottomFaceThroughItsShadow) {
+  std::ofstream(dir_ / "ink_printer.json") << R"({"name": "coarse-inks", "technology": "polyjet",
+      "resolution_dpi": [63.5, 63.5], "layer_mm": 0.4, "build_volume_mm": [200, 200, 200],
+      "model_materials": ["VeroClear", "VeroCyan", "VeroWhitePlus"], "source": "test"})";
+  const auto run = [&](const std::string& name, bool compensate) {
+    const std::string body =
+        R"({"name": ")" + name + R"(", "translator": "caustics_texture",
+            "geometry": {"mesh": ")" + (kDatasets / "meshes/board_60x60x8.stl").string() + R"(", "uv": "planar"},
+            "goal": {"image": ")" + (kDatasets / "images/caustic_ring_120.png").string() + R"(",
+                     "texture": ")" + (kDatasets / "images/texture_s2f_64.png").string() + R"(",
+                     "texture_columns": [8, 8], "inks": ["VeroCyan", "VeroWhitePlus"], "layer_step_mm": 0.1,
+                     "max_ink_mm": [0.1, 0.3], "control": [6, 6], "image_size": [48, 48], "rays": [96, 96],
+                     "distance_mm": 60, "min_thickness_mm": 2, "start_thickness_mm": 6,
+                     "compensate_texture": )" + (compensate ? "true" : "false") + R"(},
+            "optimizer": {"type": "nlopt", "algorithm": "LD_LBFGS", "max_evaluations": 15},
+            "output": {"slices": false, "stl": false, "3mf": false, "render": false},
+            "materials": ")" + (kDatasets / "materials/polyjet.json").string() + R"(",
+            "printer": ")" + (dir_ / "ink_printer.json").string() + R"("})";
+    const Result r = spec2fab("run -q " + experiment(name, body).string() + " --out " + (dir_ / name).string());
+    EXPECT_EQ(r.code, 0) << r.out;
+    return r.code == 0 ? nlohmann::json::parse(read(dir_ / name / "result.json")) : nlohmann::json::object();
+  };
+  const auto result = run("window", true);
+  ASSERT_TRUE(result.contains("caustics"));
+  const auto& texture = result["texture"];
+  const auto& caustics = result["caustics"];
+  // Two phases: one run per texture column, then one for the bottom face.
+  ASSERT_EQ(result["tuning"]["phases"].size(), 2u);
+  EXPECT_EQ(result["tuning"]["phases"][0]["name"], "texture");
+  EXPECT_EQ(result["tuning"]["phases"][0]["tuner_runs"], 64);
+  EXPECT_EQ(result["tuning"]["phases"][1]["tuner_runs"], 1);
+  EXPECT_NEAR(texture["thickness_mm"].get<double>(), 0.4, 1e-12);
+  // The picture has clear ground and white letters: the texture's shadow varies.
+  EXPECT_LT(texture["transmittance"]["min"].get<double>(), 0.8 * texture["transmittance"]["max"].get<double>());
+  EXPECT_GT(texture["delta_e00"]["mean"].get<double>(), 0.0);
+  // The caustic phase tuned against what the print casts: the reported
+  // error of the cast image is the tuner's own final error (exit filter
+  // installed, goal scaled to the light the texture lets through).
+  const double final_mse = result["tuning"]["phases"][1]["sum_final_error"].get<double>();
+  EXPECT_NEAR(std::pow(caustics["rmse"].get<double>(), 2), final_mse, 1e-9 * final_mse);
+  EXPECT_LT(caustics["rmse"].get<double>(), 0.95 * caustics["initial_rmse"].get<double>());
+  // Ignoring the texture, the tuner's error is not that of the cast image.
+  const auto ignoring = run("ignoring", false);
+  ASSERT_TRUE(ignoring.contains("caustics"));
+  const double ignoring_mse = ignoring["tuning"]["phases"][1]["sum_final_error"].get<double>();
+  EXPECT_GT(std::abs(std::pow(ignoring["caustics"]["rmse"].get<double>(), 2) - ignoring_mse), 1e-3 * ignoring_mse);
+  EXPECT_EQ(ignoring["caustics"]["initial_rmse"], caustics["initial_rmse"]);
+  // surface.stl: the clear slab in print coordinates — flat top at the
+  // board's top (z = 8), shaped bottom no thinner than 2 mm — and traced
+  // back through the texture it casts the simulated image.
+  const auto& stl = caustics["surface_stl"];
+  EXPECT_NEAR(stl["z_range_mm"][1].get<double>(), 8.0, 1e-9);
+  EXPECT_GE(stl["z_range_mm"][0].get<double>(), -1e-9);
+  EXPECT_LE(stl["z_range_mm"][0].get<double>(), 6.0 + 1e-9);
+  EXPECT_LT(stl["traced_relative_rmse_vs_simulated"].get<double>(), 1e-3);
+  for (const char* file : {"preview/goal_vs_simulated.png", "preview/height_map.png", "preview/convergence.png",
+                           "preview/texture.png", "print/surface.stl"})
+    EXPECT_TRUE(fs::exists(dir_ / "window" / file)) << file;
+  const auto tree = nlohmann::json::parse(read(dir_ / "window" / "tree.json"));
+  EXPECT_EQ(tree["type"], "plane");
+  EXPECT_EQ(tree["above"]["type"], "column");
+  EXPECT_EQ(tree["below"]["type"], "bspline");
+}
+
 TEST_F(Cli, SubsurfaceChessboardTunesEveryColumnAndReportsProfileErrors) {
   const std::string body =
       R"({"name": "board", "translator": "subsurface",

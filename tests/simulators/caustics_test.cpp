@@ -42,7 +42,9 @@ double total(const std::vector<double>& image, const CausticSetup& s) {
   return std::accumulate(image.begin(), image.end(), 0.0) * pixel_area;
 }
 
-double accounted(const CausticFlux& f) { return f.received + f.missed + f.returned + f.reflected + f.lost; }
+double accounted(const CausticFlux& f) {
+  return f.received + f.missed + f.returned + f.reflected + f.absorbed + f.lost;
+}
 
 CausticSetup flat_setup() {
   CausticSetup s;
@@ -128,6 +130,35 @@ TEST(CausticTracer, FresnelTransmissionAtNormalIncidence) {
   EXPECT_NEAR(flux.emitted, 400.0, 1e-9);
   EXPECT_NEAR(flux.received / flux.emitted, (1 - r) * (1 - r), 1e-9);
   EXPECT_NEAR(total(image, s), flux.received, 1e-9 * flux.received);
+}
+
+// A filter on the flat exit face (a texture printed there) passes its
+// transmittance: under normal light through a flat slab, each receiver
+// pixel below a cell gets exactly that cell's transmittance, and the
+// absorbed flux is the cells' areas times (1 - T).
+TEST(CausticTracer, ExitFilterPassesEachCellsTransmittance) {
+  CausticSetup s = flat_setup();
+  s.receiver_width_mm = s.receiver_depth_mm = 20;  // the footprint, 40 x 40 px
+  s.image_width = s.image_height = 40;
+  s.jitter = false;
+  s.exit_cells = {2, 1};
+  s.exit_transmittance = {0.25, 0.8};  // left half (x < 0), right half
+  CausticTracer tracer(s);
+  tracer.set_heights(std::vector<double>(tracer.heights().size(), 3.0));
+  std::vector<double> image(static_cast<size_t>(s.image_width * s.image_height));
+  const CausticFlux flux = tracer.render(image);
+  EXPECT_NEAR(flux.absorbed, 200.0 * 0.75 + 200.0 * 0.2, 1e-9);
+  EXPECT_NEAR(accounted(flux), flux.emitted, 1e-9 * flux.emitted);
+  // Away from the receiver's border and the cells' seam (bilinear splats).
+  for (int row = 2; row < 38; ++row) {
+    EXPECT_NEAR(image[static_cast<size_t>(row * 40 + 5)], 0.25, 1e-9);
+    EXPECT_NEAR(image[static_cast<size_t>(row * 40 + 34)], 0.8, 1e-9);
+  }
+  // Without the filter nothing is absorbed; a malformed filter is refused.
+  tracer.set_exit_transmittance({0, 0}, {});
+  EXPECT_EQ(tracer.render(image).absorbed, 0.0);
+  EXPECT_THROW(tracer.set_exit_transmittance({2, 2}, {1, 1, 1}), InputError);
+  EXPECT_THROW(tracer.set_exit_transmittance({1, 1}, {1.5}), InputError);
 }
 
 // Spot size (RMS radius about the centroid) on a receiver at `distance`.

@@ -11,12 +11,10 @@
 #include <cmath>
 
 #include <fmt/format.h>
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 #include <spdlog/spdlog.h>
 
 #include "core/colour.h"
+#include "texture_goal.h"
 #include "reducer/reducer_tree.h"
 #include "spec/surface_columns.h"
 #include "spec/translator.h"
@@ -26,99 +24,6 @@
 
 namespace spec2fab {
 namespace {
-
-/// Linear RGB pixels of a goal image, resampled to the column grid by area.
-struct GoalImage {
-  int width = 0, height = 0;
-  std::vector<Rgb> pixels;  ///< row-major, row 0 at v = 0
-};
-
-GoalImage load_goal_image(const Properties& goal, std::array<int, 2>& columns) {
-  const std::filesystem::path file = goal.existing_file("image");
-  cv::Mat image = cv::imread(file.string(), cv::IMREAD_COLOR);
-  if (image.empty()) goal.fail("image", "cannot read image " + file.string());
-  if (columns[0] == 0) columns = {image.cols, image.rows};
-  cv::Mat resized;
-  cv::resize(image, resized, cv::Size(columns[0], columns[1]), 0, 0, cv::INTER_AREA);
-  GoalImage out{columns[0], columns[1], {}};
-  out.pixels.reserve(static_cast<size_t>(columns[0]) * static_cast<size_t>(columns[1]));
-  for (int y = 0; y < resized.rows; ++y) {
-    for (int x = 0; x < resized.cols; ++x) {
-      const cv::Vec3b bgr = resized.at<cv::Vec3b>(y, x);
-      out.pixels.push_back({srgb_to_linear(bgr[2] / 255.0), srgb_to_linear(bgr[1] / 255.0),
-                            srgb_to_linear(bgr[0] / 255.0)});
-    }
-  }
-  return out;
-}
-
-/// Mean ΔE00 between two images after a Gaussian low-pass in linear RGB (what
-/// the eye sees from a distance: the measure error diffusion improves).
-double low_pass_delta_e(const GoalImage& goal, const std::vector<Rgb>& achieved, double sigma) {
-  auto to_mat = [&](const std::vector<Rgb>& pixels) {
-    cv::Mat m(goal.height, goal.width, CV_64FC3);
-    for (int y = 0; y < goal.height; ++y) {
-      for (int x = 0; x < goal.width; ++x) {
-        const Rgb& p = pixels[static_cast<size_t>(y * goal.width + x)];
-        m.at<cv::Vec3d>(y, x) = cv::Vec3d(p[0], p[1], p[2]);
-      }
-    }
-    cv::Mat blurred;
-    cv::GaussianBlur(m, blurred, cv::Size(0, 0), sigma, sigma, cv::BORDER_REFLECT);
-    return blurred;
-  };
-  const cv::Mat a = to_mat(goal.pixels), b = to_mat(achieved);
-  double sum = 0;
-  for (int y = 0; y < goal.height; ++y) {
-    for (int x = 0; x < goal.width; ++x) {
-      const cv::Vec3d p = a.at<cv::Vec3d>(y, x), q = b.at<cv::Vec3d>(y, x);
-      sum += ciede2000(linear_rgb_to_lab({p[0], p[1], p[2]}), linear_rgb_to_lab({q[0], q[1], q[2]}));
-    }
-  }
-  return sum / static_cast<double>(goal.pixels.size());
-}
-
-/// The point of the convex hull of `gamut` closest to `target` (linear RGB),
-/// by Frank–Wolfe iterations with exact line search. Error diffusion can
-/// only reproduce, on average, colours inside this hull (mixtures of
-/// printable stacks); a goal colour outside it would wind residuals up.
-Rgb project_onto_hull(const std::vector<Rgb>& gamut, const Rgb& target) {
-  auto dot = [](const Rgb& a, const Rgb& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; };
-  auto sub = [](const Rgb& a, const Rgb& b) { return Rgb{a[0] - b[0], a[1] - b[1], a[2] - b[2]}; };
-  Rgb x = gamut.front();
-  for (const Rgb& c : gamut) {
-    if (dot(sub(c, target), sub(c, target)) < dot(sub(x, target), sub(x, target))) x = c;
-  }
-  for (int iteration = 0; iteration < 500; ++iteration) {
-    const Rgb gradient = sub(x, target);
-    const Rgb* best = &gamut.front();
-    double lowest = dot(gradient, *best);
-    for (const Rgb& c : gamut) {
-      const double value = dot(gradient, c);
-      if (value < lowest) lowest = value, best = &c;
-    }
-    const Rgb direction = sub(*best, x);
-    const double gap = -dot(gradient, direction);
-    if (gap < 1e-12) break;
-    const double step = std::min(1.0, gap / std::max(dot(direction, direction), 1e-300));
-    for (int c = 0; c < 3; ++c) x[c] += step * direction[c];
-  }
-  return x;
-}
-
-nlohmann::json delta_e_statistics(const std::vector<Rgb>& goal, const std::vector<Rgb>& achieved) {
-  std::vector<double> d;
-  for (size_t i = 0; i < goal.size(); ++i) {
-    d.push_back(ciede2000(linear_rgb_to_lab(goal[i]), linear_rgb_to_lab(achieved[i])));
-  }
-  std::vector<double> sorted = d;
-  std::sort(sorted.begin(), sorted.end());
-  double mean = 0;
-  for (double x : d) mean += x;
-  mean /= static_cast<double>(std::max<size_t>(d.size(), 1));
-  const auto p95 = sorted[static_cast<size_t>(std::ceil(0.95 * static_cast<double>(sorted.size()))) - 1];
-  return {{"mean", mean}, {"p95", p95}, {"max", sorted.back()}};
-}
 
 class AlbedoTranslator final : public Translator {
  public:
@@ -130,7 +35,7 @@ class AlbedoTranslator final : public Translator {
     if (columns_[0] < 0 || columns_[1] < 0 || (columns_[0] == 0) != (columns_[1] == 0)) {
       goal.fail("columns", "give two positive counts, or leave out for the image's size");
     }
-    image_ = load_goal_image(goal, columns_);
+    image_ = load_goal_image(goal, "image", columns_);
     const std::string backing = goal.get<std::string>("backing", "VeroWhitePlus");
     palette.id(backing, goal.where("backing"));
     std::vector<std::string> inks;
@@ -177,7 +82,7 @@ class AlbedoTranslator final : public Translator {
     for (int j = 0; j < columns_[1]; ++j) {
       for (int i = 0; i < columns_[0]; ++i) {
         const Rgb& pixel = image_.pixels[static_cast<size_t>(j * columns_[0] + i)];
-        Rgb target = gamut_map_ ? gamut_map(pixel) : pixel;
+        Rgb target = gamut_map_ ? gamut_map(gamut_, pixel) : pixel;
         // The goal type accepts [0, 1]; the hull lies inside up to rounding.
         for (double& c : target) c = std::clamp(c, 0.0, 1.0);
         network_.add(make_tuner(i, j, target));
@@ -238,7 +143,8 @@ class AlbedoTranslator final : public Translator {
         {"low_pass_delta_e00", low_pass_delta_e(image_, achieved, low_pass_sigma_)},
         {"low_pass_delta_e00_nearest_only", low_pass_delta_e(image_, nearest, low_pass_sigma_)}};
     write_tuning_outputs(record, network_, context);
-    write_comparison(context.folder.path("preview/goal_vs_achieved.png"), achieved, nearest);
+    write_colour_panels({&image_.pixels, &achieved, &nearest}, columns_[0], columns_[1],
+                        context.folder.path("preview/goal_vs_achieved.png"));
     context.result["files"] = {{"previews", {"preview/convergence.png", "preview/goal_vs_achieved.png"}}};
     write_tree_outputs(*tree_, outputs_, context);
   }
@@ -265,46 +171,6 @@ class AlbedoTranslator final : public Translator {
   }
 
  private:
-  /// Every stack a column can be printed with, simulated (the tuner's search space enumerated).
-  static std::vector<Rgb> printable_colours(Tuner& tuner) {
-    std::vector<Parameter*> axes;
-    long long count = 1;
-    for (const auto& e : tuner.search_space().entries()) {
-      axes.push_back(e.parameter);
-      count *= e.parameter->cardinality();
-    }
-    std::vector<Rgb> out;
-    std::vector<double> x(axes.size());
-    for (long long index = 0; index < count; ++index) {
-      long long rest = index;
-      for (size_t a = 0; a < axes.size(); ++a) {
-        x[a] = axes[a]->admissible(rest % axes[a]->cardinality());
-        rest /= axes[a]->cardinality();
-      }
-      tuner.error_at(x);
-      out.push_back(static_cast<const AlbedoObservation&>(tuner.simulated()).rgb);
-    }
-    return out;
-  }
-
-  /// A goal colour diffusion can reproduce on average: its projection onto the
-  /// hull of the printable colours when that is within ΔE00 1 of it, else the printable colour nearest to it
-  /// in ΔE00 (a projection in linear RGB would turn dark out-of-gamut colours,
-  /// close in RGB, into perceptually distant ones).
-  Rgb gamut_map(const Rgb& pixel) const {
-    const Rgb projected = project_onto_hull(gamut_, pixel);
-    const Lab lab = linear_rgb_to_lab(pixel);
-    // Inside, or outside by no more than 8-bit rounding of the goal image.
-    if (ciede2000(lab, linear_rgb_to_lab(projected)) < 1.0) return projected;
-    const Rgb* best = &gamut_.front();
-    double lowest = ciede2000(lab, linear_rgb_to_lab(*best));
-    for (const Rgb& c : gamut_) {
-      const double d = ciede2000(lab, linear_rgb_to_lab(c));
-      if (d < lowest) lowest = d, best = &c;
-    }
-    return *best;
-  }
-
   std::vector<Rgb> simulated_albedos() {
     std::vector<Rgb> out;
     for (size_t t = 0; t < network_.size(); ++t) {
@@ -313,24 +179,6 @@ class AlbedoTranslator final : public Translator {
       out.push_back(static_cast<const AlbedoObservation&>(tuner.simulated()).rgb);
     }
     return out;
-  }
-
-  void write_comparison(const std::filesystem::path& file, const std::vector<Rgb>& achieved,
-                        const std::vector<Rgb>& nearest) const {
-    const int scale = std::max(1, 256 / std::max(columns_[0], columns_[1]));
-    const int w = columns_[0] * scale, h = columns_[1] * scale, gap = 8;
-    cv::Mat image(h, 3 * w + 2 * gap, CV_8UC3, cv::Scalar(255, 255, 255));
-    const std::vector<Rgb>* panels[] = {&image_.pixels, &achieved, &nearest};
-    for (int p = 0; p < 3; ++p) {
-      for (int y = 0; y < h; ++y) {
-        for (int x = 0; x < w; ++x) {
-          const Rgb& c = (*panels[p])[static_cast<size_t>((y / scale) * columns_[0] + x / scale)];
-          image.at<cv::Vec3b>(y, p * (w + gap) + x) =
-              cv::Vec3b(linear_to_srgb8(c[2]), linear_to_srgb8(c[1]), linear_to_srgb8(c[0]));
-        }
-      }
-    }
-    if (!cv::imwrite(file.string(), image)) throw std::runtime_error("cannot write " + file.string());
   }
 
   std::array<int, 2> columns_{0, 0};

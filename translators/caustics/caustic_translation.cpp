@@ -63,6 +63,18 @@ nlohmann::json CausticGoalSettings::image_goal() const {
           {"flux_mm2", slab.size().x() * slab.size().y()}};
 }
 
+nlohmann::json CausticGoalSettings::image_report(std::span<const double> achieved, std::span<const double> initial,
+                                                 const ImageObservation& goal) const {
+  nlohmann::json report = caustic_image_errors(achieved, goal);
+  const nlohmann::json at_start = caustic_image_errors(initial, goal);
+  report["initial_rmse"] = at_start["rmse"];
+  report["initial_ssim"] = at_start["ssim"];
+  report["image_size"] = image;
+  report["receiver_mm"] = receiver_mm;
+  report["distance_mm"] = distance_mm;
+  return report;
+}
+
 std::string optimizer_label(const nlohmann::json& optimizer) {
   std::string label = optimizer.value("type", "optimizer");
   if (optimizer.contains("algorithm") && optimizer["algorithm"].is_string()) {

@@ -40,6 +40,10 @@ struct CausticGoalSettings {
   /// The "caustic_image" goal: the picture carrying the light the slab's
   /// footprint lets through.
   nlohmann::json image_goal() const;
+  /// result.json "caustics": caustic_image_errors of the achieved image,
+  /// initial_rmse / initial_ssim of the start's, and the receiver's setup.
+  nlohmann::json image_report(std::span<const double> achieved, std::span<const double> initial,
+                              const ImageObservation& goal) const;
 };
 
 /// "nlopt LD_LBFGS", "spsa": an optimizer's type and, for the adapters, algorithm.

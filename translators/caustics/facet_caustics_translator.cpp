@@ -181,17 +181,11 @@ class FacetCausticsTranslator final : public Translator {
     Mesh slab;
     const std::vector<double> achieved = trace_surface(&slab);
     const double energy_start = swaps_->energies().empty() ? roughness(network_) : swaps_->energies().front();
-    nlohmann::json report = caustic_image_errors(achieved, goal);
-    const nlohmann::json at_start = caustic_image_errors(flat, goal);
-    report["initial_rmse"] = at_start["rmse"];
-    report["initial_ssim"] = at_start["ssim"];
+    nlohmann::json report = settings_.image_report(achieved, flat, goal);
     report["kernels"] = caustic_image_errors(kernel_image, goal);
     report["kernels"]["count"] = kernels_.size();
     report["facets"] = facets_;
     report["facet_mm"] = facet_mm_;
-    report["image_size"] = settings_.image;
-    report["receiver_mm"] = settings_.receiver_mm;
-    report["distance_mm"] = settings_.distance_mm;
     report["assignment"] = {{"sweeps", sweeps_},
                             {"roughness_mm2_start", energy_start},
                             {"roughness_mm2_final", roughness(network_)},

@@ -119,14 +119,8 @@ class SmoothCausticsTranslator final : public Translator {
     tree_->evaluate();
     tuner.error();
     const auto& achieved = static_cast<const ImageObservation&>(tuner.simulated());
-    nlohmann::json report = caustic_image_errors(achieved.pixels, target);
-    const nlohmann::json at_start = caustic_image_errors(initial, target);
-    report["initial_rmse"] = at_start["rmse"];
-    report["initial_ssim"] = at_start["ssim"];
+    nlohmann::json report = settings_.image_report(achieved.pixels, initial, target);
     report["control"] = control_;
-    report["image_size"] = settings_.image;
-    report["receiver_mm"] = settings_.receiver_mm;
-    report["distance_mm"] = settings_.distance_mm;
     context.result["caustics"] = report;
     write_tuning_outputs(record, network_, context);
     if (!compared.empty()) report_comparison(record.runs.front().summary, compared, context);
