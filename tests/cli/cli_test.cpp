@@ -607,7 +607,6 @@ TEST_F(Cli, CausticsTextureTunesTheTextureThenTheBottomFaceThroughItsShadow) {
   EXPECT_NEAR(texture["thickness_mm"].get<double>(), 0.4, 1e-12);
   // The picture has clear ground and white letters: the texture's shadow varies.
   EXPECT_LT(texture["transmittance"]["min"].get<double>(), 0.8 * texture["transmittance"]["max"].get<double>());
-  EXPECT_GT(texture["delta_e00"]["mean"].get<double>(), 0.0);
   // The caustic phase tuned against what the print casts: the reported
   // error of the cast image is the tuner's own final error (exit filter
   // installed, goal scaled to the light the texture lets through).
