@@ -20,6 +20,8 @@ int main(int argc, char** argv) {
   save_mesh(make_torus(20.0, 8.0, 64, 24), out / "torus_R20_r8.obj");
   save_mesh(make_box(Vec3(0, 0, 0), Vec3(40, 30, 20), 2), out / "box_40x30x20.stl");
   save_mesh(make_box(Vec3(0, 0, 0), Vec3(60, 60, 8), 2), out / "board_60x60x8.stl");
+  save_mesh(make_box(Vec3(0, 0, 0), Vec3(100, 10, 10), 1), out / "beam_100x10x10.stl");
+  save_mesh(make_box(Vec3(0, 0, 0), Vec3(60, 40, 10), 1), out / "block_60x40x10.stl");
   std::cout << "wrote meshes to " << out.string() << "\n";
   return 0;
 }

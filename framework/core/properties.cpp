@@ -233,6 +233,7 @@ template std::array<double, 3> Properties::get<std::array<double, 3>>(std::strin
 template std::array<double, 4> Properties::get<std::array<double, 4>>(std::string_view) const;
 template std::array<int, 2> Properties::get<std::array<int, 2>>(std::string_view) const;
 template std::array<int, 3> Properties::get<std::array<int, 3>>(std::string_view) const;
+template std::vector<std::array<double, 3>> Properties::get<std::vector<std::array<double, 3>>>(std::string_view) const;
 
 double Properties::get_in_range(std::string_view key, double fallback, double lower,
                                 double upper) const {

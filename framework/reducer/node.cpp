@@ -14,7 +14,17 @@ ReducerNode::ReducerNode(const ReducerNode& other) : role_(other.role_) {
 }
 
 void ReducerNode::bind(const FrameDomain& incoming, BindContext& context) {
-  for (NodePtr& child : children_) child->bind(incoming, context);
+  for (NodePtr& child : children_) child->bind_domain(incoming, context);
+}
+
+LocalFrame frame_along_path(const ReducerNode& root, std::span<const size_t> path,
+                            const QueryPoint& point, LocalFrame frame) {
+  const ReducerNode* node = &root;
+  for (size_t child : path) {
+    frame = static_cast<const GeometryNode&>(*node).frame_in_child(child, point, frame);
+    node = &node->child(child);
+  }
+  return frame;
 }
 
 Parameter read_material_parameter(const Properties& properties, const std::string& key,

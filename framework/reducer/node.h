@@ -67,6 +67,25 @@ class ReducerNode {
   /// Adapts to the shape: takes defaults from the incoming frame's domain,
   /// states what it needs from the solid, and binds its children.
   virtual void bind(const FrameDomain& incoming, BindContext& context);
+  /// What parents call: remembers the incoming domain, then bind().
+  void bind_domain(const FrameDomain& incoming, BindContext& context) {
+    bound_domain_ = incoming;
+    bind(incoming, context);
+  }
+  /// The incoming domain of the last bind (the subtree's extent in its own frame).
+  const FrameDomain& bound_domain() const { return bound_domain_; }
+
+  /// Material interfaces, for meshes that must follow them (FEM): the surfaces
+  /// where this node's own output can change — a geometry node's cuts between
+  /// its children, a material node's boundaries between its layers — as
+  /// level sets of the node's incoming frame (zero on the surface, sign flips
+  /// across it). Any point of the node's region (and a little beyond) may be
+  /// asked; the level should be continuous there.
+  virtual int interface_count() const { return 0; }
+  virtual double interface_level(int /*k*/, const QueryPoint& /*point*/,
+                                 const LocalFrame& /*frame*/) const {
+    return 1.0;
+  }
   /// The node as JSON, in the form build_node reads (parameters at their
   /// current values, materials by name).
   virtual nlohmann::json to_json(const MaterialPalette& palette) const = 0;
@@ -87,6 +106,7 @@ class ReducerNode {
 
  private:
   Role role_;
+  FrameDomain bound_domain_;
 };
 
 class GeometryNode : public ReducerNode {
@@ -97,6 +117,12 @@ class GeometryNode : public ReducerNode {
   };
   /// Which child holds the point, and the point in that child's frame.
   virtual Route route(const QueryPoint& point, const LocalFrame& frame) const = 0;
+  /// The point's frame as child `child` reads it, even where route() would
+  /// pick another child: the child's frame continued across its border, so
+  /// that all corners of a cell lying in that child read one continuous frame
+  /// (meshers evaluate a child's interfaces at such corners).
+  virtual LocalFrame frame_in_child(size_t child, const QueryPoint& point,
+                                    const LocalFrame& frame) const = 0;
 
  protected:
   GeometryNode() : ReducerNode(Role::geometry) {}
@@ -115,6 +141,11 @@ class MaterialNode : public ReducerNode {
 /// The material a subtree assigns to `point`, given in `frame` (the frame the
 /// subtree's root reads): routes through geometry nodes down to a material node.
 MaterialId route_to_material(const ReducerNode& subtree, const QueryPoint& point, LocalFrame frame);
+
+/// The frame that the node at `path` (child indices from `root`) reads at a
+/// point, following that path whatever route() would choose.
+LocalFrame frame_along_path(const ReducerNode& root, std::span<const size_t> path,
+                            const QueryPoint& point, LocalFrame frame);
 
 /// The materials a subtree assigns along its depth axis at lateral position
 /// (a, b) of its own frame: out[i] at depth (i + ½)·step_mm — how the layer

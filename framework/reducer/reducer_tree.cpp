@@ -3,6 +3,9 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include "geometry/surface_field.h"
 
 namespace spec2fab {
@@ -19,7 +22,7 @@ void ReducerTree::bind(const Solid& solid, double field_voxel_mm) {
   FrameDomain world;
   world.kind = FrameDomain::Kind::world;
   world.box = Eigen::AlignedBox3d(solid.bounds().lower, solid.bounds().upper);
-  root_->bind(world, context);
+  root_->bind_domain(world, context);
   evaluate();
   field_ = &solid.field(context.required_band_mm, field_voxel_mm);
 }
@@ -97,6 +100,41 @@ ReducerTree::Query::Query(const ReducerTree& tree)
 MaterialId ReducerTree::Query::material_at(const Vec3& world_mm) {
   QueryPoint point{world_mm, sampler_.sample(world_mm)};
   return tree_.walk(point);
+}
+
+QueryPoint ReducerTree::Query::query_point(const Vec3& world_mm) {
+  return {world_mm, sampler_.sample(world_mm)};
+}
+
+void ReducerTree::materials_at(std::span<const Vec3> world_mm, std::span<MaterialId> out) const {
+  if (out.size() != world_mm.size()) throw std::logic_error("ReducerTree::materials_at: sizes differ");
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, world_mm.size(), 256),
+                    [&](const tbb::blocked_range<size_t>& range) {
+                      Query query(*this);
+                      for (size_t i = range.begin(); i != range.end(); ++i) {
+                        out[i] = query.material_at(world_mm[i]);
+                      }
+                    });
+}
+
+namespace {
+
+bool find_path(const ReducerNode& from, const ReducerNode& target, std::vector<size_t>& path) {
+  if (&from == &target) return true;
+  for (size_t i = 0; i < from.child_count(); ++i) {
+    path.push_back(i);
+    if (find_path(from.child(i), target, path)) return true;
+    path.pop_back();
+  }
+  return false;
+}
+
+}  // namespace
+
+std::vector<size_t> ReducerTree::path_to(const ReducerNode& node) const {
+  std::vector<size_t> path;
+  if (!find_path(*root_, node, path)) throw std::logic_error("ReducerTree::path_to: node not in this tree");
+  return path;
 }
 
 void ReducerTree::Query::material_row(const Vec3& start_mm, const Vec3& step_mm, int count,

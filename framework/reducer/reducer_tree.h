@@ -8,7 +8,9 @@
 /// the root to a material node.
 
 #include <memory>
+#include <span>
 #include <string>
+#include <vector>
 
 #include "core/search_space.h"
 #include "geometry/solid.h"
@@ -50,6 +52,9 @@ class ReducerTree {
    public:
     explicit Query(const ReducerTree& tree);
     MaterialId material_at(const Vec3& world_mm);
+    /// The point with what the solid says about it (inside, depth, uv), as
+    /// every node reads it.
+    QueryPoint query_point(const Vec3& world_mm);
     /// Materials at `count` points start, start + step, ... into `out`.
     void material_row(const Vec3& start_mm, const Vec3& step_mm, int count, MaterialId* out);
 
@@ -57,6 +62,13 @@ class ReducerTree {
     const ReducerTree& tree_;
     SurfaceField::Sampler sampler_;
   };
+
+  /// Materials at many world points through the whole tree, in parallel
+  /// (TBB; results do not depend on the thread count).
+  void materials_at(std::span<const Vec3> world_mm, std::span<MaterialId> out) const;
+
+  /// Child indices from the root to `node` (which must be in this tree).
+  std::vector<size_t> path_to(const ReducerNode& node) const;
 
   /// Convenience single query (creates a Query each call; slow).
   MaterialId material_at(const Vec3& world_mm) const { return Query(*this).material_at(world_mm); }

@@ -68,10 +68,15 @@ struct RadialProfileObservation final : ObservationOf<RadialProfileObservation> 
   std::span<double> values() override { return coefficients; }
 };
 
-/// Node displacements (mm), 3 per node.
+/// Displacements (mm), 3 per point: first `probe_count` probe points (at
+/// the rest positions probe_rest_mm, 3 per probe), then every node of the
+/// simulator's mesh (a goal may hold probes only).
 struct DisplacementsObservation final : ObservationOf<DisplacementsObservation> {
   static constexpr std::string_view kType = "displacements";
   std::vector<double> xyz_mm;
+  int probe_count = 0;
+  std::vector<double> probe_rest_mm;
+  std::span<const double> probes() const { return {xyz_mm.data(), 3 * static_cast<size_t>(probe_count)}; }
   std::span<const double> values() const override { return xyz_mm; }
   std::span<double> values() override { return xyz_mm; }
 };

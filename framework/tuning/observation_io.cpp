@@ -76,13 +76,17 @@ std::vector<std::string> write_observation(const Observation& observation, const
     return {"profile.csv"};
   }
   if (const auto* displacements = dynamic_cast<const DisplacementsObservation*>(&observation)) {
-    std::string csv = "node,x_mm,y_mm,z_mm\n";
+    // Probes first (their rest point), then the mesh's nodes.
+    std::string csv = "point,kind,ux_mm,uy_mm,uz_mm\n";
     for (size_t i = 0; 3 * i + 2 < displacements->xyz_mm.size(); ++i) {
-      csv += fmt::format("{},{:.9g},{:.9g},{:.9g}\n", i, displacements->xyz_mm[3 * i],
+      const bool probe = i < static_cast<size_t>(displacements->probe_count);
+      csv += fmt::format("{},{},{:.9g},{:.9g},{:.9g}\n",
+                         probe ? i : i - static_cast<size_t>(displacements->probe_count),
+                         probe ? "probe" : "node", displacements->xyz_mm[3 * i],
                          displacements->xyz_mm[3 * i + 1], displacements->xyz_mm[3 * i + 2]);
     }
-    write_text(folder / "displacements.csv", csv);
-    return {"displacements.csv"};
+    write_text(folder / "observation.csv", csv);
+    return {"observation.csv"};
   }
   if (const auto* albedo = dynamic_cast<const AlbedoObservation*>(&observation)) {
     std::string csv = "channel,linear,srgb_8bit\n";

@@ -11,6 +11,10 @@
 /// a constructor from (const Properties&, const PartContext&).
 
 #include <concepts>
+#include <filesystem>
+#include <vector>
+
+#include <nlohmann/json.hpp>
 #include <memory>
 #include <span>
 #include <stdexcept>
@@ -22,6 +26,7 @@
 #include "materials/palette.h"
 #include "reducer/node.h"
 #include "tuning/observation.h"
+#include "tuning/simulation_domain.h"
 
 namespace spec2fab {
 
@@ -32,10 +37,24 @@ class Simulator {
   virtual std::string_view produces() const = 0;
   virtual std::unique_ptr<Observation> make_observation() const = 0;
   /// One-time work for a subtree (meshes, factorisations, lookup tables).
-  virtual void setup(const ReducerNode& /*subtree*/) {}
+  /// `domain` places the subtree in the run's solid and whole tree; it is
+  /// empty where there is none (a column simulated on its own), and
+  /// simulators that need it call domain.require_solid().
+  virtual void setup(const ReducerNode& /*subtree*/, const SimulationDomain& /*domain*/) {}
   /// Simulates the subtree at its current parameters into `out` (made by
   /// make_observation); called thousands of times, so it must not allocate.
   virtual void simulate(const ReducerNode& subtree, Observation& out) = 0;
+
+  /// After simulate(subtree, out): writes what a person would look at besides
+  /// the observation's numbers (meshes, pictures, tables) into `folder`, adds
+  /// figures to `record` (simulation.json; a simulator that records its
+  /// values in a better form sets record["values"] itself) and returns the
+  /// files written.
+  virtual std::vector<std::string> write_report(const Observation& /*out*/,
+                                                const std::filesystem::path& /*folder*/,
+                                                nlohmann::json& /*record*/) const {
+    return {};
+  }
 
   /// Reverse-mode derivative, for simulators that have one for this subtree
   /// (gradient-based optimizers need it; see Capability::gradient).
@@ -59,6 +78,15 @@ class ErrorMetric {
   /// Metrics with a derivative say so and write ∂error/∂v for every value v
   /// of `simulated` (Observation::values order) into `sensitivity`.
   virtual bool differentiable() const { return false; }
+
+  /// Least-squares form, for metrics that have one: error = ½‖r‖² with
+  /// residual_count(target) residuals r written by residuals().
+  virtual int residual_count(const Observation& /*target*/) const { return 0; }
+  virtual void residuals(const Observation& /*simulated*/, const Observation& /*target*/,
+                         std::span<double> /*out*/) const {
+    throw std::logic_error("metric '" + name() + "' has no residual form");
+  }
+
   virtual void error_gradient(const Observation& /*simulated*/, const Observation& /*target*/,
                               std::span<double> /*sensitivity*/) const {
     throw std::logic_error("metric '" + name() + "' has no derivative");

@@ -99,10 +99,10 @@ Tuner::~Tuner() = default;
 
 void Tuner::reset_target() { effective_target_ = goal_->target().clone(); }
 
-void Tuner::set_node(ReducerNode& node) {
+void Tuner::set_node(ReducerNode& node, const SimulationDomain& domain) {
   node_ = &node;
   collect_search_space();
-  simulator_->setup(node);
+  simulator_->setup(node, domain);
 }
 
 void Tuner::collect_search_space() {

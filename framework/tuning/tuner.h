@@ -30,8 +30,9 @@ class Tuner {
 
   const std::string& name() const { return name_; }
   /// Binds the tuner to a subtree (the paper's setNode): collects its free
-  /// parameters and runs the simulator's one-time setup.
-  void set_node(ReducerNode& node);
+  /// parameters and runs the simulator's one-time setup. `domain` places the
+  /// node in the run's solid and tree (volumetric simulators need it).
+  void set_node(ReducerNode& node, const SimulationDomain& domain = SimulationDomain());
   bool is_bound() const { return node_ != nullptr; }
   ReducerNode& node() { return *node_; }
   SearchSpace& search_space() { return space_; }

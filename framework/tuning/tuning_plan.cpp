@@ -26,7 +26,7 @@ std::unique_ptr<TuningPlan> build_tuning_plan(const Properties& goal, ReducerTre
       t.fail("node", e.what());
     }
     auto tuner = build_tuner(t, name, context);
-    tuner->set_node(*node);
+    tuner->set_node(*node, tree.is_bound() ? SimulationDomain(tree, *node) : SimulationDomain());
     index_of[name] = plan->network.add(std::move(tuner));
     names.push_back(name);
   }

@@ -53,7 +53,7 @@ class AlbedoSimulator final : public SimulatorFor<AlbedoObservation> {
 
   std::string name() const override { return "albedo"; }
 
-  void setup(const ReducerNode& subtree) override {
+  void setup(const ReducerNode& subtree, const SimulationDomain& /*domain*/) override {
     table_.reset();
     free_.clear();
     // Enumerating sets parameters and restores them; the subtree is unchanged after.

@@ -45,7 +45,7 @@ class FacetBeamSimulator final : public SimulatorFor<VectorObservation> {
     return out;
   }
 
-  void setup(const ReducerNode& subtree) override { surface_of(subtree); }
+  void setup(const ReducerNode& subtree, const SimulationDomain& /*domain*/) override { surface_of(subtree); }
 
   using SimulatorFor::simulate;
   void simulate(const ReducerNode& subtree, VectorObservation& out) override {

@@ -126,7 +126,7 @@ TEST(MaterialPalette, PrinterMaterialMissingFromLibrary) {
   EXPECT_EQ(error_of([&] { (void)MaterialPalette(library, printer); }),
             "printer.json: /model_materials/1: material 'VeroMagneta' is not in library " +
                 library.origin() + " (known: " +
-                "Agilus30Clear, FullCure705, TangoBlackPlus, TangoPlus, VeroBlackPlus, VeroClear, "
+                "Agilus30Clear, DM9840, DM9850, DM9860, DM9870, DM9885, DM9895, FullCure705, TangoBlackPlus, TangoPlus, VeroBlackPlus, VeroClear, "
                 "VeroCyan, VeroMagenta, VeroWhitePlus, VeroYellow); did you mean 'VeroMagenta'?");
 
   const PrinterProfile support = printer_from(

@@ -160,8 +160,8 @@ TEST_F(AlbedoSimulatorTest, TheTableEqualsDirectSimulationForEveryStacking) {
       "albedo", Properties::parse(R"({"depth_mm": 1})", "a"), "simulator", context);
   auto direct = SimulatorRegistry::instance().create_named(
       "albedo", Properties::parse(R"({"depth_mm": 1, "max_table": 0})", "b"), "simulator", context);
-  tabulated->setup(*node);
-  direct->setup(*node);
+  tabulated->setup(*node, SimulationDomain());
+  direct->setup(*node, SimulationDomain());
   std::vector<Parameter*> free;
   node->visit_parameters([&](const std::string&, Parameter& p) {
     if (p.is_free()) free.push_back(&p);

@@ -31,7 +31,7 @@ class SimulatorTest : public ::testing::Test {
     const PartContext context{palette_};
     auto simulator = SimulatorRegistry::instance().create_named(
         name, Properties::parse(options, "options.json"), "simulator", context);
-    simulator->setup(subtree);
+    simulator->setup(subtree, SimulationDomain());
     auto out = simulator->make_observation();
     simulator->simulate(subtree, *out);
     return static_cast<O&>(*out);

@@ -149,7 +149,6 @@ int simulate_command(const SimulateArguments& arguments) {
   const MaterialLibrary library = MaterialLibrary::load(config.existing_file("materials"));
   const PrinterProfile printer = PrinterProfile::load(config.existing_file("printer"));
   const MaterialPalette palette(library, printer);
-  const NodePtr subtree = build_node(config.object("subtree"), NodeContext{palette});
   const PartContext context{palette};
   const auto& simulators = SimulatorRegistry::instance();
   if (!simulators.contains(arguments.simulator)) {
@@ -157,6 +156,15 @@ int simulate_command(const SimulateArguments& arguments) {
                      did_you_mean(arguments.simulator, simulators.names()) +
                      " (known: " + join(simulators.names()) + ")");
   }
+  // With a "mesh", the subtree becomes the root of a tree bound to that solid
+  // (volumetric simulators need one); without, it is simulated on its own.
+  std::unique_ptr<Solid> solid;
+  if (config.has("mesh")) {
+    solid = std::make_unique<Solid>(load_mesh(config.existing_file("mesh")), UvSource::planar);
+  }
+  ReducerTree tree(config.object("subtree"), palette);
+  if (solid) tree.bind(*solid);
+  const ReducerNode& subtree = tree.root();
   const auto options = config.optional_object("simulator");
   const Properties no_options =
       Properties::wrap(nlohmann::json::object(), arguments.config.string() + " (simulator)");
@@ -166,14 +174,14 @@ int simulate_command(const SimulateArguments& arguments) {
 
   using Clock = std::chrono::steady_clock;
   const auto setup_start = Clock::now();
-  simulator->setup(*subtree);
+  simulator->setup(subtree, solid ? SimulationDomain(tree, subtree) : SimulationDomain());
   const double setup_seconds = std::chrono::duration<double>(Clock::now() - setup_start).count();
   auto observation = simulator->make_observation();
   const auto simulate_start = Clock::now();
   int evaluations = 0;
   const auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - simulate_start).count(); };
   do {
-    simulator->simulate(*subtree, *observation);
+    simulator->simulate(subtree, *observation);
     ++evaluations;
   } while (arguments.repeat > 0 ? evaluations < arguments.repeat : evaluations < 100 && elapsed() < 2.0);
   const double simulate_seconds = elapsed() / evaluations;
@@ -182,16 +190,23 @@ int simulate_command(const SimulateArguments& arguments) {
   }
 
   RunFolder folder(arguments.out);
-  const std::vector<std::string> files = write_observation(*observation, folder.path("."));
-  folder.write_json("simulation.json",
-                    {{"simulator", simulator->name()},
-                     {"produces", std::string(simulator->produces())},
-                     {"config", arguments.config.string()},
-                     {"printer", printer.name},
-                     {"subtree", subtree->to_json(palette)},
-                     {"values", std::vector<double>(observation->values().begin(),
-                                                    observation->values().end())},
-                     {"files", files}});
+  std::vector<std::string> files = write_observation(*observation, folder.path("."));
+  nlohmann::json record = {{"simulator", simulator->name()},
+                           {"produces", std::string(simulator->produces())},
+                           {"config", arguments.config.string()},
+                           {"printer", printer.name},
+                           {"subtree", subtree.to_json(palette)},
+                           {"setup_seconds", setup_seconds},
+                           {"simulate_seconds", simulate_seconds},
+                           {"evaluations", evaluations}};
+  for (std::string& file : simulator->write_report(*observation, folder.path("."), record)) {
+    files.push_back(std::move(file));
+  }
+  if (!record.contains("values")) {
+    record["values"] = std::vector<double>(observation->values().begin(), observation->values().end());
+  }
+  record["files"] = files;
+  folder.write_json("simulation.json", record);
   folder.commit();
   std::cout << "wrote " << arguments.out.string() << "/ (simulation.json, " << join(files)
             << "); setup " << format_seconds(setup_seconds) << ", simulate "

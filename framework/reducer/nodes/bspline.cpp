@@ -100,6 +100,17 @@ class BSplineNode final : public ClonableNode<BSplineNode, GeometryNode>, public
     const Vec3 p = cut_.to_cut_axes(frame);
     return cut_.route(p, height(p.x(), p.y()));
   }
+  LocalFrame frame_in_child(size_t child, const QueryPoint& /*point*/,
+                            const LocalFrame& frame) const override {
+    const Vec3 p = cut_.to_cut_axes(frame);
+    return HeightCut::side_frame(child, p, height(p.x(), p.y()));
+  }
+  int interface_count() const override { return 1; }
+  double interface_level(int /*k*/, const QueryPoint& /*point*/,
+                         const LocalFrame& frame) const override {
+    const Vec3 p = cut_.to_cut_axes(frame);
+    return p.z() - height(p.x(), p.y());
+  }
 
   int height_axis() const override { return cut_.axis(); }
   double surface_height(double lateral_1, double lateral_2) const override {

@@ -43,7 +43,7 @@ class ColumnNode final : public ClonableNode<ColumnNode, GeometryNode> {
     cell.kind = FrameDomain::Kind::column;
     cell.box = Eigen::AlignedBox3d(Vec3(0, 0, incoming.box.min().z()),
                                    Vec3(cell_[0], cell_[1], incoming.box.max().z()));
-    for (NodePtr& child : children_) child->bind(cell, context);
+    for (NodePtr& child : children_) child->bind_domain(cell, context);
   }
 
   Route route(const QueryPoint& /*point*/, const LocalFrame& frame) const override {
@@ -51,6 +51,21 @@ class ColumnNode final : public ClonableNode<ColumnNode, GeometryNode> {
     const int j = cell_index(frame.b, 1);
     return {i + counts_[0] * j,
             {frame.a - (lower_[0] + i * cell_[0]), frame.b - (lower_[1] + j * cell_[1]), frame.w}};
+  }
+
+  LocalFrame frame_in_child(size_t child, const QueryPoint& /*point*/,
+                            const LocalFrame& frame) const override {
+    const int i = static_cast<int>(child) % counts_[0];
+    const int j = static_cast<int>(child) / counts_[0];
+    return {frame.a - (lower_[0] + i * cell_[0]), frame.b - (lower_[1] + j * cell_[1]), frame.w};
+  }
+  // The inner grid lines: a = lower + i·cell (i = 1..na-1), then b likewise.
+  int interface_count() const override { return counts_[0] - 1 + counts_[1] - 1; }
+  double interface_level(int k, const QueryPoint& /*point*/,
+                         const LocalFrame& frame) const override {
+    if (k < counts_[0] - 1) return frame.a - (lower_[0] + (k + 1) * cell_[0]);
+    k -= counts_[0] - 1;
+    return frame.b - (lower_[1] + (k + 1) * cell_[1]);
   }
 
   nlohmann::json to_json(const MaterialPalette& palette) const override {

@@ -27,10 +27,10 @@ void HeightCut::bind_children(std::vector<NodePtr>& children, const Eigen::Align
   const double above_height = std::max(0.0, domain.max().z() - low);
   side.box = Eigen::AlignedBox3d(Vec3(domain.min().x(), domain.min().y(), 0),
                                  Vec3(domain.max().x(), domain.max().y(), below_depth));
-  children[0]->bind(side, context);
+  children[0]->bind_domain(side, context);
   side.box = Eigen::AlignedBox3d(Vec3(domain.min().x(), domain.min().y(), 0),
                                  Vec3(domain.max().x(), domain.max().y(), above_height));
-  children[1]->bind(side, context);
+  children[1]->bind_domain(side, context);
 }
 
 void HeightCut::to_json(const std::vector<NodePtr>& children, const MaterialPalette& palette,

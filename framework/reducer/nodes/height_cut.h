@@ -33,6 +33,12 @@ class HeightCut {
     return {1, {cut_axes.x(), cut_axes.y(), above}};
   }
 
+  /// Child `child`'s frame for a point, whichever side it lies on.
+  static LocalFrame side_frame(size_t child, const Vec3& cut_axes, double surface_height) {
+    const double above = cut_axes.z() - surface_height;
+    return {cut_axes.x(), cut_axes.y(), child == 0 ? -above : above};
+  }
+
   /// Binds both children to their side of a cut lying within [low, high].
   void bind_children(std::vector<NodePtr>& children, const Eigen::AlignedBox3d& domain, double low,
                      double high, BindContext& context) const;

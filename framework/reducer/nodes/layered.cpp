@@ -1,6 +1,7 @@
 // Layered material node: k layers of given thickness and material along the
 // local depth axis w; one layer is a constant material; void is a material.
 
+#include <cmath>
 #include <limits>
 
 #include "reducer/node.h"
@@ -53,6 +54,11 @@ class LayeredNode final : public ClonableNode<LayeredNode, MaterialNode> {
       ids_.push_back(static_cast<MaterialId>(layer.material.value()));
     }
     beyond_ = fill_ ? static_cast<MaterialId>(fill_->value()) : ids_.back();
+    finite_boundaries_ = 0;
+    while (finite_boundaries_ < static_cast<int>(boundaries_.size()) &&
+           std::isfinite(boundaries_[static_cast<size_t>(finite_boundaries_)])) {
+      ++finite_boundaries_;
+    }
   }
 
   MaterialId material(const QueryPoint& /*point*/, const LocalFrame& frame) const override {
@@ -60,6 +66,14 @@ class LayeredNode final : public ClonableNode<LayeredNode, MaterialNode> {
       if (frame.w < boundaries_[i]) return ids_[i];
     }
     return beyond_;
+  }
+
+  // Every finite layer boundary (whether the materials on either side differ
+  // or not: a tuner may change them).
+  int interface_count() const override { return finite_boundaries_; }
+  double interface_level(int k, const QueryPoint& /*point*/,
+                         const LocalFrame& frame) const override {
+    return frame.w - boundaries_[static_cast<size_t>(k)];
   }
 
   nlohmann::json to_json(const MaterialPalette& palette) const override {
@@ -101,6 +115,7 @@ class LayeredNode final : public ClonableNode<LayeredNode, MaterialNode> {
   std::vector<double> boundaries_;
   std::vector<MaterialId> ids_;
   MaterialId beyond_ = kVoid;
+  int finite_boundaries_ = 0;
 };
 
 }  // namespace

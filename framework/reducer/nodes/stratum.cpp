@@ -29,14 +29,28 @@ class StratumNode final : public ClonableNode<StratumNode, GeometryNode> {
     FrameDomain shell;
     shell.kind = FrameDomain::Kind::surface;
     shell.box = Eigen::AlignedBox3d(Vec3(0, 0, 0), Vec3(1, 1, deepest));
-    children_[0]->bind(shell, context);
-    children_[1]->bind(incoming, context);
+    children_[0]->bind_domain(shell, context);
+    children_[1]->bind_domain(incoming, context);
   }
 
   Route route(const QueryPoint& point, const LocalFrame& frame) const override {
     const SurfaceSample& s = point.surface;
     if (s.near_surface && s.depth_mm < depth_) return {0, {s.uv.x(), s.uv.y(), s.depth_mm}};
     return {1, frame};
+  }
+
+  LocalFrame frame_in_child(size_t child, const QueryPoint& point,
+                            const LocalFrame& frame) const override {
+    if (child == 1) return frame;
+    const SurfaceSample& s = point.surface;
+    return {s.uv.x(), s.uv.y(), s.near_surface ? s.depth_mm : depth_ + 1.0};
+  }
+  int interface_count() const override { return 1; }
+  double interface_level(int /*k*/, const QueryPoint& point,
+                         const LocalFrame& /*frame*/) const override {
+    // Beyond the field's band the point is deeper than any shell.
+    const SurfaceSample& s = point.surface;
+    return (s.near_surface ? s.depth_mm : std::max(depth_ + 1.0, s.depth_mm)) - depth_;
   }
 
   nlohmann::json to_json(const MaterialPalette& palette) const override {

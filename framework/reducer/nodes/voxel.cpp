@@ -72,7 +72,7 @@ class VoxelNode final : public ClonableNode<VoxelNode, GeometryNode> {
     FrameDomain cell;
     cell.kind = FrameDomain::Kind::column;
     cell.box = Eigen::AlignedBox3d(Vec3::Zero(), size_);
-    for (NodePtr& child : children_) child->bind(cell, context);
+    for (NodePtr& child : children_) child->bind_domain(cell, context);
   }
 
   Route route(const QueryPoint& /*point*/, const LocalFrame& frame) const override {
@@ -85,6 +85,25 @@ class VoxelNode final : public ClonableNode<VoxelNode, GeometryNode> {
     return {index[0] + counts_[0] * (index[1] + counts_[1] * index[2]),
             {x[0] - origin_[0] - index[0] * size_[0], x[1] - origin_[1] - index[1] * size_[1],
              x[2] - origin_[2] - index[2] * size_[2]}};
+  }
+
+  LocalFrame frame_in_child(size_t child, const QueryPoint& /*point*/,
+                            const LocalFrame& frame) const override {
+    const int c = static_cast<int>(child);
+    const int index[3] = {c % counts_[0], (c / counts_[0]) % counts_[1], c / (counts_[0] * counts_[1])};
+    return {frame.a - origin_[0] - index[0] * size_[0], frame.b - origin_[1] - index[1] * size_[1],
+            frame.w - origin_[2] - index[2] * size_[2]};
+  }
+  // The inner cell faces: along a, then b, then w.
+  int interface_count() const override { return counts_[0] + counts_[1] + counts_[2] - 3; }
+  double interface_level(int k, const QueryPoint& /*point*/,
+                         const LocalFrame& frame) const override {
+    const double x[3] = {frame.a, frame.b, frame.w};
+    for (int axis = 0; axis < 3; ++axis) {
+      if (k < counts_[axis] - 1) return x[axis] - (origin_[axis] + (k + 1) * size_[axis]);
+      k -= counts_[axis] - 1;
+    }
+    return 1.0;
   }
 
   nlohmann::json to_json(const MaterialPalette& palette) const override {

@@ -1,0 +1,371 @@
+#include "fem/elastic_solver.h"
+
+#include <algorithm>
+#include <cstdlib>
+#include <chrono>
+#include <cstdio>
+#include <cmath>
+#include <stdexcept>
+
+#include <Eigen/CholmodSupport>
+#include <Eigen/SparseCholesky>
+
+#include "core/error.h"
+
+namespace spec2fab::fem {
+
+namespace {
+
+using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
+constexpr size_t kPairs = 78;  // 12·13/2 entries of a symmetric 12×12
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+}  // namespace
+
+struct ElasticSolver::Impl {
+  std::vector<TetRest> rest;
+  std::vector<int> dof_index;  // full DOF -> free index, or -1
+  int free_count = 0;
+  // Per tet, for each of its 78 local pairs i <= j (column-major upper
+  // triangle; element matrices are symmetric): the position of the global
+  // lower-triangle entry in the matrix's value array, or -1 (a fixed DOF).
+  std::vector<int> scatter;
+  std::vector<int> diagonal;  // position of each free DOF's diagonal entry
+  SparseMatrix stiffness;     // lower triangle of the free-free block
+  Eigen::CholmodSupernodalLLT<SparseMatrix, Eigen::Lower> cholesky;
+  std::unique_ptr<Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower>> ldlt;  // made on first need
+  bool ldlt_analyzed = false;
+
+  std::vector<double> lambda, mu;
+  std::vector<char> active;
+  std::vector<char> node_active;
+
+  // Work buffers, sized once.
+  Eigen::VectorXd residual, step;
+  std::vector<double> forces, trial, last_converged, previous_converged;
+  Eigen::VectorXd saved_residual;
+
+  // Forms f_int (full) and, if `tangent`, the stiffness values.
+  // Returns the elastic energy (N·mm).
+  double form(const TetMesh& mesh, std::span<const double> u, bool corotated, bool tangent) {
+    double energy = 0;
+    std::fill(forces.begin(), forces.end(), 0.0);
+    double* values = stiffness.valuePtr();
+    if (tangent) std::fill(values, values + stiffness.nonZeros(), 0.0);
+    Vec12 f;
+    Mat12 k;
+    double x[12];
+    for (size_t t = 0; t < mesh.tets.size(); ++t) {
+      if (!active[t]) continue;
+      const Tet& tet = mesh.tets[t];
+      for (int a = 0; a < 4; ++a) {
+        const auto v = static_cast<size_t>(tet[static_cast<size_t>(a)]);
+        for (int d = 0; d < 3; ++d) x[3 * a + d] = mesh.nodes[v][d] + u[3 * v + static_cast<size_t>(d)];
+      }
+      energy += tet_forces(rest[t], lambda[t], mu[t], x, corotated, f, tangent ? &k : nullptr);
+      for (int a = 0; a < 4; ++a) {
+        const auto v = static_cast<size_t>(tet[static_cast<size_t>(a)]);
+        for (int d = 0; d < 3; ++d) forces[3 * v + static_cast<size_t>(d)] += f[3 * a + d];
+      }
+      if (!tangent) continue;
+      const int* map = &scatter[kPairs * t];
+      for (int j = 0; j < 12; ++j) {
+        for (int i = 0; i <= j; ++i, ++map) {
+          if (*map >= 0) values[*map] += k(i, j);
+        }
+      }
+    }
+    if (tangent) {
+      // Nodes no active tet touches: keep them where they are.
+      for (size_t v = 0; v < node_active.size(); ++v) {
+        if (node_active[v]) continue;
+        for (int d = 0; d < 3; ++d) {
+          if (const int i = dof_index[3 * v + static_cast<size_t>(d)]; i >= 0) values[diagonal[static_cast<size_t>(i)]] = 1.0;
+        }
+      }
+    }
+    return energy;
+  }
+
+  bool factorize_and_solve(SolveReport& report) {
+    ++report.factorizations;
+    auto start = Clock::now();
+    cholesky.factorize(stiffness);
+    report.factorization_seconds += seconds_since(start);
+    if (cholesky.info() == Eigen::Success) {
+      start = Clock::now();
+      step = cholesky.solve(residual);
+      report.solve_seconds += seconds_since(start);
+      return cholesky.info() == Eigen::Success;
+    }
+    // Not positive definite (a compressed, buckling state): LDLᵀ.
+    if (!ldlt) ldlt = std::make_unique<Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower>>();
+    if (!ldlt_analyzed) {
+      ldlt->analyzePattern(stiffness);
+      ldlt_analyzed = true;
+    }
+    ldlt->factorize(stiffness);
+    if (ldlt->info() != Eigen::Success) return false;
+    step = ldlt->solve(residual);
+    return step.allFinite();
+  }
+};
+
+ElasticSolver::ElasticSolver(const TetMesh& mesh, const std::vector<char>& fixed)
+    : mesh_(mesh), impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  const size_t dofs = 3 * mesh.nodes.size();
+  if (fixed.size() != dofs) throw std::logic_error("ElasticSolver: fixed flags must be 3 per node");
+  m.dof_index.assign(dofs, -1);
+  for (size_t d = 0; d < dofs; ++d) {
+    if (!fixed[d]) m.dof_index[d] = m.free_count++;
+  }
+  if (m.free_count == static_cast<int>(dofs)) {
+    throw InputError("FEM: no node is fixed or has a prescribed displacement, so the equilibrium "
+                     "is singular (rigid motion is free); give a \"fixed\" region");
+  }
+  m.rest.reserve(mesh.tets.size());
+  for (size_t t = 0; t < mesh.tets.size(); ++t) {
+    const Tet& tet = mesh.tets[t];
+    m.rest.push_back(tet_rest(mesh.nodes[static_cast<size_t>(tet[0])], mesh.nodes[static_cast<size_t>(tet[1])],
+                              mesh.nodes[static_cast<size_t>(tet[2])], mesh.nodes[static_cast<size_t>(tet[3])]));
+    if (!(m.rest.back().volume_mm3 > 0)) {
+      throw std::logic_error("ElasticSolver: tet " + std::to_string(t) + " is not positively oriented");
+    }
+  }
+  // The pattern straight from the node graph (no triplet list: at 10⁵–10⁶
+  // tets that would be the largest allocation of the whole setup).
+  std::vector<std::vector<int>> neighbours(mesh.nodes.size());
+  for (const Tet& tet : mesh.tets) {
+    for (int a : tet) {
+      for (int b : tet) neighbours[static_cast<size_t>(a)].push_back(b);
+    }
+  }
+  for (auto& list : neighbours) {
+    std::sort(list.begin(), list.end());
+    list.erase(std::unique(list.begin(), list.end()), list.end());
+    list.shrink_to_fit();
+  }
+  m.stiffness.resize(m.free_count, m.free_count);
+  std::vector<int> column_sizes(static_cast<size_t>(m.free_count), 0);
+  auto for_each_row = [&](size_t v, int column, auto&& visit) {
+    for (int w : neighbours[v]) {
+      for (size_t e = 0; e < 3; ++e) {
+        if (const int row = m.dof_index[3 * static_cast<size_t>(w) + e]; row >= column) visit(row);
+      }
+    }
+  };
+  for (size_t v = 0; v < mesh.nodes.size(); ++v) {
+    for (size_t d = 0; d < 3; ++d) {
+      if (const int column = m.dof_index[3 * v + d]; column >= 0) {
+        for_each_row(v, column, [&](int) { ++column_sizes[static_cast<size_t>(column)]; });
+      }
+    }
+  }
+  m.stiffness.reserve(column_sizes);
+  for (size_t v = 0; v < mesh.nodes.size(); ++v) {
+    for (size_t d = 0; d < 3; ++d) {
+      if (const int column = m.dof_index[3 * v + d]; column >= 0) {
+        for_each_row(v, column, [&](int row) { m.stiffness.insert(row, column) = 0.0; });
+      }
+    }
+  }
+  m.stiffness.makeCompressed();
+  neighbours = {};
+
+  const int* outer = m.stiffness.outerIndexPtr();
+  const int* inner = m.stiffness.innerIndexPtr();
+  auto position = [&](int row, int col) {
+    const int* begin = inner + outer[col];
+    const int* end = inner + outer[col + 1];
+    return static_cast<int>(std::lower_bound(begin, end, row) - inner);
+  };
+  m.diagonal.resize(static_cast<size_t>(m.free_count));
+  for (int i = 0; i < m.free_count; ++i) m.diagonal[static_cast<size_t>(i)] = position(i, i);
+  m.scatter.assign(kPairs * mesh.tets.size(), -1);
+  for (size_t t = 0; t < mesh.tets.size(); ++t) {
+    const Tet& tet = mesh.tets[t];
+    int* map = &m.scatter[kPairs * t];
+    for (int j = 0; j < 12; ++j) {
+      const int gj = m.dof_index[3 * static_cast<size_t>(tet[static_cast<size_t>(j / 3)]) + static_cast<size_t>(j % 3)];
+      for (int i = 0; i <= j; ++i, ++map) {
+        const int gi = m.dof_index[3 * static_cast<size_t>(tet[static_cast<size_t>(i / 3)]) + static_cast<size_t>(i % 3)];
+        if (gi >= 0 && gj >= 0) *map = position(std::max(gi, gj), std::min(gi, gj));
+      }
+    }
+  }
+  m.cholesky.analyzePattern(m.stiffness);
+  if (std::getenv("SPEC2FAB_FEM_TRACE")) {
+    const cholmod_common& common = m.cholesky.cholmod();
+    std::fprintf(stderr, "cholmod: n %d, nnz(A) %ld, nnz(L) %.3g, flops %.3g, ordering %d\n", m.free_count,
+                 static_cast<long>(m.stiffness.nonZeros()), common.lnz, common.fl, common.selected);
+  }
+
+  m.lambda.assign(mesh.tets.size(), 0.0);
+  m.mu.assign(mesh.tets.size(), 0.0);
+  m.active.assign(mesh.tets.size(), 0);
+  m.node_active.assign(mesh.nodes.size(), 0);
+  m.residual.resize(m.free_count);
+  m.step.resize(m.free_count);
+  m.forces.resize(dofs);
+  m.trial.resize(dofs);
+  m.last_converged.resize(dofs);
+  m.previous_converged.resize(dofs);
+  m.saved_residual.resize(m.free_count);
+}
+
+ElasticSolver::~ElasticSolver() = default;
+
+size_t ElasticSolver::free_dofs() const { return static_cast<size_t>(impl_->free_count); }
+
+void ElasticSolver::set_materials(std::span<const double> lambda, std::span<const double> mu,
+                                  std::span<const char> active) {
+  Impl& m = *impl_;
+  if (lambda.size() != m.lambda.size() || mu.size() != m.mu.size() || active.size() != m.active.size()) {
+    throw std::logic_error("ElasticSolver::set_materials: one value per tet");
+  }
+  std::copy(lambda.begin(), lambda.end(), m.lambda.begin());
+  std::copy(mu.begin(), mu.end(), m.mu.begin());
+  std::copy(active.begin(), active.end(), m.active.begin());
+  std::fill(m.node_active.begin(), m.node_active.end(), 0);
+  for (size_t t = 0; t < mesh_.tets.size(); ++t) {
+    if (!m.active[t]) continue;
+    for (int v : mesh_.tets[t]) m.node_active[static_cast<size_t>(v)] = 1;
+  }
+}
+
+void ElasticSolver::internal_forces(std::span<const double> displacement_mm, bool corotated,
+                                    std::vector<double>& forces) const {
+  impl_->form(mesh_, displacement_mm, corotated, false);
+  forces = impl_->forces;
+}
+
+SolveReport ElasticSolver::solve(const Constraints& c, const SolveOptions& options,
+                                 std::vector<double>& u) {
+  Impl& m = *impl_;
+  const size_t dofs = 3 * mesh_.nodes.size();
+  if (u.size() != dofs) u.assign(dofs, 0.0);
+  SolveReport report;
+  double external = 0;
+  for (double f : c.force_n) external += f * f;
+  external = std::sqrt(external);
+
+  // ‖free residual‖ at the displacement in `at`, loads scaled by `scale`;
+  // fills m.residual with −r (the Newton right-hand side) and `energy` with
+  // the total potential energy (elastic minus the loads' work, N·mm).
+  double energy = 0;
+  auto residual_norm = [&](std::span<const double> at, double scale, bool corotated, bool tangent,
+                           double& reference) {
+    const auto start = Clock::now();
+    energy = m.form(mesh_, at, corotated, tangent);
+    report.assembly_seconds += seconds_since(start);
+    double sum = 0, reactions = 0;
+    for (size_t d = 0; d < dofs; ++d) {
+      const int i = m.dof_index[d];
+      if (i < 0) {
+        reactions += m.forces[d] * m.forces[d];
+        continue;
+      }
+      energy -= scale * c.force_n[d] * at[d];
+      const double r = m.forces[d] - scale * c.force_n[d];
+      m.residual[i] = -r;
+      sum += r * r;
+    }
+    reference = std::max(scale * external, std::sqrt(reactions));
+    return std::sqrt(sum);
+  };
+
+  if (!options.nonlinear) {
+    for (size_t d = 0; d < dofs; ++d) u[d] = m.dof_index[d] < 0 ? c.prescribed_mm[d] : 0.0;
+    double reference = 0;
+    residual_norm(u, 1.0, false, true, reference);
+    if (!m.factorize_and_solve(report)) throw std::runtime_error("FEM: the stiffness matrix is singular");
+    for (size_t d = 0; d < dofs; ++d) {
+      if (const int i = m.dof_index[d]; i >= 0) u[d] += m.step[i];
+    }
+    const double r = residual_norm(u, 1.0, false, false, reference);
+    report.relative_residual = reference > 0 ? r / reference : r;
+    report.newton_iterations = 1;
+    report.load_steps = 1;
+    report.converged = true;
+    return report;
+  }
+
+  std::vector<double>& last_converged = m.last_converged;
+  last_converged = u;
+  double done = 0, previous_scale = -1;
+  double increment = 1.0 / std::max(1, options.load_steps);
+  int halvings = 0;
+  while (done < 1.0 - 1e-12) {
+    const double scale = std::min(1.0, done + increment);
+    // Predictor: the last step's change, scaled to this one (a secant
+    // extrapolation of the load path).
+    if (report.load_steps > 0 && previous_scale < done) {
+      const double ratio = (scale - done) / (done - previous_scale);
+      for (size_t d = 0; d < dofs; ++d) {
+        u[d] = m.dof_index[d] < 0 ? scale * c.prescribed_mm[d]
+                                  : u[d] + ratio * (u[d] - m.previous_converged[d]);
+      }
+    } else {
+      for (size_t d = 0; d < dofs; ++d) {
+        if (m.dof_index[d] < 0) u[d] = scale * c.prescribed_mm[d];
+      }
+    }
+    bool converged = false;
+    double reference = 0;
+    for (int iteration = 0; iteration < options.max_newton_iterations; ++iteration) {
+      const double r = residual_norm(u, scale, true, true, reference);
+      report.relative_residual = reference > 0 ? r / reference : r;
+      if (std::getenv("SPEC2FAB_FEM_TRACE")) std::fprintf(stderr, "step %.3f iteration %d residual %.3e\n", scale, iteration, report.relative_residual);
+      if (r <= options.tolerance * std::max(reference, 1e-300)) {
+        converged = true;
+        break;
+      }
+      ++report.newton_iterations;
+      if (!m.factorize_and_solve(report)) break;
+      // Backtracking on the potential energy (the model is hyperelastic, so
+      // equilibrium minimises it): a full Newton step on a slender body can
+      // overshoot far past the minimum along the step.
+      const double start_energy = energy;
+      const double slope = -m.residual.dot(m.step);  // dE/dα at α = 0 (< 0 for a descent step)
+      double alpha = 1.0;
+      for (int tries = 0; tries < 8; ++tries) {
+        for (size_t d = 0; d < dofs; ++d) {
+          const int i = m.dof_index[d];
+          m.trial[d] = i < 0 ? u[d] : u[d] + alpha * m.step[i];
+        }
+        double unused = 0;
+        m.saved_residual = m.residual;
+        residual_norm(m.trial, scale, true, false, unused);
+        m.residual = m.saved_residual;
+        // (Round-off in the energy sum is allowed for near convergence.)
+        const double noise = 1e-11 * std::abs(start_energy);
+        if (slope >= 0 || (std::isfinite(energy) && energy <= start_energy + 1e-4 * alpha * slope + noise)) break;
+        alpha *= 0.5;
+      }
+      std::copy(m.trial.begin(), m.trial.end(), u.begin());
+    }
+    if (converged) {
+      m.previous_converged.swap(last_converged);
+      previous_scale = done;
+      done = scale;
+      ++report.load_steps;
+      last_converged = u;
+      continue;
+    }
+    if (++halvings > 6) {
+      report.converged = false;
+      return report;
+    }
+    u = last_converged;
+    increment *= 0.5;
+  }
+  report.converged = true;
+  return report;
+}
+
+}  // namespace spec2fab::fem

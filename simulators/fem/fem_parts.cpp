@@ -1,0 +1,153 @@
+// Goal `deformed_shape` and metric `shape_mse` for the displacements the
+// `fem` simulator produces (paper §6.3, elastic goals).
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "core/error.h"
+#include "geometry/mesh_io.h"
+#include "tuning/parts.h"
+
+namespace spec2fab::fem {
+namespace {
+
+/// Mean squared distance (mm²) between simulated and goal positions of the
+/// probe points: (1/n) Σ ‖(p + u_sim) − target‖².
+class ShapeMse final : public MetricFor<DisplacementsObservation> {
+ public:
+  ShapeMse(const Properties& /*properties*/, const PartContext& /*context*/) {}
+  std::string name() const override { return "shape_mse"; }
+
+  double error(const DisplacementsObservation& simulated, const DisplacementsObservation& target) const override {
+    check(simulated, target);
+    const auto s = simulated.probes(), t = target.probes();
+    double sum = 0;
+    for (size_t i = 0; i < t.size(); ++i) sum += (s[i] - t[i]) * (s[i] - t[i]);
+    const double mse = sum / static_cast<double>(target.probe_count);
+    return std::isfinite(mse) ? mse : 1e30;
+  }
+
+  int residual_count(const Observation& target) const override {
+    return 3 * static_cast<const DisplacementsObservation&>(target).probe_count;
+  }
+  void residuals(const Observation& simulated, const Observation& target, std::span<double> out) const override {
+    const auto& s = static_cast<const DisplacementsObservation&>(simulated);
+    const auto& t = static_cast<const DisplacementsObservation&>(target);
+    check(s, t);
+    // ½‖r‖² = error: r = √(2/n) (u_sim − u_goal).
+    const double weight = std::sqrt(2.0 / t.probe_count);
+    for (size_t i = 0; i < out.size(); ++i) out[i] = weight * (s.probes()[i] - t.probes()[i]);
+  }
+
+  bool differentiable() const override { return true; }
+  void error_gradient(const Observation& simulated, const Observation& target,
+                      std::span<double> sensitivity) const override {
+    const auto& s = static_cast<const DisplacementsObservation&>(simulated);
+    const auto& t = static_cast<const DisplacementsObservation&>(target);
+    std::fill(sensitivity.begin(), sensitivity.end(), 0.0);
+    for (size_t i = 0; i < t.probes().size(); ++i) {
+      sensitivity[i] = 2.0 * (s.probes()[i] - t.probes()[i]) / t.probe_count;
+    }
+  }
+
+  static TypeDoc doc() {
+    return {"Mean squared distance (mm²) between the simulated and the goal positions of the "
+            "probe points (the paper's elastic error); least-squares residuals available.",
+            {},
+            R"({"type": "shape_mse"})"};
+  }
+
+ private:
+  static void check(const DisplacementsObservation& s, const DisplacementsObservation& t) {
+    if (t.probe_count == 0) throw InputError("shape_mse: the goal has no probe points");
+    if (s.probe_count != t.probe_count) {
+      throw InputError(fmt::format("shape_mse: the simulator reports {} probe points but the goal "
+                                   "gives {}; list the goal's points as the simulator's \"probes\"",
+                                   s.probe_count, t.probe_count));
+    }
+    for (size_t i = 0; i < t.probe_rest_mm.size(); ++i) {
+      if (std::abs(s.probe_rest_mm[i] - t.probe_rest_mm[i]) > 1e-6 * (1 + std::abs(t.probe_rest_mm[i]))) {
+        throw InputError(fmt::format("shape_mse: probe {} is at a different point in the simulator "
+                                     "and the goal", i / 3));
+      }
+    }
+  }
+};
+
+/// Target positions of probe points, from numbers, a CSV, or a rest and a
+/// deformed mesh with the same vertices (every vertex a probe).
+class DeformedShapeGoal final : public GoalFor<DisplacementsObservation> {
+ public:
+  DeformedShapeGoal(const Properties& p, const PartContext& /*context*/) {
+    const int forms = p.has("points") + p.has("csv") + p.has("deformed_mesh");
+    if (forms != 1) p.fail("give exactly one of \"points\" (with \"targets\"), \"csv\", or \"deformed_mesh\" (with \"rest_mesh\")");
+    std::vector<Vec3> rest, goal;
+    if (p.has("points")) {
+      for (const auto& q : p.get<std::vector<std::array<double, 3>>>("points")) rest.emplace_back(q[0], q[1], q[2]);
+      for (const auto& q : p.get<std::vector<std::array<double, 3>>>("targets")) goal.emplace_back(q[0], q[1], q[2]);
+      if (rest.size() != goal.size()) p.fail("targets", fmt::format("{} targets for {} points", goal.size(), rest.size()));
+    } else if (p.has("csv")) {
+      const auto file = p.existing_file("csv");
+      std::ifstream in(file);
+      std::string line;
+      std::getline(in, line);  // header: x,y,z,tx,ty,tz
+      for (int row = 2; std::getline(in, line); ++row) {
+        if (line.empty()) continue;
+        std::stringstream fields(line);
+        double v[6];
+        char comma = 0;
+        for (int k = 0; k < 6; ++k) {
+          if (!(fields >> v[k]) || (k < 5 && !(fields >> comma))) {
+            throw InputError(fmt::format("{}:{}: expected x,y,z,tx,ty,tz (mm)", file.string(), row));
+          }
+        }
+        rest.emplace_back(v[0], v[1], v[2]);
+        goal.emplace_back(v[3], v[4], v[5]);
+      }
+    } else {
+      const Mesh rest_mesh = load_mesh(p.existing_file("rest_mesh"));
+      const Mesh goal_mesh = load_mesh(p.existing_file("deformed_mesh"));
+      if (rest_mesh.vertices.size() != goal_mesh.vertices.size()) {
+        p.fail("deformed_mesh", fmt::format("{} vertices, but the rest mesh has {}: give the same surface deformed",
+                                            goal_mesh.vertices.size(), rest_mesh.vertices.size()));
+      }
+      rest = rest_mesh.vertices;
+      goal = goal_mesh.vertices;
+    }
+    if (rest.empty()) p.fail("points", "no points");
+    target_.probe_count = static_cast<int>(rest.size());
+    for (size_t i = 0; i < rest.size(); ++i) {
+      for (int d = 0; d < 3; ++d) {
+        if (!std::isfinite(rest[i][d]) || !std::isfinite(goal[i][d])) p.fail("points", "coordinates must be finite");
+        target_.probe_rest_mm.push_back(rest[i][d]);
+        target_.xyz_mm.push_back(goal[i][d] - rest[i][d]);
+      }
+    }
+  }
+
+  std::string name() const override { return "deformed_shape"; }
+  const DisplacementsObservation& typed_target() const override { return target_; }
+
+  static TypeDoc doc() {
+    return {"Target positions (mm) of probe points of the deformed shape; the simulator's "
+            "\"probes\" must be the same points in the same order.",
+            {{"points", "array of [x, y, z]", "-", "rest positions (with \"targets\")"},
+             {"targets", "array of [x, y, z]", "-", "their goal positions"},
+             {"csv", "file", "-", "rows x,y,z,tx,ty,tz after one header line"},
+             {"rest_mesh", "mesh file", "-", "with deformed_mesh: every vertex is a probe"},
+             {"deformed_mesh", "mesh file", "-", "the same surface deformed (same vertices)"}},
+            R"({"type": "deformed_shape", "points": [[100, 5, 5]], "targets": [[99, 5, -20]]})"};
+  }
+
+ private:
+  DisplacementsObservation target_;
+};
+
+}  // namespace
+}  // namespace spec2fab::fem
+
+SPEC2FAB_REGISTER(spec2fab::MetricRegistry, spec2fab::fem::ShapeMse, "shape_mse")
+SPEC2FAB_REGISTER(spec2fab::GoalRegistry, spec2fab::fem::DeformedShapeGoal, "deformed_shape")

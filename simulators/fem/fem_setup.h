@@ -1,0 +1,59 @@
+#pragma once
+/// What the `fem` simulator reads from JSON and turns into a mesh and
+/// boundary conditions: the mesh options, fixed regions, prescribed
+/// displacements, loads and probes. All boxes are axis-aligned, in the rest
+/// shape's world coordinates (mm); a node on a box's face is inside it.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "core/properties.h"
+#include "core/registry.h"
+#include "fem/elastic_solver.h"
+#include "fem/tetgen/tetgen_mesher.h"
+
+namespace spec2fab::fem {
+
+struct BoxRegion {
+  Eigen::AlignedBox3d box;
+  Vec3 value = Vec3::Zero();  ///< displacement (mm) or total force (N), where it has one
+  std::string where;          ///< JSON location, for errors
+};
+
+struct FemSettings {
+  TetgenOptions mesh;
+  bool follow_interfaces = true;
+  std::vector<BoxRegion> fixed, displacements, loads;
+  std::vector<Vec3> probes;
+  SolveOptions solve;
+  bool write_calculix_deck = false;  ///< write_report also writes calculix.inp
+
+  static FemSettings read(const Properties& properties);
+  static std::vector<PropertyDoc> docs();
+};
+
+/// Boundary conditions on `mesh`: nodes in fixed/displacement boxes are
+/// prescribed; each load's force is spread over the boundary faces that lie
+/// wholly in its box, in proportion to area (a uniform traction), a third
+/// of each face's share on each corner. Throws InputError naming the box
+/// when a fixed or displacement box holds no node or a load box touches no
+/// boundary face, and when nothing is fixed at all.
+Constraints make_constraints(const TetMesh& mesh, const std::vector<Face>& boundary,
+                             const FemSettings& settings);
+
+/// A probe's place in the mesh: its tet and barycentric weights.
+struct ProbeLocation {
+  int tet = -1;
+  std::array<double, 4> weights{};
+};
+/// Throws InputError for a probe outside the mesh.
+std::vector<ProbeLocation> locate_probes(const TetMesh& mesh, const std::vector<Vec3>& probes,
+                                         const std::string& where);
+
+/// Refuses a tet size whose mesh would not fit in memory, before meshing.
+void check_mesh_fits(double solid_volume_mm3, const TetgenOptions& options, const std::string& where);
+
+}  // namespace spec2fab::fem

@@ -1,0 +1,227 @@
+// The `fem` simulator: static equilibrium of the run's solid, meshed by
+// TetGen and split along the tree's material interfaces, each tet with the
+// E and ν of the material the tree assigns at its centroid (void tets
+// removed), under fixed regions, prescribed displacements and loads.
+// Co-rotated linear tetrahedra with a consistent tangent (corotated_tet.h),
+// Newton with load stepping, CHOLMOD (elastic_solver.h).
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <limits>
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include "core/error.h"
+#include "fem/calculix_deck.h"
+#include "fem/elastic_solver.h"
+#include "fem/fem_picture.h"
+#include "fem/fem_setup.h"
+#include "fem/interface_conformer.h"
+#include "fem/tetgen/tetgen_mesher.h"
+#include "geometry/mesh_io.h"
+#include "tuning/parts.h"
+
+namespace spec2fab::fem {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
+ public:
+  FemSimulator(const Properties& properties, const PartContext& context)
+      : settings_(FemSettings::read(properties)), where_(properties.where()), palette_(&context.palette) {
+    // E (MPa) and ν of every material the tree may assign.
+    for (MaterialId id = 1; id < palette_->size(); ++id) {
+      const Material& m = palette_->material(id);
+      const double nu = m.poisson_ratio.value, e = m.youngs_modulus_pa.value * 1e-6;
+      if (!(nu < 0.5) || !(nu > -1.0)) {
+        throw InputError(where_ + ": material '" + m.name + "' has Poisson's ratio " + fmt::format("{}", nu) +
+                         "; linear elasticity needs -1 < nu < 0.5 (nu = 0.5 is incompressible)");
+      }
+      if (!(e > 0) || !std::isfinite(e)) {
+        throw InputError(where_ + ": material '" + m.name + "' has no positive Young's modulus");
+      }
+    }
+  }
+
+  std::string name() const override { return "fem"; }
+
+  void setup(const ReducerNode& /*subtree*/, const SimulationDomain& domain) override {
+    const Solid& solid = domain.require_solid(name());
+    domain_ = domain;
+    const auto start = Clock::now();
+    check_mesh_fits(solid.volume(), settings_.mesh, where_ + "/max_tet_volume_mm3");
+    mesh_ = tetrahedralize(solid.mesh(), settings_.mesh);
+    timings_.mesh = seconds_since(start);
+    const auto conform_start = Clock::now();
+    if (settings_.follow_interfaces) conform_ = conform_to_interfaces(mesh_, domain.tree());
+    timings_.conform = seconds_since(conform_start);
+    const auto rest = Clock::now();
+    boundary_ = mesh_.boundary_faces();
+    constraints_ = make_constraints(mesh_, boundary_, settings_);
+    probes_ = locate_probes(mesh_, settings_.probes, where_ + "/probes");
+    solver_ = std::make_unique<ElasticSolver>(mesh_, constraints_.fixed);
+    centroids_.resize(mesh_.tets.size());
+    for (size_t t = 0; t < mesh_.tets.size(); ++t) centroids_[t] = mesh_.centroid(t);
+    materials_.resize(mesh_.tets.size());
+    lambda_.resize(mesh_.tets.size());
+    mu_.resize(mesh_.tets.size());
+    active_.resize(mesh_.tets.size());
+    displacement_.assign(3 * mesh_.nodes.size(), 0.0);
+    timings_.assemble_setup = seconds_since(rest);
+    spdlog::debug("fem: {} nodes, {} tets ({} from TetGen), {} free DOFs; mesh {:.2f} s", mesh_.nodes.size(),
+                  mesh_.tets.size(), conform_.tets_before, solver_->free_dofs(), timings_.mesh);
+  }
+
+  void simulate(const ReducerNode& /*subtree*/, DisplacementsObservation& out) override {
+    if (!solver_) throw std::logic_error("fem: simulate before setup");
+    const auto start = Clock::now();
+    domain_.materials_at(centroids_, materials_);
+    for (size_t t = 0; t < materials_.size(); ++t) {
+      const MaterialId id = materials_[t];
+      active_[t] = id != kVoid;
+      if (!active_[t]) continue;
+      const Material& m = palette_->material(id);
+      const double e = m.youngs_modulus_pa.value * 1e-6;  // MPa = N/mm²
+      lambda_[t] = lame_lambda(e, m.poisson_ratio.value);
+      mu_[t] = lame_mu(e, m.poisson_ratio.value);
+    }
+    solver_->set_materials(lambda_, mu_, active_);
+    // Every evaluation starts from rest: the answer is a function of the
+    // parameters alone, whatever was evaluated before.
+    std::fill(displacement_.begin(), displacement_.end(), 0.0);
+    report_ = solver_->solve(constraints_, settings_.solve, displacement_);
+    if (!report_.converged) {
+      spdlog::warn("fem: Newton did not converge (relative residual {:.3g})", report_.relative_residual);
+      std::fill(displacement_.begin(), displacement_.end(), std::numeric_limits<double>::quiet_NaN());
+    }
+    const size_t probes = probes_.size();
+    out.probe_count = static_cast<int>(probes);
+    out.xyz_mm.resize(3 * (probes + mesh_.nodes.size()));
+    out.probe_rest_mm.resize(3 * probes);
+    for (size_t p = 0; p < probes; ++p) {
+      const ProbeLocation& at = probes_[p];
+      for (size_t d = 0; d < 3; ++d) {
+        double sum = 0;
+        for (size_t k = 0; k < 4; ++k) {
+          sum += at.weights[k] * displacement_[3 * static_cast<size_t>(mesh_.tets[static_cast<size_t>(at.tet)][k]) + d];
+        }
+        out.xyz_mm[3 * p + d] = sum;
+        out.probe_rest_mm[3 * p + d] = settings_.probes[p][static_cast<long>(d)];
+      }
+    }
+    std::copy(displacement_.begin(), displacement_.end(), out.xyz_mm.begin() + static_cast<long>(3 * probes));
+    timings_.solve = seconds_since(start);
+  }
+
+  std::vector<std::string> write_report(const Observation& observation, const std::filesystem::path& folder,
+                                        nlohmann::json& record) const override {
+    const auto& out = static_cast<const DisplacementsObservation&>(observation);
+    const size_t probes = static_cast<size_t>(out.probe_count);
+    std::vector<double> u(out.xyz_mm.begin() + static_cast<long>(3 * probes), out.xyz_mm.end());
+    {
+      std::ofstream csv(folder / "displacements.csv");
+      csv << "node,x_mm,y_mm,z_mm,ux_mm,uy_mm,uz_mm\n";
+      for (size_t v = 0; v < mesh_.nodes.size(); ++v) {
+        const Vec3& x = mesh_.nodes[v];
+        csv << fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}\n", v, x.x(), x.y(), x.z(), u[3 * v],
+                           u[3 * v + 1], u[3 * v + 2]);
+      }
+      if (!csv) throw std::runtime_error("cannot write " + (folder / "displacements.csv").string());
+    }
+    save_mesh(boundary_surface(mesh_, boundary_, u), folder / "deformed.stl");
+    write_deformation_picture(mesh_, boundary_, u, folder / "deformation.png");
+    nlohmann::json probe_list = nlohmann::json::array();
+    for (size_t p = 0; p < probes; ++p) {
+      probe_list.push_back({{"point", {out.probe_rest_mm[3 * p], out.probe_rest_mm[3 * p + 1], out.probe_rest_mm[3 * p + 2]}},
+                            {"displacement_mm", {out.xyz_mm[3 * p], out.xyz_mm[3 * p + 1], out.xyz_mm[3 * p + 2]}}});
+    }
+    double largest = 0;
+    for (size_t v = 0; v < mesh_.nodes.size(); ++v) {
+      largest = std::max(largest, Vec3(u[3 * v], u[3 * v + 1], u[3 * v + 2]).norm());
+    }
+    record["probes"] = probe_list;
+    record["values"] = "displacements.csv (nodes) and probes";
+    record["mesh"] = {{"nodes", mesh_.nodes.size()},
+                      {"tets", mesh_.tets.size()},
+                      {"tets_from_tetgen", conform_.tets_before},
+                      {"interfaces_followed", conform_.interfaces_cut},
+                      {"edges_split", conform_.edges_split},
+                      {"free_dofs", solver_->free_dofs()},
+                      {"volume_mm3", mesh_.total_volume()}};
+    record["solve"] = {{"nonlinear", settings_.solve.nonlinear},
+                       {"newton_iterations", report_.newton_iterations},
+                       {"load_steps", report_.load_steps},
+                       {"factorizations", report_.factorizations},
+                       {"converged", report_.converged},
+                       {"relative_residual", report_.relative_residual},
+                       {"assembly_seconds", report_.assembly_seconds},
+                       {"factorization_seconds", report_.factorization_seconds},
+                       {"triangular_solve_seconds", report_.solve_seconds},
+                       {"max_displacement_mm", largest}};
+    record["timing"] = {{"mesh_seconds", timings_.mesh},
+                        {"conform_seconds", timings_.conform},
+                        {"pattern_and_analysis_seconds", timings_.assemble_setup},
+                        {"solve_seconds", timings_.solve}};
+    std::vector<std::string> files{"displacements.csv", "deformed.stl", "deformation.png"};
+    if (settings_.write_calculix_deck) {
+      std::vector<double> youngs(mesh_.tets.size(), 0.0), poisson(mesh_.tets.size(), 0.0);
+      for (size_t t = 0; t < mesh_.tets.size(); ++t) {
+        if (!active_[t]) continue;
+        const Material& m = palette_->material(materials_[t]);
+        youngs[t] = m.youngs_modulus_pa.value * 1e-6;
+        poisson[t] = m.poisson_ratio.value;
+      }
+      write_calculix_deck(mesh_, youngs, poisson, constraints_, settings_.solve.nonlinear,
+                          settings_.solve.load_steps, folder / "calculix.inp");
+      files.push_back("calculix.inp");
+    }
+    return files;
+  }
+
+  const TetMesh& mesh() const { return mesh_; }
+
+  static TypeDoc doc() {
+    return {"Static equilibrium of the run's solid (co-rotated linear tetrahedra on a TetGen mesh "
+            "split along the tree's material interfaces; each tet's E and nu from the material at "
+            "its centroid; void tets removed) under fixed boxes, prescribed displacements and "
+            "loads. Newton with load stepping (nonlinear) or one linear solve; CHOLMOD. Produces "
+            "the probes' and every node's displacement (mm). Units: mm, N, MPa.",
+            FemSettings::docs(),
+            R"({"type": "fem", "max_tet_volume_mm3": 1.0, "fixed": [{"min": [0, 0, 0], "max": [0, 10, 10]}], )"
+            R"("loads": [{"min": [100, 0, 0], "max": [100, 10, 10], "force_n": [0, 0, -1]}], )"
+            R"("probes": [[100, 5, 5]], "nonlinear": true})"};
+  }
+
+ private:
+  struct Timings {
+    double mesh = 0, conform = 0, assemble_setup = 0, solve = 0;
+  };
+  FemSettings settings_;
+  std::string where_;
+  const MaterialPalette* palette_;
+  SimulationDomain domain_;
+  TetMesh mesh_;
+  ConformReport conform_;
+  std::vector<Face> boundary_;
+  Constraints constraints_;
+  std::vector<ProbeLocation> probes_;
+  std::unique_ptr<ElasticSolver> solver_;
+  std::vector<Vec3> centroids_;
+  std::vector<MaterialId> materials_;
+  std::vector<double> lambda_, mu_, displacement_;
+  std::vector<char> active_;
+  SolveReport report_;
+  Timings timings_;
+};
+
+}  // namespace
+}  // namespace spec2fab::fem
+
+SPEC2FAB_REGISTER(spec2fab::SimulatorRegistry, spec2fab::fem::FemSimulator, "fem")

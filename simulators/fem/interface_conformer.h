@@ -1,0 +1,37 @@
+#pragma once
+/// Makes a tet mesh follow the material interfaces of a reducer tree.
+///
+/// A tet that straddles a layer boundary, a voxel face or a plane cut and is
+/// given the material at its centroid smears the interface over a tet's
+/// width; for a stack of bonded soft and stiff layers that is off by tens of
+/// per cent at any practical mesh size (issue "Elastic simulation", measured
+/// with CalculiX). So the mesh is split along the interfaces instead:
+///
+/// the tree is walked from the root; at each node, the tets of its region
+/// are cut by each of the node's interfaces (ReducerNode::interface_level, a
+/// level set of the node's incoming frame) by splitting every edge whose ends
+/// lie on opposite sides at the level set's linear zero. An edge split
+/// bisects every tet around that edge — inside the region or not — so the
+/// mesh stays conforming without any cut spreading beyond the edge's star;
+/// the tets of one face split their edges in one global order, so they agree
+/// on the face's triangles. Then each tet goes to the child its centroid
+/// routes to, and the walk goes on. Plane, column, voxel and layer interfaces
+/// are planes in their frames and are followed exactly; a B-spline or
+/// stratum surface is followed to within its linear interpolation per edge.
+
+#include "fem/tet_mesh.h"
+#include "reducer/reducer_tree.h"
+
+namespace spec2fab::fem {
+
+struct ConformReport {
+  size_t interfaces_cut = 0;  ///< level sets that crossed at least one tet
+  size_t edges_split = 0;
+  size_t tets_before = 0, tets_after = 0;
+};
+
+/// Splits `mesh` (inside tree's solid) so that no tet crosses an interface
+/// of `tree` (bound). Every new tet is positively oriented.
+ConformReport conform_to_interfaces(TetMesh& mesh, const ReducerTree& tree);
+
+}  // namespace spec2fab::fem
