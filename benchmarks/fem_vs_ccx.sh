@@ -48,11 +48,11 @@ cp "$out/run/calculix.inp" "$out/ccx/job.inp"
 
 read -r our_wall our_kb < "$out/spec2fab.time"
 read -r ccx_wall ccx_kb < "$out/ccx.time"
-json=$out/run/simulation.json
-field() { grep -o "\"$1\": *[0-9.eE+-]*" "$json" | head -1 | sed 's/.*: *//'; }
+flat=$(tr -d ' \n' < "$out/run/simulation.json")
+field() { grep -o "\"$1\":[0-9.eE+-]*" <<< "$flat" | head -1 | sed 's/.*://'; }
 tets=$(field tets); dofs=$(field free_dofs); mesh_s=$(field mesh_seconds)
 setup_s=$(field pattern_and_analysis_seconds); eval_s=$(field simulate_seconds)
-tip=$(grep -o '"displacement_mm": *\[[^]]*\]' "$json" | head -1)
+tip=$(grep -o '"displacement_mm":\[[^]]*\]' <<< "$flat" | head -1 || true)
 awk -v tets="$tets" -v dofs="$dofs" -v mesh_s="$mesh_s" -v setup_s="$setup_s" -v eval_s="$eval_s" \
     -v our_wall="$our_wall" -v our_kb="$our_kb" -v ccx_wall="$ccx_wall" -v ccx_kb="$ccx_kb" -v reps="$repeats" 'BEGIN {
   solve = setup_s + eval_s;
@@ -64,4 +64,4 @@ awk -v tets="$tets" -v dofs="$dofs" -v mesh_s="$mesh_s" -v setup_s="$setup_s" -v
   printf "ratio ccx / spec2fab solve: %.2f x; memory spec2fab / ccx: %.2f\n", ccx_wall / solve, our_kb / ccx_kb;
 }'
 echo "tip probe: $tip"
-echo "ccx tip (node print): see $out/ccx/job.dat"
+echo "ccx: $out/ccx/job.dat (node displacements); deck: $out/ccx/job.inp"

@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
   save_mesh(make_box(Vec3(0, 0, 0), Vec3(60, 60, 8), 2), out / "board_60x60x8.stl");
   save_mesh(make_box(Vec3(0, 0, 0), Vec3(100, 10, 10), 1), out / "beam_100x10x10.stl");
   save_mesh(make_box(Vec3(0, 0, 0), Vec3(60, 40, 10), 1), out / "block_60x40x10.stl");
+  save_mesh(make_box(Vec3(0, 0, 0), Vec3(60, 40, 20), 1), out / "book_60x40x20.stl");
   std::cout << "wrote meshes to " << out.string() << "\n";
   return 0;
 }

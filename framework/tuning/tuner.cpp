@@ -52,7 +52,19 @@ class Tuner::TunerProblem final : public Problem {
     if (capability == Capability::neighbour_moves) return tuner_.moves_.has_value();
     if (capability == Capability::gradient)
       return tuner_.metric_->differentiable() && tuner_.simulator_->differentiable(*tuner_.node_);
+    if (capability == Capability::residuals) return residual_count() > 0;
     return Problem::has(capability);
+  }
+  int residual_count() const override { return tuner_.metric_->residual_count(*tuner_.effective_target_); }
+  // The metric's least-squares form; Jacobians come from the optimizer's
+  // finite differences (e.g. Ceres "derivatives": "numeric").
+  void residuals(std::span<const double> x, std::span<double> out, std::span<double> jacobian) override {
+    if (!jacobian.empty()) {
+      throw InputError("tuner '" + tuner_.name_ + "': metric '" + tuner_.metric_->name() +
+                       "' has residuals but no analytic Jacobian; use numeric derivatives");
+    }
+    tuner_.error_at(x);
+    tuner_.metric_->residuals(*tuner_.simulated_, *tuner_.effective_target_, out);
   }
   double error_and_gradient(std::span<const double> x, std::span<double> gradient) override {
     return tuner_.error_and_gradient_at(x, gradient);

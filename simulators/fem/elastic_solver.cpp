@@ -7,10 +7,10 @@
 #include <cmath>
 #include <stdexcept>
 
-#include <Eigen/CholmodSupport>
 #include <Eigen/SparseCholesky>
 
 #include "core/error.h"
+#include "fem/cholmod_factor.h"
 
 namespace spec2fab::fem {
 
@@ -36,7 +36,7 @@ struct ElasticSolver::Impl {
   std::vector<int> scatter;
   std::vector<int> diagonal;  // position of each free DOF's diagonal entry
   SparseMatrix stiffness;     // lower triangle of the free-free block
-  Eigen::CholmodSupernodalLLT<SparseMatrix, Eigen::Lower> cholesky;
+  CholmodFactor cholesky;
   std::unique_ptr<Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower>> ldlt;  // made on first need
   bool ldlt_analyzed = false;
 
@@ -94,13 +94,13 @@ struct ElasticSolver::Impl {
   bool factorize_and_solve(SolveReport& report) {
     ++report.factorizations;
     auto start = Clock::now();
-    cholesky.factorize(stiffness);
+    const bool positive_definite = cholesky.factorize(stiffness);
     report.factorization_seconds += seconds_since(start);
-    if (cholesky.info() == Eigen::Success) {
+    if (positive_definite) {
       start = Clock::now();
-      step = cholesky.solve(residual);
+      cholesky.solve(residual, step);
       report.solve_seconds += seconds_since(start);
-      return cholesky.info() == Eigen::Success;
+      return step.allFinite();
     }
     // Not positive definite (a compressed, buckling state): LDLᵀ.
     if (!ldlt) ldlt = std::make_unique<Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower>>();
@@ -198,11 +198,10 @@ ElasticSolver::ElasticSolver(const TetMesh& mesh, const std::vector<char>& fixed
       }
     }
   }
-  m.cholesky.analyzePattern(m.stiffness);
+  m.cholesky.analyze(m.stiffness);
   if (std::getenv("SPEC2FAB_FEM_TRACE")) {
-    const cholmod_common& common = m.cholesky.cholmod();
-    std::fprintf(stderr, "cholmod: n %d, nnz(A) %ld, nnz(L) %.3g, flops %.3g, ordering %d\n", m.free_count,
-                 static_cast<long>(m.stiffness.nonZeros()), common.lnz, common.fl, common.selected);
+    std::fprintf(stderr, "cholmod: n %d, nnz(A) %ld, nnz(L) %.3g, flops %.3g\n", m.free_count,
+                 static_cast<long>(m.stiffness.nonZeros()), m.cholesky.factor_nonzeros(), m.cholesky.factor_flops());
   }
 
   m.lambda.assign(mesh.tets.size(), 0.0);
@@ -221,6 +220,8 @@ ElasticSolver::ElasticSolver(const TetMesh& mesh, const std::vector<char>& fixed
 ElasticSolver::~ElasticSolver() = default;
 
 size_t ElasticSolver::free_dofs() const { return static_cast<size_t>(impl_->free_count); }
+double ElasticSolver::factor_nonzeros() const { return impl_->cholesky.factor_nonzeros(); }
+double ElasticSolver::factor_flops() const { return impl_->cholesky.factor_flops(); }
 
 void ElasticSolver::set_materials(std::span<const double> lambda, std::span<const double> mu,
                                   std::span<const char> active) {
@@ -295,6 +296,7 @@ SolveReport ElasticSolver::solve(const Constraints& c, const SolveOptions& optio
     return report;
   }
 
+  const bool trace = std::getenv("SPEC2FAB_FEM_TRACE") != nullptr;  // Newton's progress on stderr
   std::vector<double>& last_converged = m.last_converged;
   last_converged = u;
   double done = 0, previous_scale = -1;
@@ -320,13 +322,26 @@ SolveReport ElasticSolver::solve(const Constraints& c, const SolveOptions& optio
     for (int iteration = 0; iteration < options.max_newton_iterations; ++iteration) {
       const double r = residual_norm(u, scale, true, true, reference);
       report.relative_residual = reference > 0 ? r / reference : r;
-      if (std::getenv("SPEC2FAB_FEM_TRACE")) std::fprintf(stderr, "step %.3f iteration %d residual %.3e\n", scale, iteration, report.relative_residual);
+      if (trace) std::fprintf(stderr, "fem: load %.3f, iteration %d, relative residual %.3e\n", scale, iteration, report.relative_residual);
       if (r <= options.tolerance * std::max(reference, 1e-300)) {
         converged = true;
         break;
       }
       ++report.newton_iterations;
       if (!m.factorize_and_solve(report)) break;
+      // Forces are differences of nearly equal stresses (F − R) at small
+      // strains, so the residual has a round-off floor; a Newton correction
+      // below 1e-10 of the displacement is converged whatever it says.
+      double largest_u = 0, largest_step = 0;
+      for (size_t d = 0; d < dofs; ++d) largest_u = std::max(largest_u, std::abs(u[d]));
+      for (int i = 0; i < m.free_count; ++i) largest_step = std::max(largest_step, std::abs(m.step[i]));
+      if (iteration > 0 && largest_step <= 1e-10 * largest_u) {
+        for (size_t d = 0; d < dofs; ++d) {
+          if (const int i = m.dof_index[d]; i >= 0) u[d] += m.step[i];
+        }
+        converged = true;
+        break;
+      }
       // Backtracking on the potential energy (the model is hyperelastic, so
       // equilibrium minimises it): a full Newton step on a slender body can
       // overshoot far past the minimum along the step.

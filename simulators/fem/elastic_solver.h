@@ -73,6 +73,8 @@ class ElasticSolver {
                        std::vector<double>& forces) const;
 
   size_t free_dofs() const;
+  double factor_nonzeros() const;  ///< nnz of the Cholesky factor (CHOLMOD's analysis)
+  double factor_flops() const;     ///< flops of one numeric factorisation
   const TetMesh& mesh() const { return mesh_; }
 
  private:

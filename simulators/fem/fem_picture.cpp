@@ -22,10 +22,13 @@ struct Camera {
 };
 
 cv::Vec3b viridis(double t) {
-  cv::Mat in(1, 1, CV_8UC1, cv::Scalar(static_cast<int>(std::clamp(t, 0.0, 1.0) * 255.0 + 0.5)));
-  cv::Mat out;
-  cv::applyColorMap(in, out, cv::COLORMAP_VIRIDIS);
-  return out.at<cv::Vec3b>(0, 0);
+  static const cv::Mat table = [] {
+    cv::Mat ramp(1, 256, CV_8UC1), colours;
+    for (int i = 0; i < 256; ++i) ramp.at<uchar>(0, i) = static_cast<uchar>(i);
+    cv::applyColorMap(ramp, colours, cv::COLORMAP_VIRIDIS);
+    return colours;
+  }();
+  return table.at<cv::Vec3b>(0, static_cast<int>(std::clamp(t, 0.0, 1.0) * 255.0 + 0.5));
 }
 
 void draw(cv::Mat& image, cv::Mat& depth, int x_offset, const Camera& camera,

@@ -154,6 +154,8 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
                       {"interfaces_followed", conform_.interfaces_cut},
                       {"edges_split", conform_.edges_split},
                       {"free_dofs", solver_->free_dofs()},
+                      {"cholesky_factor_nonzeros", solver_->factor_nonzeros()},
+                      {"cholesky_factor_flops", solver_->factor_flops()},
                       {"volume_mm3", mesh_.total_volume()}};
     record["solve"] = {{"nonlinear", settings_.solve.nonlinear},
                        {"newton_iterations", report_.newton_iterations},

@@ -15,68 +15,11 @@
 #include <fstream>
 #include <sstream>
 
+#include "cli_support.h"
+
 namespace {
 
-namespace fs = std::filesystem;
-using ::testing::HasSubstr;
-using ::testing::StartsWith;
-
-struct Result {
-  int code;
-  std::string out;  // stdout and stderr
-};
-
-Result spec2fab(const std::string& arguments) {
-  const std::string command = std::string(SPEC2FAB_CLI_PATH) + " " + arguments + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  std::string out;
-  std::array<char, 4096> buffer;
-  while (size_t n = fread(buffer.data(), 1, buffer.size(), pipe)) out.append(buffer.data(), n);
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
-
-const fs::path kDatasets = SPEC2FAB_DATASETS_DIR;
-
-class Cli : public ::testing::Test {
- protected:
-  Cli()
-      : dir_(fs::temp_directory_path() /
-             ("spec2fab_cli_" + std::to_string(getpid()) + "_" +
-              ::testing::UnitTest::GetInstance()->current_test_info()->name())) {
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-    // Runs fabricate at the printer's resolution: a coarse printer (0.4 mm
-    // voxels) keeps them fast; the shipped printers would print 2e9 voxels.
-    std::ofstream(dir_ / "coarse_printer.json") << kCoarsePrinter;
-  }
-  static constexpr const char* kCoarsePrinter =
-      R"({"name": "coarse", "technology": "polyjet", "resolution_dpi": [63.5, 63.5], "layer_mm": 0.4,
-          "build_volume_mm": [200, 200, 200], "model_materials": ["VeroCyan", "VeroWhitePlus"],
-          "source": "test"})";
-  ~Cli() override { fs::remove_all(dir_); }
-
-  // Writes an experiment whose paths point into datasets/.
-  fs::path experiment(const std::string& name, const std::string& body) {
-    const fs::path file = dir_ / (name + ".json");
-    std::ofstream(file) << body;
-    return file;
-  }
-  std::string valid_body(const std::string& tree, const std::string& extra = "",
-                         const std::string& translator = "tree") {
-    return R"({"translator": ")" + translator + R"(", "geometry": {"mesh": ")" +
-           (kDatasets / "meshes/sphere_r25.obj").string() +
-           R"(", "uv": "mesh"}, "goal": {"tree": )" + tree + R"(}, "materials": ")" +
-           (kDatasets / "materials/polyjet.json").string() + R"(", "printer": ")" +
-           (dir_ / "coarse_printer.json").string() + "\"" + extra + "}";
-  }
-  static std::string single_line(const std::string& s) {
-    EXPECT_EQ(std::count(s.begin(), s.end(), '\n'), 1) << s;
-    return s;
-  }
-
-  fs::path dir_;
-};
+using namespace spec2fab_cli_test;
 
 const char* kTree =
     R"({"type": "stratum", "depth_mm": 1, "shell": {"type": "layered", "material": "VeroCyan"}, "core": {"type": "layered", "material": "VeroWhitePlus"}})";

@@ -186,7 +186,7 @@ int simulate_command(const SimulateArguments& arguments) {
   } while (arguments.repeat > 0 ? evaluations < arguments.repeat : evaluations < 100 && elapsed() < 2.0);
   const double simulate_seconds = elapsed() / evaluations;
   for (double v : observation->values()) {
-    if (!std::isfinite(v)) throw std::runtime_error(simulator->name() + " produced a non-finite value");
+    if (!std::isfinite(v)) throw std::runtime_error(simulator->name() + " produced a non-finite value (see the warning above)");
   }
 
   RunFolder folder(arguments.out);

@@ -1,0 +1,39 @@
+#pragma once
+/// A thin owner of a CHOLMOD supernodal Cholesky factor for one sparsity
+/// pattern: analyse once, refactorise numerically and solve many times,
+/// reusing CHOLMOD's factor and solve workspaces (cholmod_solve2), so that a
+/// repeated factorise-and-solve allocates nothing after the first.
+/// Eigen's CholmodSupport wrapper allocates a result vector per solve.
+
+#include <Eigen/SparseCore>
+
+#include <memory>
+
+namespace spec2fab::fem {
+
+class CholmodFactor {
+ public:
+  using Matrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
+
+  CholmodFactor();
+  ~CholmodFactor();
+  CholmodFactor(const CholmodFactor&) = delete;
+  CholmodFactor& operator=(const CholmodFactor&) = delete;
+
+  /// Symbolic analysis (fill-reducing ordering, supernodes) of the lower
+  /// triangle of `lower` (compressed); the matrix must keep its pattern.
+  void analyze(const Matrix& lower);
+  /// Numeric factorisation; false when the matrix is not positive definite.
+  bool factorize(const Matrix& lower);
+  /// x = A⁻¹ b (sizes n).
+  void solve(const Eigen::VectorXd& b, Eigen::VectorXd& x);
+
+  double factor_nonzeros() const;  ///< nnz(L) from the analysis
+  double factor_flops() const;     ///< flop count of one factorisation
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace spec2fab::fem
