@@ -7,6 +7,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <Eigen/IterativeLinearSolvers>
 #include <Eigen/SparseCholesky>
 
 #include "core/error.h"
@@ -39,6 +40,9 @@ struct ElasticSolver::Impl {
   CholmodFactor cholesky;
   std::unique_ptr<Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower>> ldlt;  // made on first need
   bool ldlt_analyzed = false;
+  LinearSolver kind = LinearSolver::cholesky;
+  using Preconditioner = Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>>;
+  std::unique_ptr<Eigen::ConjugateGradient<SparseMatrix, Eigen::Lower, Preconditioner>> cg;
 
   std::vector<double> lambda, mu;
   std::vector<char> active;
@@ -94,6 +98,16 @@ struct ElasticSolver::Impl {
   bool factorize_and_solve(SolveReport& report) {
     ++report.factorizations;
     auto start = Clock::now();
+    if (kind == LinearSolver::conjugate_gradient) {
+      cg->compute(stiffness);  // the incomplete factor
+      report.factorization_seconds += seconds_since(start);
+      if (cg->info() != Eigen::Success) return false;
+      start = Clock::now();
+      step = cg->solve(residual);
+      report.solve_seconds += seconds_since(start);
+      report.cg_iterations += cg->iterations();
+      return cg->info() == Eigen::Success && step.allFinite();
+    }
     const bool positive_definite = cholesky.factorize(stiffness);
     report.factorization_seconds += seconds_since(start);
     if (positive_definite) {
@@ -115,9 +129,10 @@ struct ElasticSolver::Impl {
   }
 };
 
-ElasticSolver::ElasticSolver(const TetMesh& mesh, const std::vector<char>& fixed)
+ElasticSolver::ElasticSolver(const TetMesh& mesh, const std::vector<char>& fixed, LinearSolver linear_solver)
     : mesh_(mesh), impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
+  m.kind = linear_solver;
   const size_t dofs = 3 * mesh.nodes.size();
   if (fixed.size() != dofs) throw std::logic_error("ElasticSolver: fixed flags must be 3 per node");
   m.dof_index.assign(dofs, -1);
@@ -198,8 +213,14 @@ ElasticSolver::ElasticSolver(const TetMesh& mesh, const std::vector<char>& fixed
       }
     }
   }
-  m.cholesky.analyze(m.stiffness);
-  if (std::getenv("SPEC2FAB_FEM_TRACE")) {
+  if (m.kind == LinearSolver::conjugate_gradient) {
+    m.cg = std::make_unique<Eigen::ConjugateGradient<SparseMatrix, Eigen::Lower, Impl::Preconditioner>>();
+    m.cg->setTolerance(1e-12);
+    m.cg->setMaxIterations(std::max(1000, 10 * static_cast<int>(std::sqrt(static_cast<double>(m.free_count)))));
+  } else {
+    m.cholesky.analyze(m.stiffness);
+  }
+  if (m.kind == LinearSolver::cholesky && std::getenv("SPEC2FAB_FEM_TRACE")) {
     std::fprintf(stderr, "cholmod: n %d, nnz(A) %ld, nnz(L) %.3g, flops %.3g\n", m.free_count,
                  static_cast<long>(m.stiffness.nonZeros()), m.cholesky.factor_nonzeros(), m.cholesky.factor_flops());
   }
@@ -220,8 +241,12 @@ ElasticSolver::ElasticSolver(const TetMesh& mesh, const std::vector<char>& fixed
 ElasticSolver::~ElasticSolver() = default;
 
 size_t ElasticSolver::free_dofs() const { return static_cast<size_t>(impl_->free_count); }
-double ElasticSolver::factor_nonzeros() const { return impl_->cholesky.factor_nonzeros(); }
-double ElasticSolver::factor_flops() const { return impl_->cholesky.factor_flops(); }
+double ElasticSolver::factor_nonzeros() const {
+  return impl_->kind == LinearSolver::cholesky ? impl_->cholesky.factor_nonzeros() : 0.0;
+}
+double ElasticSolver::factor_flops() const {
+  return impl_->kind == LinearSolver::cholesky ? impl_->cholesky.factor_flops() : 0.0;
+}
 
 void ElasticSolver::set_materials(std::span<const double> lambda, std::span<const double> mu,
                                   std::span<const char> active) {

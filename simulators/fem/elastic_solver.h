@@ -29,6 +29,12 @@ struct Constraints {
   std::vector<double> force_n;        ///< external dead load on the node
 };
 
+/// How each linear system is solved.
+enum class LinearSolver {
+  cholesky,            ///< CHOLMOD supernodal (LDLᵀ fallback): exact, fast to repeat, memory of the factor
+  conjugate_gradient,  ///< CG with an incomplete-Cholesky preconditioner: a fraction of the memory
+};
+
 struct SolveOptions {
   bool nonlinear = true;           ///< co-rotated large deformation; false: small-strain linear
   int load_steps = 10;             ///< equal increments of load and prescribed displacement
@@ -44,14 +50,16 @@ struct SolveReport {
   double relative_residual = 0;
   double assembly_seconds = 0;       ///< element forces and tangents, scattered
   double factorization_seconds = 0;  ///< numeric Cholesky (or LDLᵀ)
-  double solve_seconds = 0;          ///< triangular solves
+  double solve_seconds = 0;          ///< triangular solves (or CG iterations)
+  long cg_iterations = 0;            ///< conjugate_gradient: in all solves
 };
 
 class ElasticSolver {
  public:
   /// `fixed` holds 3 flags per node (1: prescribed). Throws InputError when
   /// nothing is fixed (the system would be singular).
-  ElasticSolver(const TetMesh& mesh, const std::vector<char>& fixed);
+  ElasticSolver(const TetMesh& mesh, const std::vector<char>& fixed,
+                LinearSolver linear_solver = LinearSolver::cholesky);
   ~ElasticSolver();
   ElasticSolver(const ElasticSolver&) = delete;
   ElasticSolver& operator=(const ElasticSolver&) = delete;

@@ -80,6 +80,12 @@ FemSettings FemSettings::read(const Properties& p) {
   s.solve.max_newton_iterations = static_cast<int>(p.get_in_range("max_newton_iterations", 30, 1, 1000));
   s.solve.tolerance = p.get_in_range("tolerance", 1e-9, 1e-15, 1e-2);
   s.write_calculix_deck = p.get<bool>("write_calculix_deck", false);
+  const std::string solver = p.get<std::string>("linear_solver", "cholesky");
+  if (solver == "cg") {
+    s.linear_solver = LinearSolver::conjugate_gradient;
+  } else if (solver != "cholesky") {
+    p.fail("linear_solver", "expected \"cholesky\" or \"cg\", got '" + solver + "'");
+  }
   return s;
 }
 
@@ -100,6 +106,9 @@ std::vector<PropertyDoc> FemSettings::docs() {
       {"load_steps", "integer", "10", "load increments for the nonlinear solve"},
       {"max_newton_iterations", "integer", "30", "per load step"},
       {"tolerance", "number", "1e-9", "relative force residual for convergence"},
+      {"linear_solver", "\"cholesky\"|\"cg\"", "\"cholesky\"",
+       "sparse Cholesky (CHOLMOD), or conjugate gradients with an incomplete-Cholesky "
+       "preconditioner (less memory, slower to repeat)"},
       {"write_calculix_deck", "bool", "false",
        "also write calculix.inp: the same mesh, materials and loads for CalculiX (ccx)"}};
 }

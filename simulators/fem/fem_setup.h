@@ -29,6 +29,7 @@ struct FemSettings {
   std::vector<BoxRegion> fixed, displacements, loads;
   std::vector<Vec3> probes;
   SolveOptions solve;
+  LinearSolver linear_solver = LinearSolver::cholesky;
   bool write_calculix_deck = false;  ///< write_report also writes calculix.inp
 
   static FemSettings read(const Properties& properties);

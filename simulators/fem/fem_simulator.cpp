@@ -66,7 +66,7 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
     boundary_ = mesh_.boundary_faces();
     constraints_ = make_constraints(mesh_, boundary_, settings_);
     probes_ = locate_probes(mesh_, settings_.probes, where_ + "/probes");
-    solver_ = std::make_unique<ElasticSolver>(mesh_, constraints_.fixed);
+    solver_ = std::make_unique<ElasticSolver>(mesh_, constraints_.fixed, settings_.linear_solver);
     centroids_.resize(mesh_.tets.size());
     for (size_t t = 0; t < mesh_.tets.size(); ++t) centroids_[t] = mesh_.centroid(t);
     materials_.resize(mesh_.tets.size());
@@ -166,6 +166,7 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
                        {"assembly_seconds", report_.assembly_seconds},
                        {"factorization_seconds", report_.factorization_seconds},
                        {"triangular_solve_seconds", report_.solve_seconds},
+                       {"cg_iterations", report_.cg_iterations},
                        {"max_displacement_mm", largest}};
     record["timing"] = {{"mesh_seconds", timings_.mesh},
                         {"conform_seconds", timings_.conform},

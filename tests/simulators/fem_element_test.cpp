@@ -5,6 +5,7 @@
 #include <random>
 
 #include "fem_support.h"
+#include "geometry/mesh_check.h"
 #include "fem/corotated_tet.h"
 
 namespace spec2fab::fem {
@@ -111,6 +112,48 @@ TEST(ElasticSolver, PatchTestReproducesALinearFieldExactly) {
     worst = std::max(worst, (Vec3(u[3 * v], u[3 * v + 1], u[3 * v + 2]) - exact).norm());
   }
   EXPECT_LT(worst, 1e-12);
+}
+
+}  // namespace
+}  // namespace spec2fab::fem
+
+namespace spec2fab::fem {
+namespace {
+
+TEST(TetgenMesher, MeetsTheVolumeBoundAndRefinesInsideABox) {
+  TetgenOptions options;
+  options.max_volume_mm3 = 2.0;
+  const Mesh box = make_box(Vec3(0, 0, 0), Vec3(20, 10, 10), 1);
+  const TetMesh coarse = tetrahedralize(box, options);
+  options.refine_box = Eigen::AlignedBox3d(Vec3(0, 0, 0), Vec3(5, 10, 10));
+  options.refine_max_volume_mm3 = 0.1;
+  const TetMesh refined = tetrahedralize(box, options);
+  for (const TetMesh* mesh : {&coarse, &refined}) {
+    EXPECT_NEAR(mesh->total_volume(), 2000.0, 1e-9);
+    double largest = 0;
+    for (size_t t = 0; t < mesh->tets.size(); ++t) {
+      ASSERT_GT(mesh->volume(t), 0) << "tets are positively oriented";
+      largest = std::max(largest, mesh->volume(t));
+    }
+    EXPECT_LE(largest, 2.0 + 1e-9);
+  }
+  // TetGen's refinement (-r -a) meets per-tet bounds for nearly all tets: a
+  // few it re-creates while refining keep up to ~12 % more (measured).
+  size_t inside = 0, over = 0;
+  for (size_t t = 0; t < refined.tets.size(); ++t) {
+    if (refined.centroid(t).x() < 4.0) {
+      ++inside;
+      if (refined.volume(t) > 0.1 + 1e-9) ++over;
+      EXPECT_LE(refined.volume(t), 0.125);
+    }
+  }
+  EXPECT_LT(over, inside / 100);
+  EXPECT_GT(inside, 500u);
+  EXPECT_GT(refined.tets.size(), coarse.tets.size() + 500);
+  // The boundary faces form a closed, consistently outward surface of the box's volume.
+  const Mesh surface = boundary_surface(refined, refined.boundary_faces(), {});
+  EXPECT_TRUE(find_mesh_defects(surface).ok());
+  EXPECT_NEAR(surface.signed_volume(), 2000.0, 1e-6);
 }
 
 }  // namespace
