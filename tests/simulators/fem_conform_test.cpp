@@ -1,0 +1,66 @@
+// The interface conformer: after splitting, no tet straddles a material
+// interface of the tree, and the mesh stays conforming (no hanging faces).
+
+#include "fem/interface_conformer.h"
+#include "fem_support.h"
+#include "geometry/mesh_check.h"
+
+namespace spec2fab::fem {
+namespace {
+
+void expect_conforming_and_single_material(const TetMesh& mesh, const ReducerTree& tree, double box_area,
+                                           double box_volume) {
+  EXPECT_NEAR(mesh.total_volume(), box_volume, 1e-8 * box_volume);
+  const Mesh surface = boundary_surface(mesh, mesh.boundary_faces(), {});
+  EXPECT_TRUE(find_mesh_defects(surface).ok());
+  // A hanging node would leave interior faces without a partner: extra area.
+  EXPECT_NEAR(surface.surface_area(), box_area, 1e-8 * box_area);
+  size_t straddling = 0;
+  for (size_t t = 0; t < mesh.tets.size(); ++t) {
+    ASSERT_GT(mesh.volume(t), 0);
+    const Vec3 c = mesh.centroid(t);
+    const MaterialId at_centre = tree.material_at(c);
+    for (int v : mesh.tets[t]) {
+      const Vec3 corner = c + 0.999 * (mesh.nodes[static_cast<size_t>(v)] - c);
+      if (tree.material_at(corner) != at_centre) {
+        ++straddling;
+        break;
+      }
+    }
+  }
+  EXPECT_EQ(straddling, 0u) << "of " << mesh.tets.size() << " tets";
+}
+
+TEST(InterfaceConformer, VoxelCellsAndLayersInsideThemAreFollowedExactly) {
+  const MaterialPalette palette({testing::elastic_material("a", 1e9, 0.3), testing::elastic_material("b", 1e8, 0.3)});
+  // Cells of 3.3 mm (not on TetGen's nodes), each with 1.1 mm layers a/b/a.
+  ReducerTree tree(Properties::parse(R"({"type": "voxel", "size_mm": 3.3, "child": {"type": "layered",
+      "layers": [{"material": "a", "thickness_mm": 1.1}, {"material": "b", "thickness_mm": 1.1}, {"material": "a"}]}})",
+                                     "tree.json"),
+                   palette);
+  Solid solid(make_box(Vec3(0, 0, 0), Vec3(10, 10, 10), 1), UvSource::planar);
+  tree.bind(solid);
+  TetMesh mesh = testing::box_mesh(Vec3(0, 0, 0), Vec3(10, 10, 10), 2.0);
+  const ConformReport report = conform_to_interfaces(mesh, tree);
+  EXPECT_GT(report.interfaces_cut, 6u);
+  EXPECT_GT(report.tets_after, report.tets_before);
+  expect_conforming_and_single_material(mesh, tree, 600.0, 1000.0);
+}
+
+TEST(InterfaceConformer, ColumnsAndATiltedPlaneAreFollowedExactly) {
+  const MaterialPalette palette({testing::elastic_material("a", 1e9, 0.3), testing::elastic_material("b", 1e8, 0.3)});
+  ReducerTree tree(Properties::parse(R"({"type": "plane", "offset_mm": 4.2, "slope_a": 0.13, "slope_b": -0.07,
+      "below": {"type": "column", "count": [3, 2], "child": {"type": "layered",
+                "layers": [{"material": "b", "thickness_mm": 0.9}, {"material": "a"}]}},
+      "above": {"type": "layered", "material": "b"}})",
+                                     "tree.json"),
+                   palette);
+  Solid solid(make_box(Vec3(0, 0, 0), Vec3(10, 8, 6), 1), UvSource::planar);
+  tree.bind(solid);
+  TetMesh mesh = testing::box_mesh(Vec3(0, 0, 0), Vec3(10, 8, 6), 1.0);
+  conform_to_interfaces(mesh, tree);
+  expect_conforming_and_single_material(mesh, tree, 2 * (80.0 + 60.0 + 48.0), 480.0);
+}
+
+}  // namespace
+}  // namespace spec2fab::fem
