@@ -223,7 +223,9 @@ void print_registry(const char* heading, const RegistryType& registry, bool verb
   for (const std::string& name : registry.names()) {
     const TypeDoc& doc = registry.entry(name).doc;
     if (!verbose) {
-      const std::string first_sentence = doc.summary.substr(0, doc.summary.find(". ") + 1);
+      // Up to the first full stop followed by a space (the whole summary when it has none).
+      const size_t stop = doc.summary.find(". ");
+      const std::string first_sentence = stop == std::string::npos ? doc.summary : doc.summary.substr(0, stop + 1);
       std::printf("  %-12s %s\n", name.c_str(), first_sentence.c_str());
       continue;
     }

@@ -97,9 +97,12 @@ int main(int argc, char** argv) {
       "\"thickness_mm\": 0.1},\n"
       "                                       {\"material\": \"VeroWhitePlus\"}]},\n"
       "   \"simulator\": {\"depth_mm\": 2}}\n"
+      "With \"mesh\": a closed surface (mm), the subtree is bound to that solid, as volumetric\n"
+      "simulators need (fem: datasets/simulations/fem_cantilever.json; docs/fem.md).\n"
       "Paths are relative to CONFIG. Writes simulation.json (inputs and values) and the\n"
       "observation: PNG for images, CSV for profiles and displacements, CSV + swatch PNG for\n"
-      "albedo. Prints setup and per-evaluation times (mean of --repeat runs).");
+      "albedo; fem adds displacements.csv, deformed.stl and deformation.png. Prints setup and\n"
+      "per-evaluation times (mean of --repeat runs).");
 
   std::filesystem::path validate_file;
   CLI::App* validate_cmd =
