@@ -19,6 +19,7 @@
 #include "fem/fem_picture.h"
 #include "fem/fem_setup.h"
 #include "fem/interface_conformer.h"
+#include "fem/mesh_cache.h"
 #include "fem/tetgen/tetgen_mesher.h"
 #include "geometry/mesh_io.h"
 #include "tuning/parts.h"
@@ -55,28 +56,27 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
   void setup(const ReducerNode& /*subtree*/, const SimulationDomain& domain) override {
     const Solid& solid = domain.require_solid(name());
     domain_ = domain;
-    const auto start = Clock::now();
     check_mesh_fits(solid.volume(), settings_.mesh, where_ + "/max_tet_volume_mm3");
-    mesh_ = tetrahedralize(solid.mesh(), settings_.mesh);
-    timings_.mesh = seconds_since(start);
-    const auto conform_start = Clock::now();
-    if (settings_.follow_interfaces) conform_ = conform_to_interfaces(mesh_, domain.tree());
-    timings_.conform = seconds_since(conform_start);
+    meshed_ = conformed_mesh(solid, domain.tree(), settings_.mesh, settings_.follow_interfaces, &mesh_reused_);
+    mesh_ = &meshed_->mesh;
+    conform_ = meshed_->conform;
+    timings_.mesh = mesh_reused_ ? 0.0 : meshed_->mesh_seconds;
+    timings_.conform = mesh_reused_ ? 0.0 : meshed_->conform_seconds;
     const auto rest = Clock::now();
-    boundary_ = mesh_.boundary_faces();
-    constraints_ = make_constraints(mesh_, boundary_, settings_);
-    probes_ = locate_probes(mesh_, settings_.probes, where_ + "/probes");
-    solver_ = std::make_unique<ElasticSolver>(mesh_, constraints_.fixed, settings_.linear_solver);
-    centroids_.resize(mesh_.tets.size());
-    for (size_t t = 0; t < mesh_.tets.size(); ++t) centroids_[t] = mesh_.centroid(t);
-    materials_.resize(mesh_.tets.size());
-    lambda_.resize(mesh_.tets.size());
-    mu_.resize(mesh_.tets.size());
-    active_.resize(mesh_.tets.size());
-    displacement_.assign(3 * mesh_.nodes.size(), 0.0);
+    boundary_ = mesh_->boundary_faces();
+    constraints_ = make_constraints(*mesh_, boundary_, settings_);
+    probes_ = locate_probes(*mesh_, settings_.probes, where_ + "/probes");
+    solver_ = std::make_unique<ElasticSolver>(*mesh_, constraints_.fixed, settings_.linear_solver);
+    centroids_.resize(mesh_->tets.size());
+    for (size_t t = 0; t < mesh_->tets.size(); ++t) centroids_[t] = mesh_->centroid(t);
+    materials_.resize(mesh_->tets.size());
+    lambda_.resize(mesh_->tets.size());
+    mu_.resize(mesh_->tets.size());
+    active_.resize(mesh_->tets.size());
+    displacement_.assign(3 * mesh_->nodes.size(), 0.0);
     timings_.assemble_setup = seconds_since(rest);
-    spdlog::debug("fem: {} nodes, {} tets ({} from TetGen), {} free DOFs; mesh {:.2f} s", mesh_.nodes.size(),
-                  mesh_.tets.size(), conform_.tets_before, solver_->free_dofs(), timings_.mesh);
+    spdlog::debug("fem: {} nodes, {} tets ({} from TetGen), {} free DOFs; mesh {:.2f} s", mesh_->nodes.size(),
+                  mesh_->tets.size(), conform_.tets_before, solver_->free_dofs(), timings_.mesh);
   }
 
   void simulate(const ReducerNode& /*subtree*/, DisplacementsObservation& out) override {
@@ -103,14 +103,14 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
     }
     const size_t probes = probes_.size();
     out.probe_count = static_cast<int>(probes);
-    out.xyz_mm.resize(3 * (probes + mesh_.nodes.size()));
+    out.xyz_mm.resize(3 * (probes + mesh_->nodes.size()));
     out.probe_rest_mm.resize(3 * probes);
     for (size_t p = 0; p < probes; ++p) {
       const ProbeLocation& at = probes_[p];
       for (size_t d = 0; d < 3; ++d) {
         double sum = 0;
         for (size_t k = 0; k < 4; ++k) {
-          sum += at.weights[k] * displacement_[3 * static_cast<size_t>(mesh_.tets[static_cast<size_t>(at.tet)][k]) + d];
+          sum += at.weights[k] * displacement_[3 * static_cast<size_t>(mesh_->tets[static_cast<size_t>(at.tet)][k]) + d];
         }
         out.xyz_mm[3 * p + d] = sum;
         out.probe_rest_mm[3 * p + d] = settings_.probes[p][static_cast<long>(d)];
@@ -128,35 +128,36 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
     {
       std::ofstream csv(folder / "displacements.csv");
       csv << "node,x_mm,y_mm,z_mm,ux_mm,uy_mm,uz_mm\n";
-      for (size_t v = 0; v < mesh_.nodes.size(); ++v) {
-        const Vec3& x = mesh_.nodes[v];
+      for (size_t v = 0; v < mesh_->nodes.size(); ++v) {
+        const Vec3& x = mesh_->nodes[v];
         csv << fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}\n", v, x.x(), x.y(), x.z(), u[3 * v],
                            u[3 * v + 1], u[3 * v + 2]);
       }
       if (!csv) throw std::runtime_error("cannot write " + (folder / "displacements.csv").string());
     }
-    save_mesh(boundary_surface(mesh_, boundary_, u), folder / "deformed.stl");
-    write_deformation_picture(mesh_, boundary_, u, folder / "deformation.png");
+    save_mesh(boundary_surface(*mesh_, boundary_, u), folder / "deformed.stl");
+    write_deformation_picture(*mesh_, boundary_, u, folder / "deformation.png");
     nlohmann::json probe_list = nlohmann::json::array();
     for (size_t p = 0; p < probes; ++p) {
       probe_list.push_back({{"point", {out.probe_rest_mm[3 * p], out.probe_rest_mm[3 * p + 1], out.probe_rest_mm[3 * p + 2]}},
                             {"displacement_mm", {out.xyz_mm[3 * p], out.xyz_mm[3 * p + 1], out.xyz_mm[3 * p + 2]}}});
     }
     double largest = 0;
-    for (size_t v = 0; v < mesh_.nodes.size(); ++v) {
+    for (size_t v = 0; v < mesh_->nodes.size(); ++v) {
       largest = std::max(largest, Vec3(u[3 * v], u[3 * v + 1], u[3 * v + 2]).norm());
     }
     record["probes"] = probe_list;
     record["values"] = "displacements.csv (nodes) and probes";
-    record["mesh"] = {{"nodes", mesh_.nodes.size()},
-                      {"tets", mesh_.tets.size()},
+    record["mesh"] = {{"nodes", mesh_->nodes.size()},
+                      {"tets", mesh_->tets.size()},
                       {"tets_from_tetgen", conform_.tets_before},
+                      {"reused_from_an_earlier_setup", mesh_reused_},
                       {"interfaces_followed", conform_.interfaces_cut},
                       {"edges_split", conform_.edges_split},
                       {"free_dofs", solver_->free_dofs()},
                       {"cholesky_factor_nonzeros", solver_->factor_nonzeros()},
                       {"cholesky_factor_flops", solver_->factor_flops()},
-                      {"volume_mm3", mesh_.total_volume()}};
+                      {"volume_mm3", mesh_->total_volume()}};
     record["solve"] = {{"nonlinear", settings_.solve.nonlinear},
                        {"newton_iterations", report_.newton_iterations},
                        {"load_steps", report_.load_steps},
@@ -174,21 +175,21 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
                         {"solve_seconds", timings_.solve}};
     std::vector<std::string> files{"displacements.csv", "deformed.stl", "deformation.png"};
     if (settings_.write_calculix_deck) {
-      std::vector<double> youngs(mesh_.tets.size(), 0.0), poisson(mesh_.tets.size(), 0.0);
-      for (size_t t = 0; t < mesh_.tets.size(); ++t) {
+      std::vector<double> youngs(mesh_->tets.size(), 0.0), poisson(mesh_->tets.size(), 0.0);
+      for (size_t t = 0; t < mesh_->tets.size(); ++t) {
         if (!active_[t]) continue;
         const Material& m = palette_->material(materials_[t]);
         youngs[t] = m.youngs_modulus_pa.value * 1e-6;
         poisson[t] = m.poisson_ratio.value;
       }
-      write_calculix_deck(mesh_, youngs, poisson, constraints_, settings_.solve.nonlinear,
+      write_calculix_deck(*mesh_, youngs, poisson, constraints_, settings_.solve.nonlinear,
                           settings_.solve.load_steps, folder / "calculix.inp");
       files.push_back("calculix.inp");
     }
     return files;
   }
 
-  const TetMesh& mesh() const { return mesh_; }
+  const TetMesh& mesh() const { return *mesh_; }
 
   static TypeDoc doc() {
     return {"Static equilibrium of the run's solid (co-rotated linear tetrahedra on a TetGen mesh "
@@ -210,7 +211,9 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
   std::string where_;
   const MaterialPalette* palette_;
   SimulationDomain domain_;
-  TetMesh mesh_;
+  std::shared_ptr<const ConformedMesh> meshed_;  // shared with other simulators (mesh_cache.h)
+  const TetMesh* mesh_ = nullptr;
+  bool mesh_reused_ = false;
   ConformReport conform_;
   std::vector<Face> boundary_;
   Constraints constraints_;

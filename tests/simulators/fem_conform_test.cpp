@@ -2,6 +2,7 @@
 // interface of the tree, and the mesh stays conforming (no hanging faces).
 
 #include "fem/interface_conformer.h"
+#include "fem/mesh_cache.h"
 #include "fem_support.h"
 #include "geometry/mesh_check.h"
 
@@ -60,6 +61,39 @@ TEST(InterfaceConformer, ColumnsAndATiltedPlaneAreFollowedExactly) {
   TetMesh mesh = testing::box_mesh(Vec3(0, 0, 0), Vec3(10, 8, 6), 1.0);
   conform_to_interfaces(mesh, tree);
   expect_conforming_and_single_material(mesh, tree, 2 * (80.0 + 60.0 + 48.0), 480.0);
+}
+
+}  // namespace
+}  // namespace spec2fab::fem
+
+namespace spec2fab::fem {
+namespace {
+
+TEST(MeshCache, SharesAMeshForTheSameSolidTreeAndOptionsOnly) {
+  const MaterialPalette palette({testing::elastic_material("a", 1e9, 0.3), testing::elastic_material("b", 1e8, 0.3)});
+  const std::string json = R"({"type": "layered", "layers": [{"material": "a", "thickness_mm": 2.3}, {"material": "b"}]})";
+  Solid solid(make_box(Vec3(0, 0, 0), Vec3(10, 8, 6), 1), UvSource::planar);
+  ReducerTree tree(Properties::parse(json, "tree.json"), palette), same(Properties::parse(json, "tree.json"), palette);
+  tree.bind(solid);
+  same.bind(solid);
+  TetgenOptions options;
+  options.max_volume_mm3 = 3.0;
+  bool reused = true;
+  const auto first = conformed_mesh(solid, tree, options, true, &reused);
+  EXPECT_FALSE(reused);
+  EXPECT_EQ(conformed_mesh(solid, same, options, true, &reused), first);
+  EXPECT_TRUE(reused) << "an equal tree (another object) on the same surface";
+  // Moving an interface, or another tet size, makes another mesh.
+  const SearchSpace parameters = tree.all_parameters();
+  for (const SearchSpace::Entry& e : parameters.entries()) {
+    if (e.name == "layers/0/thickness_mm") e.parameter->set(2.9);
+  }
+  tree.evaluate();
+  EXPECT_NE(conformed_mesh(solid, tree, options, true, &reused), first);
+  EXPECT_FALSE(reused);
+  options.max_volume_mm3 = 2.0;
+  EXPECT_NE(conformed_mesh(solid, same, options, true, &reused), first);
+  EXPECT_FALSE(reused);
 }
 
 }  // namespace

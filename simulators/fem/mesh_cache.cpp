@@ -1,0 +1,74 @@
+#include "fem/mesh_cache.h"
+
+#include <chrono>
+#include <cstring>
+#include <deque>
+#include <mutex>
+#include <sstream>
+#include <string>
+#include <utility>
+
+#include "geometry/solid.h"
+
+namespace spec2fab::fem {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// FNV-1a over the surface's numbers.
+std::string surface_fingerprint(const Mesh& mesh) {
+  std::uint64_t hash = 1469598103934665603ull;
+  auto add = [&](const void* data, size_t bytes) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    for (size_t i = 0; i < bytes; ++i) hash = (hash ^ p[i]) * 1099511628211ull;
+  };
+  for (const Vec3& v : mesh.vertices) add(v.data(), 3 * sizeof(double));
+  for (const Eigen::Vector3i& t : mesh.triangles) add(t.data(), 3 * sizeof(int));
+  return std::to_string(mesh.vertices.size()) + "/" + std::to_string(mesh.triangles.size()) + "/" +
+         std::to_string(hash);
+}
+
+std::string key_of(const Solid& solid, const ReducerTree& tree, const TetgenOptions& options, bool follow) {
+  std::ostringstream key;
+  key.precision(17);
+  key << surface_fingerprint(solid.mesh()) << "|" << options.max_volume_mm3 << "|" << options.radius_edge << "|";
+  if (options.refine_box) {
+    key << options.refine_box->min().transpose() << " " << options.refine_box->max().transpose() << " "
+        << options.refine_max_volume_mm3;
+  }
+  key << "|" << follow << "|" << (follow ? tree.to_json().dump() : std::string());
+  return key.str();
+}
+
+}  // namespace
+
+std::shared_ptr<const ConformedMesh> conformed_mesh(const Solid& solid, const ReducerTree& tree,
+                                                    const TetgenOptions& options, bool follow_interfaces,
+                                                    bool* reused) {
+  static std::mutex mutex;
+  static std::deque<std::pair<std::string, std::shared_ptr<const ConformedMesh>>> recent;
+  const std::string key = key_of(solid, tree, options, follow_interfaces);
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    for (const auto& [k, mesh] : recent) {
+      if (k == key) {
+        if (reused) *reused = true;
+        return mesh;
+      }
+    }
+  }
+  auto made = std::make_shared<ConformedMesh>();
+  auto start = Clock::now();
+  made->mesh = tetrahedralize(solid.mesh(), options);
+  made->mesh_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  start = Clock::now();
+  if (follow_interfaces) made->conform = conform_to_interfaces(made->mesh, tree);
+  made->conform_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  std::lock_guard<std::mutex> lock(mutex);
+  recent.emplace_front(key, made);
+  if (recent.size() > 4) recent.pop_back();
+  if (reused) *reused = false;
+  return made;
+}
+
+}  // namespace spec2fab::fem
