@@ -98,3 +98,36 @@ TEST(MeshCache, SharesAMeshForTheSameSolidTreeAndOptionsOnly) {
 
 }  // namespace
 }  // namespace spec2fab::fem
+
+namespace spec2fab::fem {
+namespace {
+
+TEST(SimulationDomainTest, MapsWorldToASubtreesFrameAndBackAndSamplesTheWholeTree) {
+  const MaterialPalette palette({testing::elastic_material("a", 1e9, 0.3), testing::elastic_material("b", 1e8, 0.3)});
+  ReducerTree tree(Properties::parse(R"({"type": "column", "count": [2, 2], "children": [
+      {"type": "layered", "material": "a"}, {"type": "layered", "material": "b"},
+      {"type": "layered", "material": "b"}, {"type": "layered", "material": "a"}]})", "tree.json"),
+                   palette);
+  Solid solid(make_box(Vec3(0, 0, 0), Vec3(10, 8, 6), 1), UvSource::planar);
+  tree.bind(solid);
+  const SimulationDomain domain(tree, tree.node("3"));  // the column over x ≥ 5, y ≥ 4
+  EXPECT_EQ(std::vector<size_t>(domain.path().begin(), domain.path().end()), std::vector<size_t>{3});
+  ReducerTree::Query query(tree);
+  // The frame continues past the column's border (x = 1 lies in column 0).
+  const LocalFrame local = domain.local_frame(query, Vec3(1, 6, 2));
+  EXPECT_NEAR(local.a, -4, 1e-12);
+  EXPECT_NEAR(local.b, 2, 1e-12);
+  EXPECT_NEAR(local.w, 2, 1e-12);
+  Vec3 world;
+  ASSERT_TRUE(domain.world_from_local({0.5, 0.5, 3}, world));
+  EXPECT_NEAR((world - Vec3(5.5, 4.5, 3)).norm(), 0, 1e-12);
+  EXPECT_NEAR(domain.local_domain().box.max().x(), 5, 1e-12);
+  const std::vector<Vec3> points{Vec3(1, 1, 1), Vec3(9, 1, 1), Vec3(1, 7, 1), Vec3(9, 7, 1), Vec3(20, 1, 1)};
+  std::vector<MaterialId> ids(points.size());
+  domain.materials_at(points, ids);
+  EXPECT_EQ(ids, (std::vector<MaterialId>{1, 2, 2, 1, kVoid}));
+  EXPECT_THROW(SimulationDomain().require_solid("fem"), InputError);
+}
+
+}  // namespace
+}  // namespace spec2fab::fem
