@@ -98,8 +98,7 @@ ReducerTree::Query::Query(const ReducerTree& tree)
                            : throw std::logic_error("ReducerTree: query before bind()")) {}
 
 MaterialId ReducerTree::Query::material_at(const Vec3& world_mm) {
-  QueryPoint point{world_mm, sampler_.sample(world_mm)};
-  return tree_.walk(point);
+  return tree_.walk(query_point(world_mm));
 }
 
 QueryPoint ReducerTree::Query::query_point(const Vec3& world_mm) {

@@ -12,20 +12,21 @@
 
 #include <concepts>
 #include <filesystem>
-#include <vector>
-
-#include <nlohmann/json.hpp>
 #include <memory>
 #include <span>
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "core/registry.h"
 #include "core/search_space.h"
 #include "materials/palette.h"
 #include "reducer/node.h"
 #include "tuning/observation.h"
+#include "tuning/observation_io.h"
 #include "tuning/simulation_domain.h"
 
 namespace spec2fab {
@@ -45,15 +46,15 @@ class Simulator {
   /// make_observation); called thousands of times, so it must not allocate.
   virtual void simulate(const ReducerNode& subtree, Observation& out) = 0;
 
-  /// After simulate(subtree, out): writes what a person would look at besides
-  /// the observation's numbers (meshes, pictures, tables) into `folder`, adds
-  /// figures to `record` (simulation.json; a simulator that records its
-  /// values in a better form sets record["values"] itself) and returns the
-  /// files written.
-  virtual std::vector<std::string> write_report(const Observation& /*out*/,
-                                                const std::filesystem::path& /*folder*/,
+  /// After simulate(subtree, out): writes what a person would look at into
+  /// `folder` and returns the files written; by default the observation in
+  /// its generic form (write_observation). A simulator with better outputs
+  /// (meshes, pictures, tables) overrides it, adds figures to `record`
+  /// (simulation.json) and, where its values are better read from its files,
+  /// sets record["values"] itself.
+  virtual std::vector<std::string> write_report(const Observation& out, const std::filesystem::path& folder,
                                                 nlohmann::json& /*record*/) const {
-    return {};
+    return write_observation(out, folder);
   }
 
   /// Reverse-mode derivative, for simulators that have one for this subtree

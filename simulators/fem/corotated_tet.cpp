@@ -106,11 +106,4 @@ double tet_forces(const TetRest& rest, double lambda, double mu, const double* x
   return energy;
 }
 
-void tet_linear_stiffness(const TetRest& rest, Mat12& k_lambda, Mat12& k_mu) {
-  double x[12] = {0};
-  Vec12 unused;
-  tet_forces(rest, 1.0, 0.0, x, false, unused, &k_lambda);
-  tet_forces(rest, 0.0, 1.0, x, false, unused, &k_mu);
-}
-
 }  // namespace spec2fab::fem

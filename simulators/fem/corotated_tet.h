@@ -50,8 +50,4 @@ Mat3 polar_rotation(const Mat3& deformation_gradient);
 double tet_forces(const TetRest& rest, double lambda, double mu, const double* x, bool corotated,
                   Vec12& forces, Mat12* tangent);
 
-/// The small-strain stiffness split by material: K = λ·Kλ + μ·Kμ, so that a
-/// change of materials re-forms K without geometry work.
-void tet_linear_stiffness(const TetRest& rest, Mat12& k_lambda, Mat12& k_mu);
-
 }  // namespace spec2fab::fem

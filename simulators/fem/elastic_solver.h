@@ -75,15 +75,9 @@ class ElasticSolver {
   SolveReport solve(const Constraints& constraints, const SolveOptions& options,
                     std::vector<double>& displacement_mm);
 
-  /// Σ element internal forces at a displacement (3 per node; N), for tests
-  /// and reactions.
-  void internal_forces(std::span<const double> displacement_mm, bool corotated,
-                       std::vector<double>& forces) const;
-
   size_t free_dofs() const;
   double factor_nonzeros() const;  ///< nnz of the Cholesky factor (CHOLMOD's analysis)
   double factor_flops() const;     ///< flops of one numeric factorisation
-  const TetMesh& mesh() const { return mesh_; }
 
  private:
   struct Impl;

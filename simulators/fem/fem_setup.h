@@ -5,6 +5,7 @@
 /// shape's world coordinates (mm); a node on a box's face is inside it.
 
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -53,6 +54,15 @@ struct ProbeLocation {
 /// Throws InputError for a probe outside the mesh.
 std::vector<ProbeLocation> locate_probes(const TetMesh& mesh, const std::vector<Vec3>& probes,
                                          const std::string& where);
+/// A nodal field (3 per node) at a located point, interpolated in its tet.
+inline Vec3 interpolate(const TetMesh& mesh, const ProbeLocation& at, std::span<const double> field) {
+  Vec3 sum = Vec3::Zero();
+  for (size_t k = 0; k < 4; ++k) {
+    const auto v = static_cast<size_t>(mesh.tets[static_cast<size_t>(at.tet)][k]);
+    sum += at.weights[k] * Vec3(field[3 * v], field[3 * v + 1], field[3 * v + 2]);
+  }
+  return sum;
+}
 
 /// Refuses a tet size whose mesh would not fit in memory, before meshing.
 void check_mesh_fits(double solid_volume_mm3, const TetgenOptions& options, const std::string& where);

@@ -37,7 +37,8 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
  public:
   FemSimulator(const Properties& properties, const PartContext& context)
       : settings_(FemSettings::read(properties)), where_(properties.where()), palette_(&context.palette) {
-    // E (MPa) and ν of every material the tree may assign.
+    // Lamé parameters (MPa = N/mm²) of every material the tree may assign.
+    lame_.assign(palette_->size(), {0.0, 0.0});
     for (MaterialId id = 1; id < palette_->size(); ++id) {
       const Material& m = palette_->material(id);
       const double nu = m.poisson_ratio.value, e = m.youngs_modulus_pa.value * 1e-6;
@@ -48,6 +49,7 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
       if (!(e > 0) || !std::isfinite(e)) {
         throw InputError(where_ + ": material '" + m.name + "' has no positive Young's modulus");
       }
+      lame_[id] = {lame_lambda(e, nu), lame_mu(e, nu)};
     }
   }
 
@@ -86,11 +88,8 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
     for (size_t t = 0; t < materials_.size(); ++t) {
       const MaterialId id = materials_[t];
       active_[t] = id != kVoid;
-      if (!active_[t]) continue;
-      const Material& m = palette_->material(id);
-      const double e = m.youngs_modulus_pa.value * 1e-6;  // MPa = N/mm²
-      lambda_[t] = lame_lambda(e, m.poisson_ratio.value);
-      mu_[t] = lame_mu(e, m.poisson_ratio.value);
+      lambda_[t] = lame_[id].first;
+      mu_[t] = lame_[id].second;
     }
     solver_->set_materials(lambda_, mu_, active_);
     // Every evaluation starts from rest: the answer is a function of the
@@ -106,13 +105,9 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
     out.xyz_mm.resize(3 * (probes + mesh_->nodes.size()));
     out.probe_rest_mm.resize(3 * probes);
     for (size_t p = 0; p < probes; ++p) {
-      const ProbeLocation& at = probes_[p];
+      const Vec3 u = interpolate(*mesh_, probes_[p], displacement_);
       for (size_t d = 0; d < 3; ++d) {
-        double sum = 0;
-        for (size_t k = 0; k < 4; ++k) {
-          sum += at.weights[k] * displacement_[3 * static_cast<size_t>(mesh_->tets[static_cast<size_t>(at.tet)][k]) + d];
-        }
-        out.xyz_mm[3 * p + d] = sum;
+        out.xyz_mm[3 * p + d] = u[static_cast<long>(d)];
         out.probe_rest_mm[3 * p + d] = settings_.probes[p][static_cast<long>(d)];
       }
     }
@@ -189,8 +184,6 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
     return files;
   }
 
-  const TetMesh& mesh() const { return *mesh_; }
-
   static TypeDoc doc() {
     return {"Static equilibrium of the run's solid (co-rotated linear tetrahedra on a TetGen mesh "
             "split along the tree's material interfaces; each tet's E and nu from the material at "
@@ -220,6 +213,7 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
   std::vector<ProbeLocation> probes_;
   std::unique_ptr<ElasticSolver> solver_;
   std::vector<Vec3> centroids_;
+  std::vector<std::pair<double, double>> lame_;  // (λ, μ) by material id; void (0, 0)
   std::vector<MaterialId> materials_;
   std::vector<double> lambda_, mu_, displacement_;
   std::vector<char> active_;

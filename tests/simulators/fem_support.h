@@ -51,13 +51,7 @@ inline SolveReport solve_uniform(const TetMesh& mesh, const Constraints& c, doub
 
 /// Displacement at a point (interpolated in its tet).
 inline Vec3 displacement_at(const TetMesh& mesh, const std::vector<double>& u, const Vec3& point) {
-  const ProbeLocation at = locate_probes(mesh, {point}, "probe").front();
-  Vec3 sum = Vec3::Zero();
-  for (size_t k = 0; k < 4; ++k) {
-    const auto v = static_cast<size_t>(mesh.tets[static_cast<size_t>(at.tet)][k]);
-    sum += at.weights[k] * Vec3(u[3 * v], u[3 * v + 1], u[3 * v + 2]);
-  }
-  return sum;
+  return interpolate(mesh, locate_probes(mesh, {point}, "probe").front(), u);
 }
 
 /// The `fem` simulator on a box bound to a tree (JSON), materials from `palette`.

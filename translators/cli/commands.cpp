@@ -21,7 +21,6 @@
 #include "reducer/reducer_tree.h"
 #include "spec/run_folder.h"
 #include "spec/translator.h"
-#include "tuning/observation_io.h"
 #include "tuning/optimizer.h"
 #include "tuning/parts.h"
 
@@ -190,7 +189,6 @@ int simulate_command(const SimulateArguments& arguments) {
   }
 
   RunFolder folder(arguments.out);
-  std::vector<std::string> files = write_observation(*observation, folder.path("."));
   nlohmann::json record = {{"simulator", simulator->name()},
                            {"produces", std::string(simulator->produces())},
                            {"config", arguments.config.string()},
@@ -199,9 +197,7 @@ int simulate_command(const SimulateArguments& arguments) {
                            {"setup_seconds", setup_seconds},
                            {"simulate_seconds", simulate_seconds},
                            {"evaluations", evaluations}};
-  for (std::string& file : simulator->write_report(*observation, folder.path("."), record)) {
-    files.push_back(std::move(file));
-  }
+  const std::vector<std::string> files = simulator->write_report(*observation, folder.path("."), record);
   if (!record.contains("values")) {
     record["values"] = std::vector<double>(observation->values().begin(), observation->values().end());
   }

@@ -49,15 +49,13 @@ class ColumnNode final : public ClonableNode<ColumnNode, GeometryNode> {
   Route route(const QueryPoint& /*point*/, const LocalFrame& frame) const override {
     const int i = cell_index(frame.a, 0);
     const int j = cell_index(frame.b, 1);
-    return {i + counts_[0] * j,
-            {frame.a - (lower_[0] + i * cell_[0]), frame.b - (lower_[1] + j * cell_[1]), frame.w}};
+    return {i + counts_[0] * j, cell_frame(i, j, frame)};
   }
 
   LocalFrame frame_in_child(size_t child, const QueryPoint& /*point*/,
                             const LocalFrame& frame) const override {
-    const int i = static_cast<int>(child) % counts_[0];
-    const int j = static_cast<int>(child) / counts_[0];
-    return {frame.a - (lower_[0] + i * cell_[0]), frame.b - (lower_[1] + j * cell_[1]), frame.w};
+    const int c = static_cast<int>(child);
+    return cell_frame(c % counts_[0], c / counts_[0], frame);
   }
   // The inner grid lines: a = lower + i·cell (i = 1..na-1), then b likewise.
   int interface_count() const override { return counts_[0] - 1 + counts_[1] - 1; }
@@ -90,6 +88,11 @@ class ColumnNode final : public ClonableNode<ColumnNode, GeometryNode> {
   }
 
  private:
+  // The frame relative to column (i, j)'s corner.
+  LocalFrame cell_frame(int i, int j, const LocalFrame& frame) const {
+    return {frame.a - (lower_[0] + i * cell_[0]), frame.b - (lower_[1] + j * cell_[1]), frame.w};
+  }
+
   int cell_index(double x, int axis) const {
     const int i = static_cast<int>(std::floor((x - lower_[axis]) * inverse_cell_[axis]));
     return std::clamp(i, 0, counts_[axis] - 1);

@@ -28,9 +28,8 @@ class HeightCut {
   Eigen::AlignedBox3d cut_domain(const FrameDomain& incoming) const;
 
   GeometryNode::Route route(const Vec3& cut_axes, double surface_height) const {
-    const double above = cut_axes.z() - surface_height;
-    if (above < 0) return {0, {cut_axes.x(), cut_axes.y(), -above}};
-    return {1, {cut_axes.x(), cut_axes.y(), above}};
+    const int child = cut_axes.z() < surface_height ? 0 : 1;
+    return {child, side_frame(static_cast<size_t>(child), cut_axes, surface_height)};
   }
 
   /// Child `child`'s frame for a point, whichever side it lies on.

@@ -1,7 +1,6 @@
 // Layered material node: k layers of given thickness and material along the
 // local depth axis w; one layer is a constant material; void is a material.
 
-#include <cmath>
 #include <limits>
 
 #include "reducer/node.h"
@@ -47,18 +46,15 @@ class LayeredNode final : public ClonableNode<LayeredNode, MaterialNode> {
     boundaries_.clear();
     ids_.clear();
     double depth = 0;
+    finite_boundaries_ = 0;
     for (const Layer& layer : layers_) {
+      if (layer.thickness_mm) ++finite_boundaries_;
       depth = layer.thickness_mm ? depth + layer.thickness_mm->value()
                                  : std::numeric_limits<double>::infinity();
       boundaries_.push_back(depth);
       ids_.push_back(static_cast<MaterialId>(layer.material.value()));
     }
     beyond_ = fill_ ? static_cast<MaterialId>(fill_->value()) : ids_.back();
-    finite_boundaries_ = 0;
-    while (finite_boundaries_ < static_cast<int>(boundaries_.size()) &&
-           std::isfinite(boundaries_[static_cast<size_t>(finite_boundaries_)])) {
-      ++finite_boundaries_;
-    }
   }
 
   MaterialId material(const QueryPoint& /*point*/, const LocalFrame& frame) const override {

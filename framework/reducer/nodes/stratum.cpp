@@ -42,15 +42,12 @@ class StratumNode final : public ClonableNode<StratumNode, GeometryNode> {
   LocalFrame frame_in_child(size_t child, const QueryPoint& point,
                             const LocalFrame& frame) const override {
     if (child == 1) return frame;
-    const SurfaceSample& s = point.surface;
-    return {s.uv.x(), s.uv.y(), s.near_surface ? s.depth_mm : depth_ + 1.0};
+    return {point.surface.uv.x(), point.surface.uv.y(), shell_depth(point.surface)};
   }
   int interface_count() const override { return 1; }
   double interface_level(int /*k*/, const QueryPoint& point,
                          const LocalFrame& /*frame*/) const override {
-    // Beyond the field's band the point is deeper than any shell.
-    const SurfaceSample& s = point.surface;
-    return (s.near_surface ? s.depth_mm : std::max(depth_ + 1.0, s.depth_mm)) - depth_;
+    return shell_depth(point.surface) - depth_;
   }
 
   nlohmann::json to_json(const MaterialPalette& palette) const override {
@@ -72,6 +69,11 @@ class StratumNode final : public ClonableNode<StratumNode, GeometryNode> {
   }
 
  private:
+  // Depth below the surface; beyond the field's band, deeper than any shell.
+  double shell_depth(const SurfaceSample& s) const {
+    return s.near_surface ? s.depth_mm : std::max(depth_ + 1.0, s.depth_mm);
+  }
+
   Parameter depth_mm_;
   double depth_ = 0;  // derived: the current depth, read on the hot path
 };

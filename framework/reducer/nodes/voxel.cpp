@@ -82,17 +82,14 @@ class VoxelNode final : public ClonableNode<VoxelNode, GeometryNode> {
       index[k] = std::clamp(static_cast<int>(std::floor((x[k] - origin_[k]) / size_[k])), 0,
                             counts_[k] - 1);
     }
-    return {index[0] + counts_[0] * (index[1] + counts_[1] * index[2]),
-            {x[0] - origin_[0] - index[0] * size_[0], x[1] - origin_[1] - index[1] * size_[1],
-             x[2] - origin_[2] - index[2] * size_[2]}};
+    return {index[0] + counts_[0] * (index[1] + counts_[1] * index[2]), cell_frame(index, frame)};
   }
 
   LocalFrame frame_in_child(size_t child, const QueryPoint& /*point*/,
                             const LocalFrame& frame) const override {
     const int c = static_cast<int>(child);
     const int index[3] = {c % counts_[0], (c / counts_[0]) % counts_[1], c / (counts_[0] * counts_[1])};
-    return {frame.a - origin_[0] - index[0] * size_[0], frame.b - origin_[1] - index[1] * size_[1],
-            frame.w - origin_[2] - index[2] * size_[2]};
+    return cell_frame(index, frame);
   }
   // The inner cell faces: along a, then b, then w.
   int interface_count() const override { return counts_[0] + counts_[1] + counts_[2] - 3; }
@@ -131,6 +128,12 @@ class VoxelNode final : public ClonableNode<VoxelNode, GeometryNode> {
   }
 
  private:
+  // The frame relative to cell `index`'s corner.
+  LocalFrame cell_frame(const int (&index)[3], const LocalFrame& frame) const {
+    return {frame.a - origin_[0] - index[0] * size_[0], frame.b - origin_[1] - index[1] * size_[1],
+            frame.w - origin_[2] - index[2] * size_[2]};
+  }
+
   std::string children_where_;  // for errors found at bind time
   Vec3 size_ = Vec3::Ones();
   Vec3 origin_ = Vec3::Zero();
