@@ -8,6 +8,8 @@
 #
 # spec2fab runs `simulate fem` with write_calculix_deck, so ccx gets exactly
 # the mesh, materials, constraints and nodal loads the simulator solved.
+# Each linear solver in $SOLVERS (default "cholesky amg") runs in its own
+# process, so each peak RSS is its own.
 # Both run on one core (OPENBLAS_NUM_THREADS=1, OMP_NUM_THREADS=1, ccx's
 # SPOOLES is serial). Reported: wall seconds and peak RSS (/usr/bin/time),
 # and from simulation.json the setup (pattern + symbolic analysis) and the
@@ -41,27 +43,33 @@ cat > "$out/cantilever.json" <<JSON
 }
 JSON
 export OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1
-/usr/bin/time -f "%e %M" -o "$out/spec2fab.time" \
-  "$spec2fab" simulate fem "$out/cantilever.json" --out "$out/run" --repeat "$repeats" -q
-cp "$out/run/calculix.inp" "$out/ccx/job.inp"
-(cd "$out/ccx" && /usr/bin/time -f "%e %M" -o ../ccx.time ccx -i job > ccx.log 2>&1)
-
-read -r our_wall our_kb < "$out/spec2fab.time"
-read -r ccx_wall ccx_kb < "$out/ccx.time"
-flat=$(tr -d ' \n' < "$out/run/simulation.json")
-field() { grep -o "\"$1\":[0-9.eE+-]*" <<< "$flat" | head -1 | sed 's/.*://'; }
-tets=$(field tets); dofs=$(field free_dofs); mesh_s=$(field mesh_seconds)
-setup_s=$(field pattern_and_analysis_seconds); eval_s=$(field simulate_seconds)
-tip=$(grep -o '"displacement_mm":\[[^]]*\]' <<< "$flat" | head -1 || true)
-awk -v tets="$tets" -v dofs="$dofs" -v mesh_s="$mesh_s" -v setup_s="$setup_s" -v eval_s="$eval_s" \
-    -v our_wall="$our_wall" -v our_kb="$our_kb" -v ccx_wall="$ccx_wall" -v ccx_kb="$ccx_kb" -v reps="$repeats" 'BEGIN {
-  solve = setup_s + eval_s;
-  printf "mesh: %d tets, %d free DOFs (TetGen %.1f s)\n", tets, dofs, mesh_s;
-  printf "ccx (SPOOLES), whole linear job:        %8.2f s, peak RSS %6.0f MB\n", ccx_wall, ccx_kb / 1024;
-  printf "spec2fab linear static solve:           %8.2f s (pattern + analysis %.2f s, first solve %.2f s)\n", solve, setup_s, eval_s;
-  printf "spec2fab evaluation (refactor + solve): %8.2f s each, mean of %d\n", eval_s, reps;
-  printf "spec2fab whole process:                 %8.2f s (TetGen and %d evaluations included), peak RSS %6.0f MB\n", our_wall, reps, our_kb / 1024;
-  printf "ratio ccx / spec2fab solve: %.2f x; memory spec2fab / ccx: %.2f\n", ccx_wall / solve, our_kb / ccx_kb;
-}'
-echo "tip probe: $tip"
+first=1
+for solver in ${SOLVERS:-cholesky amg}; do
+  sed "s/\"nonlinear\": false/\"nonlinear\": false, \"linear_solver\": \"$solver\"/" "$out/cantilever.json" > "$out/$solver.json"
+  /usr/bin/time -f "%e %M" -o "$out/$solver.time" \
+    "$spec2fab" simulate fem "$out/$solver.json" --out "$out/$solver" --repeat "$repeats" -q
+  if [ $first = 1 ]; then
+    # ccx right after the first solver, on the deck it wrote.
+    cp "$out/$solver/calculix.inp" "$out/ccx/job.inp"
+    (cd "$out/ccx" && /usr/bin/time -f "%e %M" -o ../ccx.time ccx -i job > ccx.log 2>&1)
+    read -r ccx_wall ccx_kb < "$out/ccx.time"
+    flat=$(tr -d ' \n' < "$out/$solver/simulation.json")
+    field() { grep -o "\"$1\":[0-9.eE+-]*" <<< "$flat" | head -1 | sed 's/.*://'; }
+    printf "mesh: %d tets, %d free DOFs (TetGen %.1f s)\n" "$(field tets)" "$(field free_dofs)" "$(field mesh_seconds)"
+    awk -v w="$ccx_wall" -v kb="$ccx_kb" 'BEGIN { printf "ccx (SPOOLES), whole linear job: %8.2f s, peak RSS %6.0f MB\n", w, kb / 1024 }'
+    first=0
+  fi
+  read -r our_wall our_kb < "$out/$solver.time"
+  flat=$(tr -d ' \n' < "$out/$solver/simulation.json")
+  field() { grep -o "\"$1\":[0-9.eE+-]*" <<< "$flat" | head -1 | sed 's/.*://'; }
+  tip=$(grep -o '"displacement_mm":\[[^]]*\]' <<< "$flat" | head -1 || true)
+  awk -v solver="$solver" -v setup_s="$(field pattern_and_analysis_seconds)" -v eval_s="$(field simulate_seconds)" \
+      -v cg="$(field cg_iterations)" -v our_wall="$our_wall" -v our_kb="$our_kb" -v ccx_wall="$ccx_wall" \
+      -v ccx_kb="$ccx_kb" -v reps="$repeats" -v tip="$tip" 'BEGIN {
+    solve = setup_s + eval_s;
+    printf "spec2fab %-8s linear static solve: %8.2f s (setup %.2f s + evaluation %.2f s, mean of %d; CG iterations %d)\n", solver, solve, setup_s, eval_s, reps, cg;
+    printf "spec2fab %-8s whole process: %8.2f s (TetGen and %d evaluations included), peak RSS %6.0f MB\n", solver, our_wall, reps, our_kb / 1024;
+    printf "spec2fab %-8s vs ccx: %.2fx faster (solve), memory %.2f x ccx; tip %s\n", solver, ccx_wall / solve, our_kb / ccx_kb, tip;
+  }'
+done
 echo "ccx: $out/ccx/job.dat (node displacements); deck: $out/ccx/job.inp"

@@ -12,6 +12,7 @@
 
 #include "core/error.h"
 #include "fem/cholmod_factor.h"
+#include "fem/hypre/amg_solver.h"
 
 namespace spec2fab::fem {
 
@@ -42,6 +43,7 @@ struct ElasticSolver::Impl {
   LinearSolver kind = LinearSolver::cholesky;
   using Preconditioner = Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>>;
   std::unique_ptr<Eigen::ConjugateGradient<SparseMatrix, Eigen::Lower, Preconditioner>> cg;
+  std::unique_ptr<AmgSolver> amg;
 
   std::vector<double> lambda, mu;
   std::vector<char> active;
@@ -97,6 +99,15 @@ struct ElasticSolver::Impl {
   bool factorize_and_solve(SolveReport& report) {
     ++report.factorizations;
     auto start = Clock::now();
+    if (kind == LinearSolver::multigrid) {
+      amg->setup(stiffness);
+      report.factorization_seconds += seconds_since(start);
+      start = Clock::now();
+      const bool converged = amg->solve(residual, step);
+      report.solve_seconds += seconds_since(start);
+      report.cg_iterations += amg->last_iterations();
+      return converged && step.allFinite();
+    }
     if (kind == LinearSolver::conjugate_gradient) {
       cg->compute(stiffness);  // the incomplete factor
       report.factorization_seconds += seconds_since(start);
@@ -215,6 +226,13 @@ ElasticSolver::ElasticSolver(const TetMesh& mesh, const std::vector<char>& fixed
     m.cg = std::make_unique<Eigen::ConjugateGradient<SparseMatrix, Eigen::Lower, Impl::Preconditioner>>();
     m.cg->setTolerance(1e-12);
     m.cg->setMaxIterations(std::max(1000, 10 * static_cast<int>(std::sqrt(static_cast<double>(m.free_count)))));
+  } else if (m.kind == LinearSolver::multigrid) {
+    std::vector<int> dof_of_free(static_cast<size_t>(m.free_count));
+    for (size_t d = 0; d < dofs; ++d) {
+      if (const int i = m.dof_index[d]; i >= 0) dof_of_free[static_cast<size_t>(i)] = static_cast<int>(d);
+    }
+    // CG to 1e-10 relative: below Newton's default force tolerance (1e-9).
+    m.amg = std::make_unique<AmgSolver>(m.stiffness, std::move(dof_of_free), mesh.nodes.size(), 1e-10, 5000);
   } else {
     m.cholesky.analyze(m.stiffness);
   }
@@ -244,6 +262,10 @@ double ElasticSolver::factor_nonzeros() const {
 }
 double ElasticSolver::factor_flops() const {
   return impl_->kind == LinearSolver::cholesky ? impl_->cholesky.factor_flops() : 0.0;
+}
+
+double ElasticSolver::multigrid_complexity() const {
+  return impl_->amg ? impl_->amg->operator_complexity() : 0.0;
 }
 
 void ElasticSolver::set_materials(std::span<const double> lambda, std::span<const double> mu,

@@ -33,6 +33,7 @@ struct Constraints {
 enum class LinearSolver {
   cholesky,            ///< CHOLMOD supernodal (LDLᵀ fallback): exact, fast to repeat, memory of the factor
   conjugate_gradient,  ///< CG with an incomplete-Cholesky preconditioner: a fraction of the memory
+  multigrid,           ///< CG with an algebraic multigrid preconditioner (hypre BoomerAMG): small memory, fast on big meshes
 };
 
 struct SolveOptions {
@@ -51,7 +52,7 @@ struct SolveReport {
   double assembly_seconds = 0;       ///< element forces and tangents, scattered
   double factorization_seconds = 0;  ///< numeric Cholesky (or LDLᵀ)
   double solve_seconds = 0;          ///< triangular solves (or CG iterations)
-  long cg_iterations = 0;            ///< conjugate_gradient: in all solves
+  long cg_iterations = 0;            ///< conjugate_gradient, multigrid: in all solves
 };
 
 class ElasticSolver {
@@ -78,6 +79,7 @@ class ElasticSolver {
   size_t free_dofs() const;
   double factor_nonzeros() const;  ///< nnz of the Cholesky factor (CHOLMOD's analysis)
   double factor_flops() const;     ///< flops of one numeric factorisation
+  double multigrid_complexity() const;  ///< multigrid: Σ nnz over its levels / nnz(K) (after a solve)
 
  private:
   struct Impl;

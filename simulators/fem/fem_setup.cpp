@@ -1,5 +1,7 @@
 #include "fem/fem_setup.h"
 
+#include "fem/hypre/amg_solver.h"
+
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -83,8 +85,11 @@ FemSettings FemSettings::read(const Properties& p) {
   const std::string solver = p.get<std::string>("linear_solver", "cholesky");
   if (solver == "cg") {
     s.linear_solver = LinearSolver::conjugate_gradient;
+  } else if (solver == "amg") {
+    if (!AmgSolver::available()) p.fail("linear_solver", "\"amg\" needs hypre, and this build has none (SPEC2FAB_WITH_HYPRE=OFF)");
+    s.linear_solver = LinearSolver::multigrid;
   } else if (solver != "cholesky") {
-    p.fail("linear_solver", "expected \"cholesky\" or \"cg\", got '" + solver + "'");
+    p.fail("linear_solver", "expected \"cholesky\", \"amg\" or \"cg\", got '" + solver + "'");
   }
   return s;
 }
@@ -106,9 +111,10 @@ std::vector<PropertyDoc> FemSettings::docs() {
       {"load_steps", "integer", "10", "load increments for the nonlinear solve"},
       {"max_newton_iterations", "integer", "30", "per load step"},
       {"tolerance", "number", "1e-9", "relative force residual for convergence"},
-      {"linear_solver", "\"cholesky\"|\"cg\"", "\"cholesky\"",
-       "sparse Cholesky (CHOLMOD), or conjugate gradients with an incomplete-Cholesky "
-       "preconditioner (less memory, slower to repeat)"},
+      {"linear_solver", "\"cholesky\"|\"amg\"|\"cg\"", "\"cholesky\"",
+       "sparse Cholesky (CHOLMOD: exact, fastest on small meshes); conjugate gradients with "
+       "algebraic multigrid (hypre BoomerAMG: fastest and smallest on big meshes); or with "
+       "incomplete Cholesky (small, slow)"},
       {"write_calculix_deck", "bool", "false",
        "also write calculix.inp: the same mesh, materials and loads for CalculiX (ccx)"}};
 }

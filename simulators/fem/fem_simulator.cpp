@@ -29,6 +29,15 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+const char* linear_solver_name(LinearSolver solver) {
+  switch (solver) {
+    case LinearSolver::cholesky: return "cholesky";
+    case LinearSolver::multigrid: return "amg";
+    case LinearSolver::conjugate_gradient: return "cg";
+  }
+  return "?";
+}
+
 double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
@@ -162,7 +171,9 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
                        {"assembly_seconds", report_.assembly_seconds},
                        {"factorization_seconds", report_.factorization_seconds},
                        {"triangular_solve_seconds", report_.solve_seconds},
+                       {"linear_solver", linear_solver_name(settings_.linear_solver)},
                        {"cg_iterations", report_.cg_iterations},
+                       {"multigrid_operator_complexity", solver_->multigrid_complexity()},
                        {"max_displacement_mm", largest}};
     record["timing"] = {{"mesh_seconds", timings_.mesh},
                         {"conform_seconds", timings_.conform},
@@ -188,7 +199,8 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
     return {"Static equilibrium of the run's solid (co-rotated linear tetrahedra on a TetGen mesh "
             "split along the tree's material interfaces; each tet's E and nu from the material at "
             "its centroid; void tets removed) under fixed boxes, prescribed displacements and "
-            "loads. Newton with load stepping (nonlinear) or one linear solve; CHOLMOD. Produces "
+            "loads. Newton with load stepping (nonlinear) or one linear solve; CHOLMOD, or CG with "
+            "algebraic multigrid (hypre) for big meshes. Produces "
             "the probes' and every node's displacement (mm). Units: mm, N, MPa.",
             FemSettings::docs(),
             R"({"type": "fem", "max_tet_volume_mm3": 1.0, "fixed": [{"min": [0, 0, 0], "max": [0, 10, 10]}], )"

@@ -8,6 +8,8 @@
 #include <string>
 #include <utility>
 
+#include <malloc.h>
+
 #include "geometry/solid.h"
 
 namespace spec2fab::fem {
@@ -64,6 +66,9 @@ std::shared_ptr<const ConformedMesh> conformed_mesh(const Solid& solid, const Re
   start = Clock::now();
   if (follow_interfaces) made->conform = conform_to_interfaces(made->mesh, tree);
   made->conform_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  // TetGen's pools are freed by now but glibc keeps their pages (~0.3 kB per
+  // tet); hand them back so the solver's peak does not stand on them.
+  malloc_trim(0);
   std::lock_guard<std::mutex> lock(mutex);
   recent.emplace_front(key, made);
   if (recent.size() > 4) recent.pop_back();

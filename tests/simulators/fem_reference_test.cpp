@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include "fem/hypre/amg_solver.h"
 #include "fem_support.h"
 
 namespace spec2fab::fem {
@@ -30,9 +31,11 @@ Cantilever cantilever(double max_volume, double force_n) {
   return c;
 }
 
-double tip_deflection(const Cantilever& c, bool nonlinear, double* axial = nullptr) {
+double tip_deflection(const Cantilever& c, bool nonlinear, double* axial = nullptr,
+                      LinearSolver linear_solver = LinearSolver::cholesky) {
   std::vector<double> u;
-  const SolveReport report = testing::solve_uniform(c.mesh, c.constraints, kYoungs, kPoisson, nonlinear, u, 10);
+  const SolveReport report =
+      testing::solve_uniform(c.mesh, c.constraints, kYoungs, kPoisson, nonlinear, u, 10, linear_solver);
   EXPECT_TRUE(report.converged);
   const Vec3 tip = testing::displacement_at(c.mesh, u, Vec3(kLength, kSide / 2, kSide / 2));
   if (axial) *axial = tip.x();
@@ -81,6 +84,23 @@ TEST(FemReference, LargeDeflectionMatchesTheElastica) {
   EXPECT_LT(axial, -0.02 * kLength) << "the tip must draw back towards the clamp";
 }
 
+// The multigrid-preconditioned CG (hypre) against the sparse Cholesky
+// (CHOLMOD) on the same slender, ill-conditioned cantilever: the linear
+// answer and the elastica's Newton path (inexact linear solves inside).
+TEST(FemReference, MultigridSolvesLikeTheDirectSolver) {
+  if (!AmgSolver::available()) GTEST_SKIP() << "built without hypre";
+  const Cantilever c = cantilever(0.25, kYoungs * kInertia / (kLength * kLength));
+  for (bool nonlinear : {false, true}) {
+    double axial_direct = 0, axial_multigrid = 0;
+    const double direct = tip_deflection(c, nonlinear, &axial_direct, LinearSolver::cholesky);
+    const double multigrid = tip_deflection(c, nonlinear, &axial_multigrid, LinearSolver::multigrid);
+    std::printf("%s: tip %.10f mm (CHOLMOD) vs %.10f mm (AMG-CG)\n", nonlinear ? "nonlinear" : "linear", direct,
+                multigrid);
+    EXPECT_NEAR(multigrid / direct, 1.0, 1e-7);
+    EXPECT_NEAR(axial_multigrid, axial_direct, 1e-7 * std::abs(direct));
+  }
+}
+
 // Two materials in series along a bar; ν = 0 makes the exact solution
 // uniaxial, u(L) = F/A (L1/E1 + L2/E2), which linear tets reproduce exactly
 // when no tet straddles the interface.
@@ -91,7 +111,9 @@ TEST(FemReference, TwoMaterialBarIsSpringsInSeries) {
       "below": {"type": "layered", "material": "stiff"}, "above": {"type": "layered", "material": "soft"}})";
   const double force = 2.0, area = 4.0;
   const double exact = force / area * (7.3 / 1000.0 + 12.7 / 100.0);
-  for (const auto& [follow, solver] : {std::pair{true, "cholesky"}, std::pair{true, "cg"}, std::pair{false, "cholesky"}}) {
+  for (const auto& [follow, solver] : {std::pair{true, "cholesky"}, std::pair{true, "cg"}, std::pair{true, "amg"},
+                                          std::pair{false, "cholesky"}}) {
+    if (std::string(solver) == "amg" && !AmgSolver::available()) continue;
     testing::FemRun run(palette, Vec3(0, 0, 0), Vec3(20, 2, 2), tree,
                         std::string(R"({"max_tet_volume_mm3": 0.5, "nonlinear": false, "linear_solver": ")") +
                             solver + R"(", "follow_interfaces": )" + (follow ? "true" : "false") +

@@ -37,8 +37,9 @@ inline Material elastic_material(const std::string& name, double youngs_pa, doub
 
 /// Solves a mesh of one material (E in MPa).
 inline SolveReport solve_uniform(const TetMesh& mesh, const Constraints& c, double youngs_mpa, double poisson,
-                                 bool nonlinear, std::vector<double>& u, int load_steps = 10) {
-  ElasticSolver solver(mesh, c.fixed);
+                                 bool nonlinear, std::vector<double>& u, int load_steps = 10,
+                                 LinearSolver linear_solver = LinearSolver::cholesky) {
+  ElasticSolver solver(mesh, c.fixed, linear_solver);
   const size_t n = mesh.tets.size();
   std::vector<double> lambda(n, lame_lambda(youngs_mpa, poisson)), mu(n, lame_mu(youngs_mpa, poisson));
   std::vector<char> active(n, 1);
