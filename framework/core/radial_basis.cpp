@@ -1,11 +1,13 @@
 #include "core/radial_basis.h"
 
 #include <cmath>
-#include <map>
-#include <mutex>
 #include <numbers>
 #include <stdexcept>
 #include <utility>
+
+#include <fmt/format.h>
+
+#include "core/run_cache.h"
 
 namespace spec2fab {
 namespace {
@@ -47,13 +49,9 @@ RadialBasis::RadialBasis(int size, double radius_mm) : radius_mm_(radius_mm) {
   }
 }
 
-std::shared_ptr<const RadialBasis> RadialBasis::shared(int size, double radius_mm) {
-  static std::mutex mutex;
-  static std::map<std::pair<int, double>, std::shared_ptr<const RadialBasis>> cache;
-  std::lock_guard lock(mutex);
-  auto& entry = cache[{size, radius_mm}];
-  if (!entry) entry = std::make_shared<RadialBasis>(size, radius_mm);
-  return entry;
+std::shared_ptr<const RadialBasis> RadialBasis::shared(int size, double radius_mm, RunCache* cache) {
+  return cached<const RadialBasis>(cache, fmt::format("{}|{:.17g}", size, radius_mm),
+                                   [&] { return std::make_shared<const RadialBasis>(size, radius_mm); });
 }
 
 void RadialBasis::to_samples(std::span<const double> coefficients, int channels,

@@ -20,11 +20,14 @@
 
 namespace spec2fab {
 
+class RunCache;
+
 class RadialBasis {
  public:
   RadialBasis(int size, double radius_mm);
-  /// One basis per (size, radius) for the whole process (building one costs size² Bessel calls).
-  static std::shared_ptr<const RadialBasis> shared(int size, double radius_mm);
+  /// One basis per (size, radius) in a run (building one costs size² Bessel
+  /// calls); a new one each call when `cache` is null.
+  static std::shared_ptr<const RadialBasis> shared(int size, double radius_mm, RunCache* cache);
 
   int size() const { return static_cast<int>(frequencies_.size()); }
   double radius_mm() const { return radius_mm_; }

@@ -1,5 +1,6 @@
 #include "core/strings.h"
 
+#include <cctype>
 #include <cstdio>
 
 #include <algorithm>
@@ -61,6 +62,29 @@ std::string format_seconds(double seconds) {
     std::snprintf(text, sizeof text, "%.3g ns", seconds * 1e9);
   }
   return text;
+}
+
+}  // namespace spec2fab
+
+namespace spec2fab {
+
+std::string first_sentence(std::string_view text) {
+  static constexpr std::string_view kAbbreviations[] = {"Fig", "Figs", "Eq", "e.g", "i.e", "al", "cf", "vs", "etc"};
+  int depth = 0;
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '(' || c == '[') ++depth;
+    if ((c == ')' || c == ']') && depth > 0) --depth;
+    if (c != '.' || depth > 0 || i + 2 >= text.size() || text[i + 1] != ' ') continue;
+    if (!std::isupper(static_cast<unsigned char>(text[i + 2]))) continue;
+    size_t word = i;
+    while (word > 0 && text[word - 1] != ' ' && text[word - 1] != '(') --word;
+    const std::string_view before = text.substr(word, i - word);
+    bool abbreviation = false;
+    for (std::string_view a : kAbbreviations) abbreviation = abbreviation || before == a;
+    if (!abbreviation) return std::string(text.substr(0, i + 1));
+  }
+  return std::string(text);
 }
 
 }  // namespace spec2fab

@@ -22,4 +22,10 @@ std::string join(const std::vector<std::string>& items, std::string_view separat
 /// A duration for people: "12.3 s", "4.56 ms", "789 ns".
 std::string format_seconds(double seconds);
 
+/// The first sentence of a summary: up to the first full stop that ends a
+/// sentence — followed by a space and a capital, outside parentheses, and
+/// not after an abbreviation ("Fig.", "e.g.", "et al.", "cf.", "vs.",
+/// "Eq.", "i.e.", "etc.") — or the whole text when there is none.
+std::string first_sentence(std::string_view text);
+
 }  // namespace spec2fab

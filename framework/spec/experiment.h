@@ -15,6 +15,7 @@
 #include <string>
 
 #include "core/properties.h"
+#include "core/run_cache.h"
 #include "geometry/solid.h"
 #include "materials/material_library.h"
 #include "materials/palette.h"
@@ -61,6 +62,9 @@ class Experiment {
   const MaterialLibrary& library() const { return *library_; }
   const PrinterProfile& printer() const { return *printer_; }
   const MaterialPalette& palette() const { return *palette_; }
+  /// What this run's parts share (PartContext::cache): it lives as long as
+  /// the experiment, so nothing carries over to another run.
+  RunCache& cache() const { return *cache_; }
 
  private:
   explicit Experiment(Properties root) : root_(std::move(root)) {}
@@ -74,6 +78,7 @@ class Experiment {
   std::shared_ptr<MaterialLibrary> library_;
   std::shared_ptr<PrinterProfile> printer_;
   std::shared_ptr<MaterialPalette> palette_;
+  std::unique_ptr<RunCache> cache_ = std::make_unique<RunCache>();
 };
 
 }  // namespace spec2fab

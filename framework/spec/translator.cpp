@@ -6,6 +6,7 @@
 #include <spdlog/spdlog.h>
 #include <tbb/global_control.h>
 
+#include "core/version.h"
 #include "reducer/reducer_tree.h"
 
 namespace spec2fab {
@@ -68,7 +69,7 @@ std::filesystem::path run_experiment(const std::filesystem::path& file, const Ru
 
   // result.json holds only what the inputs determine, so that a rerun with any
   // thread count is byte-identical; wall-clock times go to timing.json.
-  nlohmann::json result = {{"spec2fab_version", "0.1.0"},
+  nlohmann::json result = {{"spec2fab_version", version()},
                            {"experiment", experiment.name()},
                            {"translator", experiment.translator()},
                            {"seed", options.seed.value_or(experiment.seed())},

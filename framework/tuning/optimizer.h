@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -78,10 +79,10 @@ class Optimizer {
   virtual std::string name() const = 0;
   /// Capabilities a problem must offer.
   virtual std::vector<Capability> requirements() const { return {}; }
-  /// Stochastic optimizers restart their random generator from `seed`. A
-  /// tuner network gives every tuner run a seed derived from (run seed, tuner,
-  /// sweep), so results never depend on which thread ran what.
-  virtual void set_seed(std::uint64_t /*seed*/) {}
+  /// A schedule gives every tuner run a seed derived from (run seed, phase,
+  /// sweep, tuner), so results never depend on which thread ran what.
+  /// Stochastic optimizers draw from random_seed(their "seed" option).
+  void set_seed(std::uint64_t schedule_seed) { schedule_seed_ = schedule_seed; }
 
   /// Minimises `problem` from `x` (start in, best point out). Refuses, with
   /// std::invalid_argument naming the optimizer and the missing capability,
@@ -91,11 +92,21 @@ class Optimizer {
                    const IterationCallback& callback = {});
 
  protected:
+  /// The seed of a stochastic run. The "seed" option has one meaning: it
+  /// picks the random stream. Run alone, the optimizer seeds from it
+  /// directly; under a schedule, it is mixed with the schedule's seed for
+  /// this tuner run, so every tuner still draws its own stream and changing
+  /// the option (or the run's --seed) changes them all.
+  std::uint64_t random_seed(int option_seed) const;
+
   /// The method itself: fills summary.termination/message/iterations/trace/
   /// details and leaves the best point in x. `minimize` counts evaluations,
   /// times the run and records initial/final error around it.
   virtual void run(Problem& problem, std::vector<double>& x, Summary& summary,
                    const IterationCallback& callback) = 0;
+
+ private:
+  std::optional<std::uint64_t> schedule_seed_;
 };
 
 /// For run(): passes the row for `iteration` — evaluations so far and wall

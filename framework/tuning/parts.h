@@ -22,6 +22,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/registry.h"
+#include "core/run_cache.h"
 #include "core/search_space.h"
 #include "materials/palette.h"
 #include "reducer/node.h"
@@ -147,6 +148,9 @@ concept CompatibleParts =
 /// (Relative file names in properties resolve with Properties::existing_file.)
 struct PartContext {
   const MaterialPalette& palette;
+  /// What the run's parts share (tables, spectra, meshes); null outside a
+  /// run, when each part makes its own.
+  RunCache* cache = nullptr;
 };
 
 using SimulatorRegistry = Registry<Simulator, const PartContext&>;

@@ -84,7 +84,7 @@ class Annealing final : public Optimizer {
           "Gaussian step of a continuous variable, as a fraction of its range"},
          {"swap_probability", "number in [0, 1]", "0.2",
           "chance that a move is a swap with a neighbour (problems with neighbour moves)"},
-         {"seed", "integer", "1", "random seed; a seed gives the same run every time"}},
+         {"seed", "integer", "1", "picks the random stream (under a schedule, mixed with the run's seed and the tuner's place)"}},
         R"({"type": "annealing", "iterations": 10000, "initial_temperature": 1.0, )"
         R"("cooling": 0.999, "schedule": "exponential", "seed": 1})"};
   }
@@ -94,7 +94,7 @@ class Annealing final : public Optimizer {
  protected:
   void run(Problem& problem, std::vector<double>& x, Summary& summary,
            const IterationCallback& callback) override {
-    Random random(static_cast<std::uint64_t>(options_.seed));
+    Random random(random_seed(options_.seed));
     const int n = problem.dimension();
     std::vector<int> movable;
     for (int i = 0; i < n; ++i) {
@@ -170,8 +170,6 @@ class Annealing final : public Optimizer {
     summary.details["final_temperature"] = temperature;
   }
 
-  // A tuner network reseeds every run (see Optimizer::set_seed).
-  void set_seed(std::uint64_t seed) override { options_.seed = static_cast<int>(seed % 2147483647u); }
 
  private:
   static Options read(const Properties& properties) {

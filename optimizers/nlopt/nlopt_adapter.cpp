@@ -146,7 +146,7 @@ class NloptAdapter final : public Optimizer {
              {"ftol_rel", "number", "1e-10", "stop when the relative change of error falls below"},
              {"xtol_rel", "number", "1e-8", "stop when the relative change of x falls below"},
              {"max_seconds", "number", "0", "wall-time limit; 0: none"},
-             {"seed", "integer", "1", "seed of NLopt's stochastic algorithms"}},
+             {"seed", "integer", "1", "picks the stream of NLopt's stochastic algorithms (under a schedule, mixed with the run's seed and the tuner's place)"}},
             R"({"type": "nlopt", "algorithm": "LD_LBFGS", "max_evaluations": 1000, )"
             R"("ftol_rel": 1e-10, "xtol_rel": 1e-8})"};
   }
@@ -204,7 +204,7 @@ class NloptAdapter final : public Optimizer {
       nlopt_set_xtol_rel(local.get(), options_.xtol_rel);
       nlopt_set_local_optimizer(opt, local.get());
     }
-    nlopt_srand(static_cast<unsigned long>(options_.seed));
+    nlopt_srand(static_cast<unsigned long>(random_seed(options_.seed)));
 
     double minimum = 0;
     const nlopt_result result = nlopt_optimize(opt, x.data(), &minimum);
@@ -251,8 +251,6 @@ class NloptAdapter final : public Optimizer {
       x[i] = problem.domain(static_cast<int>(i)).nearest_admissible(x[i]);
   }
 
-  // A tuner network reseeds every run (see Optimizer::set_seed).
-  void set_seed(std::uint64_t seed) override { options_.seed = static_cast<int>(seed % 2147483647u); }
 
  private:
   static Options read(const Properties& properties) {

@@ -80,7 +80,7 @@ class Spsa final : public Optimizer {
          {"A", "number", "-1", "stability constant A; negative means 10% of iterations"},
          {"alpha", "number", "0.602", "decay exponent of a_k"},
          {"gamma", "number", "0.101", "decay exponent of c_k"},
-         {"seed", "integer", "1", "random seed; a seed gives the same run every time"},
+         {"seed", "integer", "1", "picks the random stream (under a schedule, mixed with the run's seed and the tuner's place)"},
          {"result", "string", "\"best_seen\"",
           "best_seen: the lowest error evaluated, the final iterate included; last_iterate: "
           "the final iterate (better when the error is noisy)"}},
@@ -93,7 +93,7 @@ class Spsa final : public Optimizer {
   void run(Problem& problem, std::vector<double>& x, Summary& summary,
            const IterationCallback& callback) override {
     const auto n = static_cast<size_t>(problem.dimension());
-    Random random(static_cast<std::uint64_t>(options_.seed));
+    Random random(random_seed(options_.seed));
     // Scaled coordinates u: x = offset + scale·u, u in [0, 1] for bounded variables.
     std::vector<double> offset(n), scale(n), u(n), lower(n), upper(n);
     for (size_t i = 0; i < n; ++i) {
@@ -184,8 +184,6 @@ class Spsa final : public Optimizer {
     summary.details["A"] = big_a;
   }
 
-  // A tuner network reseeds every run (see Optimizer::set_seed).
-  void set_seed(std::uint64_t seed) override { options_.seed = static_cast<int>(seed % 2147483647u); }
 
  private:
   static Options read(const Properties& properties) {

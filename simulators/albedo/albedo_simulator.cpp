@@ -11,9 +11,7 @@
 // of columns builds one table.
 
 #include <cmath>
-#include <map>
 #include <memory>
-#include <mutex>
 #include <vector>
 
 #include <fmt/format.h>
@@ -38,7 +36,7 @@ void collect_free_parameters(ReducerNode& node, std::vector<Parameter*>& out) {
 class AlbedoSimulator final : public SimulatorFor<AlbedoObservation> {
  public:
   AlbedoSimulator(const Properties& properties, const PartContext& context)
-      : palette_(&context.palette) {
+      : palette_(&context.palette), cache_(context.cache) {
     depth_mm_ = properties.get_in_range("depth_mm", 3.0, 1e-3, 1e3);
     step_mm_ = properties.get_in_range("step_mm", 0.005, 1e-5, depth_mm_);
     const auto at = properties.get<std::array<double, 2>>("at", {0.0, 0.0});
@@ -130,28 +128,25 @@ class AlbedoSimulator final : public SimulatorFor<AlbedoObservation> {
     for (const KubelkaMunkMaterial& m : optics_) {
       for (const KubelkaMunkLayer& c : m.rgb) key += fmt::format("|{},{}", c.k, c.s);
     }
-    static std::mutex mutex;
-    static std::map<std::string, std::shared_ptr<const AlbedoTable>> cache;
-    std::lock_guard lock(mutex);
-    auto& entry = cache[key];
-    if (!entry) {
-      auto table = std::make_shared<AlbedoTable>(static_cast<size_t>(size));
+    auto table = cached<const AlbedoTable>(cache_, key, [&] {
+      auto made = std::make_shared<AlbedoTable>(static_cast<size_t>(size));
       for (long long index = 0; index < size; ++index) {
         for (size_t i = 0; i < free_.size(); ++i) {
           free_[i]->set(free_[i]->admissible((index / strides_[i]) % free_[i]->cardinality()));
         }
         evaluate_subtree(node);
-        (*table)[static_cast<size_t>(index)] = compute(node);
+        (*made)[static_cast<size_t>(index)] = compute(node);
       }
       spdlog::debug("albedo: tabulated {} stackings", size);
-      entry = std::move(table);
-    }
+      return std::shared_ptr<const AlbedoTable>(std::move(made));
+    });
     for (size_t i = 0; i < free_.size(); ++i) free_[i]->set(saved[i]);
     evaluate_subtree(node);
-    return entry;
+    return table;
   }
 
   const MaterialPalette* palette_;
+  RunCache* cache_;  ///< the run's: identical subtrees share one table
   double depth_mm_ = 3, step_mm_ = 0.005, lateral_a_ = 0, lateral_b_ = 0;
   long long max_table_ = 1000000;
   std::vector<KubelkaMunkMaterial> optics_;  ///< by material id

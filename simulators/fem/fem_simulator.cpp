@@ -45,7 +45,10 @@ double seconds_since(Clock::time_point start) {
 class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
  public:
   FemSimulator(const Properties& properties, const PartContext& context)
-      : settings_(FemSettings::read(properties)), where_(properties.where()), palette_(&context.palette) {
+      : settings_(FemSettings::read(properties)),
+        where_(properties.where()),
+        palette_(&context.palette),
+        cache_(context.cache) {
     // Lamé parameters (MPa = N/mm²) of every material the tree may assign.
     lame_.assign(palette_->size(), {0.0, 0.0});
     for (MaterialId id = 1; id < palette_->size(); ++id) {
@@ -68,7 +71,7 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
     const Solid& solid = domain.require_solid(name());
     domain_ = domain;
     check_mesh_fits(solid.volume(), settings_.mesh, where_ + "/max_tet_volume_mm3");
-    meshed_ = conformed_mesh(solid, domain.tree(), settings_.mesh, settings_.follow_interfaces, &mesh_reused_);
+    meshed_ = conformed_mesh(solid, domain.tree(), settings_.mesh, settings_.follow_interfaces, cache_, &mesh_reused_);
     mesh_ = &meshed_->mesh;
     conform_ = meshed_->conform;
     timings_.mesh = mesh_reused_ ? 0.0 : meshed_->mesh_seconds;
@@ -215,8 +218,9 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
   FemSettings settings_;
   std::string where_;
   const MaterialPalette* palette_;
+  RunCache* cache_;  ///< the run's: simulators of one run share a mesh
   SimulationDomain domain_;
-  std::shared_ptr<const ConformedMesh> meshed_;  // shared with other simulators (mesh_cache.h)
+  std::shared_ptr<const ConformedMesh> meshed_;  // shared with the run's other simulators (mesh_cache.h)
   const TetMesh* mesh_ = nullptr;
   bool mesh_reused_ = false;
   ConformReport conform_;

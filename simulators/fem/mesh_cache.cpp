@@ -2,14 +2,13 @@
 
 #include <chrono>
 #include <cstring>
-#include <deque>
-#include <mutex>
 #include <sstream>
 #include <string>
 #include <utility>
 
 #include <malloc.h>
 
+#include "core/run_cache.h"
 #include "geometry/solid.h"
 
 namespace spec2fab::fem {
@@ -46,34 +45,24 @@ std::string key_of(const Solid& solid, const ReducerTree& tree, const TetgenOpti
 
 std::shared_ptr<const ConformedMesh> conformed_mesh(const Solid& solid, const ReducerTree& tree,
                                                     const TetgenOptions& options, bool follow_interfaces,
-                                                    bool* reused) {
-  static std::mutex mutex;
-  static std::deque<std::pair<std::string, std::shared_ptr<const ConformedMesh>>> recent;
-  const std::string key = key_of(solid, tree, options, follow_interfaces);
-  {
-    std::lock_guard<std::mutex> lock(mutex);
-    for (const auto& [k, mesh] : recent) {
-      if (k == key) {
-        if (reused) *reused = true;
-        return mesh;
-      }
-    }
-  }
-  auto made = std::make_shared<ConformedMesh>();
-  auto start = Clock::now();
-  made->mesh = tetrahedralize(solid.mesh(), options);
-  made->mesh_seconds = std::chrono::duration<double>(Clock::now() - start).count();
-  start = Clock::now();
-  if (follow_interfaces) made->conform = conform_to_interfaces(made->mesh, tree);
-  made->conform_seconds = std::chrono::duration<double>(Clock::now() - start).count();
-  // TetGen's pools are freed by now but glibc keeps their pages (~0.3 kB per
-  // tet); hand them back so the solver's peak does not stand on them.
-  malloc_trim(0);
-  std::lock_guard<std::mutex> lock(mutex);
-  recent.emplace_front(key, made);
-  if (recent.size() > 4) recent.pop_back();
-  if (reused) *reused = false;
-  return made;
+                                                    RunCache* cache, bool* reused) {
+  bool made_here = false;
+  auto mesh = cached<const ConformedMesh>(cache, key_of(solid, tree, options, follow_interfaces), [&] {
+    made_here = true;
+    auto made = std::make_shared<ConformedMesh>();
+    auto start = Clock::now();
+    made->mesh = tetrahedralize(solid.mesh(), options);
+    made->mesh_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    start = Clock::now();
+    if (follow_interfaces) made->conform = conform_to_interfaces(made->mesh, tree);
+    made->conform_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    // TetGen's pools are freed by now but glibc keeps their pages (~0.3 kB
+    // per tet); hand them back so the solver's peak does not stand on them.
+    malloc_trim(0);
+    return std::shared_ptr<const ConformedMesh>(std::move(made));
+  });
+  if (reused) *reused = !made_here;
+  return mesh;
 }
 
 }  // namespace spec2fab::fem

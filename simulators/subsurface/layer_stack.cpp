@@ -3,12 +3,13 @@
 #include <fmt/format.h>
 
 #include "albedo/kubelka_munk.h"
+#include "core/run_cache.h"
 
 namespace spec2fab {
 
 std::shared_ptr<LayerStackModel> LayerStackModel::shared(const MaterialPalette& palette,
                                                          std::shared_ptr<const RadialBasis> basis,
-                                                         double step_mm) {
+                                                         double step_mm, RunCache* cache) {
   // Keyed by content: another palette with the same optics shares the spectra.
   std::string key = fmt::format("{}|{}|{}", basis->size(), basis->radius_mm(), step_mm);
   for (MaterialId id = 0; id < palette.size(); ++id) {
@@ -16,12 +17,8 @@ std::shared_ptr<LayerStackModel> LayerStackModel::shared(const MaterialPalette& 
     key += fmt::format("|{},{},{}", fmt::join(m.absorption_per_mm.value, ","),
                        fmt::join(m.reduced_scattering_per_mm.value, ","), m.refractive_index.value);
   }
-  static std::mutex mutex;
-  static std::map<std::string, std::shared_ptr<LayerStackModel>> cache;
-  std::lock_guard lock(mutex);
-  auto& entry = cache[key];
-  if (!entry) entry = std::make_shared<LayerStackModel>(palette, std::move(basis), step_mm);
-  return entry;
+  return cached<LayerStackModel>(cache, key,
+                                 [&] { return std::make_shared<LayerStackModel>(palette, std::move(basis), step_mm); });
 }
 
 LayerStackModel::LayerStackModel(const MaterialPalette& palette,

@@ -25,6 +25,8 @@
 
 namespace spec2fab {
 
+class RunCache;
+
 /// A layer's transfer functions at every frequency of a model, RGB interleaved.
 struct LayerSpectra {
   std::vector<double> reflectance_top, reflectance_bottom, transmittance_down, transmittance_up;
@@ -40,11 +42,11 @@ struct StackRun {
 /// spectrum computed once and kept (thread-safe; references stay valid).
 class LayerStackModel {
  public:
-  /// One model per (optics of the palette, basis, step): tuners of the same
-  /// run share their layer spectra.
+  /// One model per (optics of the palette, basis, step) in a run: its
+  /// tuners share their layer spectra. A new one each call when `cache` is null.
   static std::shared_ptr<LayerStackModel> shared(const MaterialPalette& palette,
                                                  std::shared_ptr<const RadialBasis> basis,
-                                                 double step_mm);
+                                                 double step_mm, RunCache* cache);
 
   LayerStackModel(const MaterialPalette& palette, std::shared_ptr<const RadialBasis> basis,
                   double step_mm);

@@ -106,8 +106,8 @@ class RadialProfileGoal final : public GoalFor<RadialProfileObservation> {
         medium.rgb[c] = {m.absorption_per_mm.value[c], m.reduced_scattering_per_mm.value[c]};
       }
     }
-    target_.reset(grid.basis());
-    target_.coefficients = dipole_profile_coefficients(medium, *grid.basis());
+    target_.reset(grid.basis(context.cache));
+    target_.coefficients = dipole_profile_coefficients(medium, *target_.basis);
   }
   std::string name() const override { return "radial_profile"; }
   const RadialProfileObservation& typed_target() const override { return target_; }

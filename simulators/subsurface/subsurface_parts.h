@@ -19,7 +19,9 @@ struct ProfileGrid {
   int samples = 400;
 
   static ProfileGrid read(const Properties& properties);
-  std::shared_ptr<const RadialBasis> basis() const { return RadialBasis::shared(samples, radius_mm); }
+  std::shared_ptr<const RadialBasis> basis(RunCache* cache) const {
+    return RadialBasis::shared(samples, radius_mm, cache);
+  }
 };
 
 /// A homogeneous translucent medium, RGB.

@@ -23,7 +23,7 @@ class SubsurfaceSimulator final : public SimulatorFor<RadialProfileObservation> 
     const auto at = properties.get<std::array<double, 2>>("at", {0.0, 0.0});
     lateral_a_ = at[0];
     lateral_b_ = at[1];
-    model_ = LayerStackModel::shared(context.palette, grid.basis(), step_mm_);
+    model_ = LayerStackModel::shared(context.palette, grid.basis(context.cache), step_mm_, context.cache);
     samples_.resize(static_cast<size_t>(std::ceil(depth_mm_ / step_mm_ - 1e-9)));
     runs_.reserve(samples_.size());
     spectrum_.resize(model_->value_count());

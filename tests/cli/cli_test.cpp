@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include "cli_support.h"
@@ -42,6 +43,13 @@ TEST_F(Cli, ValidateAcceptsShippedExperiments) {
   }
 }
 
+// The version is written once, in CMakeLists.txt's project().
+TEST_F(Cli, VersionIsTheProjectsVersion) {
+  const Result r = spec2fab("--version");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_EQ(single_line(r.out), "spec2fab " SPEC2FAB_PROJECT_VERSION "\n");
+}
+
 TEST_F(Cli, ListShowsNodesTranslatorsMaterialsAndPrinters) {
   const Result r = spec2fab("list");
   EXPECT_EQ(r.code, 0);
@@ -49,6 +57,31 @@ TEST_F(Cli, ListShowsNodesTranslatorsMaterialsAndPrinters) {
                            "albedo", "ciede2000", "rgb_mse", "annealing", "branch_and_bound",
                            "nlopt", "VeroCyan", "objet500_connex.json", "j750.json"}) {
     EXPECT_THAT(r.out, HasSubstr(name));
+  }
+  // One line per type: the name, then the summary's whole first sentence,
+  // in one column per section however long the names.
+  std::istringstream lines(r.out);
+  std::string line, section;
+  std::map<std::string, size_t> summary_column;
+  std::map<std::string, std::string> first;
+  while (std::getline(lines, line)) {
+    if (!line.empty() && line.back() == ':' && line[0] != ' ') section = line;
+    if (line.rfind("  ", 0) != 0 || line.rfind("   ", 0) == 0 || section.rfind("materials", 0) == 0) continue;
+    const size_t name_end = line.find(' ', 2);
+    const size_t summary = line.find_first_not_of(' ', name_end);
+    ASSERT_NE(summary, std::string::npos) << line;
+    EXPECT_GE(summary - name_end, 2u) << "a name runs into its summary: " << line;
+    const auto [at, fresh] = summary_column.emplace(section, summary);
+    EXPECT_EQ(at->second, summary) << "misaligned in " << section << ": " << line;
+    first[section + line.substr(2, name_end - 2)] = line.substr(summary);
+  }
+  EXPECT_EQ(first["translators:albedo"].substr(0, 39), "Spatially varying albedo (paper Fig. 7)");
+  EXPECT_EQ(first["translators:caustics_texture"].back(), '.');
+  EXPECT_THAT(first["translators:caustics_texture"], HasSubstr("(paper Fig. 1 right, Fig. 11)"));
+  EXPECT_THAT(first["goals:radial_profile"], HasSubstr("(Jensen et al. 2001's dipole)."));
+  for (const char* name : {"optimizers:annealing", "optimizers:ceres", "optimizers:nlopt", "metrics:image_mse",
+                           "goals:caustic_image", "goals:values"}) {
+    EXPECT_GT(first[name].size(), 20u) << name << " has no summary";
   }
   const Result verbose = spec2fab("list node --verbose");
   EXPECT_THAT(verbose.out, HasSubstr("depth_mm"));
@@ -299,6 +332,7 @@ TEST_F(Cli, TunedRunRecordsEverySummaryAndFindsAReachableColour) {
     EXPECT_EQ(read(dir_ / "t1" / name), read(dir_ / "t2" / name)) << name;
   }
   const auto result = nlohmann::json::parse(read(dir_ / "t1" / "result.json"));
+  EXPECT_EQ(result["spec2fab_version"], SPEC2FAB_PROJECT_VERSION);
   const auto& runs = result["tuning"]["tuner_runs"];
   ASSERT_EQ(runs.size(), 2u);
   EXPECT_EQ(runs[0]["tuner"], "exact");

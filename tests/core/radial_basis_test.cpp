@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/radial_basis.h"
+#include "core/run_cache.h"
 
 namespace spec2fab {
 namespace {
@@ -63,8 +64,11 @@ TEST(RadialBasis, SamplesRoundTripThroughCoefficients) {
 }
 
 TEST(RadialBasis, SharedBasesAreBuiltOnce) {
-  EXPECT_EQ(RadialBasis::shared(64, 5.0), RadialBasis::shared(64, 5.0));
-  EXPECT_NE(RadialBasis::shared(64, 5.0), RadialBasis::shared(64, 6.0));
+  RunCache run, another_run;
+  EXPECT_EQ(RadialBasis::shared(64, 5.0, &run), RadialBasis::shared(64, 5.0, &run));
+  EXPECT_NE(RadialBasis::shared(64, 5.0, &run), RadialBasis::shared(64, 6.0, &run));
+  EXPECT_NE(RadialBasis::shared(64, 5.0, &run), RadialBasis::shared(64, 5.0, &another_run));
+  EXPECT_NE(RadialBasis::shared(64, 5.0, nullptr), RadialBasis::shared(64, 5.0, nullptr));
 }
 
 }  // namespace

@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <optional>
 #include <random>
+#include <string>
 
 #include "optimizers/optimizer_test_support.h"
 
@@ -120,6 +122,27 @@ TEST(Spsa, CallbackTerminateStops) {
   EXPECT_EQ(summary.termination, Termination::user_terminate);
   EXPECT_EQ(summary.iterations, 10);
   EXPECT_LT(summary.final_error, summary.initial_error);
+}
+
+// The "seed" option has one meaning, alone or under a schedule: it picks
+// the random stream. A schedule's per-run seed is mixed in, not put in its
+// place, so both the option and the schedule's seed change the run.
+TEST(Spsa, SeedOptionPicksTheStreamAloneAndUnderASchedule) {
+  const auto end_point = [](int option_seed, std::optional<std::uint64_t> schedule_seed) {
+    NoisyQuadratic problem(0.0);  // noiseless: only the optimizer's draws differ
+    std::vector<double> x(20, 0.9);
+    auto optimizer = optimizer_from(R"({"type": "spsa", "iterations": 20, "a": 0.05, "seed": )" +
+                                    std::to_string(option_seed) + "}");
+    if (schedule_seed) optimizer->set_seed(*schedule_seed);
+    optimizer->minimize(problem, x);
+    return x;
+  };
+  EXPECT_EQ(end_point(1, std::nullopt), end_point(1, std::nullopt));
+  EXPECT_NE(end_point(1, std::nullopt), end_point(2, std::nullopt));
+  EXPECT_EQ(end_point(1, 77), end_point(1, 77));
+  EXPECT_NE(end_point(1, 77), end_point(2, 77)) << "the option must still matter under a schedule";
+  EXPECT_NE(end_point(1, 77), end_point(1, 78)) << "each tuner run must draw its own stream";
+  EXPECT_NE(end_point(1, 77), end_point(1, std::nullopt));
 }
 
 }  // namespace

@@ -69,7 +69,7 @@ TEST(InterfaceConformer, ColumnsAndATiltedPlaneAreFollowedExactly) {
 namespace spec2fab::fem {
 namespace {
 
-TEST(MeshCache, SharesAMeshForTheSameSolidTreeAndOptionsOnly) {
+TEST(MeshCache, SharesAMeshWithinARunForTheSameSolidTreeAndOptionsOnly) {
   const MaterialPalette palette({testing::elastic_material("a", 1e9, 0.3), testing::elastic_material("b", 1e8, 0.3)});
   const std::string json = R"({"type": "layered", "layers": [{"material": "a", "thickness_mm": 2.3}, {"material": "b"}]})";
   Solid solid(make_box(Vec3(0, 0, 0), Vec3(10, 8, 6), 1), UvSource::planar);
@@ -78,21 +78,27 @@ TEST(MeshCache, SharesAMeshForTheSameSolidTreeAndOptionsOnly) {
   same.bind(solid);
   TetgenOptions options;
   options.max_volume_mm3 = 3.0;
+  RunCache run;
   bool reused = true;
-  const auto first = conformed_mesh(solid, tree, options, true, &reused);
+  const auto first = conformed_mesh(solid, tree, options, true, &run, &reused);
   EXPECT_FALSE(reused);
-  EXPECT_EQ(conformed_mesh(solid, same, options, true, &reused), first);
+  EXPECT_EQ(conformed_mesh(solid, same, options, true, &run, &reused), first);
   EXPECT_TRUE(reused) << "an equal tree (another object) on the same surface";
+  RunCache another_run;
+  EXPECT_NE(conformed_mesh(solid, same, options, true, &another_run, &reused), first);
+  EXPECT_FALSE(reused) << "nothing carries over from one run to the next";
+  EXPECT_NE(conformed_mesh(solid, same, options, true, nullptr, &reused), first);
+  EXPECT_FALSE(reused) << "no run, no sharing";
   // Moving an interface, or another tet size, makes another mesh.
   const SearchSpace parameters = tree.all_parameters();
   for (const SearchSpace::Entry& e : parameters.entries()) {
     if (e.name == "layers/0/thickness_mm") e.parameter->set(2.9);
   }
   tree.evaluate();
-  EXPECT_NE(conformed_mesh(solid, tree, options, true, &reused), first);
+  EXPECT_NE(conformed_mesh(solid, tree, options, true, &run, &reused), first);
   EXPECT_FALSE(reused);
   options.max_volume_mm3 = 2.0;
-  EXPECT_NE(conformed_mesh(solid, same, options, true, &reused), first);
+  EXPECT_NE(conformed_mesh(solid, same, options, true, &run, &reused), first);
   EXPECT_FALSE(reused);
 }
 

@@ -189,7 +189,7 @@ TEST_F(SubsurfaceTest, SplittingALayerChangesNothingAndStacksStayWithinEnergyBou
       {"material": "VeroCyan", "thickness_mm": 0.27}, {"material": "VeroClear"}]})");
   EXPECT_EQ(simulate(*one, options).coefficients, simulate(*split, options).coefficients);
   // Random stacks: the total reflectance lies in [0, 1] and under a white backing's.
-  auto model = LayerStackModel::shared(palette_, RadialBasis::shared(128, 8.0), 0.027);
+  auto model = LayerStackModel::shared(palette_, RadialBasis::shared(128, 8.0, nullptr), 0.027, nullptr);
   std::mt19937 random(5);
   std::vector<double> spectrum(model->value_count());
   const MaterialId white = palette_.id("VeroWhitePlus", "test");
@@ -225,7 +225,7 @@ std::unique_ptr<Tuner> stack_tuner(const MaterialPalette& palette, ReducerNode& 
       for (const std::string& m : materials) o.materials.push_back(palette.id(m, "test"));
       o.steps = steps;
     }
-    auto model = LayerStackModel::shared(palette, RadialBasis::shared(128, 8.0), 0.027);
+    auto model = LayerStackModel::shared(palette, RadialBasis::shared(128, 8.0, nullptr), 0.027, nullptr);
     auto bound = std::make_shared<StackBound>(model, options, palette.id("VeroWhitePlus", "test"));
     tuner->set_lower_bound([bound](std::span<const double> x, int assigned, const Observation& target) {
       return bound->lower_bound(x, assigned, static_cast<const RadialProfileObservation&>(target));
@@ -310,7 +310,8 @@ TEST_F(SubsurfaceTest, BranchAndBoundEqualsExhaustiveSearchOnSmallStacks) {
 }
 
 TEST(SubsurfaceParts, ProfileL2IsTheAreaIntegratedSquaredDifference) {
-  const RadialBasis& basis = *RadialBasis::shared(400, 16.0);
+  const auto owned = RadialBasis::shared(400, 16.0, nullptr);  // no run: the caller owns it
+  const RadialBasis& basis = *owned;
   const MeasuredMedium marble = jensen2001_media()[4], milk = jensen2001_media()[6];
   ASSERT_EQ(marble.name, "marble");
   ASSERT_EQ(milk.name, "skimmilk");

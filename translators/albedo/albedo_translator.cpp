@@ -65,7 +65,7 @@ class AlbedoTranslator final : public Translator {
 
     const nlohmann::json optimizer =
         experiment.optimizer_or(nlohmann::json{{"type", "exhaustive"}});
-    const PartContext context{palette};
+    const PartContext context{palette, &experiment.cache()};
     auto make_tuner = [&](int i, int j, const Rgb& target) {
       const nlohmann::json parts = {
           {"simulator", {{"type", "albedo"}, {"depth_mm", shell}, {"step_mm", step / 8}}},

@@ -177,7 +177,7 @@ class CausticsTextureTranslator final : public Translator {
 
     // Texture tuners, 0 … columns − 1: the albedo translator's, over a dark
     // ground (the clear slab under the inks reflects nothing back).
-    const PartContext context{palette};
+    const PartContext context{palette, &experiment.cache()};
     const nlohmann::json texture_optimizer = experiment.root().has("texture_optimizer")
                                                  ? experiment.root().peek("texture_optimizer")
                                                  : nlohmann::json{{"type", "exhaustive"}};

@@ -79,7 +79,7 @@ class FacetCausticsTranslator final : public Translator {
     // The goal as irradiance, then as kernels.
     image_goal_ = GoalRegistry::instance().create(
         Properties::wrap(settings_.image_goal(), experiment.file().string() + " (goal image)"), "goal",
-        PartContext{palette});
+        PartContext{palette, &experiment.cache()});
     raster_.width = settings_.image[0];
     raster_.height = settings_.image[1];
     raster_.size_mm = {settings_.receiver_mm[0], settings_.receiver_mm[1]};
@@ -132,7 +132,7 @@ class FacetCausticsTranslator final : public Translator {
             {"goal", {{"type", "values"}, {"values", {kernels_[k].centre_mm.x(), kernels_[k].centre_mm.y()}}}},
             {"optimizer", aim}};
         auto tuner = build_tuner(Properties::wrap(parts, experiment.file().string() + " (facet tuner)"),
-                                 fmt::format("facet_{}_{}", i, j), PartContext{palette});
+                                 fmt::format("facet_{}_{}", i, j), PartContext{palette, &experiment.cache()});
         tuner->set_node(tree_->root().child(k));
         network_.add(std::move(tuner));
       }

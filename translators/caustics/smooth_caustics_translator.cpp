@@ -76,7 +76,7 @@ class SmoothCausticsTranslator final : public Translator {
       }
     }
     auto tuner = build_tuner(Properties::wrap(parts, experiment.file().string() + " (tuner)"), "surface",
-                             PartContext{palette});
+                             PartContext{palette, &experiment.cache()});
     main_label_ = optimizer_label(optimizer);
     tuner->set_node(tree_->root());
     network_.add(std::move(tuner));

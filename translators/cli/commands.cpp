@@ -148,7 +148,8 @@ int simulate_command(const SimulateArguments& arguments) {
   const MaterialLibrary library = MaterialLibrary::load(config.existing_file("materials"));
   const PrinterProfile printer = PrinterProfile::load(config.existing_file("printer"));
   const MaterialPalette palette(library, printer);
-  const PartContext context{palette};
+  RunCache cache;
+  const PartContext context{palette, &cache};
   const auto& simulators = SimulatorRegistry::instance();
   if (!simulators.contains(arguments.simulator)) {
     throw InputError("simulate: unknown simulator '" + arguments.simulator + "'" +
@@ -216,13 +217,12 @@ namespace {
 template <class RegistryType>
 void print_registry(const char* heading, const RegistryType& registry, bool verbose) {
   std::cout << heading << ":\n";
+  size_t width = 0;  // the names' column fits the longest
+  for (const std::string& name : registry.names()) width = std::max(width, name.size());
   for (const std::string& name : registry.names()) {
     const TypeDoc& doc = registry.entry(name).doc;
     if (!verbose) {
-      // Up to the first full stop followed by a space (the whole summary when it has none).
-      const size_t stop = doc.summary.find(". ");
-      const std::string first_sentence = stop == std::string::npos ? doc.summary : doc.summary.substr(0, stop + 1);
-      std::printf("  %-12s %s\n", name.c_str(), first_sentence.c_str());
+      std::printf("  %-*s  %s\n", static_cast<int>(width), name.c_str(), first_sentence(doc.summary).c_str());
       continue;
     }
     std::cout << "\n  " << name << "\n    " << doc.summary << "\n    properties:\n";
@@ -270,9 +270,12 @@ void print_materials(const fs::path& datasets, bool verbose) {
 
 void print_printers(const fs::path& datasets, bool verbose) {
   std::cout << "printers (" << (datasets / "printers").string() << "):\n";
-  for (const fs::path& file : json_files(datasets / "printers")) {
+  const std::vector<fs::path> files = json_files(datasets / "printers");
+  size_t width = 0;
+  for (const fs::path& file : files) width = std::max(width, file.filename().string().size());
+  for (const fs::path& file : files) {
     const PrinterProfile p = PrinterProfile::load(file);
-    std::printf("  %-22s %s, %gx%g dpi, %g mm layers, materials: %s\n",
+    std::printf("  %-*s  %s, %gx%g dpi, %g mm layers, materials: %s\n", static_cast<int>(width),
                 file.filename().string().c_str(), p.name.c_str(), p.dpi[0], p.dpi[1], p.layer_mm,
                 join(p.model_materials).c_str());
     if (verbose) {

@@ -3,12 +3,14 @@
 
 #include <cstdlib>
 #include <iostream>
+#include <string>
 
 #include <CLI/CLI.hpp>
 
 #include "commands.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "core/version.h"
 
 namespace {
 
@@ -26,7 +28,7 @@ int main(int argc, char** argv) {
       "An experiment file (JSON) names a translator and its five inputs: geometry, goal,\n"
       "simulation, materials, printer. See README.md and docs/experiment-format.md."};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "spec2fab 0.1.0");
+  app.set_version_flag("--version", std::string("spec2fab ") + version());
   bool quiet = false, verbose = false;
   app.add_flag("-q,--quiet", quiet, "only warnings and errors");
   app.add_flag("-v,--verbose", verbose, "debug messages");

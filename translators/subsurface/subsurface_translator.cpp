@@ -80,7 +80,7 @@ class SubsurfaceTranslator final : public Translator {
                                       {"samples", grid_.samples},
                                       {"depth_mm", shell},
                                       {"step_mm", step_mm_}};
-    model_ = LayerStackModel::shared(palette, grid_.basis(), step_mm_);
+    model_ = LayerStackModel::shared(palette, grid_.basis(&experiment.cache()), step_mm_, &experiment.cache());
     std::vector<LayerOptions> options(static_cast<size_t>(layer_count_));
     for (LayerOptions& o : options) {
       for (const std::string& m : materials_) o.materials.push_back(palette.id(m, goal.where("materials")));
@@ -89,7 +89,7 @@ class SubsurfaceTranslator final : public Translator {
     bound_ = std::make_shared<StackBound>(model_, options, palette.id(backing_, goal.where("backing")));
     const nlohmann::json optimizer =
         experiment.optimizer_or(nlohmann::json{{"type", "branch_and_bound"}, {"value_order", "best_bound_first"}});
-    const PartContext context{palette};
+    const PartContext context{palette, &experiment.cache()};
     for (int j = 0; j < columns_[1]; ++j) {
       for (int i = 0; i < columns_[0]; ++i) {
         const size_t medium = square_medium(i, j);

@@ -28,7 +28,7 @@ class TreeTranslator final : public Translator {
     tree_->bind(experiment.solid(), experiment.geometry_spec().field_voxel_mm);
     outputs_ = TreeOutputOptions::read(goal, experiment, *tree_);
     if (goal.has("tuners")) {
-      tuning_ = build_tuning_plan(goal, *tree_, PartContext{experiment.palette()});
+      tuning_ = build_tuning_plan(goal, *tree_, PartContext{experiment.palette(), &experiment.cache()});
     } else if (const SearchSpace free = tree_->search_space(); free.dimension() > 0) {
       // Without tuners nothing is tuned; a free parameter is likely a mistake.
       spdlog::warn(

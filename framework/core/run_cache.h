@@ -1,0 +1,57 @@
+#pragma once
+/// Values that parts of one run share because they are costly to make and
+/// the same for every part that asks — tabulated albedos, layer spectra, a
+/// tet mesh — keyed by their type and by the content they are made from.
+///
+/// A run (an experiment, a `spec2fab simulate`) owns one RunCache and hands
+/// it to its parts through PartContext, so what is cached lives exactly as
+/// long as the run: nothing leaks from one run into the next in the same
+/// process (tests, a batch of experiments), and nothing is process-wide.
+
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <type_traits>
+#include <typeindex>
+#include <utility>
+
+namespace spec2fab {
+
+class RunCache {
+ public:
+  /// The value of type T stored under `key`, made by `make()` (returning a
+  /// std::shared_ptr<T>) on the first request. T may be const; a value that
+  /// fills itself in lazily (and is thread-safe doing so) is asked for as
+  /// non-const. Thread-safe: `make` runs once per key, under the cache's
+  /// lock, so a part that asks while another makes the same value waits for
+  /// it instead of making it again.
+  template <class T, class Make>
+  std::shared_ptr<T> get(const std::string& key, Make&& make) {
+    std::lock_guard lock(mutex_);
+    auto& entry = entries_[{std::type_index(typeid(T)), key}];
+    if (!entry) entry = std::const_pointer_cast<std::remove_const_t<T>>(std::shared_ptr<T>(make()));
+    return std::static_pointer_cast<T>(entry);
+  }
+
+  /// Values held (for tests and logs).
+  size_t size() const {
+    std::lock_guard lock(mutex_);
+    return entries_.size();
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  std::map<std::pair<std::type_index, std::string>, std::shared_ptr<void>> entries_;
+};
+
+/// `cache->get<T>(key, make)`, or make() alone when there is no cache (a
+/// part built outside any run, e.g. in a unit test).
+template <class T, class Make>
+std::shared_ptr<T> cached(RunCache* cache, const std::string& key, Make&& make) {
+  if (cache) return cache->get<T>(key, std::forward<Make>(make));
+  return std::shared_ptr<T>(make());
+}
+
+}  // namespace spec2fab
