@@ -13,6 +13,7 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "core/properties.h"
@@ -88,6 +89,21 @@ class Registry {
   std::map<std::string, Entry, std::less<>> entries_;
 };
 
+/// A registry as `spec2fab list` shows it. Each registry puts itself in the
+/// listing with SPEC2FAB_LIST_REGISTRY next to its parts' base, so a new
+/// kind of part needs no edit of the command.
+struct ListedRegistry {
+  int rank = 0;         ///< place in the listing (lower first)
+  std::string kind;     ///< as typed: "spec2fab list node"
+  std::string heading;  ///< "nodes"
+  std::function<std::vector<std::pair<std::string, TypeDoc>>()> entries;  ///< name and doc, sorted by name
+};
+
+inline std::vector<ListedRegistry>& listed_registries() {
+  static std::vector<ListedRegistry> all;
+  return all;
+}
+
 }  // namespace spec2fab
 
 #define SPEC2FAB_CONCAT_INNER(a, b) a##b
@@ -104,4 +120,19 @@ class Registry {
             return std::make_unique<Type>(properties, std::forward<decltype(args)>(args)...); \
           },                                                                              \
           Type::doc());                                                                   \
+  }
+
+/// Lists `RegistryType` in `spec2fab list` under `heading`, at `rank`. Use
+/// once, at namespace scope, in the file that owns the registry's base.
+#define SPEC2FAB_LIST_REGISTRY(RegistryType, rank, kind, heading)                          \
+  namespace {                                                                             \
+  [[maybe_unused]] const bool SPEC2FAB_CONCAT(listed_, __LINE__) = [] {                   \
+    ::spec2fab::listed_registries().push_back({rank, kind, heading, [] {                  \
+      std::vector<std::pair<std::string, ::spec2fab::TypeDoc>> out;                       \
+      const auto& registry = RegistryType::instance();                                    \
+      for (const std::string& name : registry.names()) out.emplace_back(name, registry.entry(name).doc); \
+      return out;                                                                         \
+    }});                                                                                  \
+    return true;                                                                          \
+  }();                                                                                    \
   }

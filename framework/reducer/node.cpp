@@ -122,3 +122,5 @@ void sample_along_depth(const ReducerNode& subtree, double a, double b, double s
 }
 
 }  // namespace spec2fab
+
+SPEC2FAB_LIST_REGISTRY(spec2fab::NodeRegistry, 10, "node", "nodes")

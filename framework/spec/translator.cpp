@@ -89,3 +89,5 @@ std::filesystem::path run_experiment(const std::filesystem::path& file, const Ru
 }
 
 }  // namespace spec2fab
+
+SPEC2FAB_LIST_REGISTRY(spec2fab::TranslatorRegistry, 20, "translator", "translators")

@@ -6,11 +6,15 @@
 ///
 /// Every observation also exposes its numbers as one flat array, so that
 /// generic machinery (error diffusion between tuners, CSV output) needs no
-/// knowledge of the type.
+/// knowledge of the type, and writes itself to files (`spec2fab simulate`,
+/// run previews): a new observation type says how in its own file, by
+/// overriding write_files; there is no list of types to extend.
 
 #include <array>
+#include <filesystem>
 #include <memory>
 #include <span>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -25,6 +29,9 @@ class Observation {
   virtual std::span<const double> values() const = 0;
   virtual std::span<double> values() = 0;
   virtual std::unique_ptr<Observation> clone() const = 0;
+  /// Writes the observation into `folder` in the format that fits it and
+  /// returns the file names; by default its values as values.csv.
+  virtual std::vector<std::string> write_files(const std::filesystem::path& folder) const;
 };
 
 template <class Derived>
@@ -43,6 +50,8 @@ struct ImageObservation final : ObservationOf<ImageObservation> {
   std::vector<double> pixels;
   std::span<const double> values() const override { return pixels; }
   std::span<double> values() override { return pixels; }
+  /// image.png (sRGB, 8 bit; scaled so the brightest is white when values exceed 1).
+  std::vector<std::string> write_files(const std::filesystem::path& folder) const override;
 };
 
 /// A radial diffuse reflectance profile R(r), RGB, as coefficients of an
@@ -66,6 +75,8 @@ struct RadialProfileObservation final : ObservationOf<RadialProfileObservation> 
   }
   std::span<const double> values() const override { return coefficients; }
   std::span<double> values() override { return coefficients; }
+  /// profile.csv: R(r) in 1/mm² at the basis's radii.
+  std::vector<std::string> write_files(const std::filesystem::path& folder) const override;
 };
 
 /// Displacements (mm), 3 per point: first `probe_count` probe points (at
@@ -79,6 +90,8 @@ struct DisplacementsObservation final : ObservationOf<DisplacementsObservation> 
   std::span<const double> probes() const { return {xyz_mm.data(), 3 * static_cast<size_t>(probe_count)}; }
   std::span<const double> values() const override { return xyz_mm; }
   std::span<double> values() override { return xyz_mm; }
+  /// observation.csv: probes first, then nodes.
+  std::vector<std::string> write_files(const std::filesystem::path& folder) const override;
 };
 
 /// Plain numbers (e.g. a coverage fraction, a scalar response).
@@ -95,6 +108,8 @@ struct AlbedoObservation final : ObservationOf<AlbedoObservation> {
   std::array<double, 3> rgb{};
   std::span<const double> values() const override { return rgb; }
   std::span<double> values() override { return rgb; }
+  /// albedo.csv (linear and 8-bit sRGB) and an sRGB swatch, albedo.png.
+  std::vector<std::string> write_files(const std::filesystem::path& folder) const override;
 };
 
 }  // namespace spec2fab

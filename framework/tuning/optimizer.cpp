@@ -199,3 +199,5 @@ std::unique_ptr<Optimizer> build_optimizer(const Properties& properties) {
 }
 
 }  // namespace spec2fab
+
+SPEC2FAB_LIST_REGISTRY(spec2fab::OptimizerRegistry, 60, "optimizer", "optimizers")

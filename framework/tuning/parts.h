@@ -27,7 +27,6 @@
 #include "materials/palette.h"
 #include "reducer/node.h"
 #include "tuning/observation.h"
-#include "tuning/observation_io.h"
 #include "tuning/simulation_domain.h"
 
 namespace spec2fab {
@@ -49,13 +48,13 @@ class Simulator {
 
   /// After simulate(subtree, out): writes what a person would look at into
   /// `folder` and returns the files written; by default the observation in
-  /// its generic form (write_observation). A simulator with better outputs
+  /// its own form (Observation::write_files). A simulator with better outputs
   /// (meshes, pictures, tables) overrides it, adds figures to `record`
   /// (simulation.json) and, where its values are better read from its files,
   /// sets record["values"] itself.
   virtual std::vector<std::string> write_report(const Observation& out, const std::filesystem::path& folder,
                                                 nlohmann::json& /*record*/) const {
-    return write_observation(out, folder);
+    return out.write_files(folder);
   }
 
   /// Reverse-mode derivative, for simulators that have one for this subtree

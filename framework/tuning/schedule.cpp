@@ -25,6 +25,20 @@ std::uint64_t tuner_seed(std::uint64_t run_seed, size_t phase, int sweep, size_t
   return mix(mix(mix(mix(run_seed) ^ phase) ^ static_cast<std::uint64_t>(sweep)) ^ tuner);
 }
 
+ErrorDiffusion::ErrorDiffusion(const Properties& phase, const CouplingContext& context)
+    : grid_width_(context.network.grid_width()) {
+  if (grid_width_ == 0) phase.fail("coupling", "error_diffusion needs a grid4 or grid8 network");
+  if (context.parallel) phase.fail("mode", "error_diffusion depends on the order: its phase must be serial");
+}
+
+TypeDoc ErrorDiffusion::doc() {
+  return {"Error diffusion over a grid network (Floyd-Steinberg weights): after a tuner is tuned, "
+          "its residual (target - simulated) goes to the neighbours not yet tuned in the sweep. "
+          "Serial phases on grid4 or grid8 networks only.",
+          {},
+          R"({"coupling": "error_diffusion", "mode": "serial"})"};
+}
+
 void ErrorDiffusion::begin_sweep(TunerNetwork& network, const std::vector<size_t>& tuners) {
   for (size_t t : tuners) network.tuner(t).reset_target();
 }
@@ -232,3 +246,20 @@ std::string RunRecord::convergence_csv(TunerNetwork& network) const {
 }
 
 }  // namespace spec2fab
+
+namespace spec2fab {
+namespace {
+
+class NoCoupling final : public Coupling {
+ public:
+  NoCoupling(const Properties& /*phase*/, const CouplingContext& /*context*/) {}
+  std::string name() const override { return "none"; }
+  static TypeDoc doc() { return {"Tuners of the phase do not interact (the default).", {}, R"({"coupling": "none"})"}; }
+};
+
+}  // namespace
+}  // namespace spec2fab
+
+SPEC2FAB_REGISTER(spec2fab::CouplingRegistry, spec2fab::NoCoupling, "none")
+SPEC2FAB_REGISTER(spec2fab::CouplingRegistry, spec2fab::ErrorDiffusion, "error_diffusion")
+SPEC2FAB_LIST_REGISTRY(spec2fab::CouplingRegistry, 70, "coupling", "couplings")

@@ -18,6 +18,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/registry.h"
 #include "tuning/tuner_network.h"
 
 namespace spec2fab {
@@ -50,11 +51,28 @@ class Coupling {
 /// outside what the simulator can reach (a colour out of the printer's
 /// gamut) otherwise accumulates residuals without bound and smears them
 /// across the grid.
+/// What a coupling named in JSON ("coupling": "name" in a schedule phase)
+/// may rely on: the network's shape and the phase's mode.
+struct CouplingContext {
+  const NetworkShape& network;
+  bool parallel = false;
+};
+
+/// Couplings that an experiment may name, registered like every other part.
+/// The factory gets the phase's properties (a coupling's own options sit
+/// beside "coupling" in the phase) and refuses a network or mode it cannot
+/// work with. Couplings that need a translator's functions (NeighbourSwaps,
+/// a texture's shadow) are made in C++ and not listed.
+using CouplingRegistry = Registry<Coupling, const CouplingContext&>;
+
 class ErrorDiffusion final : public Coupling {
  public:
   explicit ErrorDiffusion(int grid_width,
                           std::optional<std::pair<double, double>> clamp = std::nullopt)
       : grid_width_(grid_width), clamp_(clamp) {}
+  /// From a phase: needs a grid network and a serial phase.
+  ErrorDiffusion(const Properties& phase, const CouplingContext& context);
+  static TypeDoc doc();
   std::string name() const override { return "error_diffusion"; }
   bool allows_parallel() const override { return false; }
   void begin_sweep(TunerNetwork& network, const std::vector<size_t>& tuners) override;

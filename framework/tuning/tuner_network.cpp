@@ -72,4 +72,47 @@ std::vector<std::vector<size_t>> TunerNetwork::colour_classes(const std::vector<
   return classes;
 }
 
+namespace {
+
+class NoNetwork final : public NetworkShape {
+ public:
+  NoNetwork(const Properties& /*properties*/, size_t /*count*/) {}
+  void connect(TunerNetwork& /*network*/) const override {}
+  static TypeDoc doc() {
+    return {"No connections: tuners share nothing (the default).", {}, R"({"type": "none"})"};
+  }
+};
+
+/// Row-major grid; "grid4": left, right, up, down; "grid8": with diagonals.
+class GridNetwork final : public NetworkShape {
+ public:
+  GridNetwork(const Properties& properties, size_t count)
+      : width_(static_cast<int>(properties.get_in_range("width", 1, 1, 1e9))),
+        count_(static_cast<int>(count)),
+        neighbourhood_(properties.get<std::string>("type") == "grid8" ? 8 : 4) {
+    if (count_ % width_ != 0) {
+      properties.fail("width", std::to_string(count_) + " tuners do not fill rows of " + std::to_string(width_));
+    }
+  }
+  void connect(TunerNetwork& network) const override {
+    network.connect_grid(width_, count_ / width_, neighbourhood_);
+  }
+  int grid_width() const override { return width_; }
+  static TypeDoc doc() {
+    return {"The tuners, in their listed order, laid out row-major on a grid of `width` columns; "
+            "grid4 connects left, right, up and down, grid8 the diagonals too.",
+            {{"width", "integer", "1", "tuners per row (their count must fill the rows)"}},
+            R"({"type": "grid4", "width": 8})"};
+  }
+
+ private:
+  int width_, count_, neighbourhood_;
+};
+
+}  // namespace
 }  // namespace spec2fab
+
+SPEC2FAB_REGISTER(spec2fab::NetworkRegistry, spec2fab::NoNetwork, "none")
+SPEC2FAB_REGISTER(spec2fab::NetworkRegistry, spec2fab::GridNetwork, "grid4")
+SPEC2FAB_REGISTER(spec2fab::NetworkRegistry, spec2fab::GridNetwork, "grid8")
+SPEC2FAB_LIST_REGISTRY(spec2fab::NetworkRegistry, 80, "network", "networks")

@@ -6,6 +6,7 @@
 #include <memory>
 #include <vector>
 
+#include "core/registry.h"
 #include "tuning/tuner.h"
 
 namespace spec2fab {
@@ -35,5 +36,21 @@ class TunerNetwork {
   std::vector<std::unique_ptr<Tuner>> tuners_;
   std::vector<std::vector<size_t>> neighbours_;
 };
+
+/// How a network built from JSON ("network": {"type": ...}) connects its
+/// tuners, registered by name like every other part (NetworkRegistry):
+/// "none", "grid4", "grid8". The factory gets the number of tuners, so a
+/// shape refuses a count it cannot lay out.
+class NetworkShape {
+ public:
+  virtual ~NetworkShape() = default;
+  /// Connects tuners 0..count-1 of `network`.
+  virtual void connect(TunerNetwork& network) const = 0;
+  /// Tuners per row when the shape is a grid (couplings such as error
+  /// diffusion need rows); 0 otherwise.
+  virtual int grid_width() const { return 0; }
+};
+
+using NetworkRegistry = Registry<NetworkShape, size_t>;
 
 }  // namespace spec2fab

@@ -31,23 +31,14 @@ std::unique_ptr<TuningPlan> build_tuning_plan(const Properties& goal, ReducerTre
     names.push_back(name);
   }
 
-  int grid_width = 0;
+  const auto count = tuners.size();
+  std::unique_ptr<NetworkShape> shape;
   if (const auto network = goal.optional_object("network")) {
-    const std::string type = network->get<std::string>("type");
-    if (type == "grid4" || type == "grid8") {
-      grid_width = static_cast<int>(network->get_in_range("width", 1, 1, 1e9));
-      const auto count = static_cast<int>(tuners.size());
-      if (count % grid_width != 0) {
-        network->fail("width", std::to_string(count) + " tuners do not fill rows of " +
-                                   std::to_string(grid_width));
-      }
-      plan->network.connect_grid(grid_width, count / grid_width, type == "grid4" ? 4 : 8);
-    } else if (type != "none") {
-      network->fail("type", "unknown network '" + type + "'" +
-                                did_you_mean(type, {"none", "grid4", "grid8"}) +
-                                " (known: none, grid4, grid8)");
-    }
+    shape = NetworkRegistry::instance().create(*network, "network", count);
+  } else {
+    shape = NetworkRegistry::instance().create_named("none", goal, "network", count);
   }
+  shape->connect(plan->network);
 
   const std::vector<Properties> phases =
       goal.has("schedule") ? goal.objects("schedule") : std::vector<Properties>{};
@@ -73,15 +64,9 @@ std::unique_ptr<TuningPlan> build_tuning_plan(const Properties& goal, ReducerTre
     if (mode != "serial" && mode != "parallel") spec.fail("mode", "must be serial or parallel");
     phase.mode = mode == "parallel" ? Phase::Mode::parallel : Phase::Mode::serial;
     const std::string coupling = spec.get<std::string>("coupling", "none");
-    if (coupling == "error_diffusion") {
-      if (grid_width == 0) spec.fail("coupling", "error_diffusion needs a grid4 or grid8 network");
-      phase.coupling = std::make_shared<ErrorDiffusion>(grid_width);
-      if (phase.mode == Phase::Mode::parallel) {
-        spec.fail("mode", "error_diffusion depends on the order: its phase must be serial");
-      }
-    } else if (coupling != "none") {
-      spec.fail("coupling", "unknown coupling '" + coupling + "' (known: none, error_diffusion)");
-    }
+    const CouplingContext coupling_context{*shape, phase.mode == Phase::Mode::parallel};
+    auto made = CouplingRegistry::instance().create_named(coupling, spec, "coupling", coupling_context, "coupling");
+    if (coupling != "none") phase.coupling = std::move(made);  // "none": no coupling at all, as before
     phase.fix_after = spec.get<bool>("fix_after", false);
     plan->schedule.add(std::move(phase));
   }

@@ -367,6 +367,14 @@ TEST_F(Cli, TunerMistakesAreCaughtByValidate) {
        "error_diffusion needs a grid4 or grid8 network"},
       {R"(, "tuners": [{)" + parts + R"(}], "network": {"type": "grid4", "width": 2})",
        "/goal/network/width: 1 tuners do not fill rows of 2"},
+      {R"(, "tuners": [{)" + parts + R"(}], "network": {"type": "grid6", "width": 1})",
+       "/goal/network/type: unknown network 'grid6'; did you mean 'grid4'? (known: grid4, grid8, none)"},
+      {R"(, "tuners": [{)" + parts + R"(}], "schedule": [{"coupling": "error_difusion"}])",
+       "/goal/schedule/0/coupling: unknown coupling 'error_difusion'; did you mean 'error_diffusion'? "
+       "(known: error_diffusion, none)"},
+      {R"(, "tuners": [{)" + parts + R"(}], "network": {"type": "grid4", "width": 1},
+          "schedule": [{"coupling": "error_diffusion", "mode": "parallel"}])",
+       "/goal/schedule/0/mode: error_diffusion depends on the order: its phase must be serial"},
   };
   for (const Case& c : cases) {
     std::string body = valid_body(tree);

@@ -214,13 +214,12 @@ int simulate_command(const SimulateArguments& arguments) {
 
 namespace {
 
-template <class RegistryType>
-void print_registry(const char* heading, const RegistryType& registry, bool verbose) {
-  std::cout << heading << ":\n";
+void print_registry(const ListedRegistry& listed, bool verbose) {
+  std::cout << listed.heading << ":\n";
+  const auto entries = listed.entries();
   size_t width = 0;  // the names' column fits the longest
-  for (const std::string& name : registry.names()) width = std::max(width, name.size());
-  for (const std::string& name : registry.names()) {
-    const TypeDoc& doc = registry.entry(name).doc;
+  for (const auto& [name, doc] : entries) width = std::max(width, name.size());
+  for (const auto& [name, doc] : entries) {
     if (!verbose) {
       std::printf("  %-*s  %s\n", static_cast<int>(width), name.c_str(), first_sentence(doc.summary).c_str());
       continue;
@@ -289,24 +288,38 @@ void print_printers(const fs::path& datasets, bool verbose) {
 
 }  // namespace
 
+namespace {
+
+// Every registry puts itself in the listing (SPEC2FAB_LIST_REGISTRY), in
+// rank order; materials and printers are the datasets' files.
+std::vector<ListedRegistry> sorted_registries() {
+  std::vector<ListedRegistry> registries = listed_registries();
+  std::sort(registries.begin(), registries.end(),
+            [](const ListedRegistry& a, const ListedRegistry& b) { return a.rank < b.rank; });
+  return registries;
+}
+
+}  // namespace
+
+std::vector<std::string> list_kinds() {
+  std::vector<std::string> kinds;
+  for (const ListedRegistry& r : sorted_registries()) kinds.push_back(r.kind);
+  kinds.insert(kinds.end(), {"material", "printer"});
+  return kinds;
+}
+
 int list_command(const std::string& kind, bool verbose, const fs::path& datasets) {
-  static const std::vector<std::string> kinds = {"node",  "translator", "simulator", "metric",
-                                                 "goal",  "optimizer",  "material",  "printer"};
+  const std::vector<ListedRegistry> registries = sorted_registries();
+  const std::vector<std::string> kinds = list_kinds();
   std::string k = kind;
   if (!k.empty() && k.back() == 's') k.pop_back();  // "nodes" works too
   if (!k.empty() && std::find(kinds.begin(), kinds.end(), k) == kinds.end()) {
     throw InputError("list: unknown kind '" + kind + "'" + did_you_mean(k, kinds) +
                      " (known: " + join(kinds) + ")");
   }
-  if (k.empty() || k == "node") print_registry("nodes", NodeRegistry::instance(), verbose);
-  if (k.empty() || k == "translator")
-    print_registry("translators", TranslatorRegistry::instance(), verbose);
-  if (k.empty() || k == "simulator")
-    print_registry("simulators", SimulatorRegistry::instance(), verbose);
-  if (k.empty() || k == "metric") print_registry("metrics", MetricRegistry::instance(), verbose);
-  if (k.empty() || k == "goal") print_registry("goals", GoalRegistry::instance(), verbose);
-  if (k.empty() || k == "optimizer")
-    print_registry("optimizers", OptimizerRegistry::instance(), verbose);
+  for (const ListedRegistry& r : registries) {
+    if (k.empty() || k == r.kind) print_registry(r, verbose);
+  }
   if (k.empty() || k == "material") print_materials(datasets, verbose);
   if (k.empty() || k == "printer") print_printers(datasets, verbose);
   return 0;

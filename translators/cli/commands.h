@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace spec2fab::cli {
 
@@ -38,5 +39,7 @@ int export_command(const ExportArguments& arguments);
 int simulate_command(const SimulateArguments& arguments);
 int validate_command(const std::filesystem::path& experiment);
 int list_command(const std::string& kind, bool verbose, const std::filesystem::path& datasets);
+/// What `list` can show: every listed registry's kind, then material and printer.
+std::vector<std::string> list_kinds();
 
 }  // namespace spec2fab::cli

@@ -10,6 +10,7 @@
 #include "commands.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "core/strings.h"
 #include "core/version.h"
 
 namespace {
@@ -115,11 +116,9 @@ int main(int argc, char** argv) {
   bool list_verbose = false;
   std::filesystem::path datasets = default_datasets();
   CLI::App* list_cmd = app.add_subcommand(
-      "list", "list registered types (nodes, translators, simulators, metrics, goals, optimizers) and "
-      "shipped materials and printers");
-  list_cmd->add_option("kind", kind,
-                       "node | translator | simulator | metric | goal | optimizer | material | "
-                       "printer (default: all)");
+      "list", "list every registered kind of part (nodes, translators, simulators, metrics, goals, "
+      "optimizers, couplings, networks...) and the shipped materials and printers");
+  list_cmd->add_option("kind", kind, spec2fab::join(spec2fab::cli::list_kinds(), " | ") + " (default: all)");
   list_cmd->add_flag("--verbose", list_verbose, "properties, defaults and an example of each");
   list_cmd->add_option("--datasets", datasets,
                        "datasets folder (default $SPEC2FAB_DATASETS or the source tree's)");

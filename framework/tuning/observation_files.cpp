@@ -1,0 +1,111 @@
+// How each observation type writes itself (Observation::write_files): PNG
+// for images (sRGB-encoded, 8 bit), CSV for profiles, displacements and
+// albedos (plus an sRGB swatch), values.csv for anything else.
+
+#include "tuning/observation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <stdexcept>
+
+#include <fmt/format.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "core/colour.h"
+
+namespace spec2fab {
+namespace {
+
+namespace fs = std::filesystem;
+
+void write_text(const fs::path& file, const std::string& text) {
+  std::ofstream out(file, std::ios::binary);
+  out << text;
+  if (!out) throw std::runtime_error("cannot write " + file.string());
+}
+
+void write_png(const fs::path& file, const cv::Mat& image) {
+  if (!cv::imwrite(file.string(), image)) throw std::runtime_error("cannot write " + file.string());
+}
+
+/// Linear values in [0, 1] to an 8-bit sRGB image (1 channel: grey; 3: RGB).
+cv::Mat to_png_image(int width, int height, int channels, std::span<const double> linear) {
+  cv::Mat image(height, width, channels == 1 ? CV_8UC1 : CV_8UC3);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      const size_t i = (static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x)) *
+                       static_cast<size_t>(channels);
+      if (channels == 1) {
+        image.at<uchar>(y, x) = linear_to_srgb8(linear[i]);
+      } else {  // OpenCV stores BGR
+        image.at<cv::Vec3b>(y, x) =
+            cv::Vec3b(linear_to_srgb8(linear[i + 2]), linear_to_srgb8(linear[i + 1]), linear_to_srgb8(linear[i]));
+      }
+    }
+  }
+  return image;
+}
+
+}  // namespace
+
+std::vector<std::string> ImageObservation::write_files(const fs::path& folder) const {
+  if (channels != 1 && channels != 3) {
+    throw std::runtime_error("an image observation with " + std::to_string(channels) +
+                             " channels cannot be written as PNG");
+  }
+  // Values beyond 1 (a caustic concentrates light) are scaled so the
+  // brightest is white; the values themselves are in the run's JSON.
+  const double peak = pixels.empty() ? 1.0 : *std::max_element(pixels.begin(), pixels.end());
+  std::vector<double> shown(pixels);
+  if (peak > 1)
+    for (double& v : shown) v /= peak;
+  write_png(folder / "image.png", to_png_image(width, height, channels, shown));
+  return {"image.png"};
+}
+
+std::vector<std::string> RadialProfileObservation::write_files(const fs::path& folder) const {
+  // R(r) in 1/mm² (reflected flux per unit area per unit incident flux).
+  std::string csv = "radius_mm,r,g,b\n";
+  const std::vector<double> rgb = samples();
+  const std::span<const double> radii = basis->radii();
+  for (size_t i = 0; i < radii.size(); ++i) {
+    csv += fmt::format("{:.6g},{:.9g},{:.9g},{:.9g}\n", radii[i], rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2]);
+  }
+  write_text(folder / "profile.csv", csv);
+  return {"profile.csv"};
+}
+
+std::vector<std::string> DisplacementsObservation::write_files(const fs::path& folder) const {
+  // Probes first (their rest point), then the mesh's nodes.
+  std::string csv = "point,kind,ux_mm,uy_mm,uz_mm\n";
+  for (size_t i = 0; 3 * i + 2 < xyz_mm.size(); ++i) {
+    const bool probe = i < static_cast<size_t>(probe_count);
+    csv += fmt::format("{},{},{:.9g},{:.9g},{:.9g}\n", probe ? i : i - static_cast<size_t>(probe_count),
+                       probe ? "probe" : "node", xyz_mm[3 * i], xyz_mm[3 * i + 1], xyz_mm[3 * i + 2]);
+  }
+  write_text(folder / "observation.csv", csv);
+  return {"observation.csv"};
+}
+
+std::vector<std::string> AlbedoObservation::write_files(const fs::path& folder) const {
+  std::string csv = "channel,linear,srgb_8bit\n";
+  static const char* names[] = {"r", "g", "b"};
+  for (int c = 0; c < 3; ++c) csv += fmt::format("{},{:.9g},{}\n", names[c], rgb[c], linear_to_srgb8(rgb[c]));
+  write_text(folder / "albedo.csv", csv);
+  std::vector<double> swatch;
+  for (int i = 0; i < 64 * 64; ++i) swatch.insert(swatch.end(), rgb.begin(), rgb.end());
+  write_png(folder / "albedo.png", to_png_image(64, 64, 3, swatch));
+  return {"albedo.csv", "albedo.png"};
+}
+
+std::vector<std::string> Observation::write_files(const fs::path& folder) const {
+  std::string csv = "index,value\n";
+  const auto numbers = values();
+  for (size_t i = 0; i < numbers.size(); ++i) csv += fmt::format("{},{:.9g}\n", i, numbers[i]);
+  write_text(folder / "values.csv", csv);
+  return {"values.csv"};
+}
+
+}  // namespace spec2fab
