@@ -1,12 +1,13 @@
 #include "tuning/schedule.h"
 
-#include <fmt/format.h>
-
 #include <algorithm>
 #include <chrono>
 #include <numeric>
 #include <sstream>
 #include <stdexcept>
+#include <unordered_map>
+
+#include <fmt/format.h>
 
 #include <tbb/parallel_for.h>
 
@@ -37,6 +38,28 @@ TypeDoc ErrorDiffusion::doc() {
           "Serial phases on grid4 or grid8 networks only.",
           {},
           R"({"coupling": "error_diffusion", "mode": "serial"})"};
+}
+
+std::optional<std::pair<size_t, size_t>> overlapping_tuners(TunerNetwork& network, const std::vector<size_t>& tuners) {
+  std::unordered_map<const ReducerNode*, size_t> tuner_at;
+  for (size_t t : tuners) {
+    if (!network.tuner(t).is_bound()) continue;
+    const auto [at, fresh] = tuner_at.emplace(&network.tuner(t).node(), t);
+    if (!fresh) return std::pair{at->second, t};
+  }
+  for (size_t t : tuners) {
+    if (!network.tuner(t).is_bound()) continue;
+    std::vector<const ReducerNode*> pending;  // the subtree below t's node
+    const ReducerNode& node = network.tuner(t).node();
+    for (size_t c = 0; c < node.child_count(); ++c) pending.push_back(&node.child(c));
+    while (!pending.empty()) {
+      const ReducerNode* below = pending.back();
+      pending.pop_back();
+      if (const auto found = tuner_at.find(below); found != tuner_at.end()) return std::pair{t, found->second};
+      for (size_t c = 0; c < below->child_count(); ++c) pending.push_back(&below->child(c));
+    }
+  }
+  return std::nullopt;
 }
 
 void ErrorDiffusion::begin_sweep(TunerNetwork& network, const std::vector<size_t>& tuners) {
@@ -129,6 +152,14 @@ RunRecord Schedule::run(TunerNetwork& network, std::uint64_t seed) const {
     if (parallel && phase.coupling && !phase.coupling->allows_parallel()) {
       throw std::invalid_argument("schedule: phase '" + phase.name + "' couples tuners by " +
                                   phase.coupling->name() + ", which must run serially");
+    }
+    if (parallel) {
+      if (const auto overlap = overlapping_tuners(network, tuners)) {
+        throw std::invalid_argument("schedule: phase '" + phase.name + "' runs tuners '" +
+                                    network.tuner(overlap->first).name() + "' and '" +
+                                    network.tuner(overlap->second).name() +
+                                    "' in parallel, but their subtrees overlap");
+      }
     }
     record.phase_names.push_back(phase.name);
     const auto start = std::chrono::steady_clock::now();

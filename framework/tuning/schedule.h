@@ -155,12 +155,18 @@ class Schedule {
   Schedule& add(Phase phase);
   const std::vector<Phase>& phases() const { return phases_; }
   /// Runs every phase; throws std::invalid_argument for a parallel phase with
-  /// a coupling that forbids it or a tuner index out of range.
+  /// a coupling that forbids it or tuners whose subtrees overlap, or a tuner
+  /// index out of range.
   RunRecord run(TunerNetwork& network, std::uint64_t seed) const;
 
  private:
   std::vector<Phase> phases_;
 };
+
+/// Two of `tuners` whose subtrees overlap — the same node, or one's node
+/// inside the other's subtree — or nullopt. Tuners that run in parallel
+/// must not overlap: both would set the same parameters at once.
+std::optional<std::pair<size_t, size_t>> overlapping_tuners(TunerNetwork& network, const std::vector<size_t>& tuners);
 
 /// The seed of one tuner run (SplitMix64 of the inputs).
 std::uint64_t tuner_seed(std::uint64_t run_seed, size_t phase, int sweep, size_t tuner);

@@ -7,8 +7,15 @@
 namespace spec2fab {
 
 SimulationDomain::SimulationDomain(const ReducerTree& tree, const ReducerNode& subtree)
-    : tree_(&tree), subtree_(&subtree), path_(tree.path_to(subtree)) {
+    : tree_(&tree), subtree_(&subtree) {
   if (!tree.is_bound()) throw std::logic_error("SimulationDomain: the tree is not bound to a solid");
+}
+
+std::span<const size_t> SimulationDomain::path() const {
+  // Found on first use: a translator attaches thousands of column tuners,
+  // and a search from the root for each would cost the tree's size each.
+  if (!path_) path_ = tree_->path_to(*subtree_);
+  return *path_;
 }
 
 const Solid& SimulationDomain::require_solid(const std::string& simulator) const {
@@ -20,7 +27,7 @@ const Solid& SimulationDomain::require_solid(const std::string& simulator) const
 }
 
 LocalFrame SimulationDomain::local_frame(ReducerTree::Query& query, const Vec3& world_mm) const {
-  return frame_along_path(tree_->root(), path_, query.query_point(world_mm),
+  return frame_along_path(tree_->root(), path(), query.query_point(world_mm),
                           {world_mm.x(), world_mm.y(), world_mm.z()});
 }
 

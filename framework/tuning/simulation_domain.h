@@ -7,6 +7,7 @@
 /// An empty domain (the default) says "no solid": a simulator that needs one
 /// calls require_solid() and so fails with a clear error.
 
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -27,7 +28,7 @@ class SimulationDomain {
   const ReducerTree& tree() const { return *tree_; }
   const ReducerNode& subtree() const { return *subtree_; }
   /// Child indices from the root to the subtree.
-  std::span<const size_t> path() const { return path_; }
+  std::span<const size_t> path() const;
 
   /// The subtree's extent in its own frame, as bound (FrameDomain::box).
   const FrameDomain& local_domain() const { return subtree_->bound_domain(); }
@@ -47,7 +48,7 @@ class SimulationDomain {
  private:
   const ReducerTree* tree_ = nullptr;
   const ReducerNode* subtree_ = nullptr;
-  std::vector<size_t> path_;
+  mutable std::optional<std::vector<size_t>> path_;  // found on first use
 };
 
 }  // namespace spec2fab

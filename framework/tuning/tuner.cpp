@@ -117,6 +117,10 @@ void Tuner::set_node(ReducerNode& node, const SimulationDomain& domain) {
   simulator_->setup(node, domain);
 }
 
+void Tuner::set_node(ReducerTree& tree, ReducerNode& node) {
+  set_node(node, tree.is_bound() ? SimulationDomain(tree, node) : SimulationDomain());
+}
+
 void Tuner::collect_search_space() {
   space_ = SearchSpace();
   collect_free_parameters(*node_, "", space_);

@@ -33,6 +33,9 @@ class Tuner {
   /// parameters and runs the simulator's one-time setup. `domain` places the
   /// node in the run's solid and tree (volumetric simulators need it).
   void set_node(ReducerNode& node, const SimulationDomain& domain = SimulationDomain());
+  /// set_node for `node` of `tree`, with the tree's domain when the tree is
+  /// bound to a solid (how translators and JSON plans attach tuners).
+  void set_node(ReducerTree& tree, ReducerNode& node);
   bool is_bound() const { return node_ != nullptr; }
   ReducerNode& node() { return *node_; }
   SearchSpace& search_space() { return space_; }

@@ -26,7 +26,7 @@ std::unique_ptr<TuningPlan> build_tuning_plan(const Properties& goal, ReducerTre
       t.fail("node", e.what());
     }
     auto tuner = build_tuner(t, name, context);
-    tuner->set_node(*node, tree.is_bound() ? SimulationDomain(tree, *node) : SimulationDomain());
+    tuner->set_node(tree, *node);
     index_of[name] = plan->network.add(std::move(tuner));
     names.push_back(name);
   }
@@ -67,6 +67,16 @@ std::unique_ptr<TuningPlan> build_tuning_plan(const Properties& goal, ReducerTre
     const CouplingContext coupling_context{*shape, phase.mode == Phase::Mode::parallel};
     auto made = CouplingRegistry::instance().create_named(coupling, spec, "coupling", coupling_context, "coupling");
     if (coupling != "none") phase.coupling = std::move(made);  // "none": no coupling at all, as before
+    if (phase.mode == Phase::Mode::parallel) {
+      std::vector<size_t> members = phase.tuners;
+      if (members.empty())
+        for (size_t t = 0; t < plan->network.size(); ++t) members.push_back(t);
+      if (const auto overlap = overlapping_tuners(plan->network, members)) {
+        spec.fail("mode", "tuners '" + names[overlap->first] + "' and '" + names[overlap->second] +
+                              "' cannot run in parallel: their subtrees overlap (they would set the same "
+                              "parameters at once); make the phase serial");
+      }
+    }
     phase.fix_after = spec.get<bool>("fix_after", false);
     plan->schedule.add(std::move(phase));
   }

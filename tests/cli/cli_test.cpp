@@ -375,6 +375,8 @@ TEST_F(Cli, TunerMistakesAreCaughtByValidate) {
       {R"(, "tuners": [{)" + parts + R"(}], "network": {"type": "grid4", "width": 1},
           "schedule": [{"coupling": "error_diffusion", "mode": "parallel"}])",
        "/goal/schedule/0/mode: error_diffusion depends on the order: its phase must be serial"},
+      {R"(, "tuners": [{)" + parts + R"(}, {)" + parts + R"(}], "schedule": [{"mode": "parallel"}])",
+       "/goal/schedule/0/mode: tuners 'tuner0' and 'tuner1' cannot run in parallel: their subtrees overlap"},
   };
   for (const Case& c : cases) {
     std::string body = valid_body(tree);

@@ -46,6 +46,39 @@ std::unique_ptr<ReducerTree> halftone_tree(const MaterialPalette& p, int width, 
   return std::make_unique<ReducerTree>(Properties::parse(json, "tree.json"), p);
 }
 
+// Tuners that run in parallel must not share parameters: the same node, or
+// one's node inside the other's subtree, is refused.
+TEST(Schedule, ParallelTunersMustNotOverlap) {
+  auto p = palette();
+  auto tree = halftone_tree(*p, 2, 1);
+  TunerNetwork network;
+  auto add = [&](ReducerNode& node, const char* name) {
+    auto tuner = std::make_unique<Tuner>(name, std::make_unique<testing::FirstLayerSimulator>(),
+                                         std::make_unique<testing::SquaredError>(),
+                                         std::make_unique<testing::ConstantGoal>(std::vector<double>{0}),
+                                         optimizer(R"({"type": "exhaustive"})"));
+    tuner->set_node(node);
+    return network.add(std::move(tuner));
+  };
+  const size_t left = add(tree->root().child(0), "left");
+  const size_t right = add(tree->root().child(1), "right");
+  const size_t whole = add(tree->root(), "whole");
+  const size_t left_again = add(tree->root().child(0), "left_again");
+  EXPECT_EQ(overlapping_tuners(network, {left, right}), std::nullopt);
+  EXPECT_EQ(overlapping_tuners(network, {left, whole}), (std::pair<size_t, size_t>{whole, left}));
+  EXPECT_EQ(overlapping_tuners(network, {right, whole}), (std::pair<size_t, size_t>{whole, right}));
+  EXPECT_EQ(overlapping_tuners(network, {left, left_again}), (std::pair<size_t, size_t>{left, left_again}));
+  Schedule schedule;
+  Phase phase;
+  phase.name = "both";
+  phase.tuners = {left, whole};
+  phase.mode = Phase::Mode::parallel;
+  schedule.add(phase);
+  EXPECT_THAT([&] { schedule.run(network, 1); },
+              ThrowsMessage<std::invalid_argument>(HasSubstr("runs tuners 'whole' and 'left' in parallel, but their "
+                                                             "subtrees overlap")));
+}
+
 TEST(Tuner, IncompatiblePartsFailAtRunTimeNamingBoth) {
   try {
     Tuner tuner("t", std::make_unique<testing::ZeroDisplacements>(Properties::parse("{}", "")),

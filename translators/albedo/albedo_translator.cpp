@@ -74,7 +74,7 @@ class AlbedoTranslator final : public Translator {
           {"optimizer", optimizer}};
       auto tuner = build_tuner(Properties::wrap(parts, experiment.file().string() + " (tuner)"),
                                fmt::format("column_{}_{}", i, j), context);
-      tuner->set_node(tree_->node("shell/" + std::to_string(i + columns_[0] * j)));
+      tuner->set_node(*tree_, tree_->node("shell/" + std::to_string(i + columns_[0] * j)));
       return tuner;
     };
     gamut_ = printable_colours(*make_tuner(0, 0, {0.5, 0.5, 0.5}));

@@ -189,7 +189,7 @@ class CausticsTextureTranslator final : public Translator {
           {"optimizer", texture_optimizer}};
       auto tuner = build_tuner(Properties::wrap(parts, experiment.file().string() + " (texture tuner)"),
                                fmt::format("column_{}_{}", i, j), context);
-      tuner->set_node(texture_stack(i + columns_[0] * j));
+      tuner->set_node(*tree_, texture_stack(i + columns_[0] * j));
       return tuner;
     };
     gamut_ = printable_colours(*make_texture_tuner(0, 0, {0.5, 0.5, 0.5}));
@@ -217,7 +217,7 @@ class CausticsTextureTranslator final : public Translator {
                                   {"goal", settings_.image_goal()},
                                   {"optimizer", optimizer}};
     auto caustic = build_tuner(Properties::wrap(parts, experiment.file().string() + " (caustic tuner)"), "surface", context);
-    caustic->set_node(tree_->node("below"));
+    caustic->set_node(*tree_, tree_->node("below"));
     network_.add(std::move(caustic));
     caustic_tuner_ = texture_tuners;
 

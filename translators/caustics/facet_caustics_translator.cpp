@@ -133,7 +133,7 @@ class FacetCausticsTranslator final : public Translator {
             {"optimizer", aim}};
         auto tuner = build_tuner(Properties::wrap(parts, experiment.file().string() + " (facet tuner)"),
                                  fmt::format("facet_{}_{}", i, j), PartContext{palette, &experiment.cache()});
-        tuner->set_node(tree_->root().child(k));
+        tuner->set_node(*tree_, tree_->root().child(k));
         network_.add(std::move(tuner));
       }
     }

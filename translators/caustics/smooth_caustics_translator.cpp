@@ -78,7 +78,7 @@ class SmoothCausticsTranslator final : public Translator {
     auto tuner = build_tuner(Properties::wrap(parts, experiment.file().string() + " (tuner)"), "surface",
                              PartContext{palette, &experiment.cache()});
     main_label_ = optimizer_label(optimizer);
-    tuner->set_node(tree_->root());
+    tuner->set_node(*tree_, tree_->root());
     network_.add(std::move(tuner));
     Phase phase;
     phase.name = "surface";

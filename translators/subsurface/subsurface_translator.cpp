@@ -101,7 +101,7 @@ class SubsurfaceTranslator final : public Translator {
             {"optimizer", optimizer}};
         auto tuner = build_tuner(Properties::wrap(parts, experiment.file().string() + " (tuner)"),
                                  fmt::format("column_{}_{}", i, j), context);
-        tuner->set_node(tree_->node("shell/" + std::to_string(i + columns_[0] * j)));
+        tuner->set_node(*tree_, tree_->node("shell/" + std::to_string(i + columns_[0] * j)));
         tuner->set_lower_bound([bound = bound_](std::span<const double> x, int assigned, const Observation& target) {
           return bound->lower_bound(x, assigned, static_cast<const RadialProfileObservation&>(target));
         });
