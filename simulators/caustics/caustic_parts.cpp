@@ -220,6 +220,15 @@ class ImageMse final : public MetricFor<ImageObservation> {
                        " x " + std::to_string(target.height) + ") differ in size");
     return squared_distance(simulated.pixels, target.pixels) / static_cast<double>(target.pixels.size());
   }
+  // ½‖r‖² = error: r = √(2/n) (s − t), one residual per pixel value.
+  int residual_count(const Observation& target) const override { return static_cast<int>(target.values().size()); }
+  void residuals(const Observation& simulated, const Observation& target, std::span<double> out) const override {
+    const auto& s = static_cast<const ImageObservation&>(simulated);
+    const auto& t = static_cast<const ImageObservation&>(target);
+    error(s, t);  // the size check
+    const double weight = std::sqrt(2.0 / static_cast<double>(t.pixels.size()));
+    for (size_t i = 0; i < out.size(); ++i) out[i] = weight * (s.pixels[i] - t.pixels[i]);
+  }
   bool differentiable() const override { return true; }
   void error_gradient(const Observation& simulated, const Observation& target,
                       std::span<double> sensitivity) const override {
@@ -228,7 +237,8 @@ class ImageMse final : public MetricFor<ImageObservation> {
     for (size_t i = 0; i < t.size(); ++i) sensitivity[i] = scale * (s[i] - t[i]);
   }
   static TypeDoc doc() {
-    return {"Mean squared difference of two images, pixel by pixel.", {}, R"({"type": "image_mse"})"};
+    return {"Mean squared difference of two images, pixel by pixel; least-squares residuals available.", {},
+            R"({"type": "image_mse"})"};
   }
 };
 

@@ -3,6 +3,7 @@
 #include "subsurface/subsurface_parts.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "albedo/kubelka_munk.h"
 #include "core/distance.h"
@@ -141,9 +142,17 @@ class ProfileL2 final : public MetricFor<RadialProfileObservation> {
     }
     return squared_distance(simulated.coefficients, target.coefficients);
   }
+  // ½‖r‖² = error: r = √2 (a − b), one residual per basis coefficient and channel.
+  int residual_count(const Observation& target) const override { return static_cast<int>(target.values().size()); }
+  void residuals(const Observation& simulated, const Observation& target, std::span<double> out) const override {
+    const auto& s = static_cast<const RadialProfileObservation&>(simulated);
+    const auto& t = static_cast<const RadialProfileObservation&>(target);
+    error(s, t);  // the grid check
+    for (size_t i = 0; i < out.size(); ++i) out[i] = std::sqrt(2.0) * (s.coefficients[i] - t.coefficients[i]);
+  }
   static TypeDoc doc() {
     return {"Squared difference of two reflectance profiles integrated over the disc, summed over "
-            "R, G, B (1/mm^2). Compares radial_profile.",
+            "R, G, B (1/mm^2); least-squares residuals available. Compares radial_profile.",
             {},
             R"({"type": "profile_l2"})"};
   }

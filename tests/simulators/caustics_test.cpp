@@ -443,6 +443,38 @@ TEST_F(CausticSimulatorTest, GradientOfImageErrorMatchesFiniteDifferences) {
   EXPECT_FALSE(tuner->problem().has(Capability::gradient));
 }
 
+// image_mse has a least-squares form (½‖r‖² = the error), so Ceres'
+// Levenberg–Marquardt can tune a caustic surface from a tuner built as an
+// experiment builds it (numeric Jacobian: central differences of r).
+TEST_F(CausticSimulatorTest, LevenbergMarquardtTunesOnImageResiduals) {
+  const auto spline = node(R"({"type": "bspline", "control": [4, 4], "domain": [0, 0, 20, 20],
+      "heights_mm": {"value": 2.5, "min": 1, "max": 5},
+      "below": {"type": "layered", "material": "VeroClear"}, "above": {"type": "layered", "material": "void"}})");
+  const std::string parts = R"({
+      "simulator": {"type": "caustics", "size_mm": [20, 20], "thickness_mm": 6, "vertices": [13, 13],
+                    "distance_mm": 40, "receiver_mm": [24, 24], "image": [40, 40], "rays": [160, 160]},
+      "metric": {"type": "image_mse"},
+      "goal": {"type": "caustic_image", "image": ")" SPEC2FAB_DATASETS_DIR R"(/images/caustic_ring_120.png",
+               "size": [40, 40], "receiver_mm": [24, 24], "flux_mm2": 400},
+      "optimizer": {"type": "ceres", "derivatives": "numeric", "max_iterations": 10}})";
+  auto tuner = build_tuner(Properties::parse(parts, "tuner.json"), "t", PartContext{palette_});
+  tuner->set_node(*spline);
+  Problem& problem = tuner->problem();
+  ASSERT_TRUE(problem.has(Capability::residuals));
+  ASSERT_EQ(problem.residual_count(), 40 * 40);
+  const std::vector<double> x(16, 2.5);
+  std::vector<double> r(40 * 40);
+  problem.residuals(x, r, {});
+  double half_square = 0;
+  for (double v : r) half_square += 0.5 * v * v;
+  EXPECT_NEAR(half_square, problem.error(x), 1e-12 * problem.error(x));
+  const Summary summary = tuner->tune();
+  // Measured: 0.862 -> 0.801 after 5 iterations, 0.779 after 20 (the
+  // ray-traced image is piecewise smooth; central differences see it so).
+  // Wrong residuals (sign, scale) would not descend at all.
+  EXPECT_LT(summary.final_error, 0.95 * summary.initial_error) << summary.message;
+}
+
 // What goes to the printer is an STL: read back from disk (float vertices,
 // welded by the loader) and traced as a plain mesh, the slab casts the image
 // the simulator computed from the B-spline itself.

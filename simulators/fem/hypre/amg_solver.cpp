@@ -39,7 +39,7 @@ struct IgnoreThirdPartyLeaks {
 struct MpiSession {
   bool owned = false;
   MpiSession() {
-    const IgnoreThirdPartyLeaks ignore;
+    [[maybe_unused]] const IgnoreThirdPartyLeaks ignore;
     int initialized = 0;
     MPI_Initialized(&initialized);
     if (!initialized) {
@@ -50,7 +50,7 @@ struct MpiSession {
     HYPRE_Init();
   }
   ~MpiSession() {
-    const IgnoreThirdPartyLeaks ignore;
+    [[maybe_unused]] const IgnoreThirdPartyLeaks ignore;
     HYPRE_Finalize();
     int finalized = 0;
     MPI_Finalized(&finalized);
