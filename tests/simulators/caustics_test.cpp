@@ -392,6 +392,17 @@ TEST_F(CausticSimulatorTest, GoalPictureCarriesTheGivenFluxAndMseComparesPixels)
 // The derivative the caustic tuner gives gradient-based optimizers, against
 // central finite differences of the error itself: for a B-spline surface
 // (heights through its basis) and a plane (offset and slopes).
+// A caustic tuner on a 20 x 20 mm slab casting the ring at 40 x 40 pixels.
+std::string small_caustic_tuner(const std::string& optimizer) {
+  return R"({
+      "simulator": {"type": "caustics", "size_mm": [20, 20], "thickness_mm": 6, "vertices": [13, 13],
+                    "distance_mm": 40, "receiver_mm": [24, 24], "image": [40, 40], "rays": [160, 160]},
+      "metric": {"type": "image_mse"},
+      "goal": {"type": "caustic_image", "image": ")" SPEC2FAB_DATASETS_DIR R"(/images/caustic_ring_120.png",
+               "size": [40, 40], "receiver_mm": [24, 24], "flux_mm2": 400},
+      "optimizer": )" + optimizer + "}";
+}
+
 TEST_F(CausticSimulatorTest, GradientOfImageErrorMatchesFiniteDifferences) {
   const std::string material = R"("below": {"type": "layered", "material": "VeroClear"},
       "above": {"type": "layered", "material": "void"})";
@@ -402,13 +413,7 @@ TEST_F(CausticSimulatorTest, GradientOfImageErrorMatchesFiniteDifferences) {
                           material + "}");
   const auto layered = node(R"({"type": "layered", "layers": [
       {"material": "VeroClear", "thickness_mm": {"value": 2.5, "min": 1, "max": 5}}, {"material": "void"}]})");
-  const std::string parts = R"({
-      "simulator": {"type": "caustics", "size_mm": [20, 20], "thickness_mm": 6, "vertices": [13, 13],
-                    "distance_mm": 40, "receiver_mm": [24, 24], "image": [40, 40], "rays": [160, 160]},
-      "metric": {"type": "image_mse"},
-      "goal": {"type": "caustic_image", "image": ")" SPEC2FAB_DATASETS_DIR R"(/images/caustic_ring_120.png",
-               "size": [40, 40], "receiver_mm": [24, 24], "flux_mm2": 400},
-      "optimizer": {"type": "nlopt", "algorithm": "LD_LBFGS"}})";
+  const std::string parts = small_caustic_tuner(R"({"type": "nlopt", "algorithm": "LD_LBFGS"})");
   const auto check = [&](ReducerNode& subtree, std::vector<double> x, double step) {
     auto tuner = build_tuner(Properties::parse(parts, "tuner.json"), "t", PartContext{palette_});
     tuner->set_node(subtree);
@@ -450,13 +455,7 @@ TEST_F(CausticSimulatorTest, LevenbergMarquardtTunesOnImageResiduals) {
   const auto spline = node(R"({"type": "bspline", "control": [4, 4], "domain": [0, 0, 20, 20],
       "heights_mm": {"value": 2.5, "min": 1, "max": 5},
       "below": {"type": "layered", "material": "VeroClear"}, "above": {"type": "layered", "material": "void"}})");
-  const std::string parts = R"({
-      "simulator": {"type": "caustics", "size_mm": [20, 20], "thickness_mm": 6, "vertices": [13, 13],
-                    "distance_mm": 40, "receiver_mm": [24, 24], "image": [40, 40], "rays": [160, 160]},
-      "metric": {"type": "image_mse"},
-      "goal": {"type": "caustic_image", "image": ")" SPEC2FAB_DATASETS_DIR R"(/images/caustic_ring_120.png",
-               "size": [40, 40], "receiver_mm": [24, 24], "flux_mm2": 400},
-      "optimizer": {"type": "ceres", "derivatives": "numeric", "max_iterations": 10}})";
+  const std::string parts = small_caustic_tuner(R"({"type": "ceres", "derivatives": "numeric", "max_iterations": 10})");
   auto tuner = build_tuner(Properties::parse(parts, "tuner.json"), "t", PartContext{palette_});
   tuner->set_node(*spline);
   Problem& problem = tuner->problem();
