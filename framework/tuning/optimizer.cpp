@@ -6,17 +6,13 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/seed.h"
+
 namespace spec2fab {
 
 std::uint64_t Optimizer::random_seed(int option_seed) const {
   if (!schedule_seed_) return static_cast<std::uint64_t>(option_seed);
-  auto mix = [](std::uint64_t z) {  // splitmix64's finaliser
-    z += 0x9e3779b97f4a7c15ull;
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    return z ^ (z >> 31);
-  };
-  return mix(*schedule_seed_ ^ mix(static_cast<std::uint64_t>(option_seed)));
+  return mix_seed(*schedule_seed_ ^ mix_seed(static_cast<std::uint64_t>(option_seed)));
 }
 
 std::string to_string(Termination termination) {

@@ -12,18 +12,13 @@
 #include <tbb/parallel_for.h>
 
 #include "core/log.h"
+#include "core/seed.h"
 #include "core/properties.h"
 
 namespace spec2fab {
 
 std::uint64_t tuner_seed(std::uint64_t run_seed, size_t phase, int sweep, size_t tuner) {
-  auto mix = [](std::uint64_t z) {
-    z += 0x9e3779b97f4a7c15ull;
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    return z ^ (z >> 31);
-  };
-  return mix(mix(mix(mix(run_seed) ^ phase) ^ static_cast<std::uint64_t>(sweep)) ^ tuner);
+  return mix_seed(mix_seed(mix_seed(mix_seed(run_seed) ^ phase) ^ static_cast<std::uint64_t>(sweep)) ^ tuner);
 }
 
 ErrorDiffusion::ErrorDiffusion(const Properties& phase, const CouplingContext& context)

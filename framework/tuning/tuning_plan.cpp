@@ -65,8 +65,7 @@ std::unique_ptr<TuningPlan> build_tuning_plan(const Properties& goal, ReducerTre
     phase.mode = mode == "parallel" ? Phase::Mode::parallel : Phase::Mode::serial;
     const std::string coupling = spec.get<std::string>("coupling", "none");
     const CouplingContext coupling_context{*shape, phase.mode == Phase::Mode::parallel};
-    auto made = CouplingRegistry::instance().create_named(coupling, spec, "coupling", coupling_context, "coupling");
-    if (coupling != "none") phase.coupling = std::move(made);  // "none": no coupling at all, as before
+    phase.coupling = CouplingRegistry::instance().create_named(coupling, spec, "coupling", coupling_context, "coupling");
     if (phase.mode == Phase::Mode::parallel) {
       std::vector<size_t> members = phase.tuners;
       if (members.empty())

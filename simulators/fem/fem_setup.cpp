@@ -1,7 +1,6 @@
 #include "fem/fem_setup.h"
 
-#include "fem/hypre/amg_solver.h"
-
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -9,6 +8,7 @@
 #include <Eigen/LU>
 
 #include "core/error.h"
+#include "fem/hypre/amg_solver.h"
 
 namespace spec2fab::fem {
 namespace {
@@ -83,15 +83,25 @@ FemSettings FemSettings::read(const Properties& p) {
   s.solve.tolerance = p.get_in_range("tolerance", 1e-9, 1e-15, 1e-2);
   s.write_calculix_deck = p.get<bool>("write_calculix_deck", false);
   const std::string solver = p.get<std::string>("linear_solver", "cholesky");
-  if (solver == "cg") {
-    s.linear_solver = LinearSolver::conjugate_gradient;
-  } else if (solver == "amg") {
-    if (!AmgSolver::available()) p.fail("linear_solver", "\"amg\" needs hypre, and this build has none (SPEC2FAB_WITH_HYPRE=OFF)");
-    s.linear_solver = LinearSolver::multigrid;
-  } else if (solver != "cholesky") {
+  const auto named = std::find_if(std::begin(kLinearSolvers), std::end(kLinearSolvers),
+                                  [&](LinearSolver k) { return solver == to_string(k); });
+  if (named == std::end(kLinearSolvers)) {
     p.fail("linear_solver", "expected \"cholesky\", \"amg\" or \"cg\", got '" + solver + "'");
   }
+  if (*named == LinearSolver::multigrid && !AmgSolver::available()) {
+    p.fail("linear_solver", "\"amg\" needs hypre, and this build has none (SPEC2FAB_WITH_HYPRE=OFF)");
+  }
+  s.linear_solver = *named;
   return s;
+}
+
+const char* to_string(LinearSolver solver) {
+  switch (solver) {
+    case LinearSolver::cholesky: return "cholesky";
+    case LinearSolver::multigrid: return "amg";
+    case LinearSolver::conjugate_gradient: return "cg";
+  }
+  return "?";
 }
 
 std::vector<PropertyDoc> FemSettings::docs() {

@@ -24,6 +24,11 @@ struct BoxRegion {
   std::string where;          ///< JSON location, for errors
 };
 
+/// The "linear_solver" names: "cholesky", "amg", "cg".
+const char* to_string(LinearSolver solver);
+inline constexpr LinearSolver kLinearSolvers[] = {LinearSolver::cholesky, LinearSolver::multigrid,
+                                                  LinearSolver::conjugate_gradient};
+
 struct FemSettings {
   TetgenOptions mesh;
   bool follow_interfaces = true;

@@ -29,15 +29,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-const char* linear_solver_name(LinearSolver solver) {
-  switch (solver) {
-    case LinearSolver::cholesky: return "cholesky";
-    case LinearSolver::multigrid: return "amg";
-    case LinearSolver::conjugate_gradient: return "cg";
-  }
-  return "?";
-}
-
 double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
@@ -174,7 +165,7 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
                        {"assembly_seconds", report_.assembly_seconds},
                        {"factorization_seconds", report_.factorization_seconds},
                        {"triangular_solve_seconds", report_.solve_seconds},
-                       {"linear_solver", linear_solver_name(settings_.linear_solver)},
+                       {"linear_solver", to_string(settings_.linear_solver)},
                        {"cg_iterations", report_.cg_iterations},
                        {"multigrid_operator_complexity", solver_->multigrid_complexity()},
                        {"max_displacement_mm", largest}};

@@ -63,12 +63,6 @@ TEST(InterfaceConformer, ColumnsAndATiltedPlaneAreFollowedExactly) {
   expect_conforming_and_single_material(mesh, tree, 2 * (80.0 + 60.0 + 48.0), 480.0);
 }
 
-}  // namespace
-}  // namespace spec2fab::fem
-
-namespace spec2fab::fem {
-namespace {
-
 TEST(MeshCache, SharesAMeshWithinARunForTheSameSolidTreeAndOptionsOnly) {
   const MaterialPalette palette({testing::elastic_material("a", 1e9, 0.3), testing::elastic_material("b", 1e8, 0.3)});
   const std::string json = R"({"type": "layered", "layers": [{"material": "a", "thickness_mm": 2.3}, {"material": "b"}]})";
@@ -101,12 +95,6 @@ TEST(MeshCache, SharesAMeshWithinARunForTheSameSolidTreeAndOptionsOnly) {
   EXPECT_NE(conformed_mesh(solid, same, options, true, &run, &reused), first);
   EXPECT_FALSE(reused);
 }
-
-}  // namespace
-}  // namespace spec2fab::fem
-
-namespace spec2fab::fem {
-namespace {
 
 TEST(SimulationDomainTest, MapsWorldToASubtreesFrameAndBackAndSamplesTheWholeTree) {
   const MaterialPalette palette({testing::elastic_material("a", 1e9, 0.3), testing::elastic_material("b", 1e8, 0.3)});
