@@ -8,9 +8,7 @@
 #include "core/log.h"
 #include "fabrication/fabricator.h"
 #include "fabrication/material_surfaces.h"
-#include "fabrication/preview_renderer.h"
-#include "fabrication/slice_stack_writer.h"
-#include "fabrication/three_mf_writer.h"
+#include "fabrication/print_writer.h"
 
 namespace spec2fab {
 
@@ -19,10 +17,8 @@ namespace fs = std::filesystem;
 FabricationOptions FabricationOptions::from_properties(const std::optional<Properties>& output) {
   FabricationOptions options;
   if (!output) return options;
-  options.slices = output->get<bool>("slices", options.slices);
-  options.stl = output->get<bool>("stl", options.stl);
-  options.three_mf = output->get<bool>("3mf", options.three_mf);
-  options.render = output->get<bool>("render", options.render);
+  for (const std::string& writer : PrintWriterRegistry::instance().names())
+    options.writers[writer] = output->get<bool>(writer, true);
   options.max_voxels = static_cast<long long>(
       output->get_in_range("max_voxels", static_cast<double>(options.max_voxels), 1, 1e15));
   options.mesh_voxel_mm = output->get_in_range("mesh_voxel_mm", options.mesh_voxel_mm, 0, 1000);
@@ -31,6 +27,12 @@ FabricationOptions FabricationOptions::from_properties(const std::optional<Prope
   options.png_compression =
       static_cast<int>(output->get_in_range("png_compression", options.png_compression, 0, 9));
   return options;
+}
+
+bool FabricationOptions::any() const {
+  for (const std::string& writer : PrintWriterRegistry::instance().names())
+    if (writes(writer)) return true;
+  return false;
 }
 
 std::string material_file_name(const std::string& material) {
@@ -85,16 +87,20 @@ FabricationReport fabricate(const ReducerTree& tree, const PrinterProfile& print
   if (!options.any()) return report;  // nothing to write, so nothing to refuse
   fabricator.check(options.max_voxels, FabricationOptions::kMaxVoxelsOption);
 
-  std::optional<SliceStackWriter> slices;
-  std::optional<MaterialSurfaces> surfaces;
+  // Every registered writer that is switched on, in name order.
+  const PrintWriterContext context{printer, palette, options, folder};
+  const Properties no_options = Properties::wrap(nlohmann::json::object(), "output");
+  std::vector<std::unique_ptr<PrintWriter>> writers;
+  bool need_surfaces = false;
   std::vector<SliceSink*> sinks;
-  if (options.slices) {
-    slices.emplace(folder.path("print/slices/manifest.json").parent_path(), printer,
-                   options.png_compression);
-    sinks.push_back(&*slices);
+  for (const std::string& name : PrintWriterRegistry::instance().names()) {
+    if (!options.writes(name)) continue;
+    writers.push_back(PrintWriterRegistry::instance().create_named(name, no_options, "print writer", context));
+    need_surfaces |= writers.back()->needs_surfaces();
+    if (SliceSink* sink = writers.back()->sink()) sinks.push_back(sink);
   }
-  const bool need_meshes = options.stl || options.three_mf || options.render;
-  if (need_meshes) {
+  std::optional<MaterialSurfaces> surfaces;
+  if (need_surfaces) {
     surfaces.emplace(mesh_stride(grid, options.mesh_voxel_mm));
     sinks.push_back(&*surfaces);
   }
@@ -107,11 +113,6 @@ FabricationReport fabricate(const ReducerTree& tree, const PrinterProfile& print
 
   nlohmann::json materials = nlohmann::json::object();
   nlohmann::json files = nlohmann::json::object();
-  if (options.slices) {
-    files["slices"] = "print/slices/";
-    files["manifest"] = "print/slices/manifest.json";
-  }
-  nlohmann::json stl_files = nlohmann::json::array();
   for (size_t id = 1; id < palette.size(); ++id) {
     const std::string& name = palette.name(static_cast<MaterialId>(id));
     nlohmann::json entry = {
@@ -121,28 +122,12 @@ FabricationReport fabricate(const ReducerTree& tree, const PrinterProfile& print
       const Mesh& mesh = surfaces->meshes()[id];
       entry["mesh_volume_mm3"] = mesh.signed_volume();
       entry["triangles"] = mesh.triangles.size();
-      if (options.stl && !mesh.triangles.empty()) {
-        const std::string stl = "print/" + material_file_name(name) + ".stl";
-        write_stl(mesh, folder.path(stl));
-        entry["stl"] = stl;
-        stl_files.push_back(stl);
-      }
     }
     materials[name] = entry;
   }
-  if (options.stl) files["stl"] = stl_files;
   if (surfaces) report.result["mesh_voxel_mm"] = surfaces->mesh_grid().voxel_mm;
-  if (options.three_mf) {
-    write_three_mf(surfaces->meshes(), palette, folder.path("print/model.3mf"));
-    files["3mf"] = "print/model.3mf";
-  }
-  if (options.render) {
-    RenderOptions render;
-    render.pixels = options.render_pixels;
-    render.appearance_srgb = options.appearance_srgb;
-    render_preview(surfaces->meshes(), palette, render, folder.path("preview/render.png"));
-    files["render"] = "preview/render.png";
-  }
+  const std::vector<Mesh> no_surfaces;
+  for (const auto& writer : writers) writer->finish(surfaces ? surfaces->meshes() : no_surfaces, {files, materials});
   report.result["void_voxels"] = voxels[kVoid];
   report.result["materials"] = materials;
   report.result["files"] = files;
@@ -154,3 +139,5 @@ FabricationReport fabricate(const ReducerTree& tree, const PrinterProfile& print
 }
 
 }  // namespace spec2fab
+
+SPEC2FAB_LIST_REGISTRY(spec2fab::PrintWriterRegistry, 80, "print_writer", "print writers")

@@ -3,13 +3,16 @@
 /// calls: plans the print, refuses what is too big, streams the tuned tree's
 /// slices at the printer's resolution through the writers, and reports.
 ///
-/// Into the run folder:
-///   print/slices/slice_NNNNN.png + manifest.json   (voxel-print slice stack)
-///   print/<material>.stl                           (one closed surface per material)
-///   print/model.3mf                                (one named, coloured object per material)
-///   preview/render.png                             (ray-traced picture of the print)
+/// Into the run folder, by the registered print writers (print_writer.h):
+///   print/slices/slice_NNNNN.png + manifest.json   ("slices": voxel-print slice stack)
+///   print/<material>.stl                           ("stl": one closed surface per material)
+///   print/model.3mf                                ("3mf": one named, coloured object per material)
+///   preview/render.png                             ("render": ray-traced picture of the print)
 
 #include <cstdint>
+#include <map>
+#include <string>
+#include <string_view>
 #include <optional>
 #include <vector>
 
@@ -22,15 +25,15 @@
 
 namespace spec2fab {
 
-/// The experiment's "output" section, as far as fabrication reads it:
+/// The experiment's "output" section, as far as fabrication reads it: a
+/// switch per print writer and their options,
 ///   "output": {"slices": true, "stl": true, "3mf": true, "render": true,
 ///              "max_voxels": 5e9, "mesh_voxel_mm": 0, "render_pixels": 512,
 ///              "png_compression": 1}
 struct FabricationOptions {
-  bool slices = true;    ///< PNG slice stack + manifest.json
-  bool stl = true;       ///< one STL per material
-  bool three_mf = true;  ///< model.3mf
-  bool render = true;    ///< preview/render.png
+  /// Print writers switched on or off by name (PrintWriterRegistry: "slices",
+  /// "stl", "3mf", "render", …); a writer not named here runs.
+  std::map<std::string, bool, std::less<>> writers;
   /// Refuse above this many print voxels (a 50 mm cube at 600 × 600 dpi ×
   /// 30 µm is 2.3e9, about a minute on two cores).
   long long max_voxels = 5'000'000'000LL;
@@ -44,7 +47,12 @@ struct FabricationOptions {
   std::vector<Rgb> appearance_srgb;  ///< optional per-material colours for the render
   bool progress = true;              ///< progress line on a terminal
 
-  bool any() const { return slices || stl || three_mf || render; }
+  bool writes(std::string_view writer) const {
+    const auto found = writers.find(writer);
+    return found == writers.end() || found->second;
+  }
+  /// Whether any registered writer runs.
+  bool any() const;
   /// Reads (and marks read) the keys above; absent section = defaults.
   static FabricationOptions from_properties(const std::optional<Properties>& output);
   /// The option that raises the voxel limit, as users write it.

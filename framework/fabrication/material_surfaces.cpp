@@ -1,5 +1,8 @@
 #include "fabrication/material_surfaces.h"
 
+#include "fabrication/fabricate.h"
+#include "fabrication/print_writer.h"
+
 #include <algorithm>
 #include <stdexcept>
 
@@ -220,3 +223,41 @@ void write_stl(const Mesh& mesh, const fs::path& file) {
 }
 
 }  // namespace spec2fab
+
+namespace spec2fab {
+namespace {
+
+class StlFiles final : public PrintWriter {
+ public:
+  StlFiles(const Properties& /*switch*/, const PrintWriterContext& context)
+      : palette_(context.palette), folder_(context.folder) {}
+  static TypeDoc doc() {
+    return {"print/<material>.stl: one closed surface per material (binary STL, mm), as the paper sent "
+            "to its printer; the surfaces share their common boundaries.",
+            {{"output.mesh_voxel_mm", "number (mm)", "0 (auto)",
+              "voxel of the surfaces; 0: print voxels, coarsened to <= 512 along the longest side"}},
+            R"({"output": {"stl": true}})"};
+  }
+  bool needs_surfaces() const override { return true; }
+  void finish(const std::vector<Mesh>& surfaces, PrintFiles report) override {
+    nlohmann::json files = nlohmann::json::array();
+    for (size_t id = 1; id < surfaces.size(); ++id) {
+      if (surfaces[id].triangles.empty()) continue;
+      const std::string& name = palette_.name(static_cast<MaterialId>(id));
+      const std::string stl = "print/" + material_file_name(name) + ".stl";
+      write_stl(surfaces[id], folder_.path(stl));
+      report.materials[name]["stl"] = stl;
+      files.push_back(stl);
+    }
+    report.files["stl"] = files;
+  }
+
+ private:
+  const MaterialPalette& palette_;
+  RunFolder& folder_;
+};
+
+}  // namespace
+}  // namespace spec2fab
+
+SPEC2FAB_REGISTER(spec2fab::PrintWriterRegistry, spec2fab::StlFiles, "stl")

@@ -1,5 +1,8 @@
 #include "fabrication/preview_renderer.h"
 
+#include "fabrication/fabricate.h"
+#include "fabrication/print_writer.h"
+
 #include <embree3/rtcore.h>
 
 #include <Eigen/Geometry>
@@ -146,3 +149,36 @@ void render_preview(const std::vector<Mesh>& meshes, const MaterialPalette& pale
 }
 
 }  // namespace spec2fab
+
+namespace spec2fab {
+namespace {
+
+class RenderPreview final : public PrintWriter {
+ public:
+  RenderPreview(const Properties& /*switch*/, const PrintWriterContext& context)
+      : palette_(context.palette), folder_(context.folder) {
+    options_.pixels = context.options.render_pixels;
+    options_.appearance_srgb = context.options.appearance_srgb;
+  }
+  static TypeDoc doc() {
+    return {"preview/render.png: the print's material surfaces ray-traced (Embree), each material in its "
+            "display colour.",
+            {{"output.render_pixels", "integer", "512", "the picture's width and height"}},
+            R"({"output": {"render": true}})"};
+  }
+  bool needs_surfaces() const override { return true; }
+  void finish(const std::vector<Mesh>& surfaces, PrintFiles report) override {
+    render_preview(surfaces, palette_, options_, folder_.path("preview/render.png"));
+    report.files["render"] = "preview/render.png";
+  }
+
+ private:
+  const MaterialPalette& palette_;
+  RunFolder& folder_;
+  RenderOptions options_;
+};
+
+}  // namespace
+}  // namespace spec2fab
+
+SPEC2FAB_REGISTER(spec2fab::PrintWriterRegistry, spec2fab::RenderPreview, "render")

@@ -1,5 +1,8 @@
 #include "fabrication/slice_stack_writer.h"
 
+#include "fabrication/fabricate.h"
+#include "fabrication/print_writer.h"
+
 #include <png.h>
 
 #include <csetjmp>
@@ -132,3 +135,32 @@ void SliceStackWriter::finish() {
 }
 
 }  // namespace spec2fab
+
+namespace spec2fab {
+namespace {
+
+class SliceStackFiles final : public PrintWriter {
+ public:
+  SliceStackFiles(const Properties& /*switch*/, const PrintWriterContext& context)
+      : writer_(context.folder.path("print/slices/manifest.json").parent_path(), context.printer,
+                context.options.png_compression) {}
+  static TypeDoc doc() {
+    return {"print/slices/: one indexed-colour PNG per printer layer (palette index = material) and "
+            "manifest.json, the voxel-print input of PolyJet printers.",
+            {{"output.png_compression", "integer", "1", "zlib level of the slice PNGs (0-9)"}},
+            R"({"output": {"slices": true}})"};
+  }
+  SliceSink* sink() override { return &writer_; }
+  void finish(const std::vector<Mesh>& /*surfaces*/, PrintFiles report) override {
+    report.files["slices"] = "print/slices/";
+    report.files["manifest"] = "print/slices/manifest.json";
+  }
+
+ private:
+  SliceStackWriter writer_;
+};
+
+}  // namespace
+}  // namespace spec2fab
+
+SPEC2FAB_REGISTER(spec2fab::PrintWriterRegistry, spec2fab::SliceStackFiles, "slices")

@@ -1,5 +1,7 @@
 #include "fabrication/three_mf_writer.h"
 
+#include "fabrication/print_writer.h"
+
 #include <cmath>
 #include <stdexcept>
 
@@ -134,3 +136,32 @@ std::vector<ThreeMfObject> read_three_mf_objects(const fs::path& file) {
 }
 
 }  // namespace spec2fab
+
+namespace spec2fab {
+namespace {
+
+class ThreeMfFile final : public PrintWriter {
+ public:
+  ThreeMfFile(const Properties& /*switch*/, const PrintWriterContext& context)
+      : palette_(context.palette), folder_(context.folder) {}
+  static TypeDoc doc() {
+    return {"print/model.3mf: one named object per material in its display colour, assembled in one frame "
+            "(lib3mf).",
+            {},
+            R"({"output": {"3mf": true}})"};
+  }
+  bool needs_surfaces() const override { return true; }
+  void finish(const std::vector<Mesh>& surfaces, PrintFiles report) override {
+    write_three_mf(surfaces, palette_, folder_.path("print/model.3mf"));
+    report.files["3mf"] = "print/model.3mf";
+  }
+
+ private:
+  const MaterialPalette& palette_;
+  RunFolder& folder_;
+};
+
+}  // namespace
+}  // namespace spec2fab
+
+SPEC2FAB_REGISTER(spec2fab::PrintWriterRegistry, spec2fab::ThreeMfFile, "3mf")

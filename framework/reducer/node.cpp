@@ -103,6 +103,13 @@ void repeated_children_to_json(const std::vector<NodePtr>& children,
   }
 }
 
+void ReducerNode::read_parameters(
+    const std::function<void(const std::string& name, const Parameter& parameter)>& read) const {
+  // visit_parameters is non-const only so that tuners can set what they
+  // visit; this visitor hands out const references and changes nothing.
+  const_cast<ReducerNode*>(this)->visit_parameters([&](const std::string& name, Parameter& p) { read(name, p); });
+}
+
 MaterialId route_to_material(const ReducerNode& subtree, const QueryPoint& point, LocalFrame frame) {
   const ReducerNode* node = &subtree;
   while (node->role() == ReducerNode::Role::geometry) {

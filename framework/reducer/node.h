@@ -62,6 +62,8 @@ class ReducerNode {
 
   /// Visits this node's own parameters (not its children's).
   virtual void visit_parameters(const ParameterVisitor& /*visit*/) {}
+  /// The same, read-only: what simulators, which get their subtree const, use.
+  void read_parameters(const std::function<void(const std::string& name, const Parameter& parameter)>& read) const;
   /// Refreshes derived state after parameters changed (the paper's evaluate).
   virtual void evaluate() {}
   /// Adapts to the shape: takes defaults from the incoming frame's domain,

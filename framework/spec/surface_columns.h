@@ -7,21 +7,16 @@
 /// layers — the paper's point that one tree serves two goals.
 
 #include <array>
-#include <memory>
 #include <string>
 
 #include <nlohmann/json.hpp>
 
-#include "reducer/reducer_tree.h"
-#include "spec/experiment.h"
-
 namespace spec2fab {
 
+/// The tree as JSON (TuningTranslator::set_tree builds and binds it).
 /// `layers`: the Layered node's "layers" array without the backing (added
-/// last). The tree is bound to the experiment's solid; column i + nu·j is
-/// node "shell/<i + nu·j>".
-std::unique_ptr<ReducerTree> build_surface_column_tree(const Experiment& experiment, double shell_mm,
-                                                       std::array<int, 2> columns, nlohmann::json layers,
-                                                       const std::string& backing, const std::string& label);
+/// last). Column i + nu·j is node "shell/<i + nu·j>".
+nlohmann::json surface_column_tree(double shell_mm, std::array<int, 2> columns, nlohmann::json layers,
+                                   const std::string& backing);
 
 }  // namespace spec2fab

@@ -1,6 +1,8 @@
 #include "spec/tree_outputs.h"
 
+#include "core/strings.h"
 #include "fabrication/cross_section.h"
+#include "fabrication/print_writer.h"
 #include "reducer/census.h"
 #include "reducer/reducer_tree.h"
 
@@ -22,16 +24,18 @@ TreeOutputOptions TreeOutputOptions::read(const Properties& goal, const Experime
 }
 
 std::vector<PropertyDoc> TreeOutputOptions::docs() {
-  return {{"goal.census_voxel_mm", "number (mm)", "longest side / 128",
-           "voxel size of the material census in result.json"},
-          {"output.section_pixels", "integer", "512", "size of the cross-section previews"},
-          {"output.slices / stl / 3mf / render", "bool", "true",
-           "print files to write (print/slices/, print/<material>.stl, print/model.3mf, "
-           "preview/render.png)"},
-          {"output.max_voxels", "number", "5e9", "refuse to fabricate more print voxels than this"},
-          {"output.mesh_voxel_mm", "number (mm)", "0 (auto)",
-           "voxel of the STL/3MF surfaces; 0: print voxels, coarsened to <= 512 along the longest "
-           "side"}};
+  std::vector<PropertyDoc> docs = {
+      {"goal.census_voxel_mm", "number (mm)", "longest side / 128", "voxel size of the material census in result.json"},
+      {"output.section_pixels", "integer", "512", "size of the cross-section previews"}};
+  // A switch per registered print writer, and the writers' own options.
+  const PrintWriterRegistry& writers = PrintWriterRegistry::instance();
+  for (const std::string& name : writers.names()) {
+    const TypeDoc& doc = writers.entry(name).doc;
+    docs.push_back({"output." + name, "bool", "true", first_sentence(doc.summary)});
+    for (const PropertyDoc& option : doc.properties) docs.push_back(option);
+  }
+  docs.push_back({"output.max_voxels", "number", "5e9", "refuse to fabricate more print voxels than this"});
+  return docs;
 }
 
 void write_tree_outputs(ReducerTree& tree, const TreeOutputOptions& options,

@@ -10,6 +10,7 @@
 /// `SPEC2FAB_REGISTER(SimulatorRegistry, MySimulator, "my_simulator")`, with
 /// a constructor from (const Properties&, const PartContext&).
 
+#include <array>
 #include <concepts>
 #include <filesystem>
 #include <memory>
@@ -30,6 +31,20 @@
 #include "tuning/simulation_domain.h"
 
 namespace spec2fab {
+
+/// Values over a grid of cells covering a simulator's footprint, row by row
+/// from the lowest (a, b): what one part of a print hands the simulator of
+/// another (the transmittance of a texture over a caustic slab's exit face).
+struct GridField {
+  std::array<int, 2> cells{0, 0};
+  std::vector<double> values;  ///< cells[0] · cells[1]
+};
+
+/// One input a simulator takes from outside its subtree (Simulator::inputs).
+struct SimulatorInput {
+  std::string name;
+  std::string meaning;
+};
 
 class Simulator {
  public:
@@ -56,6 +71,15 @@ class Simulator {
                                                 nlohmann::json& /*record*/) const {
     return out.write_files(folder);
   }
+
+  /// Inputs that come from outside the subtree — state an earlier schedule
+  /// phase hands over by name through Tuner::set_simulator_input (a coupling
+  /// does it; see TextureShadow). None by default.
+  virtual std::vector<SimulatorInput> inputs() const { return {}; }
+  /// Sets input `name`, replacing what it held; the next simulate() sees it.
+  /// Throws InputError for a malformed field; the default (no inputs) throws
+  /// std::invalid_argument naming the inputs there are.
+  virtual void set_input(std::string_view name, GridField /*value*/);
 
   /// Reverse-mode derivative, for simulators that have one for this subtree
   /// (gradient-based optimizers need it; see Capability::gradient).

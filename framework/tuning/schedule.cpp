@@ -131,15 +131,18 @@ std::string progress_detail(int sweep, double error_sum, size_t runs) {
 
 }  // namespace
 
+std::vector<size_t> Phase::members(size_t network_size) const {
+  if (!tuners.empty()) return tuners;
+  std::vector<size_t> all(network_size);
+  std::iota(all.begin(), all.end(), size_t{0});
+  return all;
+}
+
 RunRecord Schedule::run(TunerNetwork& network, std::uint64_t seed) const {
   RunRecord record;
   for (size_t p = 0; p < phases_.size(); ++p) {
     const Phase& phase = phases_[p];
-    std::vector<size_t> tuners = phase.tuners;
-    if (tuners.empty()) {
-      tuners.resize(network.size());
-      std::iota(tuners.begin(), tuners.end(), 0);
-    }
+    const std::vector<size_t> tuners = phase.members(network.size());
     for (size_t t : tuners) {
       if (t >= network.size()) throw std::invalid_argument("schedule: no tuner " + std::to_string(t));
     }

@@ -39,6 +39,28 @@ class Coupling {
   virtual void end_phase(TunerNetwork& /*network*/, const std::vector<size_t>& /*tuners*/) {}
 };
 
+struct Phase;
+
+/// What a coupling named in JSON ("coupling": "name" in a schedule phase)
+/// may rely on: the network's shape, the phase's mode and tuners, the phases
+/// before it, the run's materials.
+struct CouplingContext {
+  const NetworkShape& network;
+  bool parallel = false;
+  TunerNetwork* tuners = nullptr;              ///< every tuner, bound to its node
+  std::vector<size_t> members;                 ///< the phase's tuners
+  const std::vector<Phase>* earlier = nullptr;  ///< the phases before this one
+  const MaterialPalette* palette = nullptr;
+};
+
+/// Couplings that an experiment may name, registered like every other part.
+/// The factory gets the phase's properties (a coupling's own options sit
+/// beside "coupling" in the phase) and refuses a network, mode or tuners it
+/// cannot work with. Couplings built on a translator's functions
+/// (NeighbourSwaps, whose energy the translator defines) are made in C++ and
+/// not listed.
+using CouplingRegistry = Registry<Coupling, const CouplingContext&>;
+
 /// Error diffusion over a grid network (tuners row-major, `grid_width` per
 /// row), as in Floyd–Steinberg halftoning: after a tuner is tuned, its
 /// residual (effective target − simulated) is added to the effective targets
@@ -51,19 +73,6 @@ class Coupling {
 /// outside what the simulator can reach (a colour out of the printer's
 /// gamut) otherwise accumulates residuals without bound and smears them
 /// across the grid.
-/// What a coupling named in JSON ("coupling": "name" in a schedule phase)
-/// may rely on: the network's shape and the phase's mode.
-struct CouplingContext {
-  const NetworkShape& network;
-  bool parallel = false;
-};
-
-/// Couplings that an experiment may name, registered like every other part.
-/// The factory gets the phase's properties (a coupling's own options sit
-/// beside "coupling" in the phase) and refuses a network or mode it cannot
-/// work with. Couplings that need a translator's functions (NeighbourSwaps,
-/// a texture's shadow) are made in C++ and not listed.
-using CouplingRegistry = Registry<Coupling, const CouplingContext&>;
 
 class ErrorDiffusion final : public Coupling {
  public:
@@ -127,6 +136,9 @@ struct Phase {
   /// optimizer (built once per phase, kept over its sweeps) instead of its
   /// own — annealing swaps first, a local solver after, say.
   nlohmann::json optimizer;
+
+  /// The tuners the phase runs, in order, in a network of `network_size`.
+  std::vector<size_t> members(size_t network_size) const;
 };
 
 /// One tuner run of a schedule.

@@ -85,9 +85,12 @@ class Tuner {
   const Observation& simulated() const { return *simulated_; }
   Observation& effective_target() { return *effective_target_; }
   const Goal& goal() const { return *goal_; }
-  /// The simulator, for state an earlier phase hands it (a caustic tuner
-  /// learns the texture a first phase printed over its exit face).
-  Simulator& simulator() { return *simulator_; }
+  /// Hands the simulator one of its inputs by name (Simulator::inputs): state
+  /// an earlier phase leaves for it, such as the texture a first phase printed
+  /// over a caustic slab's exit face.
+  void set_simulator_input(std::string_view name, GridField value) { simulator_->set_input(name, std::move(value)); }
+  /// The simulator's inputs, for couplings that check what they hand over.
+  std::vector<SimulatorInput> simulator_inputs() const { return simulator_->inputs(); }
   Optimizer& optimizer() { return *optimizer_; }
   /// Puts `optimizer` in place of the tuner's own and returns the one it had
   /// (a schedule phase may tune with another optimizer; Phase::optimizer).

@@ -64,13 +64,12 @@ std::unique_ptr<TuningPlan> build_tuning_plan(const Properties& goal, ReducerTre
     if (mode != "serial" && mode != "parallel") spec.fail("mode", "must be serial or parallel");
     phase.mode = mode == "parallel" ? Phase::Mode::parallel : Phase::Mode::serial;
     const std::string coupling = spec.get<std::string>("coupling", "none");
-    const CouplingContext coupling_context{*shape, phase.mode == Phase::Mode::parallel};
+    const CouplingContext coupling_context{*shape, phase.mode == Phase::Mode::parallel, &plan->network,
+                                           phase.members(plan->network.size()), &plan->schedule.phases(),
+                                           &context.palette};
     phase.coupling = CouplingRegistry::instance().create_named(coupling, spec, "coupling", coupling_context, "coupling");
     if (phase.mode == Phase::Mode::parallel) {
-      std::vector<size_t> members = phase.tuners;
-      if (members.empty())
-        for (size_t t = 0; t < plan->network.size(); ++t) members.push_back(t);
-      if (const auto overlap = overlapping_tuners(plan->network, members)) {
+      if (const auto overlap = overlapping_tuners(plan->network, phase.members(plan->network.size()))) {
         spec.fail("mode", "tuners '" + names[overlap->first] + "' and '" + names[overlap->second] +
                               "' cannot run in parallel: their subtrees overlap (they would set the same "
                               "parameters at once); make the phase serial");

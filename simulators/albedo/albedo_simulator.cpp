@@ -12,6 +12,7 @@
 
 #include <cmath>
 #include <memory>
+#include <type_traits>
 #include <vector>
 
 #include <fmt/format.h>
@@ -26,10 +27,17 @@ namespace {
 
 using AlbedoTable = std::vector<Rgb>;
 
-void collect_free_parameters(ReducerNode& node, std::vector<Parameter*>& out) {
-  node.visit_parameters([&](const std::string&, Parameter& p) {
+/// The free parameters of a subtree, depth first: the table's axes.
+template <class Node, class P>
+void collect_free_parameters(Node& node, std::vector<P*>& out) {
+  const auto add = [&](const std::string&, P& p) {
     if (p.is_free()) out.push_back(&p);
-  });
+  };
+  if constexpr (std::is_const_v<Node>) {
+    node.read_parameters(add);
+  } else {
+    node.visit_parameters(add);
+  }
   for (size_t i = 0; i < node.child_count(); ++i) collect_free_parameters(node.child(i), out);
 }
 
@@ -54,9 +62,7 @@ class AlbedoSimulator final : public SimulatorFor<AlbedoObservation> {
   void setup(const ReducerNode& subtree, const SimulationDomain& /*domain*/) override {
     table_.reset();
     free_.clear();
-    // Enumerating sets parameters and restores them; the subtree is unchanged after.
-    auto& node = const_cast<ReducerNode&>(subtree);
-    collect_free_parameters(node, free_);
+    collect_free_parameters(subtree, free_);
     long long size = 1;
     for (const Parameter* p : free_) {
       if (p->kind() == ParameterKind::continuous || size * p->cardinality() > max_table_) return;
@@ -65,7 +71,7 @@ class AlbedoSimulator final : public SimulatorFor<AlbedoObservation> {
     if (free_.empty()) return;
     strides_.assign(free_.size(), 1);
     for (size_t i = free_.size() - 1; i > 0; --i) strides_[i - 1] = strides_[i] * free_[i]->cardinality();
-    table_ = shared_table(node, size);
+    table_ = shared_table(subtree, size);
   }
 
   using SimulatorFor::simulate;
@@ -114,35 +120,35 @@ class AlbedoSimulator final : public SimulatorFor<AlbedoObservation> {
     return rgb;
   }
 
-  std::shared_ptr<const AlbedoTable> shared_table(ReducerNode& node, long long size) {
-    std::vector<double> saved;
-    for (const Parameter* p : free_) saved.push_back(p->value());
-    for (Parameter* p : free_) p->set(p->admissible(0));
-    evaluate_subtree(node);
+  /// Tabulates on a copy of the subtree, whose parameters it may set: the
+  /// tuner's subtree is only read.
+  std::shared_ptr<const AlbedoTable> shared_table(const ReducerNode& subtree, long long size) {
+    const NodePtr copy = subtree.clone();
+    std::vector<Parameter*> axes;
+    collect_free_parameters(*copy, axes);
+    for (Parameter* p : axes) p->set(p->admissible(0));
+    evaluate_subtree(*copy);
     // The key: the subtree with its free parameters at their first values,
     // plus everything else that changes the result.
     // Materials are named in the JSON; their optics (which palettes may
     // differ in) are part of the key too.
-    std::string key = node.to_json(*palette_).dump();
+    std::string key = copy->to_json(*palette_).dump();
     for (double v : {depth_mm_, step_mm_, lateral_a_, lateral_b_}) key += fmt::format("|{}", v);
     for (const KubelkaMunkMaterial& m : optics_) {
       for (const KubelkaMunkLayer& c : m.rgb) key += fmt::format("|{},{}", c.k, c.s);
     }
-    auto table = cached<const AlbedoTable>(cache_, key, [&] {
+    return cached<const AlbedoTable>(cache_, key, [&] {
       auto made = std::make_shared<AlbedoTable>(static_cast<size_t>(size));
       for (long long index = 0; index < size; ++index) {
-        for (size_t i = 0; i < free_.size(); ++i) {
-          free_[i]->set(free_[i]->admissible((index / strides_[i]) % free_[i]->cardinality()));
+        for (size_t i = 0; i < axes.size(); ++i) {
+          axes[i]->set(axes[i]->admissible((index / strides_[i]) % axes[i]->cardinality()));
         }
-        evaluate_subtree(node);
-        (*made)[static_cast<size_t>(index)] = compute(node);
+        evaluate_subtree(*copy);
+        (*made)[static_cast<size_t>(index)] = compute(*copy);
       }
       spdlog::debug("albedo: tabulated {} stackings", size);
       return std::shared_ptr<const AlbedoTable>(std::move(made));
     });
-    for (size_t i = 0; i < free_.size(); ++i) free_[i]->set(saved[i]);
-    evaluate_subtree(node);
-    return table;
   }
 
   const MaterialPalette* palette_;
@@ -151,7 +157,7 @@ class AlbedoSimulator final : public SimulatorFor<AlbedoObservation> {
   long long max_table_ = 1000000;
   std::vector<KubelkaMunkMaterial> optics_;  ///< by material id
   std::vector<MaterialId> samples_;          ///< sized once: simulate() does not allocate
-  std::vector<Parameter*> free_;             ///< the subtree's free parameters, table axes
+  std::vector<const Parameter*> free_;       ///< the subtree's free parameters, table axes
   std::vector<long long> strides_;
   std::shared_ptr<const AlbedoTable> table_;
 };

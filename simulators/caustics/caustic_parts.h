@@ -31,15 +31,6 @@ struct CausticSlabConfig {
   static CausticSlabConfig read(const Properties& properties);
 };
 
-class Simulator;
-
-/// Installs an exit filter (CausticSetup::exit_transmittance) in a
-/// "caustics" simulator: a texture printed on the slab's flat face, known
-/// only once an earlier phase has tuned it. Throws std::invalid_argument
-/// for any other simulator.
-void set_caustic_exit_transmittance(Simulator& simulator, std::array<int, 2> cells,
-                                    std::vector<double> transmittance);
-
 /// Where the tracer's frame (footprint centred on the origin, bottom at
 /// z = 0) sits in the subtree's coordinates when the slab's bottom corner is
 /// at origin_mm: tracer point + offset = subtree point.

@@ -64,8 +64,15 @@ class CausticSimulator final : public SimulatorFor<ImageObservation> {
         jacobian.transpose() * Eigen::Map<const Eigen::VectorXd>(d_heights_.data(), static_cast<Eigen::Index>(d_heights_.size()));
   }
 
-  const CausticTracer& tracer() const { return *tracer_; }
-  CausticTracer& tracer() { return *tracer_; }
+  std::vector<SimulatorInput> inputs() const override {
+    return {{"exit_transmittance",
+             "fraction of the light kept where it leaves the flat face, per cell of a grid over the footprint "
+             "(a texture printed there)"}};
+  }
+  void set_input(std::string_view name, GridField value) override {
+    if (name != "exit_transmittance") return Simulator::set_input(name, std::move(value));
+    tracer_->set_exit_transmittance(value.cells, std::move(value.values));
+  }
   const CausticFlux& last_flux() const { return flux_; }
 
   static TypeDoc doc() {
@@ -75,7 +82,8 @@ class CausticSimulator final : public SimulatorFor<ImageObservation> {
         "surface where the subtree turns from material to void. The top is meshed on a vertex "
         "grid and traced with Embree (refraction at every surface, total internal reflection, "
         "optional Fresnel); stratified, deterministic rays. Plane and B-spline roots give their "
-        "height directly; any other subtree is searched along w with material queries.",
+        "height directly; any other subtree is searched along w with material queries. Input "
+        "(set by a coupling such as texture_shadow): exit_transmittance, a filter over the flat face.",
         {{"size_mm", "[x, y]", "[50, 50]", "slab footprint; the subtree's (a, b) run from its corner"},
          {"origin_mm", "[a, b, w]", "[0, 0, 0]", "the subtree's coordinates of the slab's bottom corner"},
          {"thickness_mm", "number (mm)", "10", "highest the top may be (search range along w)"},
@@ -167,14 +175,6 @@ class CausticSimulator final : public SimulatorFor<ImageObservation> {
 };
 
 }  // namespace
-
-void set_caustic_exit_transmittance(Simulator& simulator, std::array<int, 2> cells,
-                                    std::vector<double> transmittance) {
-  auto* caustics = dynamic_cast<CausticSimulator*>(&simulator);
-  if (caustics == nullptr)
-    throw std::invalid_argument("set_caustic_exit_transmittance: '" + simulator.name() + "' is not the caustics simulator");
-  caustics->tracer().set_exit_transmittance(cells, std::move(transmittance));
-}
 
 }  // namespace spec2fab
 

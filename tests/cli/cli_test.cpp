@@ -143,6 +143,16 @@ std::string read(const fs::path& file) {
   return s.str();
 }
 
+// docs/parts.md is what the registries declare, regenerated, byte for byte.
+TEST_F(Cli, PartsReferenceInDocsIsCurrent) {
+  const Result r = spec2fab("list --markdown");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("\n### texture_shadow\n"));
+  EXPECT_THAT(r.out, HasSubstr("| `output.png_compression` | integer | 1 |"));
+  EXPECT_TRUE(r.out == read(kDatasets / "../docs/parts.md"))
+      << "docs/parts.md is stale: regenerate it with `build/spec2fab list --markdown > docs/parts.md`";
+}
+
 TEST_F(Cli, RunWritesFolderIdenticalForAnyThreadCount) {
   const fs::path file = experiment("det", valid_body(kTree));
   const Result one =
@@ -371,7 +381,7 @@ TEST_F(Cli, TunerMistakesAreCaughtByValidate) {
        "/goal/network/type: unknown network 'grid6'; did you mean 'grid4'? (known: grid4, grid8, none)"},
       {R"(, "tuners": [{)" + parts + R"(}], "schedule": [{"coupling": "error_difusion"}])",
        "/goal/schedule/0/coupling: unknown coupling 'error_difusion'; did you mean 'error_diffusion'? "
-       "(known: error_diffusion, none)"},
+       "(known: error_diffusion, none, texture_shadow)"},
       {R"(, "tuners": [{)" + parts + R"(}], "network": {"type": "grid4", "width": 1},
           "schedule": [{"coupling": "error_diffusion", "mode": "parallel"}])",
        "/goal/schedule/0/mode: error_diffusion depends on the order: its phase must be serial"},
@@ -483,6 +493,21 @@ static void write_clear_printer(const fs::path& file) {
       "layer_mm": 0.4, "build_volume_mm": [200, 200, 200], "model_materials": ["VeroClear"], "source": "test"})";
 }
 
+// A PNG's width and height, from its IHDR chunk (bytes 16–23, big-endian).
+static std::array<int, 2> png_size(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::array<unsigned char, 24> head{};
+  in.read(reinterpret_cast<char*>(head.data()), head.size());
+  if (!in) return {0, 0};
+  const auto word = [&](size_t at) {
+    return static_cast<int>((head[at] << 24) | (head[at + 1] << 16) | (head[at + 2] << 8) | head[at + 3]);
+  };
+  return {word(16), word(20)};
+}
+
+// A binary STL holds an 84-byte header and count, then 50 bytes a triangle.
+static std::uintmax_t binary_stl_size(std::uintmax_t triangles) { return 84 + 50 * triangles; }
+
 TEST_F(Cli, SmoothCausticsTunesTheSurfaceAndReportsImageErrors) {
   const std::string body =
       R"({"name": "lens", "translator": "smooth_caustics",
@@ -499,21 +524,32 @@ TEST_F(Cli, SmoothCausticsTunesTheSurfaceAndReportsImageErrors) {
   ASSERT_EQ(r.code, 0) << r.out;
   const auto result = nlohmann::json::parse(read(dir_ / "run" / "result.json"));
   const auto& caustics = result["caustics"];
-  EXPECT_GT(caustics["rmse"].get<double>(), 0.0);
-  // L-BFGS on the tracer's derivative lowers the error from the flat start.
+  // The reported image is the one the tuner ended at: its RMSE squared is
+  // the tuner's final image MSE.
+  const double final_mse = result["tuning"]["phases"][0]["sum_final_error"].get<double>();
+  EXPECT_NEAR(std::pow(caustics["rmse"].get<double>(), 2), final_mse, 1e-9 * final_mse);
+  // L-BFGS on the tracer's derivative lowers the error from the flat start,
+  // and the picture looks more like the goal.
   EXPECT_LT(caustics["rmse"].get<double>(), 0.95 * caustics["initial_rmse"].get<double>());
-  EXPECT_GT(caustics["ssim"].get<double>(), -1.0);
-  EXPECT_LT(caustics["ssim"].get<double>(), 1.0);
+  EXPECT_GT(caustics["ssim"].get<double>(), caustics["initial_ssim"].get<double>());
   EXPECT_EQ(result["tuning"]["tuner_runs"][0]["optimizer"], "nlopt");
-  // SPSA ran first from the same start, for the comparison.
+  // SPSA ran first from the same start, for the comparison, and ended
+  // higher than L-BFGS on the tracer's derivative.
   ASSERT_EQ(caustics["optimizers"].size(), 2u);
   EXPECT_EQ(caustics["optimizers"][1]["optimizer"], "spsa");
   EXPECT_EQ(caustics["optimizers"][1]["initial_error"], caustics["optimizers"][0]["initial_error"]);
+  EXPECT_EQ(caustics["optimizers"][0]["final_error"], result["tuning"]["phases"][0]["sum_final_error"]);
+  EXPECT_LT(caustics["optimizers"][0]["final_error"].get<double>(),
+            caustics["optimizers"][1]["final_error"].get<double>());
   // The smooth slab STL, traced back, casts the simulated image.
   EXPECT_LT(caustics["surface_stl"]["traced_relative_rmse_vs_simulated"].get<double>(), 1e-3);
-  for (const char* file : {"preview/goal_vs_simulated.png", "preview/height_map.png", "preview/convergence.png",
-                           "preview/optimizer_comparison.png", "print/surface.stl"})
-    EXPECT_TRUE(fs::exists(dir_ / "run" / file)) << file;
+  EXPECT_EQ(fs::file_size(dir_ / "run/print/surface.stl"),
+            binary_stl_size(caustics["surface_stl"]["triangles"].get<std::uintmax_t>()));
+  // Goal | simulated, 48 px each with an 8 px gap; the 6 x 6 heights at 40 px each.
+  EXPECT_EQ(png_size(dir_ / "run/preview/goal_vs_simulated.png"), (std::array<int, 2>{2 * 48 + 8, 48}));
+  EXPECT_EQ(png_size(dir_ / "run/preview/height_map.png"), (std::array<int, 2>{240, 240}));
+  EXPECT_EQ(png_size(dir_ / "run/preview/convergence.png"), (std::array<int, 2>{800, 500}));
+  EXPECT_EQ(png_size(dir_ / "run/preview/optimizer_comparison.png"), (std::array<int, 2>{800, 500}));
   const auto tree = nlohmann::json::parse(read(dir_ / "run" / "tree.json"));
   EXPECT_EQ(tree["type"], "bspline");
   EXPECT_EQ(tree["heights_mm"].size(), 36u);
@@ -553,9 +589,10 @@ TEST_F(Cli, FacetCausticsAimsEveryFacetAtItsKernelAndReportsImageErrors) {
   EXPECT_EQ(result["tuning"]["phases"][0]["tuner_runs"], 20 * 144);
   EXPECT_EQ(result["tuning"]["phases"][1]["tuner_runs"], 144);
   EXPECT_EQ(result["tuning"]["tuner_runs"].back()["optimizer"], "nlopt");
-  for (const char* file : {"preview/goal_vs_simulated.png", "preview/height_map.png", "preview/convergence.png",
-                           "print/surface.stl"})
-    EXPECT_TRUE(fs::exists(dir_ / "run" / file)) << file;
+  // Goal | kernels | simulated, 48 px each; the 12 x 12 facet heights at 20 px each.
+  EXPECT_EQ(png_size(dir_ / "run/preview/goal_vs_simulated.png"), (std::array<int, 2>{3 * 48 + 2 * 8, 48}));
+  EXPECT_EQ(png_size(dir_ / "run/preview/height_map.png"), (std::array<int, 2>{240, 240}));
+  EXPECT_GT(fs::file_size(dir_ / "run/print/surface.stl"), binary_stl_size(2 * 144));  // facets and walls
   const auto tree = nlohmann::json::parse(read(dir_ / "run" / "tree.json"));
   EXPECT_EQ(tree["type"], "column");
 }
@@ -614,9 +651,13 @@ TEST_F(Cli, CausticsTextureTunesTheTextureThenTheBottomFaceThroughItsShadow) {
   EXPECT_GE(stl["z_range_mm"][0].get<double>(), -1e-9);
   EXPECT_LE(stl["z_range_mm"][0].get<double>(), 6.0 + 1e-9);
   EXPECT_LT(stl["traced_relative_rmse_vs_simulated"].get<double>(), 1e-3);
-  for (const char* file : {"preview/goal_vs_simulated.png", "preview/height_map.png", "preview/convergence.png",
-                           "preview/texture.png", "print/surface.stl"})
-    EXPECT_TRUE(fs::exists(dir_ / "window" / file)) << file;
+  EXPECT_EQ(fs::file_size(dir_ / "window/print/surface.stl"), binary_stl_size(stl["triangles"].get<std::uintmax_t>()));
+  // Texture: goal | printed | transmittance, 8 columns at 32 px each.
+  EXPECT_EQ(png_size(dir_ / "window/preview/texture.png"), (std::array<int, 2>{3 * 256 + 2 * 8, 256}));
+  EXPECT_EQ(png_size(dir_ / "window/preview/goal_vs_simulated.png"), (std::array<int, 2>{2 * 48 + 8, 48}));
+  // The texture piece reports as the albedo translator does.
+  EXPECT_EQ(texture["error_diffusion"], true);
+  EXPECT_EQ(texture["columns"], nlohmann::json::array({8, 8}));
   const auto tree = nlohmann::json::parse(read(dir_ / "window" / "tree.json"));
   EXPECT_EQ(tree["type"], "plane");
   EXPECT_EQ(tree["above"]["type"], "column");

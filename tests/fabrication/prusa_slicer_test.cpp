@@ -45,8 +45,7 @@ TEST(PrusaSlicer, SlicesTheExportedStlAnd3mf) {
   testing::TempDir dir("prusa");
   RunFolder folder(dir.path / "run");
   FabricationOptions options;
-  options.slices = false;
-  options.render = false;
+  options.writers = {{"slices", false}, {"render", false}};
   options.progress = false;
   fabricate(*f.tree, f.printer, options, folder);
   folder.commit();

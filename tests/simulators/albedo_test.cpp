@@ -186,6 +186,26 @@ TEST_F(AlbedoSimulatorTest, TheTableEqualsDirectSimulationForEveryStacking) {
   EXPECT_EQ(compared, 30);
 }
 
+// Tabulating enumerates every stacking on a copy: the subtree a tuner binds
+// the simulator to is only read (its parameters and their values stay).
+TEST_F(AlbedoSimulatorTest, TabulatingLeavesTheSubtreeAsItWas) {
+  const NodePtr node = build_node(Properties::parse(R"({"type": "layered", "layers": [
+      {"material": "VeroCyan", "thickness_mm": {"value": 0.054, "min": 0, "max": 0.108, "step": 0.027}},
+      {"material": "VeroWhitePlus"}]})", "subtree.json"), NodeContext{palette_});
+  const nlohmann::json before = node->to_json(palette_);
+  const PartContext context{palette_};
+  auto simulator = SimulatorRegistry::instance().create_named(
+      "albedo", Properties::parse(R"({"depth_mm": 1})", "a"), "simulator", context);
+  simulator->setup(*node, SimulationDomain());
+  EXPECT_EQ(node->to_json(palette_), before);
+  // And the lookup reads the subtree's current value: 2 of 0..4 steps.
+  AlbedoObservation tabulated;
+  simulator->simulate(*node, tabulated);
+  const AlbedoObservation direct = simulate(R"({"type": "layered", "layers": [
+      {"material": "VeroCyan", "thickness_mm": 0.054}, {"material": "VeroWhitePlus"}]})", R"({"depth_mm": 1})");
+  for (int c = 0; c < 3; ++c) EXPECT_EQ(tabulated.rgb[c], direct.rgb[c]);
+}
+
 TEST(Ciede2000, MatchesTheSharmaWuDalalTestData) {
   // Table 1 of Sharma, Wu & Dalal, Color Res. Appl. 30(1), 2005: the 34 pairs.
   struct Pair {

@@ -448,6 +448,45 @@ TEST_F(CausticSimulatorTest, GradientOfImageErrorMatchesFiniteDifferences) {
   EXPECT_FALSE(tuner->problem().has(Capability::gradient));
 }
 
+// What an earlier phase hands a caustic tuner goes in by name: a uniform
+// exit filter t keeps t of the light that reaches the receiver (Beer–Lambert
+// on the way out), everywhere; a name the simulator does not take is refused
+// with the names it does.
+TEST_F(CausticSimulatorTest, ExitTransmittanceIsAnInputSetByName) {
+  const auto spline = node(R"({"type": "bspline", "control": [4, 4], "domain": [0, 0, 20, 20],
+      "heights_mm": {"value": 2.5, "min": 1, "max": 5},
+      "below": {"type": "layered", "material": "VeroClear"}, "above": {"type": "layered", "material": "void"}})");
+  auto tuner = build_tuner(Properties::parse(small_caustic_tuner(R"({"type": "nlopt", "algorithm": "LD_LBFGS"})"),
+                                             "tuner.json"),
+                           "t", PartContext{palette_});
+  tuner->set_node(*spline);
+  const auto cast = [&] {
+    tuner->error();
+    const auto& pixels = static_cast<const ImageObservation&>(tuner->simulated()).pixels;
+    return std::vector<double>(pixels.begin(), pixels.end());
+  };
+  const std::vector<double> clear = cast();
+  ASSERT_EQ(tuner->simulator_inputs().size(), 1u);
+  EXPECT_EQ(tuner->simulator_inputs().front().name, "exit_transmittance");
+  tuner->set_simulator_input("exit_transmittance", GridField{{2, 2}, {0.3, 0.3, 0.3, 0.3}});
+  const std::vector<double> filtered = cast();
+  double total_clear = 0, total_filtered = 0;
+  for (size_t i = 0; i < clear.size(); ++i) {
+    EXPECT_NEAR(filtered[i], 0.3 * clear[i], 1e-12 * (1 + clear[i])) << i;
+    total_clear += clear[i];
+    total_filtered += filtered[i];
+  }
+  EXPECT_GT(total_clear, 0);
+  EXPECT_NEAR(total_filtered / total_clear, 0.3, 1e-12);
+  try {
+    tuner->set_simulator_input("texture", GridField{{1, 1}, {1.0}});
+    FAIL() << "an unknown input was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "simulator 'caustics' has no input 'texture' (inputs: exit_transmittance)");
+  }
+  EXPECT_THROW(tuner->set_simulator_input("exit_transmittance", GridField{{2, 2}, {1.0}}), InputError);
+}
+
 // image_mse has a least-squares form (½‖r‖² = the error), so Ceres'
 // Levenberg–Marquardt can tune a caustic surface from a tuner built as an
 // experiment builds it (numeric Jacobian: central differences of r).

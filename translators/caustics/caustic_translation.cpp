@@ -12,7 +12,11 @@
 #include "core/colour.h"
 #include "core/distance.h"
 #include "core/properties.h"
+#include "fabrication/material_surfaces.h"
+#include "geometry/mesh_io.h"
 #include "spec/experiment.h"
+#include "spec/run_folder.h"
+#include "tuning/parts.h"
 
 namespace spec2fab {
 
@@ -73,6 +77,60 @@ nlohmann::json CausticGoalSettings::image_report(std::span<const double> achieve
   report["receiver_mm"] = receiver_mm;
   report["distance_mm"] = distance_mm;
   return report;
+}
+
+CausticSurfaceSettings CausticSurfaceSettings::read(const Properties& goal) {
+  CausticSurfaceSettings s;
+  s.control = goal.get<std::array<int, 2>>("control", s.control);
+  if (s.control[0] < 2 || s.control[1] < 2 || s.control[0] * s.control[1] > 1'000'000)
+    goal.fail("control", "expected [na, nb], at least 2 each");
+  s.vertices_per_span = static_cast<int>(goal.get_in_range("vertices_per_span", s.vertices_per_span, 1, 16));
+  return s;
+}
+
+std::vector<PropertyDoc> CausticSurfaceSettings::docs() {
+  return {{"goal.control", "[na, nb]", "[60, 60]", "B-spline control points of the shaped face"},
+          {"goal.vertices_per_span", "integer", "3", "mesh vertices per control span"}};
+}
+
+std::array<int, 2> CausticSurfaceSettings::vertices() const {
+  return {vertices_per_span * (control[0] - 1) + 1, vertices_per_span * (control[1] - 1) + 1};
+}
+
+nlohmann::json CausticSurfaceSettings::node(const std::string& axis, const std::array<double, 3>& heights_mm,
+                                            const Bounds& footprint, const std::string& material) const {
+  return {{"type", "bspline"},
+          {"axis", axis},
+          {"control", control},
+          {"heights_mm", {{"value", heights_mm[0]}, {"min", heights_mm[1]}, {"max", heights_mm[2]}}},
+          {"domain", {footprint.lower.x(), footprint.lower.y(), footprint.upper.x(), footprint.upper.y()}},
+          {"below", {{"type", "layered"}, {"material", material}}},
+          {"above", {{"type", "layered"}, {"material", "void"}}}};
+}
+
+SurfaceStl write_caustic_surface_stl(const CausticSlabConfig& slab, const HeightSurface& surface,
+                                     std::span<const double> simulated, const std::function<void(Mesh&)>& to_print,
+                                     const GridField* exit_filter, RunFolder& folder) {
+  Mesh mesh = caustic_slab_mesh(slab.setup, surface, slab.origin_mm);
+  if (to_print) to_print(mesh);
+  const std::filesystem::path file = folder.path("print/surface.stl");
+  write_stl(mesh, file);
+  Mesh loaded = load_mesh(file);
+  if (to_print) to_print(loaded);  // back to the subtree's frame
+  const Eigen::Vector3d offset = slab_offset(slab.setup, slab.origin_mm);
+  for (Vec3& v : loaded.vertices) v -= offset;
+  CausticSetup setup = slab.setup;
+  if (exit_filter) {
+    setup.exit_cells = exit_filter->cells;
+    setup.exit_transmittance = exit_filter->values;
+  }
+  CausticTracer tracer(setup, std::move(loaded.vertices), std::move(loaded.triangles));
+  std::vector<double> traced(simulated.size());
+  tracer.render(traced);
+  return {{{"file", "print/surface.stl"},
+           {"triangles", mesh.triangles.size()},
+           {"traced_relative_rmse_vs_simulated", rms_difference(traced, simulated) / root_mean_square(simulated)}},
+          mesh.bounds()};
 }
 
 std::string optimizer_label(const nlohmann::json& optimizer) {

@@ -1,11 +1,13 @@
 #pragma once
-/// What both caustic translators share: the goal keys that describe the
-/// slab, light and receiver (read, documented, turned into the caustics
-/// simulator's and the caustic_image goal's properties), and the pictures
-/// and figures they report.
+/// The caustic piece, what the caustic translators share: the goal keys that
+/// describe the slab, light and receiver (read, documented, turned into the
+/// caustics simulator's and the caustic_image goal's properties), the
+/// B-spline face that is tuned, the smooth surface written for the printer,
+/// and the pictures and figures they report.
 
 #include <array>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <span>
 #include <vector>
@@ -19,7 +21,11 @@
 namespace spec2fab {
 
 class Experiment;
+class HeightSurface;
 class Properties;
+class RunFolder;
+struct CausticSlabConfig;
+struct GridField;
 
 /// The goal keys both read: image, material, distance, receiver, image size,
 /// rays, refractive index. The slab is the solid's bounding box; the
@@ -45,6 +51,37 @@ struct CausticGoalSettings {
   nlohmann::json image_report(std::span<const double> achieved, std::span<const double> initial,
                               const ImageObservation& goal) const;
 };
+
+/// The shaped face: a B-spline height surface over the slab's footprint,
+/// its control grid, and how finely the simulator meshes it.
+struct CausticSurfaceSettings {
+  std::array<int, 2> control{60, 60};
+  int vertices_per_span = 3;
+
+  static CausticSurfaceSettings read(const Properties& goal);
+  static std::vector<PropertyDoc> docs();
+  /// Mesh vertices of the simulated surface along each axis.
+  std::array<int, 2> vertices() const;
+  /// The B-spline node: along `axis` ("z", or "w" under a cut), heights
+  /// {value, min, max} in mm, `material` below and void above.
+  nlohmann::json node(const std::string& axis, const std::array<double, 3>& heights_mm, const Bounds& footprint,
+                      const std::string& material) const;
+};
+
+/// print/surface.stl: the tuned slab as one smooth closed mesh — the
+/// simulator's own triangles — for printers that take a surface (the
+/// per-material STLs come from print voxels, whose 27 µm terraces would
+/// scatter the light). `to_print` (an involution, or empty for none) maps
+/// the subtree's frame to the print's. Read back and traced — through
+/// `exit_filter` when given, the texture over the exit face — it must cast
+/// what the simulator cast (`simulated`); the difference is reported.
+struct SurfaceStl {
+  nlohmann::json report;  ///< file, triangles, traced_relative_rmse_vs_simulated
+  Bounds bounds;          ///< of the mesh written, in the print's coordinates
+};
+SurfaceStl write_caustic_surface_stl(const CausticSlabConfig& slab, const HeightSurface& surface,
+                                     std::span<const double> simulated, const std::function<void(Mesh&)>& to_print,
+                                     const GridField* exit_filter, RunFolder& folder);
 
 /// "nlopt LD_LBFGS", "spsa": an optimizer's type and, for the adapters, algorithm.
 std::string optimizer_label(const nlohmann::json& optimizer);

@@ -41,15 +41,12 @@
 #include "fabrication/material_surfaces.h"
 #include "reducer/height_surface.h"
 #include "reducer/reducer_tree.h"
-#include "spec/translator.h"
-#include "spec/tree_outputs.h"
-#include "spec/tuning_outputs.h"
-#include "tuning/schedule.h"
+#include "spec/tuning_translator.h"
 
 namespace spec2fab {
 namespace {
 
-class FacetCausticsTranslator final : public Translator {
+class FacetCausticsTranslator final : public TuningTranslator {
  public:
   FacetCausticsTranslator(const Properties& root, const Experiment& experiment) {
     const Properties goal = experiment.goal();
@@ -99,10 +96,7 @@ class FacetCausticsTranslator final : public Translator {
           {"slope_b", slope},
           {"below", {{"type", "layered"}, {"material", settings_.material}}},
           {"above", {{"type", "layered"}, {"material", "void"}}}}}};
-    tree_ = std::make_unique<ReducerTree>(
-        Properties::wrap(tree, experiment.file().string() + " (facet caustics tree)"), palette);
-    tree_->bind(experiment.solid(), experiment.geometry_spec().field_voxel_mm);
-    outputs_ = TreeOutputOptions::read(goal, experiment, *tree_);
+    set_tree(tree, "facet caustics tree", goal, experiment);
 
     const nlohmann::json aim = experiment.optimizer_or(
         {{"type", "nlopt"}, {"algorithm", "LN_BOBYQA"}, {"max_evaluations", 200}, {"xtol_rel", 1e-10}});
@@ -167,22 +161,21 @@ class FacetCausticsTranslator final : public Translator {
         settings_.image[1]);
   }
 
-  const ReducerTree& tree() const override { return *tree_; }
+  /// What the report compares with: the kernels' image and the flat slab's.
+  void prepare(RunContext& /*context*/) override {
+    kernel_image_ = render_kernels(kernels_, setup_.width_mm * setup_.depth_mm, raster_);
+    flat_ = trace_surface(nullptr);
+  }
 
-  void run(RunContext& context) override {
+  void report(const RunRecord& /*record*/, RunContext& context) override {
     const ImageObservation& goal = target();
-    const double flux = setup_.width_mm * setup_.depth_mm;
-    const std::vector<double> kernel_image = render_kernels(kernels_, flux, raster_);
-    const std::vector<double> flat = trace_surface(nullptr);
-
-    const RunRecord record = schedule_.run(network_, context.seed);
     const StitchReport stitch = stitch_offsets();
 
     Mesh slab;
     const std::vector<double> achieved = trace_surface(&slab);
     const double energy_start = swaps_->energies().empty() ? roughness(network_) : swaps_->energies().front();
-    nlohmann::json report = settings_.image_report(achieved, flat, goal);
-    report["kernels"] = caustic_image_errors(kernel_image, goal);
+    nlohmann::json report = settings_.image_report(achieved, flat_, goal);
+    report["kernels"] = caustic_image_errors(kernel_image_, goal);
     report["kernels"]["count"] = kernels_.size();
     report["facets"] = facets_;
     report["facet_mm"] = facet_mm_;
@@ -196,8 +189,7 @@ class FacetCausticsTranslator final : public Translator {
                         {"facets_lowered_to_fit", stitch.lowered}};
     context.result["caustics"] = report;
 
-    write_tuning_outputs(record, network_, context);
-    write_caustic_panels({goal.pixels, kernel_image, achieved}, goal.width, goal.height,
+    write_caustic_panels({goal.pixels, kernel_image_, achieved}, goal.width, goal.height,
                          context.folder.path("preview/goal_vs_simulated.png"));
     std::vector<double> centre_heights;
     for (size_t k = 0; k < network_.size(); ++k)
@@ -207,7 +199,6 @@ class FacetCausticsTranslator final : public Translator {
         {"previews", {"preview/convergence.png", "preview/goal_vs_simulated.png", "preview/height_map.png"}},
         {"surface", "print/surface.stl"}};
     write_stl(slab, context.folder.path("print/surface.stl"));
-    write_tree_outputs(*tree_, outputs_, context);
   }
 
   static TypeDoc doc() {
@@ -414,10 +405,7 @@ class FacetCausticsTranslator final : public Translator {
   std::vector<GaussianKernel> kernels_;
   std::vector<Eigen::Vector2d> centres_;
   std::shared_ptr<NeighbourSwaps> swaps_;
-  std::unique_ptr<ReducerTree> tree_;
-  TreeOutputOptions outputs_;
-  TunerNetwork network_;
-  Schedule schedule_;
+  std::vector<double> kernel_image_, flat_;  ///< the kernels' image; the flat slab's
 };
 
 }  // namespace

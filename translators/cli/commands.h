@@ -39,6 +39,9 @@ int export_command(const ExportArguments& arguments);
 int simulate_command(const SimulateArguments& arguments);
 int validate_command(const std::filesystem::path& experiment);
 int list_command(const std::string& kind, bool verbose, const std::filesystem::path& datasets);
+/// docs/parts.md: every registered part, its options and an example, as
+/// Markdown (`list --markdown`; a test keeps the committed file current).
+std::string parts_reference();
 /// What `list` can show: every listed registry's kind, then material and printer.
 std::vector<std::string> list_kinds();
 

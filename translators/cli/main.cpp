@@ -120,6 +120,9 @@ int main(int argc, char** argv) {
       "optimizers, couplings, networks...) and the shipped materials and printers");
   list_cmd->add_option("kind", kind, spec2fab::join(spec2fab::cli::list_kinds(), " | ") + " (default: all)");
   list_cmd->add_flag("--verbose", list_verbose, "properties, defaults and an example of each");
+  bool list_markdown = false;
+  list_cmd->add_flag("--markdown", list_markdown,
+                     "every registered part with its options as Markdown (what docs/parts.md holds)");
   list_cmd->add_option("--datasets", datasets,
                        "datasets folder (default $SPEC2FAB_DATASETS or the source tree's)");
 
@@ -143,6 +146,10 @@ int main(int argc, char** argv) {
     if (*validate_cmd) return cli::validate_command(validate_file);
     if (*simulate_cmd) return cli::simulate_command(simulate);
     if (*export_cmd) return cli::export_command(export_arguments);
+    if (*list_cmd && list_markdown) {
+      std::cout << cli::parts_reference();
+      return 0;
+    }
     if (*list_cmd) return cli::list_command(kind, list_verbose, datasets);
   } catch (const InputError& e) {
     std::cerr << "error: " << e.what() << "\n";

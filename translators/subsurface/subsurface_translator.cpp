@@ -21,9 +21,7 @@
 #include "core/distance.h"
 #include "reducer/reducer_tree.h"
 #include "spec/surface_columns.h"
-#include "spec/translator.h"
-#include "spec/tree_outputs.h"
-#include "spec/tuning_outputs.h"
+#include "spec/tuning_translator.h"
 #include "subsurface/stack_bound.h"
 #include "subsurface/subsurface_parts.h"
 #include "tuning/schedule.h"
@@ -31,7 +29,7 @@
 namespace spec2fab {
 namespace {
 
-class SubsurfaceTranslator final : public Translator {
+class SubsurfaceTranslator final : public TuningTranslator {
  public:
   SubsurfaceTranslator(const Properties& /*root*/, const Experiment& experiment) {
     const Properties goal = experiment.goal();
@@ -72,8 +70,7 @@ class SubsurfaceTranslator final : public Translator {
       layers.push_back({{"material", {{"value", materials_.front()}, {"choices", materials_}}},
                         {"thickness_mm", {{"value", thicknesses.front()}, {"choices", thicknesses}}}});
     }
-    tree_ = build_surface_column_tree(experiment, shell, columns_, std::move(layers), backing_, "subsurface");
-    outputs_ = TreeOutputOptions::read(goal, experiment, *tree_);
+    set_tree(surface_column_tree(shell, columns_, std::move(layers), backing_), "subsurface tree", goal, experiment);
 
     const nlohmann::json simulator = {{"type", "subsurface"},
                                       {"radius_mm", grid_.radius_mm},
@@ -122,11 +119,7 @@ class SubsurfaceTranslator final : public Translator {
         thickness_steps_.size(), backing_);
   }
 
-  const ReducerTree& tree() const override { return *tree_; }
-
-  void run(RunContext& context) override {
-    const RunRecord record = schedule_.run(network_, context.seed);
-    tree_->evaluate();
+  void report(const RunRecord& record, RunContext& context) override {
     const double candidates =
         std::pow(static_cast<double>(materials_.size() * thickness_steps_.size()), layer_count_);
     std::vector<double> column_rms, relative_rms, fractions, errors;
@@ -170,12 +163,10 @@ class SubsurfaceTranslator final : public Translator {
           {"leaves_evaluated_total", leaves},
           {"fraction_of_exhaustive", stats(fractions)}}},
         {"stacks", stacks}};
-    write_tuning_outputs(record, network_, context);
     write_profiles(context.folder.path("preview/profiles.png"));
     write_appearance(context.folder.path("preview/appearance.png"));
     context.result["files"] = {
         {"previews", {"preview/convergence.png", "preview/profiles.png", "preview/appearance.png"}}};
-    write_tree_outputs(*tree_, outputs_, context);
   }
 
   static TypeDoc doc() {
@@ -315,10 +306,6 @@ class SubsurfaceTranslator final : public Translator {
   std::vector<int> thickness_steps_;
   std::shared_ptr<LayerStackModel> model_;
   std::shared_ptr<StackBound> bound_;
-  std::unique_ptr<ReducerTree> tree_;
-  TreeOutputOptions outputs_;
-  TunerNetwork network_;
-  Schedule schedule_;
 };
 
 }  // namespace

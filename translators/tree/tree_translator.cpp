@@ -12,23 +12,21 @@
 #include <spdlog/spdlog.h>
 
 #include "reducer/reducer_tree.h"
-#include "spec/translator.h"
-#include "spec/tree_outputs.h"
-#include "spec/tuning_outputs.h"
+#include "spec/tuning_translator.h"
 #include "tuning/tuning_plan.h"
 
 namespace spec2fab {
 namespace {
 
-class TreeTranslator final : public Translator {
+class TreeTranslator final : public TuningTranslator {
  public:
   TreeTranslator(const Properties& /*root*/, const Experiment& experiment) {
     const Properties goal = experiment.goal();
-    tree_ = std::make_unique<ReducerTree>(goal.object("tree"), experiment.palette());
-    tree_->bind(experiment.solid(), experiment.geometry_spec().field_voxel_mm);
-    outputs_ = TreeOutputOptions::read(goal, experiment, *tree_);
+    set_tree(std::make_unique<ReducerTree>(goal.object("tree"), experiment.palette()), goal, experiment);
     if (goal.has("tuners")) {
-      tuning_ = build_tuning_plan(goal, *tree_, PartContext{experiment.palette(), &experiment.cache()});
+      const auto plan = build_tuning_plan(goal, *tree_, PartContext{experiment.palette(), &experiment.cache()});
+      network_ = std::move(plan->network);
+      schedule_ = std::move(plan->schedule);
     } else if (const SearchSpace free = tree_->search_space(); free.dimension() > 0) {
       // Without tuners nothing is tuned; a free parameter is likely a mistake.
       spdlog::warn(
@@ -40,19 +38,12 @@ class TreeTranslator final : public Translator {
   std::string summary() const override {
     std::string text = "tree: a reducer tree (" + std::to_string(tree_->node_count()) +
                        " nodes) bound to the shape";
-    if (tuning_) {
-      text += ", tuned by " + std::to_string(tuning_->network.size()) + " tuner(s) in " +
-              std::to_string(tuning_->schedule.phases().size()) + " phase(s)";
+    if (network_.size() > 0) {
+      text += ", tuned by " + std::to_string(network_.size()) + " tuner(s) in " +
+              std::to_string(schedule_.phases().size()) + " phase(s)";
     }
     return text + "; writes tree.json, a material census on " +
            std::to_string(outputs_.census_voxel_mm) + " mm voxels and cross-section previews";
-  }
-
-  const ReducerTree& tree() const override { return *tree_; }
-
-  void run(RunContext& context) override {
-    if (tuning_) tune(context);
-    write_tree_outputs(*tree_, outputs_, context);
   }
 
   static TypeDoc doc() {
@@ -65,8 +56,8 @@ class TreeTranslator final : public Translator {
           "optimizer}, each a registered type with its options (`spec2fab list simulator` ...)"},
          {"goal.network", "object", "none", "{type: none | grid4 | grid8, width}: tuners row-major"},
          {"goal.schedule", "array", "one serial phase of all tuners",
-          "phases: {name, tuners (names), sweeps, mode: serial | parallel, coupling: none | "
-          "error_diffusion, fix_after}"},
+          "phases: {name, tuners (names), sweeps, mode: serial | parallel, coupling (a registered "
+          "coupling with its options: `spec2fab list coupling`), fix_after}"},
         },
         R"({"translator": "tree", "goal": {"tree": {"type": "layered", "material": )"
         R"("VeroWhitePlus"}}})"};
@@ -75,27 +66,20 @@ class TreeTranslator final : public Translator {
   }
 
  private:
-  void tune(RunContext& context) {
-    TunerNetwork& network = tuning_->network;
-    const RunRecord record = tuning_->schedule.run(network, context.seed);
-    tree_->evaluate();
+  /// Each tuner's error against its goal (not a diffused target) at the end.
+  void report(const RunRecord& record, RunContext& context) override {
     nlohmann::json tuners = nlohmann::json::array();
-    for (size_t t = 0; t < network.size(); ++t) {
-      Tuner& tuner = network.tuner(t);
-      tuner.reset_target();  // report against the goal, not a diffused target
+    for (size_t t = 0; t < network_.size(); ++t) {
+      Tuner& tuner = network_.tuner(t);
+      tuner.reset_target();
       tuners.push_back({{"name", tuner.name()}, {"final_error", tuner.error()}});
     }
-    write_tuning_outputs(record, network, context);
     context.result["tuning"]["tuners"] = tuners;
     for (const TunerRun& run : record.runs) {
-      spdlog::debug("{} ({}, sweep {}): {}", network.tuner(run.tuner).name(),
-                    record.phase_names[run.phase], run.sweep + 1, run.summary.brief_report());
+      spdlog::debug("{} ({}, sweep {}): {}", network_.tuner(run.tuner).name(), record.phase_names[run.phase],
+                    run.sweep + 1, run.summary.brief_report());
     }
   }
-
-  std::unique_ptr<ReducerTree> tree_;
-  std::unique_ptr<TuningPlan> tuning_;
-  TreeOutputOptions outputs_;
 };
 
 }  // namespace

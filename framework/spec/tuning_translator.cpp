@@ -1,0 +1,33 @@
+#include "spec/tuning_translator.h"
+
+#include "reducer/reducer_tree.h"
+#include "spec/tuning_outputs.h"
+
+namespace spec2fab {
+
+void TuningTranslator::set_tree(std::unique_ptr<ReducerTree> tree, const Properties& goal,
+                                const Experiment& experiment) {
+  tree_ = std::move(tree);
+  tree_->bind(experiment.solid(), experiment.geometry_spec().field_voxel_mm);
+  outputs_ = TreeOutputOptions::read(goal, experiment, *tree_);
+}
+
+void TuningTranslator::set_tree(const nlohmann::json& tree, const std::string& what, const Properties& goal,
+                                const Experiment& experiment) {
+  set_tree(std::make_unique<ReducerTree>(Properties::wrap(tree, experiment.file().string() + " (" + what + ")"),
+                                         experiment.palette()),
+           goal, experiment);
+}
+
+void TuningTranslator::run(RunContext& context) {
+  if (network_.size() > 0) {
+    prepare(context);
+    const RunRecord record = schedule_.run(network_, context.seed);
+    tree_->evaluate();
+    write_tuning_outputs(record, network_, context);
+    report(record, context);
+  }
+  write_tree_outputs(*tree_, outputs_, context);
+}
+
+}  // namespace spec2fab

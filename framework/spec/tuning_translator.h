@@ -1,0 +1,45 @@
+#pragma once
+/// The skeleton of every translator that tunes a reducer tree: it owns the
+/// tree, the tree outputs, the tuner network and the schedule, and runs
+///
+///   prepare → schedule → tree evaluated → tuning record → report → tree outputs
+///
+/// A translator derived from it builds the tree (`set_tree`), adds tuners to
+/// `network_` and phases to `schedule_` in its constructor — from pieces such
+/// as the texture (translators/pieces) — and writes only what is its own in
+/// `report`. A translator with no tuners writes the tree outputs alone.
+
+#include <memory>
+
+#include "spec/translator.h"
+#include "spec/tree_outputs.h"
+#include "tuning/schedule.h"
+
+namespace spec2fab {
+
+class TuningTranslator : public Translator {
+ public:
+  const ReducerTree& tree() const final { return *tree_; }
+  void run(RunContext& context) final;
+
+ protected:
+  /// Takes the tree, binds it to the experiment's solid and reads the
+  /// outputs' options (refusing an oversized print now).
+  void set_tree(std::unique_ptr<ReducerTree> tree, const Properties& goal, const Experiment& experiment);
+  /// set_tree for a tree written as JSON (`what` names it in errors).
+  void set_tree(const nlohmann::json& tree, const std::string& what, const Properties& goal,
+                const Experiment& experiment);
+
+  /// Before the schedule runs: what the report compares with (the start).
+  virtual void prepare(RunContext& /*context*/) {}
+  /// After the schedule ran, the tree was evaluated and the tuning record
+  /// written: the translator's figures, previews and files.
+  virtual void report(const RunRecord& record, RunContext& context) = 0;
+
+  std::unique_ptr<ReducerTree> tree_;
+  TreeOutputOptions outputs_;
+  TunerNetwork network_;
+  Schedule schedule_;
+};
+
+}  // namespace spec2fab
