@@ -154,6 +154,12 @@ bool stop_requested(CallbackResult answer, Summary& summary) {
   return false;
 }
 
+void end_after_iterations(Summary& summary, long long iterations) {
+  if (summary.termination != Termination::not_run) return;
+  summary.termination = Termination::max_iterations;
+  summary.message = "completed " + std::to_string(iterations) + " iterations";
+}
+
 bool trace_keeps(long long iteration, long long iterations, long long rows) {
   const long long kept = std::max<long long>(1, rows);
   const long long every = std::max<long long>(1, (iterations + kept - 1) / kept);

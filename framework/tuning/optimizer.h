@@ -1,6 +1,7 @@
 #pragma once
 /// Optimizers, in the manner of Ceres: each has flat `Options` with defaults
-/// written in the class and `IsValid(std::string* why)` naming a bad field,
+/// written in the class, each option declared once (core/options.h: reading,
+/// `IsValid(std::string* why)` naming a bad field, and the documentation),
 /// and returns a `Summary` (termination, initial/final error, evaluations,
 /// iterations, time, a per-iteration trace, brief and full reports).
 ///
@@ -121,6 +122,10 @@ CallbackResult report_iteration(const Problem& problem, Summary& summary,
 /// user_terminate (with a message) in `summary` and returns true.
 bool stop_requested(CallbackResult answer, Summary& summary);
 
+/// For run(): a run that went through all its `iterations` without another
+/// ending (a tolerance, the callback) ends with max_iterations.
+void end_after_iterations(Summary& summary, long long iterations);
+
 /// Whether iteration `iteration` of `iterations` gets a trace row when a run
 /// keeps about `rows` evenly spaced rows (always the first and the last).
 bool trace_keeps(long long iteration, long long iterations, long long rows = 1000);
@@ -129,13 +134,5 @@ using OptimizerRegistry = Registry<Optimizer>;
 
 /// Builds the optimizer described by `properties` (its "type" names it).
 std::unique_ptr<Optimizer> build_optimizer(const Properties& properties);
-
-/// Throws InputError at `properties` when options.IsValid fails.
-template <class Options>
-Options validated(const Properties& properties, Options options) {
-  std::string why;
-  if (!options.IsValid(&why)) properties.fail(why);
-  return options;
-}
 
 }  // namespace spec2fab

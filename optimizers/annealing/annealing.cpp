@@ -24,6 +24,7 @@
 
 #include "../random.h"
 #include "core/strings.h"
+#include "core/options.h"
 #include "tuning/optimizer.h"
 
 namespace spec2fab {
@@ -40,51 +41,40 @@ class Annealing final : public Optimizer {
     double swap_probability = 0.2;
     int seed = 1;
 
-    bool IsValid(std::string* why) const {
-      const std::vector<std::string> schedules = {"exponential", "linear", "logarithmic"};
-      if (iterations < 1) {
-        *why = "iterations: must be positive";
-      } else if (schedule_iterations != 0 && schedule_iterations < iterations) {
-        *why = "schedule_iterations: must be at least iterations";
-      } else if (!(initial_temperature > 0) || !std::isfinite(initial_temperature)) {
-        *why = "initial_temperature: must be positive";
-      } else if (!(cooling > 0 && cooling <= 1)) {
-        *why = "cooling: must lie in (0, 1]";
-      } else if (std::find(schedules.begin(), schedules.end(), schedule) == schedules.end()) {
-        *why = "schedule: unknown schedule '" + schedule + "'" + did_you_mean(schedule, schedules) +
-               " (known: " + join(schedules) + ")";
-      } else if (!(step_fraction > 0 && step_fraction <= 1)) {
-        *why = "step_fraction: must lie in (0, 1]";
-      } else if (!(swap_probability >= 0 && swap_probability <= 1)) {
-        *why = "swap_probability: must lie in [0, 1]";
-      } else if (seed < 0) {
-        *why = "seed: must not be negative";
-      } else {
-        return true;
-      }
-      return false;
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.number(o.iterations, "iterations", Range::at_least(1), "moves proposed (one error evaluation each)");
+      d.number(o.schedule_iterations, "schedule_iterations", Range::at_least(0),
+               "length of the temperature schedule (0: iterations); longer than iterations, it continues "
+               "over successive runs (a tuner run once per sweep cools over the sweeps)");
+      d.number(o.initial_temperature, "initial_temperature", Range::above(0), "T0, in units of the error");
+      d.number(o.cooling, "cooling", Range::open_closed(0, 1), "alpha of the exponential schedule");
+      d.choice(o.schedule, "schedule", {"exponential", "linear", "logarithmic"}, "how the temperature falls");
+      d.number(o.step_fraction, "step_fraction", Range::open_closed(0, 1),
+               "Gaussian step of a continuous variable, as a fraction of its range");
+      d.number(o.swap_probability, "swap_probability", Range::closed(0, 1),
+               "chance that a move is a swap with a neighbour (problems with neighbour moves)");
+      d.number(o.seed, "seed", Range::at_least(0),
+               "picks the random stream (under a schedule, mixed with the run's seed and the tuner's place)");
     }
+    bool check(std::string* why) const {
+      if (schedule_iterations != 0 && schedule_iterations < iterations) {
+        *why = "schedule_iterations: must be 0 or at least iterations";
+        return false;
+      }
+      return true;
+    }
+    bool IsValid(std::string* why) const { return options_valid(*this, why); }
   };
 
   explicit Annealing(const Properties& properties)
-      : options_(validated(properties, read(properties))) {}
+      : options_(read_options<Options>(properties)) {}
 
   static TypeDoc doc() {
     return {
         "Simulated annealing over continuous, discrete and choice variables, with optional "
         "state swaps between neighbouring tuners.",
-        {{"iterations", "integer", "10000", "moves proposed (one error evaluation each)"},
-         {"schedule_iterations", "integer", "0",
-          "length of the temperature schedule (0: iterations); longer than iterations, it continues "
-          "over successive runs (a tuner run once per sweep cools over the sweeps)"},
-         {"initial_temperature", "number", "1", "T0, in units of the error"},
-         {"cooling", "number in (0, 1]", "0.999", "alpha of the exponential schedule"},
-         {"schedule", "string", "\"exponential\"", "exponential, linear or logarithmic"},
-         {"step_fraction", "number in (0, 1]", "0.1",
-          "Gaussian step of a continuous variable, as a fraction of its range"},
-         {"swap_probability", "number in [0, 1]", "0.2",
-          "chance that a move is a swap with a neighbour (problems with neighbour moves)"},
-         {"seed", "integer", "1", "picks the random stream (under a schedule, mixed with the run's seed and the tuner's place)"}},
+        option_docs<Options>(),
         R"({"type": "annealing", "iterations": 10000, "initial_temperature": 1.0, )"
         R"("cooling": 0.999, "schedule": "exponential", "seed": 1})"};
   }
@@ -159,10 +149,7 @@ class Annealing final : public Optimizer {
       if (stop_requested(answer, summary)) break;
     }
     x = best_x;
-    if (summary.termination == Termination::not_run) {
-      summary.termination = Termination::max_iterations;
-      summary.message = "completed " + std::to_string(options_.iterations) + " iterations";
-    }
+    end_after_iterations(summary, options_.iterations);
     summary.details["accepted"] = accepted;
     summary.details["rejected"] = rejected;
     summary.details["swaps_proposed"] = swaps_proposed;
@@ -172,19 +159,6 @@ class Annealing final : public Optimizer {
 
 
  private:
-  static Options read(const Properties& properties) {
-    Options o;
-    o.iterations = properties.get<int>("iterations", o.iterations);
-    o.schedule_iterations = properties.get<int>("schedule_iterations", o.schedule_iterations);
-    o.initial_temperature = properties.get<double>("initial_temperature", o.initial_temperature);
-    o.cooling = properties.get<double>("cooling", o.cooling);
-    o.schedule = properties.get<std::string>("schedule", o.schedule);
-    o.step_fraction = properties.get<double>("step_fraction", o.step_fraction);
-    o.swap_probability = properties.get<double>("swap_probability", o.swap_probability);
-    o.seed = properties.get<int>("seed", o.seed);
-    return o;
-  }
-
   long long schedule_length() const {
     return options_.schedule_iterations > 0 ? options_.schedule_iterations : options_.iterations;
   }

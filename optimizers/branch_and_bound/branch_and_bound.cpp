@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "core/strings.h"
+#include "core/options.h"
 #include "tuning/optimizer.h"
 
 namespace spec2fab {
@@ -26,31 +27,24 @@ class BranchAndBound final : public Optimizer {
     int continuous_steps = 10;
     std::string value_order = "natural";
 
-    bool IsValid(std::string* why) const {
-      const std::vector<std::string> orders = {"natural", "best_bound_first"};
-      if (continuous_steps < 1) {
-        *why = "continuous_steps: must be positive";
-      } else if (std::find(orders.begin(), orders.end(), value_order) == orders.end()) {
-        *why = "value_order: unknown order '" + value_order + "'" +
-               did_you_mean(value_order, orders) + " (known: " + join(orders) + ")";
-      } else {
-        return true;
-      }
-      return false;
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.number(o.continuous_steps, "continuous_steps", Range::at_least(1),
+               "increments a continuous variable's range is split into (steps + 1 values)");
+      d.choice(o.value_order, "value_order", {"natural", "best_bound_first"},
+               "natural (admissible order) or best_bound_first (children sorted by bound)");
     }
+    bool IsValid(std::string* why) const { return options_valid(*this, why); }
   };
 
   explicit BranchAndBound(const Properties& properties)
-      : options_(validated(properties, read(properties))) {}
+      : options_(read_options<Options>(properties)) {}
 
   static TypeDoc doc() {
     return {
         "Exact depth-first branch and bound on the problem's lower bound over partial "
         "assignments; continuous variables are discretised.",
-        {{"continuous_steps", "integer", "10",
-          "increments a continuous variable's range is split into (steps + 1 values)"},
-         {"value_order", "string", "\"natural\"",
-          "natural (admissible order) or best_bound_first (children sorted by bound)"}},
+        option_docs<Options>(),
         R"({"type": "branch_and_bound", "continuous_steps": 10, )"
         R"("value_order": "best_bound_first"})"};
   }
@@ -178,13 +172,6 @@ class BranchAndBound final : public Optimizer {
       stopped = stop_requested(answer, summary);
     }
   };
-
-  static Options read(const Properties& properties) {
-    Options o;
-    o.continuous_steps = properties.get<int>("continuous_steps", o.continuous_steps);
-    o.value_order = properties.get<std::string>("value_order", o.value_order);
-    return o;
-  }
 
   Options options_;
 };

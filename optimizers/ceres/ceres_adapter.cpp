@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "core/strings.h"
+#include "core/options.h"
 #include "tuning/optimizer.h"
 
 namespace spec2fab {
@@ -33,14 +34,6 @@ const std::vector<std::string> kLinearSolvers = {
     "sparse_schur", "iterative_schur",       "cgnr"};
 const std::vector<std::string> kTrustRegions = {"levenberg_marquardt", "dogleg"};
 const std::vector<std::string> kDerivatives = {"analytic", "numeric"};
-
-bool one_of(const std::string& value, const std::vector<std::string>& known,
-            const std::string& field, std::string* why) {
-  if (std::find(known.begin(), known.end(), value) != known.end()) return true;
-  *why = field + ": unknown value '" + value + "'" + did_you_mean(value, known) +
-         " (known: " + join(known) + ")";
-  return false;
-}
 
 // Problem::residuals behind Ceres' interface. Exceptions must not cross
 // Ceres' frames: the first is kept and rethrown after Solve.
@@ -136,38 +129,28 @@ class CeresAdapter final : public Optimizer {
     std::string linear_solver = "dense_qr";
     std::string trust_region = "levenberg_marquardt";
 
-    bool IsValid(std::string* why) const {
-      if (max_iterations < 1) {
-        *why = "max_iterations: must be positive";
-      } else if (!(function_tolerance >= 0)) {
-        *why = "function_tolerance: must not be negative";
-      } else if (!(gradient_tolerance >= 0)) {
-        *why = "gradient_tolerance: must not be negative";
-      } else if (!(parameter_tolerance >= 0)) {
-        *why = "parameter_tolerance: must not be negative";
-      } else {
-        return one_of(derivatives, kDerivatives, "derivatives", why) &&
-               one_of(linear_solver, kLinearSolvers, "linear_solver", why) &&
-               one_of(trust_region, kTrustRegions, "trust_region", why);
-      }
-      return false;
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.number(o.max_iterations, "max_iterations", Range::at_least(1), "Ceres' max_num_iterations");
+      d.number(o.function_tolerance, "function_tolerance", Range::at_least(0), "stop when |Δcost|/cost falls below");
+      d.number(o.gradient_tolerance, "gradient_tolerance", Range::at_least(0),
+               "stop when the projected gradient's max norm falls below");
+      d.number(o.parameter_tolerance, "parameter_tolerance", Range::at_least(0),
+               "stop when |Δx|/(|x| + tol) falls below");
+      d.choice(o.derivatives, "derivatives", kDerivatives,
+               "analytic (the problem's Jacobian) or numeric (central differences of residuals)");
+      d.choice(o.linear_solver, "linear_solver", kLinearSolvers, "Ceres' linear solver for the trust-region step");
+      d.choice(o.trust_region, "trust_region", kTrustRegions, "Ceres' trust-region strategy");
     }
+    bool IsValid(std::string* why) const { return options_valid(*this, why); }
   };
 
   explicit CeresAdapter(const Properties& properties)
-      : options_(validated(properties, read(properties))) {}
+      : options_(read_options<Options>(properties)) {}
 
   static TypeDoc doc() {
     return {"Bounded nonlinear least squares with Ceres Solver on the problem's residuals.",
-            {{"max_iterations", "integer", "100", "Ceres' max_num_iterations"},
-             {"function_tolerance", "number", "1e-6", "stop when |Δcost|/cost falls below"},
-             {"gradient_tolerance", "number", "1e-10",
-              "stop when the projected gradient's max norm falls below"},
-             {"parameter_tolerance", "number", "1e-8", "stop when |Δx|/(|x| + tol) falls below"},
-             {"derivatives", "string", "\"analytic\"",
-              "analytic (the problem's Jacobian) or numeric (central differences of residuals)"},
-             {"linear_solver", "string", "\"dense_qr\"", join(kLinearSolvers)},
-             {"trust_region", "string", "\"levenberg_marquardt\"", join(kTrustRegions)}},
+            option_docs<Options>(),
             R"({"type": "ceres", "max_iterations": 100, "derivatives": "analytic", )"
             R"("trust_region": "levenberg_marquardt", "linear_solver": "dense_qr"})"};
   }
@@ -262,18 +245,6 @@ class CeresAdapter final : public Optimizer {
   }
 
  private:
-  static Options read(const Properties& properties) {
-    Options o;
-    o.max_iterations = properties.get<int>("max_iterations", o.max_iterations);
-    o.function_tolerance = properties.get<double>("function_tolerance", o.function_tolerance);
-    o.gradient_tolerance = properties.get<double>("gradient_tolerance", o.gradient_tolerance);
-    o.parameter_tolerance = properties.get<double>("parameter_tolerance", o.parameter_tolerance);
-    o.derivatives = properties.get<std::string>("derivatives", o.derivatives);
-    o.linear_solver = properties.get<std::string>("linear_solver", o.linear_solver);
-    o.trust_region = properties.get<std::string>("trust_region", o.trust_region);
-    return o;
-  }
-
   Options options_;
 };
 

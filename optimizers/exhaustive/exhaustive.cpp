@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "core/options.h"
 #include "tuning/optimizer.h"
 
 namespace spec2fab {
@@ -19,24 +20,22 @@ class Exhaustive final : public Optimizer {
   struct Options {
     int max_candidates = 10'000'000;
 
-    bool IsValid(std::string* why) const {
-      if (max_candidates < 1) {
-        *why = "max_candidates: must be positive";
-        return false;
-      }
-      return true;
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.number(o.max_candidates, "max_candidates", Range::at_least(1),
+               "refuse (failure) problems with more assignments than this");
     }
+    bool IsValid(std::string* why) const { return options_valid(*this, why); }
   };
 
   explicit Exhaustive(const Properties& properties)
-      : options_(validated(properties, read(properties))) {}
+      : options_(read_options<Options>(properties)) {}
 
   static TypeDoc doc() {
     return {
         "Evaluates every admissible assignment of an all-discrete problem and keeps the best; "
         "the exact reference for small problems.",
-        {{"max_candidates", "integer", "10000000",
-          "refuse (failure) problems with more assignments than this"}},
+        option_docs<Options>(),
         R"({"type": "exhaustive", "max_candidates": 10000000})"};
   }
 
@@ -99,12 +98,6 @@ class Exhaustive final : public Optimizer {
   }
 
  private:
-  static Options read(const Properties& properties) {
-    Options o;
-    o.max_candidates = properties.get<int>("max_candidates", o.max_candidates);
-    return o;
-  }
-
   Options options_;
 };
 

@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "core/strings.h"
+#include "core/options.h"
 #include "tuning/optimizer.h"
 
 namespace spec2fab {
@@ -111,42 +112,35 @@ class NloptAdapter final : public Optimizer {
     double max_seconds = 0;  ///< 0: no limit (a limit makes runs depend on the machine)
     int seed = 1;
 
-    bool IsValid(std::string* why) const {
-      if (nlopt_algorithm_from_string(upper_case(algorithm).c_str()) < 0) {
-        *why = "algorithm: unknown NLopt algorithm '" + algorithm + "'" +
-               did_you_mean(upper_case(algorithm), algorithm_names()) +
-               " (for example LD_LBFGS, LD_MMA, LD_SLSQP, LN_BOBYQA, LN_COBYLA, LN_SBPLX, "
-               "LN_NELDERMEAD, GN_DIRECT_L, GN_CRS2_LM, GN_ISRES; see NLopt's algorithm list)";
-      } else if (max_evaluations < 1) {
-        *why = "max_evaluations: must be positive";
-      } else if (!(ftol_rel >= 0)) {
-        *why = "ftol_rel: must not be negative";
-      } else if (!(xtol_rel >= 0)) {
-        *why = "xtol_rel: must not be negative";
-      } else if (!(max_seconds >= 0)) {
-        *why = "max_seconds: must not be negative (0: no limit)";
-      } else if (seed < 0) {
-        *why = "seed: must not be negative";
-      } else {
-        return true;
-      }
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.value(o.algorithm, "algorithm", "NLopt's name, e.g. LD_LBFGS, LD_MMA, LN_BOBYQA, LN_COBYLA, GN_DIRECT_L");
+      d.number(o.max_evaluations, "max_evaluations", Range::at_least(1), "error (and gradient) evaluations");
+      d.number(o.ftol_rel, "ftol_rel", Range::at_least(0), "stop when the relative change of error falls below");
+      d.number(o.xtol_rel, "xtol_rel", Range::at_least(0), "stop when the relative change of x falls below");
+      d.number(o.max_seconds, "max_seconds", Range::at_least(0), "wall-time limit; 0: none");
+      d.number(o.seed, "seed", Range::at_least(0),
+               "picks the stream of NLopt's stochastic algorithms (under a schedule, mixed with the run's seed "
+               "and the tuner's place)");
+    }
+    bool check(std::string* why) const {
+      if (nlopt_algorithm_from_string(upper_case(algorithm).c_str()) >= 0) return true;
+      *why = "algorithm: unknown NLopt algorithm '" + algorithm + "'" +
+             did_you_mean(upper_case(algorithm), algorithm_names()) +
+             " (for example LD_LBFGS, LD_MMA, LD_SLSQP, LN_BOBYQA, LN_COBYLA, LN_SBPLX, "
+             "LN_NELDERMEAD, GN_DIRECT_L, GN_CRS2_LM, GN_ISRES; see NLopt's algorithm list)";
       return false;
     }
+    bool IsValid(std::string* why) const { return options_valid(*this, why); }
   };
 
   explicit NloptAdapter(const Properties& properties)
-      : options_(validated(properties, read(properties))),
+      : options_(read_options<Options>(properties)),
         algorithm_(upper_case(options_.algorithm)) {}
 
   static TypeDoc doc() {
     return {"Any NLopt algorithm by name: local or global, derivative-free or gradient-based.",
-            {{"algorithm", "string", "\"LN_BOBYQA\"",
-              "NLopt's name, e.g. LD_LBFGS, LD_MMA, LN_BOBYQA, LN_COBYLA, GN_DIRECT_L"},
-             {"max_evaluations", "integer", "1000", "error (and gradient) evaluations"},
-             {"ftol_rel", "number", "1e-10", "stop when the relative change of error falls below"},
-             {"xtol_rel", "number", "1e-8", "stop when the relative change of x falls below"},
-             {"max_seconds", "number", "0", "wall-time limit; 0: none"},
-             {"seed", "integer", "1", "picks the stream of NLopt's stochastic algorithms (under a schedule, mixed with the run's seed and the tuner's place)"}},
+            option_docs<Options>(),
             R"({"type": "nlopt", "algorithm": "LD_LBFGS", "max_evaluations": 1000, )"
             R"("ftol_rel": 1e-10, "xtol_rel": 1e-8})"};
   }
@@ -253,17 +247,6 @@ class NloptAdapter final : public Optimizer {
 
 
  private:
-  static Options read(const Properties& properties) {
-    Options o;
-    o.algorithm = properties.get<std::string>("algorithm", o.algorithm);
-    o.max_evaluations = properties.get<int>("max_evaluations", o.max_evaluations);
-    o.ftol_rel = properties.get<double>("ftol_rel", o.ftol_rel);
-    o.xtol_rel = properties.get<double>("xtol_rel", o.xtol_rel);
-    o.max_seconds = properties.get<double>("max_seconds", o.max_seconds);
-    o.seed = properties.get<int>("seed", o.seed);
-    return o;
-  }
-
   bool gradient_based() const { return starts_with_any(algorithm_, {"LD_", "GD_"}); }
   bool global() const { return starts_with_any(algorithm_, {"GN_", "GD_", "G_MLSL"}); }
 

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "../random.h"
+#include "core/options.h"
 #include "tuning/optimizer.h"
 
 namespace spec2fab {
@@ -37,53 +38,42 @@ class Spsa final : public Optimizer {
     /// the lowest error seen flatters the point that drew the luckiest noise)
     std::string result = "best_seen";
 
-    bool IsValid(std::string* why) const {
-      if (iterations < 1) {
-        *why = "iterations: must be positive";
-      } else if (!(a >= 0) || !std::isfinite(a)) {
-        *why = "a: must not be negative (0 calibrates it)";
-      } else if (!(first_step > 0 && first_step <= 1)) {
-        *why = "first_step: must lie in (0, 1]";
-      } else if (!(c > 0) || !std::isfinite(c)) {
-        *why = "c: must be positive";
-      } else if (!std::isfinite(A)) {
-        *why = "A: must be a finite number (negative: 10% of iterations)";
-      } else if (!(alpha > 0 && alpha <= 1)) {
-        *why = "alpha: must lie in (0, 1]";
-      } else if (!(gamma > 0 && gamma <= alpha)) {
-        *why = "gamma: must lie in (0, alpha]";
-      } else if (seed < 0) {
-        *why = "seed: must not be negative";
-      } else if (result != "best_seen" && result != "last_iterate") {
-        *why = "result: must be \"best_seen\" or \"last_iterate\", not \"" + result + "\"";
-      } else {
-        return true;
-      }
-      return false;
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.number(o.iterations, "iterations", Range::at_least(1), "gradient estimates and steps");
+      d.number(o.a, "a", Range::at_least(0),
+               "step gain a; 0 calibrates it from 4 gradient estimates at the start so that the "
+               "first step moves about first_step of each range");
+      d.number(o.first_step, "first_step", Range::open_closed(0, 1),
+               "calibrated first step, as a fraction of each range (small for sensitive errors, e.g. "
+               "caustics, where a micrometre of height moves light by a pixel)");
+      d.number(o.c, "c", Range::above(0), "perturbation c, as a fraction of each variable's range");
+      d.number(o.A, "A", Range::any(), "stability constant A; negative means 10% of iterations");
+      d.number(o.alpha, "alpha", Range::open_closed(0, 1), "decay exponent of a_k");
+      d.number(o.gamma, "gamma", Range::open_closed(0, 1), "decay exponent of c_k, at most alpha");
+      d.number(o.seed, "seed", Range::at_least(0),
+               "picks the random stream (under a schedule, mixed with the run's seed and the tuner's place)");
+      d.choice(o.result, "result", {"best_seen", "last_iterate"},
+               "best_seen: the lowest error evaluated, the final iterate included; last_iterate: "
+               "the final iterate (better when the error is noisy)");
     }
+    bool check(std::string* why) const {
+      if (gamma > alpha) {
+        *why = "gamma: must lie in (0, alpha]";
+        return false;
+      }
+      return true;
+    }
+    bool IsValid(std::string* why) const { return options_valid(*this, why); }
   };
 
-  explicit Spsa(const Properties& properties) : options_(validated(properties, read(properties))) {}
+  explicit Spsa(const Properties& properties) : options_(read_options<Options>(properties)) {}
 
   static TypeDoc doc() {
     return {
         "Simultaneous perturbation stochastic approximation (Spall 1998) for noisy errors: "
         "two evaluations per iteration whatever the dimension.",
-        {{"iterations", "integer", "1000", "gradient estimates and steps"},
-         {"a", "number", "0",
-          "step gain a; 0 calibrates it from 4 gradient estimates at the start so that the "
-          "first step moves about first_step of each range"},
-         {"first_step", "number", "0.1",
-          "calibrated first step, as a fraction of each range (small for sensitive errors, e.g. "
-          "caustics, where a micrometre of height moves light by a pixel)"},
-         {"c", "number", "0.05", "perturbation c, as a fraction of each variable's range"},
-         {"A", "number", "-1", "stability constant A; negative means 10% of iterations"},
-         {"alpha", "number", "0.602", "decay exponent of a_k"},
-         {"gamma", "number", "0.101", "decay exponent of c_k"},
-         {"seed", "integer", "1", "picks the random stream (under a schedule, mixed with the run's seed and the tuner's place)"},
-         {"result", "string", "\"best_seen\"",
-          "best_seen: the lowest error evaluated, the final iterate included; last_iterate: "
-          "the final iterate (better when the error is noisy)"}},
+        option_docs<Options>(),
         R"({"type": "spsa", "iterations": 1000, "c": 0.05, "seed": 1})"};
   }
 
@@ -176,30 +166,13 @@ class Spsa final : public Optimizer {
       if (problem.error(final_x) <= best) best_x = final_x;
       x = best_x;
     }
-    if (summary.termination == Termination::not_run) {
-      summary.termination = Termination::max_iterations;
-      summary.message = "completed " + std::to_string(options_.iterations) + " iterations";
-    }
+    end_after_iterations(summary, options_.iterations);
     summary.details["a"] = a;
     summary.details["A"] = big_a;
   }
 
 
  private:
-  static Options read(const Properties& properties) {
-    Options o;
-    o.iterations = properties.get<int>("iterations", o.iterations);
-    o.a = properties.get<double>("a", o.a);
-    o.first_step = properties.get<double>("first_step", o.first_step);
-    o.c = properties.get<double>("c", o.c);
-    o.A = properties.get<double>("A", o.A);
-    o.alpha = properties.get<double>("alpha", o.alpha);
-    o.gamma = properties.get<double>("gamma", o.gamma);
-    o.seed = properties.get<int>("seed", o.seed);
-    o.result = properties.get<std::string>("result", o.result);
-    return o;
-  }
-
   Options options_;
 };
 

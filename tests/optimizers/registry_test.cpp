@@ -5,6 +5,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <stdexcept>
 
 #include "optimizers/optimizer_test_support.h"
@@ -72,38 +73,54 @@ struct BadOption {
 };
 
 TEST(OptimizerRegistry, BadOptionsNameTheField) {
+  // Each option's range and choices are declared once (core/options.h): the
+  // error names the key's JSON path and says what it must be.
   const std::vector<BadOption> cases = {
-      {R"({"type": "exhaustive", "max_candidates": 0})",
-       "t.json: /: max_candidates: must be positive"},
-      {R"({"type": "annealing", "iterations": 0})", "t.json: /: iterations: must be positive"},
-      {R"({"type": "annealing", "cooling": 1.5})", "t.json: /: cooling: must lie in (0, 1]"},
+      {R"({"type": "exhaustive", "max_candidates": 0})", "t.json: /max_candidates: 0 is not at least 1"},
+      {R"({"type": "annealing", "iterations": 0})", "t.json: /iterations: 0 is not at least 1"},
+      {R"({"type": "annealing", "cooling": 1.5})", "t.json: /cooling: 1.5 is not in (0, 1]"},
       {R"({"type": "annealing", "schedule": "exponentail"})",
-       "t.json: /: schedule: unknown schedule 'exponentail'; did you mean 'exponential'?"},
-      {R"({"type": "annealing", "swap_probability": -0.1})", "t.json: /: swap_probability:"},
+       "t.json: /schedule: unknown value 'exponentail'; did you mean 'exponential'? (known: exponential, linear, "
+       "logarithmic)"},
+      {R"({"type": "annealing", "swap_probability": -0.1})", "t.json: /swap_probability: -0.1 is not in [0, 1]"},
       {R"({"type": "annealing", "iterations": "many"})",
        "t.json: /iterations: expected an integer, got a string"},
-      {R"({"type": "branch_and_bound", "continuous_steps": 0})",
-       "t.json: /: continuous_steps: must be positive"},
+      {R"({"type": "annealing", "iterations": 100, "schedule_iterations": 50})",
+       "t.json: /: schedule_iterations: must be 0 or at least iterations"},
+      {R"({"type": "branch_and_bound", "continuous_steps": 0})", "t.json: /continuous_steps: 0 is not at least 1"},
       {R"({"type": "branch_and_bound", "value_order": "best_bound"})",
-       "t.json: /: value_order: unknown order 'best_bound'"},
-      {R"({"type": "spsa", "iterations": -5})", "t.json: /: iterations: must be positive"},
-      {R"({"type": "spsa", "c": 0})", "t.json: /: c: must be positive"},
+       "t.json: /value_order: unknown value 'best_bound'"},
+      {R"({"type": "spsa", "iterations": -5})", "t.json: /iterations: -5 is not at least 1"},
+      {R"({"type": "spsa", "c": 0})", "t.json: /c: 0 is not above 0"},
       {R"({"type": "spsa", "gamma": 0.9})", "t.json: /: gamma: must lie in (0, alpha]"},
-      {R"({"type": "spsa", "result": "best"})", "t.json: /: result: must be"},
-      {R"({"type": "ceres", "max_iterations": 0})", "t.json: /: max_iterations: must be positive"},
+      {R"({"type": "spsa", "result": "best"})", "t.json: /result: unknown value 'best'"},
+      {R"({"type": "ceres", "max_iterations": 0})", "t.json: /max_iterations: 0 is not at least 1"},
       {R"({"type": "ceres", "linear_solver": "dense_qrr"})",
-       "t.json: /: linear_solver: unknown value 'dense_qrr'; did you mean 'dense_qr'?"},
-      {R"({"type": "ceres", "derivatives": "automatic"})", "t.json: /: derivatives: unknown value"},
-      {R"({"type": "ceres", "trust_region": "dogleg2"})", "t.json: /: trust_region:"},
+       "t.json: /linear_solver: unknown value 'dense_qrr'; did you mean 'dense_qr'?"},
+      {R"({"type": "ceres", "derivatives": "automatic"})", "t.json: /derivatives: unknown value"},
+      {R"({"type": "ceres", "trust_region": "dogleg2"})", "t.json: /trust_region:"},
       {R"({"type": "nlopt", "algorithm": "LD_LBFSG"})",
        "t.json: /: algorithm: unknown NLopt algorithm 'LD_LBFSG'; did you mean 'LD_LBFGS'?"},
-      {R"({"type": "nlopt", "max_evaluations": 0})",
-       "t.json: /: max_evaluations: must be positive"},
-      {R"({"type": "nlopt", "max_seconds": -1})", "t.json: /: max_seconds: must not be negative"},
+      {R"({"type": "nlopt", "max_evaluations": 0})", "t.json: /max_evaluations: 0 is not at least 1"},
+      {R"({"type": "nlopt", "max_seconds": -1})", "t.json: /max_seconds: -1 is not at least 0"},
   };
   for (const BadOption& c : cases) {
     EXPECT_THAT(input_error_of([&] { optimizer_from(c.json); }), HasSubstr(c.message)) << c.json;
   }
+}
+
+// Declared once: what list --verbose shows is what reading enforces, and a
+// struct built in C++ is checked by the same declaration.
+TEST(OptimizerRegistry, OptionsDocumentedAndCheckedFromTheirDeclaration) {
+  const TypeDoc& doc = OptimizerRegistry::instance().entry("annealing").doc;
+  const auto row = std::find_if(doc.properties.begin(), doc.properties.end(),
+                                [](const PropertyDoc& p) { return p.name == "cooling"; });
+  ASSERT_NE(row, doc.properties.end());
+  EXPECT_EQ(row->type, "number in (0, 1]");
+  EXPECT_EQ(row->default_value, "0.999");
+  const TypeDoc& bnb = OptimizerRegistry::instance().entry("branch_and_bound").doc;
+  EXPECT_EQ(bnb.properties[1].type, "natural | best_bound_first");
+  EXPECT_EQ(bnb.properties[1].default_value, "\"natural\"");
 }
 
 TEST(OptimizerRegistry, UnknownNloptAlgorithmListsValidOnes) {

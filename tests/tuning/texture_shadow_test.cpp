@@ -10,10 +10,8 @@
 
 #include "../../translators/pieces/texture_shadow.h"
 #include "core/error.h"
-#include "materials/material_library.h"
-#include "materials/palette.h"
-#include "materials/printer_profile.h"
 #include "reducer/reducer_tree.h"
+#include "simulators/simulator_fixture.h"
 #include "tuning/tuning_plan.h"
 
 namespace spec2fab {
@@ -21,13 +19,8 @@ namespace {
 
 using ::testing::HasSubstr;
 
-class TextureShadowTest : public ::testing::Test {
+class TextureShadowTest : public SimulatorTest {
  protected:
-  TextureShadowTest()
-      : library_(MaterialLibrary::load(SPEC2FAB_DATASETS_DIR "/materials/polyjet.json")),
-        printer_(PrinterProfile::load(SPEC2FAB_DATASETS_DIR "/printers/j750.json")),
-        palette_(library_, printer_) {}
-
   /// exp(−Σ (σa + σs′)·d) per channel, Rec. 709 luminance weights.
   double beer_lambert(const std::vector<std::pair<std::string, double>>& layers) const {
     const double weights[3] = {0.2126, 0.7152, 0.0722};
@@ -93,9 +86,6 @@ class TextureShadowTest : public ::testing::Test {
     return "accepted";
   }
 
-  MaterialLibrary library_;
-  PrinterProfile printer_;
-  MaterialPalette palette_;
 };
 
 TEST_F(TextureShadowTest, TransmittanceIsBeerLambertDownEachColumn) {
