@@ -21,10 +21,8 @@ void write_cross_section_png(const ReducerTree& tree, int axis, double position_
   std::vector<cv::Vec3b> colours(tree.palette().size());
   for (size_t id = 0; id < colours.size(); ++id) {
     const Rgb& c = tree.palette().material(static_cast<MaterialId>(id)).display_srgb;
-    colours[id] = id == kVoid ? cv::Vec3b(235, 235, 235)
-                              : cv::Vec3b(static_cast<uchar>(std::lround(255 * c[2])),
-                                          static_cast<uchar>(std::lround(255 * c[1])),
-                                          static_cast<uchar>(std::lround(255 * c[0])));
+    colours[id] = cv::Vec3b(static_cast<uchar>(std::lround(255 * c[2])), static_cast<uchar>(std::lround(255 * c[1])),
+                            static_cast<uchar>(std::lround(255 * c[0])));
   }
   cv::Mat image(height, width, CV_8UC3);
   tbb::parallel_for(0, height, [&](int row) {
@@ -37,7 +35,14 @@ void write_cross_section_png(const ReducerTree& tree, int axis, double position_
     start[v_axis] = bounds.lower[v_axis] + (height - row - 0.5) * pixel_mm;
     step[u_axis] = pixel_mm;
     query.material_row(start, step, width, ids.data());
-    for (int x = 0; x < width; ++x) image.at<cv::Vec3b>(row, x) = colours[ids[static_cast<size_t>(x)]];
+    for (int x = 0; x < width; ++x) {
+      const MaterialId id = ids[static_cast<size_t>(x)];
+      // Void as a grey checkerboard (8 px squares), as image editors show
+      // transparency: a flat grey was hard to tell from white material.
+      const bool dark = ((x / 8) + (row / 8)) % 2 == 0;
+      image.at<cv::Vec3b>(row, x) = id == kVoid ? (dark ? cv::Vec3b(200, 200, 200) : cv::Vec3b(228, 228, 228))
+                                                : colours[id];
+    }
   });
   if (!cv::imwrite(file.string(), image)) throw std::runtime_error("cannot write " + file.string());
 }
