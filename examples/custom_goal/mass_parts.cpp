@@ -1,0 +1,107 @@
+// The "mass" simulator, the "relative_mass_error" metric and the "mass" goal.
+//
+// The simulator integrates density over the print by the midpoint rule: the
+// whole tree (where a tuner's subtree sits in it) is asked for its material at
+// the centres of a grid of cells over the solid's bounding box, each cell
+// adding density × cell volume. The grid is fine along z (the direction a
+// cut moves) so that the mass changes in small steps as a parameter moves.
+
+#include <cmath>
+#include <vector>
+
+#include "mass_parts.h"
+#include "geometry/solid.h"
+#include "tuning/parts.h"
+
+namespace custom_goal {
+namespace {
+
+using namespace spec2fab;
+
+class MassSimulator final : public SimulatorFor<MassObservation> {
+ public:
+  MassSimulator(const Properties& properties, const PartContext& context) {
+    cell_mm_ = properties.get<std::array<double, 3>>("cell_mm", cell_mm_);
+    for (double c : cell_mm_)
+      if (!(c >= 1e-3 && c <= 100)) properties.fail("cell_mm", "each side between 0.001 and 100 mm");
+    // g/mm³ per material id: kg/m³ × 1e-6.
+    for (MaterialId id = 0; id < context.palette.size(); ++id)
+      grams_per_mm3_.push_back(id == kVoid ? 0.0 : context.palette.material(id).density_kg_m3.value * 1e-6);
+  }
+  static TypeDoc doc() {
+    return {"Mass of the whole print (grams): density integrated over a grid of cells across the solid's "
+            "bounding box, each cell's material asked of the whole tree at its centre. Produces mass.",
+            {{"cell_mm", "[x, y, z] (mm)", "[1, 1, 0.05]", "cell size; fine along the direction a cut moves"}},
+            R"({"type": "mass", "cell_mm": [1, 1, 0.05]})"};
+  }
+  std::string name() const override { return "mass"; }
+
+  void setup(const ReducerNode& /*subtree*/, const SimulationDomain& domain) override {
+    const Bounds box = domain.require_solid("mass").bounds();
+    domain_ = domain;
+    std::array<int, 3> n{};
+    for (int a = 0; a < 3; ++a) n[a] = std::max(1, static_cast<int>(std::ceil(box.size()[a] / cell_mm_[a])));
+    centres_.clear();
+    for (int k = 0; k < n[2]; ++k)
+      for (int j = 0; j < n[1]; ++j)
+        for (int i = 0; i < n[0]; ++i)
+          centres_.push_back(box.lower + Vec3((i + 0.5) * box.size().x() / n[0], (j + 0.5) * box.size().y() / n[1],
+                                              (k + 0.5) * box.size().z() / n[2]));
+    cell_volume_mm3_ = box.size().x() / n[0] * box.size().y() / n[1] * box.size().z() / n[2];
+    materials_.resize(centres_.size());
+  }
+
+  using SimulatorFor::simulate;
+  void simulate(const ReducerNode& /*subtree*/, MassObservation& out) override {
+    domain_.materials_at(centres_, materials_);
+    double grams = 0;
+    for (MaterialId id : materials_) grams += grams_per_mm3_[id];
+    out.grams = grams * cell_volume_mm3_;
+  }
+
+ private:
+  std::array<double, 3> cell_mm_{1, 1, 0.05};
+  std::vector<double> grams_per_mm3_;
+  SimulationDomain domain_;
+  std::vector<Vec3> centres_;
+  std::vector<MaterialId> materials_;
+  double cell_volume_mm3_ = 0;
+};
+
+/// ((m − m*) / m*)²: a 1 % miss costs 1e-4 whatever the print weighs.
+class RelativeMassError final : public MetricFor<MassObservation> {
+ public:
+  RelativeMassError(const Properties& /*properties*/, const PartContext& /*context*/) {}
+  static TypeDoc doc() {
+    return {"Squared relative difference of two masses, ((m - m*) / m*)^2.", {}, R"({"type": "relative_mass_error"})"};
+  }
+  std::string name() const override { return "relative_mass_error"; }
+  using MetricFor::error;
+  double error(const MassObservation& simulated, const MassObservation& target) const override {
+    const double relative = (simulated.grams - target.grams) / target.grams;
+    return relative * relative;
+  }
+};
+
+class MassGoal final : public GoalFor<MassObservation> {
+ public:
+  MassGoal(const Properties& properties, const PartContext& /*context*/) {
+    target_.grams = properties.get_in_range("grams", 10.0, 1e-6, 1e9);
+  }
+  static TypeDoc doc() {
+    return {"A print of a given mass.", {{"grams", "number (g)", "10", "the mass"}},
+            R"({"type": "mass", "grams": 20})"};
+  }
+  std::string name() const override { return "mass"; }
+  const MassObservation& typed_target() const override { return target_; }
+
+ private:
+  MassObservation target_;
+};
+
+}  // namespace
+}  // namespace custom_goal
+
+SPEC2FAB_REGISTER(spec2fab::SimulatorRegistry, custom_goal::MassSimulator, "mass")
+SPEC2FAB_REGISTER(spec2fab::MetricRegistry, custom_goal::RelativeMassError, "relative_mass_error")
+SPEC2FAB_REGISTER(spec2fab::GoalRegistry, custom_goal::MassGoal, "mass")
