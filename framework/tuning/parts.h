@@ -112,6 +112,16 @@ class ErrorMetric {
     throw std::logic_error("metric '" + name() + "' has no residual form");
   }
 
+  /// The residual form's derivative, for metrics whose residual k depends
+  /// on value k alone (every sum of squares here: r_k = w_k (s_k − t_k)):
+  /// ∂r_k/∂v_k into `out`, one per residual. With the simulator's pull_back
+  /// it gives the tuner's residual Jacobian (Levenberg–Marquardt with
+  /// "derivatives": "analytic"). False: the metric has none.
+  virtual bool residual_derivatives(const Observation& /*simulated*/, const Observation& /*target*/,
+                                    std::span<double> /*out*/) const {
+    return false;
+  }
+
   virtual void error_gradient(const Observation& /*simulated*/, const Observation& /*target*/,
                               std::span<double> /*sensitivity*/) const {
     throw std::logic_error("metric '" + name() + "' has no derivative");

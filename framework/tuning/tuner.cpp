@@ -56,15 +56,35 @@ class Tuner::TunerProblem final : public Problem {
     return Problem::has(capability);
   }
   int residual_count() const override { return tuner_.metric_->residual_count(*tuner_.effective_target_); }
-  // The metric's least-squares form; Jacobians come from the optimizer's
-  // finite differences (e.g. Ceres "derivatives": "numeric").
+  // The metric's least-squares form. The Jacobian, when asked, row by row
+  // through the simulator's pull_back: row k is ∂r_k/∂v_k times ∂v_k/∂x, one
+  // reverse pass per residual (cheap where a residual touches few rays or
+  // nodes; an optimizer may use finite differences instead, e.g. Ceres
+  // "derivatives": "numeric").
   void residuals(std::span<const double> x, std::span<double> out, std::span<double> jacobian) override {
-    if (!jacobian.empty()) {
-      throw InputError("tuner '" + tuner_.name_ + "': metric '" + tuner_.metric_->name() +
-                       "' has residuals but no analytic Jacobian; use numeric derivatives");
-    }
     tuner_.error_at(x);
     tuner_.metric_->residuals(*tuner_.simulated_, *tuner_.effective_target_, out);
+    if (jacobian.empty()) return;
+    const size_t m = out.size(), n = domains_.size();
+    derivatives_.resize(m);
+    const bool analytic = tuner_.simulated_->values().size() == m &&
+                          tuner_.simulator_->differentiable(*tuner_.node_) &&
+                          tuner_.metric_->residual_derivatives(*tuner_.simulated_, *tuner_.effective_target_,
+                                                               derivatives_);
+    if (!analytic) {
+      throw InputError("tuner '" + tuner_.name_ + "': no analytic residual Jacobian (simulator '" +
+                       tuner_.simulator_->name() + "' and metric '" + tuner_.metric_->name() +
+                       "' would both need derivatives); use \"derivatives\": \"numeric\"");
+    }
+    sensitivity_.assign(m, 0.0);
+    for (size_t k = 0; k < m; ++k) {
+      const std::span<double> row = jacobian.subspan(k * n, n);
+      std::fill(row.begin(), row.end(), 0.0);
+      if (derivatives_[k] == 0) continue;
+      sensitivity_[k] = derivatives_[k];
+      tuner_.simulator_->pull_back(*tuner_.node_, sensitivity_, tuner_.space_, row);
+      sensitivity_[k] = 0;
+    }
   }
   double error_and_gradient(std::span<const double> x, std::span<double> gradient) override {
     return tuner_.error_and_gradient_at(x, gradient);
@@ -91,6 +111,7 @@ class Tuner::TunerProblem final : public Problem {
  private:
   Tuner& tuner_;
   std::vector<VariableDomain> domains_;
+  std::vector<double> derivatives_, sensitivity_;  ///< residual Jacobian scratch, reused
 };
 
 Tuner::Tuner(std::string name, std::unique_ptr<Simulator> simulator,

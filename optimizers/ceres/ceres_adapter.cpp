@@ -138,7 +138,8 @@ class CeresAdapter final : public Optimizer {
       d.number(o.parameter_tolerance, "parameter_tolerance", Range::at_least(0),
                "stop when |Δx|/(|x| + tol) falls below");
       d.choice(o.derivatives, "derivatives", kDerivatives,
-               "analytic (the problem's Jacobian) or numeric (central differences of residuals)");
+               "analytic (the problem's Jacobian: a tuner's comes through its simulator's pull_back, one "
+               "reverse pass per residual) or numeric (central differences of residuals)");
       d.choice(o.linear_solver, "linear_solver", kLinearSolvers, "Ceres' linear solver for the trust-region step");
       d.choice(o.trust_region, "trust_region", kTrustRegions, "Ceres' trust-region strategy");
     }

@@ -229,6 +229,11 @@ class ImageMse final : public MetricFor<ImageObservation> {
     const double weight = std::sqrt(2.0 / static_cast<double>(t.pixels.size()));
     for (size_t i = 0; i < out.size(); ++i) out[i] = weight * (s.pixels[i] - t.pixels[i]);
   }
+  bool residual_derivatives(const Observation& /*simulated*/, const Observation& target,
+                            std::span<double> out) const override {
+    std::fill(out.begin(), out.end(), std::sqrt(2.0 / static_cast<double>(target.values().size())));
+    return true;
+  }
   bool differentiable() const override { return true; }
   void error_gradient(const Observation& simulated, const Observation& target,
                       std::span<double> sensitivity) const override {

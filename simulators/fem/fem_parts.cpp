@@ -1,6 +1,7 @@
 // Goal `deformed_shape` and metric `shape_mse` for the displacements the
 // `fem` simulator produces (paper §6.3, elastic goals).
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -40,6 +41,11 @@ class ShapeMse final : public MetricFor<DisplacementsObservation> {
     // ½‖r‖² = error: r = √(2/n) (u_sim − u_goal).
     const double weight = std::sqrt(2.0 / t.probe_count);
     for (size_t i = 0; i < out.size(); ++i) out[i] = weight * (s.probes()[i] - t.probes()[i]);
+  }
+  bool residual_derivatives(const Observation& /*simulated*/, const Observation& target,
+                            std::span<double> out) const override {
+    std::fill(out.begin(), out.end(), std::sqrt(2.0 / static_cast<const DisplacementsObservation&>(target).probe_count));
+    return true;
   }
 
   bool differentiable() const override { return true; }

@@ -150,6 +150,11 @@ class ProfileL2 final : public MetricFor<RadialProfileObservation> {
     error(s, t);  // the grid check
     for (size_t i = 0; i < out.size(); ++i) out[i] = std::sqrt(2.0) * (s.coefficients[i] - t.coefficients[i]);
   }
+  bool residual_derivatives(const Observation& /*simulated*/, const Observation& /*target*/,
+                            std::span<double> out) const override {
+    std::fill(out.begin(), out.end(), std::sqrt(2.0));
+    return true;
+  }
   static TypeDoc doc() {
     return {"Squared difference of two reflectance profiles integrated over the disc, summed over "
             "R, G, B (1/mm^2); least-squares residuals available. Compares radial_profile.",

@@ -513,6 +513,51 @@ TEST_F(CausticSimulatorTest, LevenbergMarquardtTunesOnImageResiduals) {
   EXPECT_LT(summary.final_error, 0.95 * summary.initial_error) << summary.message;
 }
 
+// The residual Jacobian through pull_back (one reverse pass per residual)
+// against central differences of the residuals, and Levenberg–Marquardt on
+// it: the analytic Jacobian is what makes LM practical here.
+TEST_F(CausticSimulatorTest, ResidualJacobianThroughPullBackMatchesFiniteDifferences) {
+  const auto spline = node(R"({"type": "bspline", "control": [4, 4], "domain": [0, 0, 20, 20],
+      "heights_mm": {"value": 2.5, "min": 1, "max": 5},
+      "below": {"type": "layered", "material": "VeroClear"}, "above": {"type": "layered", "material": "void"}})");
+  auto tuner = build_tuner(Properties::parse(small_caustic_tuner(
+                                                 R"({"type": "ceres", "derivatives": "analytic", "max_iterations": 4})"),
+                                             "tuner.json"),
+                           "t", PartContext{palette_});
+  tuner->set_node(*spline);
+  Problem& problem = tuner->problem();
+  const int m = problem.residual_count(), n = problem.dimension();
+  ASSERT_EQ(n, 16);
+  std::vector<double> x(16);
+  for (size_t k = 0; k < x.size(); ++k) x[k] = 2.5 + 0.15 * std::sin(1.7 * static_cast<double>(k));
+  std::vector<double> r(static_cast<size_t>(m)), jacobian(static_cast<size_t>(m * n));
+  problem.residuals(x, r, jacobian);
+  const Eigen::Map<const Eigen::MatrixXd> analytic(jacobian.data(), n, m);  // column k: residual k's row
+  Eigen::MatrixXd differences(n, m);
+  const double step = 1e-4;
+  std::vector<double> plus(r.size()), minus(r.size());
+  for (int i = 0; i < n; ++i) {
+    std::vector<double> xp = x, xm = x;
+    xp[static_cast<size_t>(i)] += step;
+    xm[static_cast<size_t>(i)] -= step;
+    problem.residuals(xp, plus, {});
+    problem.residuals(xm, minus, {});
+    for (int k = 0; k < m; ++k)
+      differences(i, k) = (plus[static_cast<size_t>(k)] - minus[static_cast<size_t>(k)]) / (2 * step);
+  }
+  ASSERT_GT(differences.norm(), 0);
+  EXPECT_LT((analytic - differences).norm(), 0.03 * differences.norm());
+  // Jᵀr is the gradient of ½‖r‖², which the tuner computes by one pull_back.
+  std::vector<double> gradient(16);
+  problem.error_and_gradient(x, gradient);
+  const Eigen::VectorXd jtr = analytic * Eigen::Map<const Eigen::VectorXd>(r.data(), m);
+  for (int i = 0; i < n; ++i) EXPECT_NEAR(jtr(i), gradient[static_cast<size_t>(i)], 1e-9 * (1 + jtr.norm())) << i;
+
+  problem.error(std::vector<double>(16, 2.5));
+  const Summary summary = tuner->tune();
+  EXPECT_LT(summary.final_error, 0.95 * summary.initial_error) << summary.message;
+}
+
 // What goes to the printer is an STL: read back from disk (float vertices,
 // welded by the loader) and traced as a plain mesh, the slab casts the image
 // the simulator computed from the B-spline itself.

@@ -135,9 +135,12 @@ SurfaceStl write_caustic_surface_stl(const CausticSlabConfig& slab, const Height
 
 std::string optimizer_label(const nlohmann::json& optimizer) {
   std::string label = optimizer.value("type", "optimizer");
-  if (optimizer.contains("algorithm") && optimizer["algorithm"].is_string()) {
-    label += ' ';
-    label += optimizer["algorithm"].get_ref<const std::string&>();
+  // What tells two runs of one adapter apart: NLopt's algorithm, Ceres' derivatives.
+  for (const char* key : {"algorithm", "derivatives"}) {
+    if (optimizer.contains(key) && optimizer[key].is_string()) {
+      label += ' ';
+      label += optimizer[key].get_ref<const std::string&>();
+    }
   }
   return label;
 }

@@ -83,7 +83,8 @@ SurfaceStl write_caustic_surface_stl(const CausticSlabConfig& slab, const Height
                                      std::span<const double> simulated, const std::function<void(Mesh&)>& to_print,
                                      const GridField* exit_filter, RunFolder& folder);
 
-/// "nlopt LD_LBFGS", "spsa": an optimizer's type and, for the adapters, algorithm.
+/// "nlopt LD_LBFGS", "ceres numeric", "spsa": an optimizer's type and, for the
+/// adapters, what tells two of its runs apart (algorithm, derivatives).
 std::string optimizer_label(const nlohmann::json& optimizer);
 
 /// Images side by side (each width × height, row 0 at +y), all on the
