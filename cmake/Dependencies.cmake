@@ -7,8 +7,12 @@ find_package(CLI11 CONFIG REQUIRED)
 find_package(spdlog REQUIRED)
 find_package(embree 3 REQUIRED)
 find_package(assimp REQUIRED)
-find_package(Ceres REQUIRED)
-find_package(NLopt CONFIG REQUIRED)
+if(SPEC2FAB_WITH_CERES)
+  find_package(Ceres REQUIRED)
+endif()
+if(SPEC2FAB_WITH_NLOPT)
+  find_package(NLopt CONFIG REQUIRED)
+endif()
 
 list(APPEND CMAKE_MODULE_PATH /usr/lib/x86_64-linux-gnu/cmake/OpenVDB)
 find_package(OpenVDB REQUIRED)
@@ -32,11 +36,13 @@ endforeach()
 
 # lib3mf 1.8 (C-style COM API) and the libzip it needs; libpng for indexed-colour
 # slice PNGs (OpenCV writes no palette images).
-find_package(PkgConfig REQUIRED)
-pkg_check_modules(LIB3MF REQUIRED IMPORTED_TARGET lib3MF)
-pkg_check_modules(LIBZIP REQUIRED IMPORTED_TARGET libzip)
-add_library(spec2fab_lib3mf INTERFACE)
-target_link_libraries(spec2fab_lib3mf INTERFACE PkgConfig::LIB3MF PkgConfig::LIBZIP)
+if(SPEC2FAB_WITH_LIB3MF)
+  find_package(PkgConfig REQUIRED)
+  pkg_check_modules(LIB3MF REQUIRED IMPORTED_TARGET lib3MF)
+  pkg_check_modules(LIBZIP REQUIRED IMPORTED_TARGET libzip)
+  add_library(spec2fab_lib3mf INTERFACE)
+  target_link_libraries(spec2fab_lib3mf INTERFACE PkgConfig::LIB3MF PkgConfig::LIBZIP)
+endif()
 find_package(PNG REQUIRED)
 
 # The FEM's sparse Cholesky (CHOLMOD, supernodal) spends its time in BLAS.

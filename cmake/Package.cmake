@@ -47,6 +47,8 @@ foreach(root framework simulators translators)
   install(DIRECTORY ${root}/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/spec2fab/${root}
           FILES_MATCHING PATTERN "*.h")
 endforeach()
+install(FILES ${PROJECT_BINARY_DIR}/generated/core/build_options.h
+        DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/spec2fab/framework/core)
 set(package_dir ${CMAKE_INSTALL_LIBDIR}/cmake/Spec2Fab)
 file(RELATIVE_PATH SPEC2FAB_PREFIX_FROM_PACKAGE "/${package_dir}" "/")  # "../../.." for lib/cmake/Spec2Fab
 configure_file(cmake/Spec2FabConfig.cmake.in Spec2FabConfig.cmake @ONLY)

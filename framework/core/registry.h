@@ -11,11 +11,14 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <mutex>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
 #include <vector>
 
+#include "core/build_options.h"
 #include "core/properties.h"
 #include "core/strings.h"
 
@@ -40,9 +43,14 @@ template <class Base, class... Args>
 class Registry {
  public:
   using Factory = std::function<std::unique_ptr<Base>(const Properties&, Args...)>;
+  /// Made when first asked for, not at registration: a doc may list another
+  /// registry's parts (a translator's output switches are the print
+  /// writers), which static initialisation may not have filled yet.
+  using DocMaker = std::function<TypeDoc()>;
   struct Entry {
     Factory factory;
-    TypeDoc doc;
+    DocMaker make_doc;
+    mutable std::optional<TypeDoc> doc;
   };
 
   static Registry& instance() {
@@ -50,9 +58,17 @@ class Registry {
     return registry;
   }
 
-  bool add(std::string name, Factory factory, TypeDoc doc) {
-    entries_.emplace(std::move(name), Entry{std::move(factory), std::move(doc)});
+  bool add(std::string name, Factory factory, DocMaker make_doc) {
+    entries_.emplace(std::move(name), Entry{std::move(factory), std::move(make_doc), std::nullopt});
     return true;
+  }
+
+  /// What the type named `name` does, its properties and an example.
+  const TypeDoc& doc(std::string_view name) const {
+    const Entry& e = entry(name);
+    const std::lock_guard<std::mutex> lock(doc_mutex_);
+    if (!e.doc) e.doc = e.make_doc();
+    return *e.doc;
   }
 
   bool contains(std::string_view name) const { return entries_.count(std::string(name)) > 0; }
@@ -66,7 +82,8 @@ class Registry {
   const Entry& entry(std::string_view name) const { return entries_.at(std::string(name)); }
 
   /// Builds the type named by `properties[type_key]`; an unknown name is an
-  /// InputError that lists the known ones.
+  /// InputError that lists the known ones (or says which build option left
+  /// it out).
   std::unique_ptr<Base> create(const Properties& properties, std::string_view kind,
                                Args... args, std::string_view type_key = "type") const {
     const std::string name = properties.get<std::string>(type_key);
@@ -78,6 +95,8 @@ class Registry {
                                      std::string_view type_key = "type") const {
     const auto found = entries_.find(name);
     if (found == entries_.end()) {
+      if (const std::string left_out = left_out_of_build(kind, name); !left_out.empty())
+        properties.fail(type_key, left_out);
       properties.fail(type_key, "unknown " + std::string(kind) + " '" + name + "'" +
                                     did_you_mean(name, names()) + " (known: " + join(names()) +
                                     ")");
@@ -87,6 +106,7 @@ class Registry {
 
  private:
   std::map<std::string, Entry, std::less<>> entries_;
+  mutable std::mutex doc_mutex_;
 };
 
 /// A registry as `spec2fab list` shows it. Each registry puts itself in the
@@ -119,7 +139,7 @@ inline std::vector<ListedRegistry>& listed_registries() {
           [](const ::spec2fab::Properties& properties, auto&&... args) {                  \
             return std::make_unique<Type>(properties, std::forward<decltype(args)>(args)...); \
           },                                                                              \
-          Type::doc());                                                                   \
+          [] { return Type::doc(); });                                                    \
   }
 
 /// Lists `RegistryType` in `spec2fab list` under `heading`, at `rank`. Use
@@ -130,7 +150,7 @@ inline std::vector<ListedRegistry>& listed_registries() {
     ::spec2fab::listed_registries().push_back({rank, kind, heading, [] {                  \
       std::vector<std::pair<std::string, ::spec2fab::TypeDoc>> out;                       \
       const auto& registry = RegistryType::instance();                                    \
-      for (const std::string& name : registry.names()) out.emplace_back(name, registry.entry(name).doc); \
+      for (const std::string& name : registry.names()) out.emplace_back(name, registry.doc(name)); \
       return out;                                                                         \
     }});                                                                                  \
     return true;                                                                          \

@@ -5,6 +5,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "core/build_options.h"
 #include "core/log.h"
 #include "fabrication/fabricator.h"
 #include "fabrication/material_surfaces.h"
@@ -19,6 +20,11 @@ FabricationOptions FabricationOptions::from_properties(const std::optional<Prope
   if (!output) return options;
   for (const std::string& writer : PrintWriterRegistry::instance().names())
     options.writers[writer] = output->get<bool>(writer, true);
+  // A writer left out of this build may be switched off, not on.
+  for (const OptionalModule& module : optional_modules())
+    for (const OptionalPart& part : module.parts)
+      if (!module.built && part.kind == "print writer" && output->get<bool>(part.name, false))
+        output->fail(part.name, left_out_of_build(part.kind, part.name));
   options.max_voxels = static_cast<long long>(
       output->get_in_range("max_voxels", static_cast<double>(options.max_voxels), 1, 1e15));
   options.mesh_voxel_mm = output->get_in_range("mesh_voxel_mm", options.mesh_voxel_mm, 0, 1000);

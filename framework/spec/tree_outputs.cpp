@@ -30,7 +30,7 @@ std::vector<PropertyDoc> TreeOutputOptions::docs() {
   // A switch per registered print writer, and the writers' own options.
   const PrintWriterRegistry& writers = PrintWriterRegistry::instance();
   for (const std::string& name : writers.names()) {
-    const TypeDoc& doc = writers.entry(name).doc;
+    const TypeDoc& doc = writers.doc(name);
     docs.push_back({"output." + name, "bool", "true", first_sentence(doc.summary)});
     for (const PropertyDoc& option : doc.properties) docs.push_back(option);
   }

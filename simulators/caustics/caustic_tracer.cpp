@@ -7,11 +7,35 @@
 #include <string>
 
 #include <Eigen/Geometry>
-#include <ceres/jet.h>
 #include <embree3/rtcore.h>
 #include <tbb/parallel_for.h>
 
+#include "core/build_options.h"
 #include "core/error.h"
+
+// Forward-mode derivatives of a landing point in a triangle's three heights:
+// Ceres' Jet where the Ceres module is built (what the shipped results were
+// made with), Eigen's AutoDiffScalar where it is not. The same formulas; the
+// last bits may differ.
+#if SPEC2FAB_WITH_CERES
+#include <ceres/jet.h>
+namespace spec2fab {
+namespace {
+using HeightJet = ceres::Jet<double, 3>;
+HeightJet height_variable(double value, int k) { return HeightJet(value, k); }
+Eigen::Vector3d height_derivatives(const HeightJet& x) { return x.v; }
+}  // namespace
+}  // namespace spec2fab
+#else
+#include <unsupported/Eigen/AutoDiff>
+namespace spec2fab {
+namespace {
+using HeightJet = Eigen::AutoDiffScalar<Eigen::Vector3d>;
+HeightJet height_variable(double value, int k) { return HeightJet(value, 3, k); }
+Eigen::Vector3d height_derivatives(const HeightJet& x) { return x.derivatives(); }
+}  // namespace
+}  // namespace spec2fab
+#endif
 
 namespace spec2fab {
 namespace {
@@ -411,7 +435,6 @@ void CausticTracer::pull_back(std::span<const double> d_irradiance, std::span<do
   const double per_area = pixels_per_mm2();
   const double du_dx = s.image_width / s.receiver_width_mm, dv_dy = -s.image_height / s.receiver_depth_mm;
   ray_gradients_.resize(results_.size());
-  using Jet = ceres::Jet<double, 3>;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, results_.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i != r.end(); ++i) {
       const RayResult& ray = results_[i];
@@ -427,15 +450,15 @@ void CausticTracer::pull_back(std::span<const double> d_irradiance, std::span<do
       if (d_u == 0 && d_v == 0) continue;
       const Eigen::Vector3i& f = triangles_[static_cast<size_t>(ray.entry)];
       Eigen::Vector2d xy[3];
-      Jet h[3];
+      HeightJet h[3];
       for (int k = 0; k < 3; ++k) {
         const Vec3& v = vertices_[static_cast<size_t>(f[k])];
         xy[k] = v.head<2>();
-        h[k] = Jet(v.z(), k);
+        h[k] = height_variable(v.z(), k);
       }
-      const Eigen::Matrix<Jet, 2, 1> point = slab_receiver_point(ray_origin(static_cast<int>(i)), s.light_direction, xy, h,
+      const Eigen::Matrix<HeightJet, 2, 1> point = slab_receiver_point(ray_origin(static_cast<int>(i)), s.light_direction, xy, h,
                                                             s.refractive_index, -s.receiver_distance_mm);
-      ray_gradients_[i] = d_u * du_dx * point.x().v + d_v * dv_dy * point.y().v;
+      ray_gradients_[i] = d_u * du_dx * height_derivatives(point.x()) + d_v * dv_dy * height_derivatives(point.y());
     }
   });
   // Summed in ray order: the same gradient for any thread count.

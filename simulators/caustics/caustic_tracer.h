@@ -63,7 +63,7 @@ struct CausticFlux {
 /// z = receiver_z after entering the top triangle with lateral corners `xy`
 /// (counter-clockwise seen from above) and heights `h`, and leaving through
 /// the flat bottom z = 0: the refractions the tracer performs, for any scalar
-/// so that ceres::Jet carries ∂/∂h through them. NaN when the ray cannot
+/// so that a forward-mode derivative type carries ∂/∂h through them. NaN when the ray cannot
 /// refract (total internal reflection).
 template <class T>
 Eigen::Matrix<T, 2, 1> slab_receiver_point(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,

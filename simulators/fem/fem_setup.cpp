@@ -7,6 +7,7 @@
 
 #include <Eigen/LU>
 
+#include "core/build_options.h"
 #include "core/error.h"
 #include "fem/hypre/amg_solver.h"
 
@@ -89,7 +90,7 @@ FemSettings FemSettings::read(const Properties& p) {
     p.fail("linear_solver", "expected \"cholesky\", \"amg\" or \"cg\", got '" + solver + "'");
   }
   if (*named == LinearSolver::multigrid && !AmgSolver::available()) {
-    p.fail("linear_solver", "\"amg\" needs hypre, and this build has none (SPEC2FAB_WITH_HYPRE=OFF)");
+    p.fail("linear_solver", left_out_of_build("linear solver", "amg"));
   }
   s.linear_solver = *named;
   return s;

@@ -25,7 +25,7 @@ struct Result {
   std::string out;  // stdout and stderr
 };
 
-inline Result spec2fab(const std::string& arguments) {
+inline Result run_spec2fab(const std::string& arguments) {
   const std::string command = std::string(SPEC2FAB_CLI_PATH) + " " + arguments + " 2>&1";
   FILE* pipe = popen(command.c_str(), "r");
   std::string out;

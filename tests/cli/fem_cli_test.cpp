@@ -4,6 +4,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "build_gates.h"
 #include "cli_support.h"
 
 namespace {
@@ -52,9 +53,22 @@ class FemCli : public Cli {
   static constexpr const char* kFixed = R"(, "fixed": [{"min": [0, 0, 0], "max": [0, 4, 4]}])";
 };
 
-TEST_F(FemCli, SimulateFemWritesDisplacementsMeshPictureAndFigures) {
+// Without TetGen (-DSPEC2FAB_WITH_TETGEN=OFF) there is no mesh to simulate:
+// one line naming the build option, exit 2, nothing written.
+TEST_F(FemCli, WithoutTetgenTheMeshIsRefusedNamingTheBuildOption) {
+  if (SPEC2FAB_WITH_TETGEN) GTEST_SKIP() << "this build meshes with TetGen";
   const fs::path file = experiment("fem", config(kFixed));
-  const Result r = spec2fab("simulate fem " + file.string() + " --repeat 1 --out " + (dir_ / "out").string());
+  const Result r = run_spec2fab("simulate fem " + file.string() + " --repeat 1 --out " + (dir_ / "out").string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_THAT(single_line(r.out), HasSubstr("the mesher 'tetgen' (TetGen) is left out of this build: "
+                                            "configure with -DSPEC2FAB_WITH_TETGEN=ON"));
+  EXPECT_FALSE(fs::exists(dir_ / "out"));
+}
+
+TEST_F(FemCli, SimulateFemWritesDisplacementsMeshPictureAndFigures) {
+  SPEC2FAB_SKIP_UNLESS(SPEC2FAB_WITH_TETGEN);
+  const fs::path file = experiment("fem", config(kFixed));
+  const Result r = run_spec2fab("simulate fem " + file.string() + " --repeat 1 --out " + (dir_ / "out").string());
   ASSERT_EQ(r.code, 0) << r.out;
   for (const char* name : {"simulation.json", "displacements.csv", "deformed.stl", "deformation.png"}) {
     EXPECT_TRUE(fs::is_regular_file(dir_ / "out" / name)) << name;
@@ -87,6 +101,7 @@ TEST_F(FemCli, SimulateFemWritesDisplacementsMeshPictureAndFigures) {
 }
 
 TEST_F(FemCli, BadInputIsOneLineAndExitCode2) {
+  SPEC2FAB_SKIP_UNLESS(SPEC2FAB_WITH_TETGEN);  // some cases are found on the mesh
   // An open mesh: the box without its last face.
   const fs::path open_mesh = dir_ / "open.stl";
   {
@@ -123,7 +138,7 @@ TEST_F(FemCli, BadInputIsOneLineAndExitCode2) {
   };
   for (const Case& c : cases) {
     const fs::path file = experiment("bad", c.body);
-    const Result r = spec2fab("simulate fem " + file.string() + " --out " + (dir_ / "bad_out").string());
+    const Result r = run_spec2fab("simulate fem " + file.string() + " --out " + (dir_ / "bad_out").string());
     EXPECT_EQ(r.code, 2) << c.name << ": " << r.out;
     EXPECT_THAT(single_line(r.out), HasSubstr(c.expected)) << c.name;
     EXPECT_FALSE(fs::exists(dir_ / "bad_out")) << c.name;

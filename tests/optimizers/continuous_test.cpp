@@ -8,6 +8,7 @@
 #include <limits>
 #include <memory>
 
+#include "build_gates.h"
 #include "optimizers/optimizer_test_support.h"
 
 namespace spec2fab {
@@ -81,6 +82,7 @@ class RosenbrockMinimum : public ::testing::TestWithParam<Case> {};
 
 TEST_P(RosenbrockMinimum, ReachedTo1e8InX) {
   const Case& c = GetParam();
+  if (!testing::optimizer_built(c.json)) GTEST_SKIP() << c.json << " is left out of this build";
   LeastSquaresProblem problem = rosenbrock(c.n);
   std::vector<double> x = classic_start(c.n);
   const Summary summary = optimizer_from(c.json)->minimize(problem, x);
@@ -121,6 +123,7 @@ LeastSquaresProblem bounded_rosenbrock() {
 }
 
 TEST(BoundedRosenbrock, NloptReachesTheMinimumOnTheBound) {
+  SPEC2FAB_SKIP_UNLESS(SPEC2FAB_WITH_NLOPT);
   LeastSquaresProblem problem = bounded_rosenbrock();
   std::vector<double> x = {-1.2, 1.0};
   const Summary summary =
@@ -137,6 +140,7 @@ TEST(BoundedRosenbrock, NloptReachesTheMinimumOnTheBound) {
 // projected steps along the curved valley shrink, and it stops (parameter
 // tolerance) a little short of the constrained minimum. It keeps the bound.
 TEST(BoundedRosenbrock, CeresKeepsTheBoundAndGetsClose) {
+  SPEC2FAB_SKIP_UNLESS(SPEC2FAB_WITH_CERES);
   for (const std::string derivatives : {"analytic", "numeric"}) {
     LeastSquaresProblem problem = bounded_rosenbrock();
     std::vector<double> x = {-1.2, 1.0};
@@ -151,6 +155,7 @@ TEST(BoundedRosenbrock, CeresKeepsTheBoundAndGetsClose) {
 }
 
 TEST(Nlopt, DerivativeFreeAndGlobalAlgorithmsFindAQuadraticsMinimum) {
+  SPEC2FAB_SKIP_UNLESS(SPEC2FAB_WITH_NLOPT);
   FunctionProblem problem({VariableDomain::continuous(-1, 1), VariableDomain::continuous(-1, 1)},
                           [](std::span<const double> x) {
                             return (x[0] - 0.3) * (x[0] - 0.3) + 2 * (x[1] + 0.6) * (x[1] + 0.6);
@@ -169,6 +174,7 @@ TEST(Nlopt, DerivativeFreeAndGlobalAlgorithmsFindAQuadraticsMinimum) {
 }
 
 TEST(Nlopt, GlobalAlgorithmNeedsFiniteBounds) {
+  SPEC2FAB_SKIP_UNLESS(SPEC2FAB_WITH_NLOPT);
   const double inf = std::numeric_limits<double>::infinity();
   FunctionProblem problem({VariableDomain::continuous(-inf, inf)},
                           [](std::span<const double> x) { return x[0] * x[0]; });
@@ -181,6 +187,7 @@ TEST(Nlopt, GlobalAlgorithmNeedsFiniteBounds) {
 }
 
 TEST(Nlopt, MaxEvaluationsIsReported) {
+  SPEC2FAB_SKIP_UNLESS(SPEC2FAB_WITH_NLOPT);
   LeastSquaresProblem problem = rosenbrock(2);
   std::vector<double> x = {-1.2, 1.0};
   const Summary summary =
@@ -193,6 +200,7 @@ TEST(Nlopt, MaxEvaluationsIsReported) {
 }
 
 TEST(Ceres, MaxIterationsIsReported) {
+  SPEC2FAB_SKIP_UNLESS(SPEC2FAB_WITH_CERES);
   LeastSquaresProblem problem = rosenbrock(10);
   std::vector<double> x = classic_start(10);
   const Summary summary =
@@ -212,6 +220,7 @@ IterationCallback stop_after(int rows, CallbackResult answer) {
 TEST(Callbacks, AbortDiscardsAndTerminateKeepsProgress) {
   for (const std::string json :
        {R"({"type": "ceres"})", R"({"type": "nlopt", "algorithm": "LD_LBFGS"})"}) {
+    if (!testing::optimizer_built(json)) continue;
     LeastSquaresProblem problem = rosenbrock(2);
     std::vector<double> x = {-1.2, 1.0};
     Summary summary =
@@ -230,6 +239,7 @@ TEST(Callbacks, AbortDiscardsAndTerminateKeepsProgress) {
 }
 
 TEST(Callbacks, TraceRowsCountEvaluations) {
+  SPEC2FAB_SKIP_UNLESS(SPEC2FAB_WITH_NLOPT);
   LeastSquaresProblem problem = rosenbrock(2);
   std::vector<double> x = {-1.2, 1.0};
   const Summary summary =

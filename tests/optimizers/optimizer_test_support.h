@@ -26,6 +26,12 @@ inline std::unique_ptr<Optimizer> optimizer_from(const std::string& json) {
   return optimizer;
 }
 
+/// Whether this build has the optimizer `json` names (the Ceres and NLopt
+/// adapters are optional modules).
+inline bool optimizer_built(const std::string& json) {
+  return OptimizerRegistry::instance().contains(Properties::parse(json, "t.json").get<std::string>("type"));
+}
+
 /// The message of the InputError that `f` throws ("no error" otherwise).
 inline std::string input_error_of(const std::function<void()>& f) {
   try {

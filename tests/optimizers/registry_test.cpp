@@ -7,7 +7,9 @@
 
 #include <algorithm>
 #include <stdexcept>
+#include <tuple>
 
+#include "build_gates.h"
 #include "optimizers/optimizer_test_support.h"
 
 namespace spec2fab {
@@ -19,8 +21,28 @@ using testing::input_error_of;
 using testing::optimizer_from;
 using ::testing::StartsWith;
 
-const std::vector<std::string> kOptimizers = {"exhaustive", "annealing", "branch_and_bound",
-                                              "spsa",       "ceres",     "nlopt"};
+// The Ceres and NLopt adapters are optional modules: listed where built.
+const std::vector<std::string> kOptimizers = [] {
+  std::vector<std::string> names = {"exhaustive", "annealing", "branch_and_bound", "spsa"};
+  if (SPEC2FAB_WITH_CERES) names.push_back("ceres");
+  if (SPEC2FAB_WITH_NLOPT) names.push_back("nlopt");
+  return names;
+}();
+
+// A build without an optional module names the option that left its part out.
+TEST(OptimizerRegistry, LeftOutOptimizerNamesTheBuildOption) {
+  for (const auto& [name, built, option] : {std::tuple{"ceres", SPEC2FAB_WITH_CERES, "SPEC2FAB_WITH_CERES"},
+                                            std::tuple{"nlopt", SPEC2FAB_WITH_NLOPT, "SPEC2FAB_WITH_NLOPT"}}) {
+    const std::string error = input_error_of([&] { optimizer_from(R"({"type": ")" + std::string(name) + R"("})"); });
+    if (built) {
+      EXPECT_EQ(error, "no error") << name;
+    } else {
+      EXPECT_EQ(error, std::string("t.json: /type: the optimizer '") + name + "' (" +
+                           (std::string(name) == "ceres" ? "Ceres Solver" : "NLopt") +
+                           ") is left out of this build: configure with -D" + option + "=ON");
+    }
+  }
+}
 
 TEST(OptimizerRegistry, EveryOptimizerIsRegistered) {
   for (const std::string& name : kOptimizers) {
@@ -39,7 +61,7 @@ TEST(OptimizerRegistry, DefaultOptionsAreValid) {
 
 TEST(OptimizerRegistry, DocumentedExamplesBuildAndDocumentEveryProperty) {
   for (const std::string& name : kOptimizers) {
-    const TypeDoc& doc = OptimizerRegistry::instance().entry(name).doc;
+    const TypeDoc& doc = OptimizerRegistry::instance().doc(name);
     EXPECT_FALSE(doc.summary.empty()) << name;
     std::unique_ptr<Optimizer> optimizer;
     EXPECT_NO_THROW(optimizer = optimizer_from(doc.example)) << name << ": " << doc.example;
@@ -55,6 +77,7 @@ TEST(OptimizerRegistry, DocumentedExamplesBuildAndDocumentEveryProperty) {
 }
 
 TEST(OptimizerRegistry, BuildsTheDocumentedNloptExample) {
+  SPEC2FAB_SKIP_UNLESS(SPEC2FAB_WITH_NLOPT);
   const std::unique_ptr<Optimizer> nlopt =
       optimizer_from(R"({"type": "nlopt", "algorithm": "LD_LBFGS"})");
   EXPECT_EQ(nlopt->name(), "nlopt");
@@ -105,6 +128,7 @@ TEST(OptimizerRegistry, BadOptionsNameTheField) {
       {R"({"type": "nlopt", "max_seconds": -1})", "t.json: /max_seconds: -1 is not at least 0"},
   };
   for (const BadOption& c : cases) {
+    if (!testing::optimizer_built(c.json)) continue;
     EXPECT_THAT(input_error_of([&] { optimizer_from(c.json); }), HasSubstr(c.message)) << c.json;
   }
 }
@@ -112,18 +136,19 @@ TEST(OptimizerRegistry, BadOptionsNameTheField) {
 // Declared once: what list --verbose shows is what reading enforces, and a
 // struct built in C++ is checked by the same declaration.
 TEST(OptimizerRegistry, OptionsDocumentedAndCheckedFromTheirDeclaration) {
-  const TypeDoc& doc = OptimizerRegistry::instance().entry("annealing").doc;
+  const TypeDoc& doc = OptimizerRegistry::instance().doc("annealing");
   const auto row = std::find_if(doc.properties.begin(), doc.properties.end(),
                                 [](const PropertyDoc& p) { return p.name == "cooling"; });
   ASSERT_NE(row, doc.properties.end());
   EXPECT_EQ(row->type, "number in (0, 1]");
   EXPECT_EQ(row->default_value, "0.999");
-  const TypeDoc& bnb = OptimizerRegistry::instance().entry("branch_and_bound").doc;
+  const TypeDoc& bnb = OptimizerRegistry::instance().doc("branch_and_bound");
   EXPECT_EQ(bnb.properties[1].type, "natural | best_bound_first");
   EXPECT_EQ(bnb.properties[1].default_value, "\"natural\"");
 }
 
 TEST(OptimizerRegistry, UnknownNloptAlgorithmListsValidOnes) {
+  SPEC2FAB_SKIP_UNLESS(SPEC2FAB_WITH_NLOPT);
   EXPECT_THAT(input_error_of([] { optimizer_from(R"({"type": "nlopt", "algorithm": "BFGS"})"); }),
               AllOf(HasSubstr("algorithm: unknown NLopt algorithm 'BFGS'"), HasSubstr("LD_LBFGS"),
                     HasSubstr("LN_BOBYQA")));
@@ -132,7 +157,7 @@ TEST(OptimizerRegistry, UnknownNloptAlgorithmListsValidOnes) {
 TEST(OptimizerRegistry, UnknownKeyIsRejected) {
   EXPECT_THAT(input_error_of([] { optimizer_from(R"({"type": "annealing", "iteratoins": 100})"); }),
               AllOf(StartsWith("t.json: /iteratoins: unknown key"), HasSubstr("iterations")));
-  EXPECT_THAT(input_error_of([] { optimizer_from(R"({"type": "ceres", "tolerance": 1e-9})"); }),
+  EXPECT_THAT(input_error_of([] { optimizer_from(R"({"type": "spsa", "tolerance": 1e-9})"); }),
               StartsWith("t.json: /tolerance: unknown key"));
 }
 
@@ -159,16 +184,22 @@ std::string refusal(const std::string& json, Problem& problem) {
 
 TEST(OptimizerCapabilities, MissingCapabilityIsRefusedNamingBoth) {
   FunctionProblem problem = plain_quadratic();
-  EXPECT_THAT(refusal(R"({"type": "nlopt", "algorithm": "LD_LBFGS"})", problem),
-              AllOf(HasSubstr("'nlopt'"), HasSubstr("gradient")));
+  if (SPEC2FAB_WITH_NLOPT) {
+    EXPECT_THAT(refusal(R"({"type": "nlopt", "algorithm": "LD_LBFGS"})", problem),
+                AllOf(HasSubstr("'nlopt'"), HasSubstr("gradient")));
+  }
   EXPECT_THAT(refusal(R"({"type": "branch_and_bound"})", problem),
               AllOf(HasSubstr("'branch_and_bound'"), HasSubstr("lower bound")));
-  EXPECT_THAT(refusal(R"({"type": "ceres"})", problem),
-              AllOf(HasSubstr("'ceres'"), HasSubstr("residuals")));
+  if (SPEC2FAB_WITH_CERES) {
+    EXPECT_THAT(refusal(R"({"type": "ceres"})", problem),
+                AllOf(HasSubstr("'ceres'"), HasSubstr("residuals")));
+  }
   EXPECT_THAT(refusal(R"({"type": "exhaustive"})", problem),
               AllOf(HasSubstr("'exhaustive'"), HasSubstr("discrete")));
   // Derivative-free methods need nothing more.
-  EXPECT_EQ(refusal(R"({"type": "nlopt", "algorithm": "LN_BOBYQA"})", problem), "no refusal");
+  if (SPEC2FAB_WITH_NLOPT) {
+    EXPECT_EQ(refusal(R"({"type": "nlopt", "algorithm": "LN_BOBYQA"})", problem), "no refusal");
+  }
   EXPECT_EQ(refusal(R"({"type": "annealing", "iterations": 10})", problem), "no refusal");
   EXPECT_EQ(refusal(R"({"type": "spsa", "iterations": 10})", problem), "no refusal");
 }

@@ -53,7 +53,7 @@ TEST(Docs, EveryTranslatorsKeysAreTheOnesItsSectionDescribes) {
     const std::string text = section(markdown, name);
     ASSERT_FALSE(text.empty()) << "docs/experiment-format.md has no '## " << name << " translator' section";
     std::set<std::string> declared;
-    for (const PropertyDoc& d : registry.entry(name).doc.properties) {
+    for (const PropertyDoc& d : registry.doc(name).properties) {
       if (shared.count(d.name) || d.name.rfind("output.", 0) == 0) continue;
       declared.insert(d.name);
       EXPECT_TRUE(text.find("`" + d.name + "`") != std::string::npos)

@@ -62,7 +62,7 @@ class TextureShadowTest : public SimulatorTest {
          "metric": {"type": "image_mse"},
          "goal": {"type": "caustic_image", "image": ")" SPEC2FAB_DATASETS_DIR R"(/images/caustic_ring_120.png",
                   "size": [40, 40], "receiver_mm": [24, 24], "flux_mm2": 400},
-         "optimizer": {"type": "nlopt", "algorithm": "LD_LBFGS", "max_evaluations": 2}}])";
+         "optimizer": {"type": "spsa", "iterations": 1}}])";
   }
 
   std::unique_ptr<TuningPlan> plan(ReducerTree& tree, const std::string& schedule) const {

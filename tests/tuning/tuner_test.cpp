@@ -8,6 +8,7 @@
 
 #include <cmath>
 
+#include "build_gates.h"
 #include "materials/palette.h"
 #include "reducer/reducer_tree.h"
 #include "tuning/schedule.h"
@@ -121,6 +122,7 @@ TEST(Tuner, RegisteredAlbedoSimulatorRefusesAnImageMetricFromJson) {
 }
 
 TEST(Tuner, TunesItsSubtreeToTheGoal) {
+  SPEC2FAB_SKIP_UNLESS(SPEC2FAB_WITH_NLOPT);
   const auto p = palette();
   auto tree = std::make_unique<ReducerTree>(
       Properties::parse(R"({"type": "layered", "layers": [

@@ -1,5 +1,6 @@
 #include "commands.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <iostream>
 #include <map>
@@ -226,9 +227,16 @@ void print_registry(const ListedRegistry& listed, bool verbose) {
       continue;
     }
     std::cout << "\n  " << name << "\n    " << doc.summary << "\n    properties:\n";
+    // Columns as wide as this type's longest name, type and default.
+    int name_width = 0, type_width = 0, default_width = 0;
     for (const PropertyDoc& p : doc.properties) {
-      std::printf("      %-14s %-34s default %-12s %s\n", p.name.c_str(), p.type.c_str(),
-                  p.default_value.c_str(), p.meaning.c_str());
+      name_width = std::max(name_width, static_cast<int>(p.name.size()));
+      type_width = std::max(type_width, static_cast<int>(p.type.size()));
+      default_width = std::max(default_width, static_cast<int>(p.default_value.size()));
+    }
+    for (const PropertyDoc& p : doc.properties) {
+      std::printf("      %-*s  %-*s  default %-*s  %s\n", name_width, p.name.c_str(), type_width, p.type.c_str(),
+                  default_width, p.default_value.c_str(), p.meaning.c_str());
     }
     std::cout << "    example: " << doc.example << "\n";
   }

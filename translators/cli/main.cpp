@@ -8,6 +8,7 @@
 #include <CLI/CLI.hpp>
 
 #include "commands.h"
+#include "core/build_options.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "core/strings.h"
@@ -29,7 +30,7 @@ int main(int argc, char** argv) {
       "An experiment file (JSON) names a translator and its five inputs: geometry, goal,\n"
       "simulation, materials, printer. See README.md and docs/experiment-format.md."};
   app.require_subcommand(1);
-  app.set_version_flag("--version", std::string("spec2fab ") + version());
+  app.set_version_flag("--version", std::string("spec2fab ") + version() + " (" + build_summary() + ")");
   bool quiet = false, verbose = false;
   app.add_flag("-q,--quiet", quiet, "only warnings and errors");
   app.add_flag("-v,--verbose", verbose, "debug messages");

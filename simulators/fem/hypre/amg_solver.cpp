@@ -2,7 +2,9 @@
 
 #include <stdexcept>
 
-#ifdef SPEC2FAB_HAVE_HYPRE
+#include "core/build_options.h"
+
+#if SPEC2FAB_WITH_HYPRE
 
 #include <algorithm>
 #include <mutex>

@@ -5,15 +5,16 @@
 #include <sstream>
 #include <string>
 
+#include "core/build_options.h"
 #include "core/error.h"
 
-#ifdef SPEC2FAB_HAVE_TETGEN
+#if SPEC2FAB_WITH_TETGEN
 #include <tetgen.h>
 #endif
 
 namespace spec2fab::fem {
 
-#ifdef SPEC2FAB_HAVE_TETGEN
+#if SPEC2FAB_WITH_TETGEN
 
 bool tetgen_available() { return true; }
 
@@ -129,9 +130,8 @@ TetMesh tetrahedralize(const Mesh& surface, const TetgenOptions& options) {
 bool tetgen_available() { return false; }
 
 TetMesh tetrahedralize(const Mesh& surface, const TetgenOptions& /*options*/) {
-  throw InputError((surface.name.empty() ? std::string("mesh") : surface.name) +
-                   ": this build of Spec2Fab has no TetGen (configured with "
-                   "-DSPEC2FAB_WITH_TETGEN=OFF), so it cannot make tetrahedral meshes");
+  throw InputError((surface.name.empty() ? std::string("mesh") : surface.name) + ": " +
+                   left_out_of_build("mesher", "tetgen") + " (no tetrahedral meshes without it)");
 }
 
 #endif
