@@ -21,10 +21,17 @@
 ///
 /// A constraint between options (one at least another) goes in an optional
 /// `bool check(std::string* why) const`, which reading and IsValid also run.
+///
+/// number() also takes arrays (each element in the range); required() has no
+/// default; an option whose default depends on others (rays: twice the image)
+/// keeps a sentinel and says so in the docs with Default{"2 × image"}. A name
+/// ending in _mm is documented as millimetres. file() is a required path to
+/// an existing file, relative to the document's folder.
 
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <filesystem>
 #include <limits>
 #include <string>
 #include <type_traits>
@@ -37,6 +44,17 @@
 #include "core/strings.h"
 
 namespace spec2fab {
+
+/// A number as a person writes it: 1000000, 0.999, 1e-5 (not 1e+06, 1e-05).
+inline std::string number_text(double v) {
+  std::string text = fmt::format("{:.15g}", v);
+  const size_t e = text.find('e');
+  if (e == std::string::npos) return text;
+  std::string exponent = text.substr(e + 1);
+  const bool negative = exponent[0] == '-';
+  exponent.erase(0, exponent.find_first_not_of("+-0"));
+  return text.substr(0, e + 1) + (negative ? "-" : "") + exponent;
+}
 
 /// Where a number may lie; either end open or closed, or absent.
 struct Range {
@@ -56,37 +74,100 @@ struct Range {
   std::string text() const {
     const bool low = std::isfinite(min), high = std::isfinite(max);
     if (low && high)
-      return fmt::format("in {}{:g}, {:g}{}", open_min ? '(' : '[', min, max, open_max ? ')' : ']');
-    if (low) return fmt::format("{} {:g}", open_min ? "above" : "at least", min);
-    if (high) return fmt::format("{} {:g}", open_max ? "below" : "at most", max);
+      return fmt::format("in {}{}, {}{}", open_min ? '(' : '[', number_text(min), number_text(max), open_max ? ')' : ']');
+    if (low) return fmt::format("{} {}", open_min ? "above" : "at least", number_text(min));
+    if (high) return fmt::format("{} {}", open_max ? "below" : "at most", number_text(max));
     return "";
   }
 };
 
+/// The documented default of an option whose default another option sets.
+struct Default {
+  const char* text;
+};
+
 namespace options_detail {
+
+template <class T>
+struct is_std_array : std::false_type {};
+template <class T, size_t N>
+struct is_std_array<std::array<T, N>> : std::true_type {};
+template <class T>
+struct is_std_vector : std::false_type {};
+template <class T>
+struct is_std_vector<std::vector<T>> : std::true_type {};
+template <class T>
+inline constexpr bool is_sequence_v = is_std_array<T>::value || is_std_vector<T>::value;
+
+/// Each number of a value (itself, or an array's elements).
+template <class T, class F>
+void for_each_number(const T& value, F&& f) {
+  if constexpr (is_sequence_v<T>) {
+    for (const auto& item : value) f(static_cast<double>(item));
+  } else {
+    f(static_cast<double>(value));
+  }
+}
 
 template <class T>
 std::string default_text(const T& value) {
   if constexpr (std::is_same_v<T, bool>) {
     return value ? "true" : "false";
   } else if constexpr (std::is_arithmetic_v<T>) {
-    return fmt::format("{:g}", static_cast<double>(value));
+    return number_text(static_cast<double>(value));
   } else if constexpr (std::is_same_v<T, std::string>) {
     return "\"" + value + "\"";
   } else {
     std::vector<std::string> items;
     for (const auto& item : value) items.push_back(default_text(item));
-    return "[" + join(items) + "]";
+    std::string text = "[";  // appended: GCC 12 warns (-Wrestrict) wrongly on "[" + …
+    text += join(items);
+    text += "]";
+    return text;
   }
 }
 
 template <class T>
 std::string type_text() {
-  if constexpr (std::is_same_v<T, bool>) return "bool";
-  else if constexpr (std::is_integral_v<T>) return "integer";
-  else if constexpr (std::is_arithmetic_v<T>) return "number";
-  else if constexpr (std::is_same_v<T, std::string>) return "string";
-  else return "array";
+  if constexpr (std::is_same_v<T, bool>) {
+    return "bool";
+  } else if constexpr (std::is_integral_v<T>) {
+    return "integer";
+  } else if constexpr (std::is_arithmetic_v<T>) {
+    return "number";
+  } else if constexpr (std::is_same_v<T, std::string>) {
+    return "string";
+  } else if constexpr (is_std_array<T>::value) {
+    const std::vector<std::string> items(std::tuple_size_v<T>, type_text<typename T::value_type>());
+    // Appended, not "[" + …: GCC 12 warns (-Wrestrict) wrongly on that form.
+    std::string text = "[";
+    text += join(items);
+    text += "]";
+    return text;
+  } else if constexpr (is_std_vector<T>::value) {
+    std::string text = "array of ";
+    text += type_text<typename T::value_type>();
+    text += "s";
+    return text;
+  } else {
+    return "array";
+  }
+}
+
+/// The type as documented: a name ending in _mm is in millimetres.
+template <class T>
+std::string full_type_text(const char* name) {
+  const std::string_view n(name);
+  return type_text<T>() + (n.size() > 3 && n.substr(n.size() - 3) == "_mm" ? " (mm)" : "");
+}
+
+template <class T>
+std::string range_problem(const T& value, Range range) {
+  std::string problem;
+  for_each_number(value, [&](double v) {
+    if (problem.empty() && !range.contains(v)) problem = number_text(v) + " is not " + range.text();
+  });
+  return problem;
 }
 
 template <class O>
@@ -101,8 +182,16 @@ class Reader {
   template <class T>
   void number(T& value, const char* name, Range range, const char*) {
     value = p_.get<T>(name, value);
-    if (!range.contains(static_cast<double>(value)))
-      p_.fail(name, fmt::format("{:g} is not {}", static_cast<double>(value), range.text()));
+    if (const std::string problem = range_problem(value, range); !problem.empty()) p_.fail(name, problem);
+  }
+  template <class T>
+  void number(T& value, const char* name, Range range, const char* meaning, Default) {
+    if (p_.has(name)) number(value, name, range, meaning);
+  }
+  template <class T>
+  void required(T& value, const char* name, Range range, const char*) {
+    value = p_.get<T>(name);
+    if (const std::string problem = range_problem(value, range); !problem.empty()) p_.fail(name, problem);
   }
   void choice(std::string& value, const char* name, const std::vector<std::string>& choices, const char*) {
     value = p_.get<std::string>(name, value);
@@ -113,6 +202,7 @@ class Reader {
   void value(T& value, const char* name, const char*) {
     value = p_.get<T>(name, value);
   }
+  void file(std::filesystem::path& value, const char* name, const char*) { value = p_.existing_file(name); }
 
  private:
   const Properties& p_;
@@ -124,8 +214,14 @@ class Checker {
   std::string problem;
   template <class T>
   void number(const T& value, const char* name, Range range, const char*) {
-    if (problem.empty() && !range.contains(static_cast<double>(value)))
-      problem = fmt::format("{}: {:g} is not {}", name, static_cast<double>(value), range.text());
+    if (const std::string p = range_problem(value, range); problem.empty() && !p.empty())
+      problem = std::string(name) + ": " + p;
+  }
+  template <class T>
+  void number(const T&, const char*, Range, const char*, Default) {}  // the sentinel is not checked
+  template <class T>
+  void required(const T& value, const char* name, Range range, const char* meaning) {
+    number(value, name, range, meaning);
   }
   void choice(const std::string& value, const char* name, const std::vector<std::string>& choices, const char*) {
     if (problem.empty() && std::find(choices.begin(), choices.end(), value) == choices.end())
@@ -134,6 +230,7 @@ class Checker {
   }
   template <class T>
   void value(const T&, const char*, const char*) {}
+  void file(const std::filesystem::path&, const char*, const char*) {}
 };
 
 /// The options as documentation rows: name, type, default, meaning.
@@ -142,8 +239,15 @@ class Documenter {
   std::vector<PropertyDoc> rows;
   template <class T>
   void number(const T& value, const char* name, Range range, const char* meaning) {
-    const std::string bound = range.text();
-    rows.push_back({name, type_text<T>() + (bound.empty() ? "" : " " + bound), default_text(value), meaning});
+    rows.push_back({name, typed(value, name, range), default_text(value), meaning});
+  }
+  template <class T>
+  void number(const T& value, const char* name, Range range, const char* meaning, Default fallback) {
+    rows.push_back({name, typed(value, name, range), fallback.text, meaning});
+  }
+  template <class T>
+  void required(const T& value, const char* name, Range range, const char* meaning) {
+    rows.push_back({name, typed(value, name, range), "required", meaning});
   }
   void choice(const std::string& value, const char* name, const std::vector<std::string>& choices,
               const char* meaning) {
@@ -151,7 +255,17 @@ class Documenter {
   }
   template <class T>
   void value(const T& value, const char* name, const char* meaning) {
-    rows.push_back({name, type_text<T>(), default_text(value), meaning});
+    rows.push_back({name, full_type_text<T>(name), default_text(value), meaning});
+  }
+  void file(const std::filesystem::path&, const char* name, const char* meaning) {
+    rows.push_back({name, "file", "required", meaning});
+  }
+
+ private:
+  template <class T>
+  static std::string typed(const T&, const char* name, Range range) {
+    const std::string bound = range.text();
+    return full_type_text<T>(name) + (bound.empty() ? "" : " " + bound);
   }
 };
 

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "core/options.h"
 #include "core/properties.h"
 
 namespace spec2fab {
@@ -30,15 +31,23 @@ TypeDoc SquaredDistance::doc() {
           R"({"type": "squared_distance"})"};
 }
 
+namespace {
+struct FixedValuesOptions {
+  std::vector<double> values;
+  template <class Declare, class Self>
+  static void declare(Declare& d, Self& o) {
+    d.required(o.values, "values", Range::any(), "the target");
+  }
+};
+}  // namespace
+
 FixedValuesGoal::FixedValuesGoal(const Properties& properties, const PartContext& /*context*/) {
-  target_.data = properties.get<std::vector<double>>("values");
-  for (double v : target_.data)
-    if (!std::isfinite(v)) properties.fail("values", "every value must be finite");
+  target_.data = read_options<FixedValuesOptions>(properties).values;
 }
 
 TypeDoc FixedValuesGoal::doc() {
   return {"A fixed vector of numbers as the target.",
-          {{"values", "array of numbers", "required", "the target"}},
+          option_docs<FixedValuesOptions>(),
           R"({"type": "values", "values": [12.5, -3.0]})"};
 }
 

@@ -1,6 +1,7 @@
 // A constant colour as an albedo goal.
 
 #include "core/colour.h"
+#include "core/options.h"
 #include "tuning/parts.h"
 
 namespace spec2fab {
@@ -8,24 +9,31 @@ namespace {
 
 class AlbedoGoal final : public GoalFor<AlbedoObservation> {
  public:
+  struct Options {
+    std::array<double, 3> srgb{-1, -1, -1}, linear_rgb{-1, -1, -1};  ///< -1: not given
+
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.number(o.srgb, "srgb", Range::closed(0, 1), "sRGB-encoded colour (r, g, b)", Default{"required (or linear_rgb)"});
+      d.number(o.linear_rgb, "linear_rgb", Range::closed(0, 1), "linear colour (r, g, b)", Default{"required (or srgb)"});
+    }
+    bool check(std::string* why) const {
+      if ((srgb[0] >= 0) != (linear_rgb[0] >= 0)) return true;
+      *why = "give the colour as \"srgb\" or as \"linear_rgb\" (three numbers in [0, 1])";
+      return false;
+    }
+  };
+
   AlbedoGoal(const Properties& properties, const PartContext& /*context*/) {
-    if (properties.has("srgb") == properties.has("linear_rgb")) {
-      properties.fail("give the colour as \"srgb\" or as \"linear_rgb\" (three numbers in [0, 1])");
-    }
-    const bool encoded = properties.has("srgb");
-    const char* key = encoded ? "srgb" : "linear_rgb";
-    const auto rgb = properties.get<std::array<double, 3>>(key);
-    for (int c = 0; c < 3; ++c) {
-      if (!(rgb[c] >= 0 && rgb[c] <= 1)) properties.fail(key, "channels must lie in [0, 1]");
-      target_.rgb[c] = encoded ? srgb_to_linear(rgb[c]) : rgb[c];
-    }
+    const Options options = read_options<Options>(properties);
+    const bool encoded = options.srgb[0] >= 0;
+    for (int c = 0; c < 3; ++c) target_.rgb[c] = encoded ? srgb_to_linear(options.srgb[c]) : options.linear_rgb[c];
   }
   std::string name() const override { return "albedo"; }
   const AlbedoObservation& typed_target() const override { return target_; }
   static TypeDoc doc() {
     return {"A constant target colour. Describes albedo.",
-            {{"srgb", "[r, g, b] in [0, 1]", "required (or linear_rgb)", "sRGB-encoded colour"},
-             {"linear_rgb", "[r, g, b] in [0, 1]", "required (or srgb)", "linear colour"}},
+            option_docs<Options>(),
             R"({"type": "albedo", "srgb": [0.2, 0.5, 0.8]})"};
   }
 

@@ -19,6 +19,7 @@
 #include <spdlog/spdlog.h>
 
 #include "albedo/kubelka_munk.h"
+#include "core/options.h"
 #include "tuning/parts.h"
 #include "tuning/tuner.h"
 
@@ -43,14 +44,35 @@ void collect_free_parameters(Node& node, std::vector<P*>& out) {
 
 class AlbedoSimulator final : public SimulatorFor<AlbedoObservation> {
  public:
+  struct Options {
+    double depth_mm = 3, step_mm = 0.005;
+    std::array<double, 2> at{0, 0};
+    int max_table = 1'000'000;
+
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.number(o.depth_mm, "depth_mm", Range::closed(1e-3, 1e3),
+               "depth sampled; what lies below counts as infinitely thick");
+      d.number(o.step_mm, "step_mm", Range::at_least(1e-5),
+               "sampling step along the depth axis (finer than any layer), at most depth_mm");
+      d.value(o.at, "at", "lateral position (a, b) in the subtree's frame");
+      d.number(o.max_table, "max_table", Range::closed(0, 1e8), "largest table to build; 0 never tabulates");
+    }
+    bool check(std::string* why) const {
+      if (step_mm <= depth_mm) return true;
+      *why = fmt::format("step_mm: {:g} is more than depth_mm ({:g})", step_mm, depth_mm);
+      return false;
+    }
+  };
+
   AlbedoSimulator(const Properties& properties, const PartContext& context)
       : palette_(&context.palette), cache_(context.cache) {
-    depth_mm_ = properties.get_in_range("depth_mm", 3.0, 1e-3, 1e3);
-    step_mm_ = properties.get_in_range("step_mm", 0.005, 1e-5, depth_mm_);
-    const auto at = properties.get<std::array<double, 2>>("at", {0.0, 0.0});
-    lateral_a_ = at[0];
-    lateral_b_ = at[1];
-    max_table_ = static_cast<long long>(properties.get_in_range("max_table", 1e6, 0, 1e8));
+    const Options options = read_options<Options>(properties);
+    depth_mm_ = options.depth_mm;
+    step_mm_ = options.step_mm;
+    lateral_a_ = options.at[0];
+    lateral_b_ = options.at[1];
+    max_table_ = options.max_table;
     for (MaterialId id = 0; id < context.palette.size(); ++id) {
       optics_.push_back(KubelkaMunkMaterial::from_material(context.palette.material(id)));
     }
@@ -92,10 +114,7 @@ class AlbedoSimulator final : public SimulatorFor<AlbedoObservation> {
         "transport coefficient (optical data of the material library). Produces albedo. "
         "When the subtree's free parameters are all discrete, every combination is "
         "tabulated once at setup (shared by identical subtrees) and evaluation is a lookup.",
-        {{"depth_mm", "number (mm)", "3", "depth sampled; what lies below counts as infinitely thick"},
-         {"step_mm", "number (mm)", "0.005", "sampling step along the depth axis (finer than any layer)"},
-         {"at", "[a, b]", "[0, 0]", "lateral position in the subtree's frame"},
-         {"max_table", "integer", "1e6", "largest table to build; 0 never tabulates"}},
+        option_docs<Options>(),
         R"({"type": "albedo", "depth_mm": 2})"};
   }
 

@@ -46,36 +46,30 @@ double image_ssim(std::span<const double> a, std::span<const double> b, int widt
 }
 
 CausticSlabConfig CausticSlabConfig::read(const Properties& properties) {
+  const Options o = read_options<Options>(properties);
   CausticSlabConfig config;
   CausticSetup& s = config.setup;
-  const auto size = properties.get<std::array<double, 2>>("size_mm", {50.0, 50.0});
-  s.width_mm = size[0];
-  s.depth_mm = size[1];
-  config.thickness_mm = properties.get_in_range("thickness_mm", 10.0, 1e-3, 1e4);
-  const auto origin = properties.get<std::array<double, 3>>("origin_mm", {0.0, 0.0, 0.0});
-  config.origin_mm = Eigen::Vector3d(origin[0], origin[1], origin[2]);
-  if (!config.origin_mm.allFinite()) properties.fail("origin_mm", "expected three finite numbers");
-  const auto vertices = properties.get<std::array<int, 2>>("vertices", {121, 121});
-  s.vertices_x = vertices[0];
-  s.vertices_y = vertices[1];
-  s.refractive_index = properties.get_in_range("refractive_index", 1.5, 1.0, 4.0);
-  const auto light = properties.get<std::array<double, 3>>("light", {0.0, 0.0, -1.0});
-  s.light_direction = Eigen::Vector3d(light[0], light[1], light[2]);
-  s.receiver_distance_mm = properties.get_in_range("distance_mm", 100.0, 1e-3, 1e6);
-  const auto receiver = properties.get<std::array<double, 2>>("receiver_mm", size);
-  s.receiver_width_mm = receiver[0];
-  s.receiver_depth_mm = receiver[1];
-  const auto centre = properties.get<std::array<double, 2>>("receiver_centre_mm", {0.0, 0.0});
-  s.receiver_centre_mm = Eigen::Vector2d(centre[0], centre[1]);
-  const auto image = properties.get<std::array<int, 2>>("image", {240, 240});
-  s.image_width = image[0];
-  s.image_height = image[1];
-  const auto rays = properties.get<std::array<int, 2>>("rays", {2 * image[0], 2 * image[1]});
-  s.rays_x = rays[0];
-  s.rays_y = rays[1];
-  s.jitter = properties.get<bool>("jitter", true);
-  s.fresnel = properties.get<bool>("fresnel", false);
-  s.seed = static_cast<unsigned>(properties.get_in_range("seed", 1, 0, 4294967295.0));
+  s.width_mm = o.size_mm[0];
+  s.depth_mm = o.size_mm[1];
+  config.thickness_mm = o.thickness_mm;
+  config.origin_mm = Eigen::Vector3d(o.origin_mm[0], o.origin_mm[1], o.origin_mm[2]);
+  s.vertices_x = o.vertices[0];
+  s.vertices_y = o.vertices[1];
+  s.refractive_index = o.refractive_index;
+  s.light_direction = Eigen::Vector3d(o.light[0], o.light[1], o.light[2]);
+  s.receiver_distance_mm = o.distance_mm;
+  const bool receiver_given = o.receiver_mm[0] > 0;
+  s.receiver_width_mm = receiver_given ? o.receiver_mm[0] : o.size_mm[0];
+  s.receiver_depth_mm = receiver_given ? o.receiver_mm[1] : o.size_mm[1];
+  s.receiver_centre_mm = Eigen::Vector2d(o.receiver_centre_mm[0], o.receiver_centre_mm[1]);
+  s.image_width = o.image[0];
+  s.image_height = o.image[1];
+  const bool rays_given = o.rays[0] > 0;
+  s.rays_x = rays_given ? o.rays[0] : 2 * o.image[0];
+  s.rays_y = rays_given ? o.rays[1] : 2 * o.image[1];
+  s.jitter = o.jitter;
+  s.fresnel = o.fresnel;
+  s.seed = static_cast<unsigned>(o.seed);
   return config;
 }
 
@@ -166,17 +160,34 @@ namespace {
 /// carries `flux_mm2` — the light the slab lets through — over the receiver.
 class CausticImageGoal final : public GoalFor<ImageObservation> {
  public:
+  struct Options {
+    std::filesystem::path image;
+    std::array<int, 2> size{240, 240};
+    std::array<double, 2> receiver_mm{};
+    double flux_mm2 = 0;
+
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.file(o.image, "image", "the picture (any format OpenCV reads)");
+      d.number(o.size, "size", Range::at_least(1), "the simulator's image size (width, height)");
+      d.required(o.receiver_mm, "receiver_mm", Range::above(0), "the receiver's extent (x, y)");
+      d.required(o.flux_mm2, "flux_mm2", Range::above(0), "light to distribute: incident irradiance x area");
+    }
+    bool check(std::string* why) const {
+      if (static_cast<long long>(size[0]) * size[1] <= 64'000'000) return true;
+      *why = "size: more than 64 million pixels";
+      return false;
+    }
+  };
+
   CausticImageGoal(const Properties& properties, const PartContext& /*context*/) {
-    const auto file = properties.existing_file("image");
+    const Options options = read_options<Options>(properties);
+    const std::filesystem::path& file = options.image;
     const cv::Mat picture = cv::imread(file.string(), cv::IMREAD_GRAYSCALE);
     if (picture.empty()) throw InputError(properties.where("image") + ": cannot read " + file.string() + " as an image");
-    const auto size = properties.get<std::array<int, 2>>("size", {240, 240});
-    if (size[0] < 1 || size[1] < 1 || static_cast<long long>(size[0]) * size[1] > 64'000'000)
-      properties.fail("size", "expected [width, height], 1 to 64 million pixels");
-    const auto receiver = properties.get<std::array<double, 2>>("receiver_mm");
-    if (!(receiver[0] > 0 && receiver[1] > 0)) properties.fail("receiver_mm", "expected a positive size");
-    const double flux = properties.get<double>("flux_mm2");
-    if (!(flux > 0) || !std::isfinite(flux)) properties.fail("flux_mm2", "expected a positive amount of light");
+    const std::array<int, 2>& size = options.size;
+    const std::array<double, 2>& receiver = options.receiver_mm;
+    const double flux = options.flux_mm2;
     cv::Mat resized;
     cv::resize(picture, resized, cv::Size(size[0], size[1]), 0, 0, cv::INTER_AREA);
     target_.width = size[0];
@@ -198,10 +209,7 @@ class CausticImageGoal final : public GoalFor<ImageObservation> {
   static TypeDoc doc() {
     return {"A picture read as the irradiance a caustic should cast: grey levels decoded from "
             "sRGB, resized to the simulator's image, scaled to carry flux_mm2 over the receiver.",
-            {{"image", "file", "required", "the picture (any format OpenCV reads)"},
-             {"size", "[width, height]", "[240, 240]", "the simulator's image size"},
-             {"receiver_mm", "[x, y]", "required", "the receiver's extent"},
-             {"flux_mm2", "number", "required", "light to distribute: incident irradiance x area"}},
+            option_docs<Options>(),
             R"({"type": "caustic_image", "image": "ring.png", "receiver_mm": [60, 60], "flux_mm2": 3600})"};
   }
 

@@ -10,6 +10,7 @@
 #include <Eigen/Core>
 
 #include "caustics/caustic_tracer.h"
+#include "core/options.h"
 #include "geometry/mesh.h"
 #include "reducer/height_surface.h"
 
@@ -28,6 +29,41 @@ struct CausticSlabConfig {
   CausticSetup setup;
   double thickness_mm = 10;  ///< highest the top may be (height search range)
   Eigen::Vector3d origin_mm = Eigen::Vector3d::Zero();  ///< the slab's bottom corner
+
+  /// The properties as declared (core/options.h); read() turns them into the above.
+  struct Options {
+    std::array<double, 2> size_mm{50, 50};
+    std::array<double, 3> origin_mm{0, 0, 0};
+    double thickness_mm = 10;
+    std::array<int, 2> vertices{121, 121};
+    double refractive_index = 1.5;
+    std::array<double, 3> light{0, 0, -1};
+    double distance_mm = 100;
+    std::array<double, 2> receiver_mm{0, 0};  ///< 0: size_mm
+    std::array<double, 2> receiver_centre_mm{0, 0};
+    std::array<int, 2> image{240, 240};
+    std::array<int, 2> rays{0, 0};  ///< 0: twice the image
+    bool jitter = true, fresnel = false;
+    double seed = 1;
+
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.number(o.size_mm, "size_mm", Range::above(0), "slab footprint (x, y); the subtree's (a, b) run from its corner");
+      d.number(o.origin_mm, "origin_mm", Range::any(), "the subtree's coordinates (a, b, w) of the slab's bottom corner");
+      d.number(o.thickness_mm, "thickness_mm", Range::closed(1e-3, 1e4), "highest the top may be (search range along w)");
+      d.number(o.vertices, "vertices", Range::at_least(2), "top-surface mesh vertices (nx, ny), corners included");
+      d.number(o.refractive_index, "refractive_index", Range::closed(1, 4), "of the slab's material");
+      d.number(o.light, "light", Range::any(), "direction (x, y, z) the light travels, z < 0");
+      d.number(o.distance_mm, "distance_mm", Range::closed(1e-3, 1e6), "receiver plane below the slab's bottom");
+      d.number(o.receiver_mm, "receiver_mm", Range::above(0), "receiver extent (x, y) imaged", Default{"size_mm"});
+      d.number(o.receiver_centre_mm, "receiver_centre_mm", Range::any(), "receiver centre below the slab's centre");
+      d.number(o.image, "image", Range::at_least(1), "pixels (width, height); row 0 at +y");
+      d.number(o.rays, "rays", Range::at_least(1), "stratified samples (nx, ny) over the footprint", Default{"2 × image"});
+      d.value(o.jitter, "jitter", "jitter samples within their strata (hashed, deterministic)");
+      d.value(o.fresnel, "fresnel", "weight transmissions by unpolarised Fresnel");
+      d.number(o.seed, "seed", Range::closed(0, 4294967295.0), "jitter pattern (an integer)");
+    }
+  };
   static CausticSlabConfig read(const Properties& properties);
 };
 

@@ -84,20 +84,7 @@ class CausticSimulator final : public SimulatorFor<ImageObservation> {
         "optional Fresnel); stratified, deterministic rays. Plane and B-spline roots give their "
         "height directly; any other subtree is searched along w with material queries. Input "
         "(set by a coupling such as texture_shadow): exit_transmittance, a filter over the flat face.",
-        {{"size_mm", "[x, y]", "[50, 50]", "slab footprint; the subtree's (a, b) run from its corner"},
-         {"origin_mm", "[a, b, w]", "[0, 0, 0]", "the subtree's coordinates of the slab's bottom corner"},
-         {"thickness_mm", "number (mm)", "10", "highest the top may be (search range along w)"},
-         {"vertices", "[nx, ny]", "[121, 121]", "top-surface mesh vertices, corners included"},
-         {"refractive_index", "number", "1.5", "of the slab's material"},
-         {"light", "[x, y, z]", "[0, 0, -1]", "direction the light travels (z < 0)"},
-         {"distance_mm", "number (mm)", "100", "receiver plane below the slab's bottom"},
-         {"receiver_mm", "[x, y]", "size_mm", "receiver extent imaged"},
-         {"receiver_centre_mm", "[x, y]", "[0, 0]", "receiver centre below the slab's centre"},
-         {"image", "[width, height]", "[240, 240]", "pixels; row 0 at +y"},
-         {"rays", "[nx, ny]", "2 × image", "stratified samples over the footprint"},
-         {"jitter", "boolean", "true", "jitter samples within their strata (hashed, deterministic)"},
-         {"fresnel", "boolean", "false", "weight transmissions by unpolarised Fresnel"},
-         {"seed", "integer", "1", "jitter pattern"}},
+        option_docs<CausticSlabConfig::Options>(),
         R"({"type": "caustics", "size_mm": [50, 50], "distance_mm": 200, "image": [240, 240]})"};
   }
 

@@ -12,6 +12,7 @@
 
 #include "caustics/caustic_tracer.h"
 #include "core/error.h"
+#include "core/options.h"
 #include "core/properties.h"
 #include "reducer/height_surface.h"
 #include "tuning/parts.h"
@@ -21,20 +22,37 @@ namespace {
 
 class FacetBeamSimulator final : public SimulatorFor<VectorObservation> {
  public:
+  struct Options {
+    std::array<double, 2> facet_mm{};
+    std::array<double, 2> facet_origin_mm{0, 0};
+    double bottom_mm = 0, refractive_index = 1.5, distance_mm = 100;
+    std::array<double, 3> light{0, 0, -1};
+
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.required(o.facet_mm, "facet_mm", Range::above(0), "the facet's size (its column)");
+      d.number(o.facet_origin_mm, "facet_origin_mm", Range::any(),
+               "world position (x, y) of the facet's (a, b) = (0, 0) corner");
+      d.number(o.bottom_mm, "bottom_mm", Range::any(), "world height of the slab's flat bottom");
+      d.number(o.refractive_index, "refractive_index", Range::closed(1, 4), "of the slab's material");
+      d.number(o.light, "light", Range::any(), "direction (x, y, z) the light travels, z < 0");
+      d.number(o.distance_mm, "distance_mm", Range::closed(1e-3, 1e6), "receiver plane below the slab's bottom");
+    }
+    bool check(std::string* why) const {
+      if (light[2] < 0) return true;
+      *why = "light: the light must travel downwards (z < 0)";
+      return false;
+    }
+  };
+
   FacetBeamSimulator(const Properties& properties, const PartContext& /*context*/) {
-    const auto size = properties.get<std::array<double, 2>>("facet_mm");
-    if (!(size[0] > 0 && size[1] > 0)) properties.fail("facet_mm", "expected two positive sizes");
-    size_ = {size[0], size[1]};
-    const auto origin = properties.get<std::array<double, 2>>("facet_origin_mm", {0.0, 0.0});
-    origin_ = {origin[0], origin[1]};
-    bottom_ = properties.get<double>("bottom_mm", 0.0);
-    eta_ = properties.get_in_range("refractive_index", 1.5, 1.0, 4.0);
-    distance_ = properties.get_in_range("distance_mm", 100.0, 1e-3, 1e6);
-    const auto light = properties.get<std::array<double, 3>>("light", {0.0, 0.0, -1.0});
-    light_ = Eigen::Vector3d(light[0], light[1], light[2]);
-    if (!(light_.z() < 0) || !light_.allFinite()) properties.fail("light", "the light must travel downwards (z < 0)");
-    light_.normalize();
-    if (!origin_.allFinite() || !std::isfinite(bottom_)) properties.fail("facet_origin_mm", "expected finite numbers");
+    const Options options = read_options<Options>(properties);
+    size_ = {options.facet_mm[0], options.facet_mm[1]};
+    origin_ = {options.facet_origin_mm[0], options.facet_origin_mm[1]};
+    bottom_ = options.bottom_mm;
+    eta_ = options.refractive_index;
+    distance_ = options.distance_mm;
+    light_ = Eigen::Vector3d(options.light[0], options.light[1], options.light[2]).normalized();
   }
 
   std::string name() const override { return "facet_beam"; }
@@ -74,12 +92,7 @@ class FacetBeamSimulator final : public SimulatorFor<VectorObservation> {
             "light: the receiver point, in world x and y (mm), of the ray through the facet's "
             "centre, refracted into the facet and out through the slab's flat bottom — the "
             "whole facet's beam lands around it, translated. For facet caustics.",
-            {{"facet_mm", "[a, b]", "required", "the facet's size (its column)"},
-             {"facet_origin_mm", "[x, y]", "[0, 0]", "world position of the facet's (a, b) = (0, 0) corner"},
-             {"bottom_mm", "number (mm)", "0", "world height of the slab's flat bottom"},
-             {"refractive_index", "number", "1.5", "of the slab's material"},
-             {"light", "[x, y, z]", "[0, 0, -1]", "direction the light travels (z < 0)"},
-             {"distance_mm", "number (mm)", "100", "receiver plane below the slab's bottom"}},
+            option_docs<Options>(),
             R"({"type": "facet_beam", "facet_mm": [1.33, 1.33], "facet_origin_mm": [0, 0], "distance_mm": 200})"};
   }
 

@@ -12,13 +12,6 @@
 
 namespace spec2fab {
 
-ProfileGrid ProfileGrid::read(const Properties& properties) {
-  ProfileGrid grid;
-  grid.radius_mm = properties.get_in_range("radius_mm", grid.radius_mm, 0.1, 1e3);
-  grid.samples = static_cast<int>(properties.get_in_range("samples", grid.samples, 8, 4096));
-  return grid;
-}
-
 const std::vector<MeasuredMedium>& jensen2001_media() {
   static const std::vector<MeasuredMedium> media = [] {
     struct Row {
@@ -113,15 +106,15 @@ class RadialProfileGoal final : public GoalFor<RadialProfileObservation> {
   std::string name() const override { return "radial_profile"; }
   const RadialProfileObservation& typed_target() const override { return target_; }
   static TypeDoc doc() {
-    return {"The reflectance profile of a homogeneous semi-infinite medium under air (Jensen et "
+    TypeDoc doc{"The reflectance profile of a homogeneous semi-infinite medium under air (Jensen et "
             "al. 2001's dipole). Describes radial_profile.",
             {{"medium", "name or object", "required (or material)",
               "apple, chicken1, cream, ketchup, marble, potato, skimmilk, skin1, skin2, wholemilk "
               "(Jensen et al. 2001), or {absorption_per_mm, reduced_scattering_per_mm, refractive_index}"},
-             {"material", "material name", "required (or medium)", "a material of the run's palette"},
-             {"radius_mm", "number (mm)", "16", "must match the simulator's"},
-             {"samples", "integer", "400", "must match the simulator's"}},
+             {"material", "material name", "required (or medium)", "a material of the run's palette"}},
             R"({"type": "radial_profile", "medium": "marble"})"};
+    for (PropertyDoc& row : option_docs<ProfileGrid>()) doc.properties.push_back(std::move(row));
+    return doc;
   }
 
  private:

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "core/options.h"
 #include "core/properties.h"
 #include "core/radial_basis.h"
 #include "subsurface/multipole.h"
@@ -18,7 +19,14 @@ struct ProfileGrid {
   double radius_mm = 16;
   int samples = 400;
 
-  static ProfileGrid read(const Properties& properties);
+  template <class Declare, class Self>
+  static void declare(Declare& d, Self& o) {
+    d.number(o.radius_mm, "radius_mm", Range::closed(0.1, 1e3),
+             "profile support: R(r) is represented on [0, radius_mm] (goal and simulator alike)");
+    d.number(o.samples, "samples", Range::closed(8, 4096),
+             "basis size = number of radii the profile is written at (goal and simulator alike)");
+  }
+  static ProfileGrid read(const Properties& properties) { return read_options<ProfileGrid>(properties); }
   std::shared_ptr<const RadialBasis> basis(RunCache* cache) const {
     return RadialBasis::shared(samples, radius_mm, cache);
   }

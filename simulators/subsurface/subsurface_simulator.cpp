@@ -7,6 +7,9 @@
 
 #include <cmath>
 
+#include <fmt/format.h>
+
+#include "core/options.h"
 #include "subsurface/layer_stack.h"
 #include "subsurface/subsurface_parts.h"
 #include "tuning/parts.h"
@@ -16,14 +19,34 @@ namespace {
 
 class SubsurfaceSimulator final : public SimulatorFor<RadialProfileObservation> {
  public:
+  struct Options {
+    ProfileGrid grid;
+    double depth_mm = 4, step_mm = 0.027;
+    std::array<double, 2> at{0, 0};
+
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      ProfileGrid::declare(d, o.grid);
+      d.number(o.depth_mm, "depth_mm", Range::closed(1e-3, 1e3),
+               "depth sampled; below it, the last material is semi-infinite");
+      d.number(o.step_mm, "step_mm", Range::at_least(1e-4),
+               "depth sampling step, at most depth_mm; layer thicknesses are multiples of it");
+      d.value(o.at, "at", "lateral position (a, b) in the subtree's frame");
+    }
+    bool check(std::string* why) const {
+      if (step_mm <= depth_mm) return true;
+      *why = fmt::format("step_mm: {:g} is more than depth_mm ({:g})", step_mm, depth_mm);
+      return false;
+    }
+  };
+
   SubsurfaceSimulator(const Properties& properties, const PartContext& context) {
-    const ProfileGrid grid = ProfileGrid::read(properties);
-    depth_mm_ = properties.get_in_range("depth_mm", 4.0, 1e-3, 1e3);
-    step_mm_ = properties.get_in_range("step_mm", 0.027, 1e-4, depth_mm_);
-    const auto at = properties.get<std::array<double, 2>>("at", {0.0, 0.0});
-    lateral_a_ = at[0];
-    lateral_b_ = at[1];
-    model_ = LayerStackModel::shared(context.palette, grid.basis(context.cache), step_mm_, context.cache);
+    const Options options = read_options<Options>(properties);
+    depth_mm_ = options.depth_mm;
+    step_mm_ = options.step_mm;
+    lateral_a_ = options.at[0];
+    lateral_b_ = options.at[1];
+    model_ = LayerStackModel::shared(context.palette, options.grid.basis(context.cache), step_mm_, context.cache);
     samples_.resize(static_cast<size_t>(std::ceil(depth_mm_ / step_mm_ - 1e-9)));
     runs_.reserve(samples_.size());
     spectrum_.resize(model_->value_count());
@@ -51,11 +74,7 @@ class SubsurfaceSimulator final : public SimulatorFor<RadialProfileObservation> 
         "Jensen 2005; every image summed in closed form), layers combined in the frequency "
         "domain, over a semi-infinite backing (what lies below depth_mm). Produces "
         "radial_profile: coefficients of an orthonormal Fourier-Bessel basis on a disc.",
-        {{"radius_mm", "number (mm)", "16", "profile support: R(r) is represented on [0, radius_mm]"},
-         {"samples", "integer", "400", "basis size = number of radii the profile is written at"},
-         {"depth_mm", "number (mm)", "4", "depth sampled; below it, the last material is semi-infinite"},
-         {"step_mm", "number (mm)", "0.027", "depth sampling step; layer thicknesses are multiples of it"},
-         {"at", "[a, b]", "[0, 0]", "lateral position in the subtree's frame"}},
+        option_docs<Options>(),
         R"({"type": "subsurface", "depth_mm": 3, "step_mm": 0.027})"};
   }
 

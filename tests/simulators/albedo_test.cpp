@@ -286,7 +286,7 @@ TEST(AlbedoParts, GoalReadsSrgbAndMetricsCompareAlbedos) {
   EXPECT_THAT([&] {
     GoalRegistry::instance().create(
         Properties::parse(R"({"type": "albedo", "srgb": [0.5, 1.2, 0]})", "g.json"), "goal", context);
-  }, ::testing::ThrowsMessage<InputError>(::testing::HasSubstr("g.json: /srgb: channels must lie in [0, 1]")));
+  }, ::testing::ThrowsMessage<InputError>(::testing::HasSubstr("g.json: /srgb: 1.2 is not in [0, 1]")));
   auto mse = MetricRegistry::instance().create(Properties::parse(R"({"type": "rgb_mse"})", "m"), "metric", context);
   auto de = MetricRegistry::instance().create(Properties::parse(R"({"type": "ciede2000"})", "m"), "metric", context);
   AlbedoObservation a, b;
