@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "mass_parts.h"
+#include "core/options.h"
 #include "geometry/solid.h"
 #include "tuning/parts.h"
 
@@ -20,10 +21,18 @@ using namespace spec2fab;
 
 class MassSimulator final : public SimulatorFor<MassObservation> {
  public:
-  MassSimulator(const Properties& properties, const PartContext& context) {
-    cell_mm_ = properties.get<std::array<double, 3>>("cell_mm", cell_mm_);
-    for (double c : cell_mm_)
-      if (!(c >= 1e-3 && c <= 100)) properties.fail("cell_mm", "each side between 0.001 and 100 mm");
+  // Each option once: reading, range checks and the docs come from here.
+  struct Options {
+    std::array<double, 3> cell_mm{1, 1, 0.05};
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.number(o.cell_mm, "cell_mm", Range::closed(1e-3, 100),
+               "cell size (x, y, z); fine along the direction a cut moves");
+    }
+  };
+
+  MassSimulator(const Properties& properties, const PartContext& context)
+      : cell_mm_(read_options<Options>(properties).cell_mm) {
     // g/mm³ per material id: kg/m³ × 1e-6.
     for (MaterialId id = 0; id < context.palette.size(); ++id)
       grams_per_mm3_.push_back(id == kVoid ? 0.0 : context.palette.material(id).density_kg_m3.value * 1e-6);
@@ -31,7 +40,7 @@ class MassSimulator final : public SimulatorFor<MassObservation> {
   static TypeDoc doc() {
     return {"Mass of the whole print (grams): density integrated over a grid of cells across the solid's "
             "bounding box, each cell's material asked of the whole tree at its centre. Produces mass.",
-            {{"cell_mm", "[x, y, z] (mm)", "[1, 1, 0.05]", "cell size; fine along the direction a cut moves"}},
+            option_docs<Options>(),
             R"({"type": "mass", "cell_mm": [1, 1, 0.05]})"};
   }
   std::string name() const override { return "mass"; }
@@ -85,11 +94,19 @@ class RelativeMassError final : public MetricFor<MassObservation> {
 
 class MassGoal final : public GoalFor<MassObservation> {
  public:
+  struct Options {
+    double grams = 10;
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.number(o.grams, "grams", Range::closed(1e-6, 1e9), "the mass (g)");
+    }
+  };
+
   MassGoal(const Properties& properties, const PartContext& /*context*/) {
-    target_.grams = properties.get_in_range("grams", 10.0, 1e-6, 1e9);
+    target_.grams = read_options<Options>(properties).grams;
   }
   static TypeDoc doc() {
-    return {"A print of a given mass.", {{"grams", "number (g)", "10", "the mass"}},
+    return {"A print of a given mass.", option_docs<Options>(),
             R"({"type": "mass", "grams": 20})"};
   }
   std::string name() const override { return "mass"; }

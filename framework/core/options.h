@@ -33,6 +33,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <optional>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -45,9 +46,11 @@
 
 namespace spec2fab {
 
-/// A number as a person writes it: 1000000, 0.999, 1e-5 (not 1e+06, 1e-05).
+/// A number as a person writes it: 1000000, 0.999, 1e-5, 1e12 (not 1e+06,
+/// 1e-05, 1000000000000), and exactly (4294967295).
 inline std::string number_text(double v) {
   std::string text = fmt::format("{:.15g}", v);
+  if (const std::string shorter = fmt::format("{:g}", v); text.size() > 8 && std::stod(shorter) == v) text = shorter;
   const size_t e = text.find('e');
   if (e == std::string::npos) return text;
   std::string exponent = text.substr(e + 1);
@@ -103,7 +106,7 @@ inline constexpr bool is_sequence_v = is_std_array<T>::value || is_std_vector<T>
 template <class T, class F>
 void for_each_number(const T& value, F&& f) {
   if constexpr (is_sequence_v<T>) {
-    for (const auto& item : value) f(static_cast<double>(item));
+    for (const auto& item : value) for_each_number(item, f);
   } else {
     f(static_cast<double>(value));
   }
@@ -147,7 +150,7 @@ std::string type_text() {
   } else if constexpr (is_std_vector<T>::value) {
     std::string text = "array of ";
     text += type_text<typename T::value_type>();
-    text += "s";
+    if constexpr (!is_sequence_v<typename T::value_type>) text += "s";
     return text;
   } else {
     return "array";
@@ -175,6 +178,16 @@ concept HasCheck = requires(const O& o, std::string* why) {
   { o.check(why) } -> std::convertible_to<bool>;
 };
 
+template <class O>
+concept HasWhere = requires(O& o) { o.where = std::string(); };
+
+/// "{min, max, force_n}": the keys of a nested options struct.
+template <class O>
+std::string keys_text();
+
+template <class O>
+O read_nested(const Properties& properties);
+
 /// Reads each option from JSON (absent: the default stays).
 class Reader {
  public:
@@ -193,6 +206,10 @@ class Reader {
     value = p_.get<T>(name);
     if (const std::string problem = range_problem(value, range); !problem.empty()) p_.fail(name, problem);
   }
+  template <class T>
+  void required(T& value, const char* name, const char*) {
+    value = p_.get<T>(name);
+  }
   void choice(std::string& value, const char* name, const std::vector<std::string>& choices, const char*) {
     value = p_.get<std::string>(name, value);
     if (std::find(choices.begin(), choices.end(), value) == choices.end())
@@ -203,6 +220,18 @@ class Reader {
     value = p_.get<T>(name, value);
   }
   void file(std::filesystem::path& value, const char* name, const char*) { value = p_.existing_file(name); }
+  /// An array of objects, each an options struct of its own.
+  template <class E>
+  void objects(std::vector<E>& value, const char* name, const char*) {
+    if (!p_.has(name)) return;
+    value.clear();
+    for (const Properties& item : p_.objects(name)) value.push_back(read_nested<E>(item));
+  }
+  /// An optional object.
+  template <class E>
+  void object(std::optional<E>& value, const char* name, const char*) {
+    if (const auto item = p_.optional_object(name)) value = read_nested<E>(*item);
+  }
 
  private:
   const Properties& p_;
@@ -223,6 +252,8 @@ class Checker {
   void required(const T& value, const char* name, Range range, const char* meaning) {
     number(value, name, range, meaning);
   }
+  template <class T>
+  void required(const T&, const char*, const char*) {}
   void choice(const std::string& value, const char* name, const std::vector<std::string>& choices, const char*) {
     if (problem.empty() && std::find(choices.begin(), choices.end(), value) == choices.end())
       problem = std::string(name) + ": unknown value '" + value + "'" + did_you_mean(value, choices) +
@@ -231,6 +262,10 @@ class Checker {
   template <class T>
   void value(const T&, const char*, const char*) {}
   void file(const std::filesystem::path&, const char*, const char*) {}
+  template <class E>
+  void objects(const std::vector<E>&, const char*, const char*) {}
+  template <class E>
+  void object(const std::optional<E>&, const char*, const char*) {}
 };
 
 /// The options as documentation rows: name, type, default, meaning.
@@ -249,6 +284,10 @@ class Documenter {
   void required(const T& value, const char* name, Range range, const char* meaning) {
     rows.push_back({name, typed(value, name, range), "required", meaning});
   }
+  template <class T>
+  void required(const T&, const char* name, const char* meaning) {
+    rows.push_back({name, full_type_text<T>(name), "required", meaning});
+  }
   void choice(const std::string& value, const char* name, const std::vector<std::string>& choices,
               const char* meaning) {
     rows.push_back({name, join(choices, " | "), default_text(value), meaning});
@@ -259,6 +298,14 @@ class Documenter {
   }
   void file(const std::filesystem::path&, const char* name, const char* meaning) {
     rows.push_back({name, "file", "required", meaning});
+  }
+  template <class E>
+  void objects(const std::vector<E>&, const char* name, const char* meaning) {
+    rows.push_back({name, "array of " + keys_text<E>(), "[]", meaning});
+  }
+  template <class E>
+  void object(const std::optional<E>&, const char* name, const char* meaning) {
+    rows.push_back({name, keys_text<E>(), "none", meaning});
   }
 
  private:
@@ -309,5 +356,27 @@ std::vector<PropertyDoc> option_docs() {
   O::declare(documenter, defaults);
   return documenter.rows;
 }
+
+namespace options_detail {
+
+template <class O>
+std::string keys_text() {
+  std::vector<std::string> keys;
+  for (const PropertyDoc& row : option_docs<O>()) keys.push_back(row.name);
+  std::string text = "{";  // appended: GCC 12 warns (-Wrestrict) wrongly on "{" + …
+  text += join(keys);
+  text += "}";
+  return text;
+}
+
+/// A nested options struct; one with a `where` member learns its JSON place.
+template <class O>
+O read_nested(const Properties& properties) {
+  O options = read_options<O>(properties);
+  if constexpr (HasWhere<O>) options.where = properties.where();
+  return options;
+}
+
+}  // namespace options_detail
 
 }  // namespace spec2fab

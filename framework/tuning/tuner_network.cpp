@@ -1,5 +1,7 @@
 #include "tuning/tuner_network.h"
 
+#include "core/options.h"
+
 #include <algorithm>
 #include <stdexcept>
 
@@ -86,8 +88,16 @@ class NoNetwork final : public NetworkShape {
 /// Row-major grid; "grid4": left, right, up, down; "grid8": with diagonals.
 class GridNetwork final : public NetworkShape {
  public:
+  struct Options {
+    int width = 1;
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.number(o.width, "width", Range::at_least(1), "tuners per row (their count must fill the rows)");
+    }
+  };
+
   GridNetwork(const Properties& properties, size_t count)
-      : width_(static_cast<int>(properties.get_in_range("width", 1, 1, 1e9))),
+      : width_(read_options<Options>(properties).width),
         count_(static_cast<int>(count)),
         neighbourhood_(properties.get<std::string>("type") == "grid8" ? 8 : 4) {
     if (count_ % width_ != 0) {
@@ -101,7 +111,7 @@ class GridNetwork final : public NetworkShape {
   static TypeDoc doc() {
     return {"The tuners, in their listed order, laid out row-major on a grid of `width` columns; "
             "grid4 connects left, right, up and down, grid8 the diagonals too.",
-            {{"width", "integer", "1", "tuners per row (their count must fill the rows)"}},
+            option_docs<Options>(),
             R"({"type": "grid4", "width": 8})"};
   }
 

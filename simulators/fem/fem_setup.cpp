@@ -4,32 +4,131 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <optional>
 
 #include <Eigen/LU>
 
 #include "core/build_options.h"
 #include "core/error.h"
+#include "core/options.h"
 #include "fem/hypre/amg_solver.h"
 
 namespace spec2fab::fem {
 namespace {
 
-Vec3 read_point(const Properties& p, std::string_view key) {
-  const auto v = p.get<std::array<double, 3>>(key);
-  for (double x : v) {
-    if (!std::isfinite(x)) p.fail(key, "coordinates must be finite");
-  }
-  return {v[0], v[1], v[2]};
+// The simulator's properties, declared once (core/options.h): reading,
+// checks and the rows of list --verbose / docs/parts.md.
+template <class Declare, class Self>
+void declare_corners(Declare& d, Self& o) {
+  d.required(o.min, "min", Range::any(), "lower corner (x, y, z)");
+  d.required(o.max, "max", Range::any(), "upper corner, each coordinate at least min's");
 }
 
-BoxRegion read_box(const Properties& p, const char* value_key) {
-  BoxRegion region;
-  const Vec3 lower = read_point(p, "min"), upper = read_point(p, "max");
-  if (!(lower.array() <= upper.array()).all()) p.fail("max", "every coordinate must be >= min's");
-  region.box = Eigen::AlignedBox3d(lower, upper);
-  if (value_key) region.value = read_point(p, value_key);
-  region.where = p.where();
-  return region;
+/// A box of the simulator's properties: its corners, checked in order, and
+/// its JSON place for errors found later on the mesh.
+struct Corners {
+  std::array<double, 3> min{}, max{};
+  std::string where;
+  bool check(std::string* why) const {
+    for (size_t k = 0; k < 3; ++k)
+      if (!(min[k] <= max[k])) {
+        *why = "max: every coordinate must be >= min's";
+        return false;
+      }
+    return true;
+  }
+};
+struct FixedBox : Corners {
+  template <class Declare, class Self>
+  static void declare(Declare& d, Self& o) { declare_corners(d, o); }
+};
+struct DisplacementBox : Corners {
+  std::array<double, 3> displacement_mm{};
+  template <class Declare, class Self>
+  static void declare(Declare& d, Self& o) {
+    declare_corners(d, o);
+    d.required(o.displacement_mm, "displacement_mm", Range::any(), "the vector every node in the box moves by");
+  }
+};
+struct LoadBox : Corners {
+  std::array<double, 3> force_n{};
+  template <class Declare, class Self>
+  static void declare(Declare& d, Self& o) {
+    declare_corners(d, o);
+    d.required(o.force_n, "force_n", Range::any(), "the total force (N), spread over the faces in the box");
+  }
+};
+struct RefineBox : Corners {
+  double max_tet_volume_mm3 = 0.1;
+  template <class Declare, class Self>
+  static void declare(Declare& d, Self& o) {
+    declare_corners(d, o);
+    d.number(o.max_tet_volume_mm3, "max_tet_volume_mm3", Range::closed(1e-9, 1e12), "largest tet in the box");
+  }
+};
+
+const std::vector<std::string>& linear_solver_names() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> out;
+    for (LinearSolver k : kLinearSolvers) out.push_back(to_string(k));
+    return out;
+  }();
+  return names;
+}
+
+struct FemOptions {
+  double max_tet_volume_mm3 = 1.0, radius_edge = 1.5;
+  std::optional<RefineBox> refine;
+  bool follow_interfaces = true;
+  std::vector<FixedBox> fixed;
+  std::vector<DisplacementBox> displacements;
+  std::vector<LoadBox> loads;
+  std::vector<std::array<double, 3>> probes;
+  bool nonlinear = true;
+  int load_steps = 10, max_newton_iterations = 30;
+  double tolerance = 1e-9;
+  std::string linear_solver = "cholesky";
+  bool write_calculix_deck = false;
+
+  template <class Declare, class Self>
+  static void declare(Declare& d, Self& o) {
+    d.number(o.max_tet_volume_mm3, "max_tet_volume_mm3", Range::closed(1e-9, 1e12), "largest tet TetGen makes (-a)");
+    d.number(o.radius_edge, "radius_edge", Range::closed(1.05, 100), "TetGen's radius-edge quality bound (-q)");
+    d.object(o.refine, "refine", "a box meshed finer");
+    d.value(o.follow_interfaces, "follow_interfaces",
+            "split tets along the tree's material interfaces (layers, cells, cuts)");
+    d.objects(o.fixed, "fixed", "boxes whose nodes are clamped (this or displacements is required)");
+    d.objects(o.displacements, "displacements", "boxes whose nodes move by a given vector");
+    d.objects(o.loads, "loads", "a total force spread over the boundary faces inside the box by area");
+    d.number(o.probes, "probes", Range::any(), "points (x, y, z) whose displacement is reported (mm)");
+    d.value(o.nonlinear, "nonlinear", "co-rotated large deformation (Newton); false: small strain");
+    d.number(o.load_steps, "load_steps", Range::closed(1, 10000), "load increments for the nonlinear solve");
+    d.number(o.max_newton_iterations, "max_newton_iterations", Range::closed(1, 1000), "per load step");
+    d.number(o.tolerance, "tolerance", Range::closed(1e-15, 1e-2), "relative force residual for convergence");
+    d.choice(o.linear_solver, "linear_solver", linear_solver_names(),
+             "sparse Cholesky (CHOLMOD: exact, fastest on small meshes); conjugate gradients with "
+             "algebraic multigrid (hypre BoomerAMG: fastest and smallest on big meshes); or with "
+             "incomplete Cholesky (small, slow)");
+    d.value(o.write_calculix_deck, "write_calculix_deck",
+            "also write calculix.inp: the same mesh, materials and loads for CalculiX (ccx)");
+  }
+  bool check(std::string* why) const {
+    if (fixed.empty() && displacements.empty()) {
+      *why = "fixed: no fixed region and no prescribed displacement: the equilibrium would be "
+             "singular (the body could move freely); give at least one \"fixed\" box";
+      return false;
+    }
+    if (linear_solver == "amg" && !AmgSolver::available()) {
+      *why = "linear_solver: " + left_out_of_build("linear solver", "amg");
+      return false;
+    }
+    return true;
+  }
+};
+
+BoxRegion region_of(const Corners& b, const std::array<double, 3>& value) {
+  return {Eigen::AlignedBox3d(Vec3(b.min[0], b.min[1], b.min[2]), Vec3(b.max[0], b.max[1], b.max[2])),
+          Vec3(value[0], value[1], value[2]), b.where};
 }
 
 bool in_box(const Eigen::AlignedBox3d& box, const Vec3& x, double tolerance) {
@@ -46,53 +145,26 @@ double tolerance_of(const TetMesh& mesh) {
 }  // namespace
 
 FemSettings FemSettings::read(const Properties& p) {
+  const FemOptions o = read_options<FemOptions>(p);
   FemSettings s;
-  s.mesh.max_volume_mm3 = p.get_in_range("max_tet_volume_mm3", 1.0, 1e-9, 1e12);
-  s.mesh.radius_edge = p.get_in_range("radius_edge", 1.5, 1.05, 100);
-  if (const auto refine = p.optional_object("refine")) {
-    s.mesh.refine_box = read_box(*refine, nullptr).box;
-    s.mesh.refine_max_volume_mm3 = refine->get_in_range("max_tet_volume_mm3", 0.1, 1e-9, 1e12);
+  s.mesh.max_volume_mm3 = o.max_tet_volume_mm3;
+  s.mesh.radius_edge = o.radius_edge;
+  if (o.refine) {
+    s.mesh.refine_box = region_of(*o.refine, {0, 0, 0}).box;
+    s.mesh.refine_max_volume_mm3 = o.refine->max_tet_volume_mm3;
   }
-  s.follow_interfaces = p.get<bool>("follow_interfaces", true);
-  if (p.has("fixed")) {
-    for (const Properties& box : p.objects("fixed")) s.fixed.push_back(read_box(box, nullptr));
-  }
-  if (p.has("displacements")) {
-    for (const Properties& box : p.objects("displacements")) {
-      s.displacements.push_back(read_box(box, "displacement_mm"));
-    }
-  }
-  if (p.has("loads")) {
-    for (const Properties& box : p.objects("loads")) s.loads.push_back(read_box(box, "force_n"));
-  }
-  if (s.fixed.empty() && s.displacements.empty()) {
-    p.fail("fixed", "no fixed region and no prescribed displacement: the equilibrium would be "
-                    "singular (the body could move freely); give at least one \"fixed\" box");
-  }
-  if (p.has("probes")) {
-    const auto probes = p.get<std::vector<std::array<double, 3>>>("probes");
-    for (const auto& q : probes) {
-      if (!std::isfinite(q[0]) || !std::isfinite(q[1]) || !std::isfinite(q[2])) {
-        p.fail("probes", "coordinates must be finite");
-      }
-      s.probes.emplace_back(q[0], q[1], q[2]);
-    }
-  }
-  s.solve.nonlinear = p.get<bool>("nonlinear", true);
-  s.solve.load_steps = static_cast<int>(p.get_in_range("load_steps", 10, 1, 10000));
-  s.solve.max_newton_iterations = static_cast<int>(p.get_in_range("max_newton_iterations", 30, 1, 1000));
-  s.solve.tolerance = p.get_in_range("tolerance", 1e-9, 1e-15, 1e-2);
-  s.write_calculix_deck = p.get<bool>("write_calculix_deck", false);
-  const std::string solver = p.get<std::string>("linear_solver", "cholesky");
-  const auto named = std::find_if(std::begin(kLinearSolvers), std::end(kLinearSolvers),
-                                  [&](LinearSolver k) { return solver == to_string(k); });
-  if (named == std::end(kLinearSolvers)) {
-    p.fail("linear_solver", "expected \"cholesky\", \"amg\" or \"cg\", got '" + solver + "'");
-  }
-  if (*named == LinearSolver::multigrid && !AmgSolver::available()) {
-    p.fail("linear_solver", left_out_of_build("linear solver", "amg"));
-  }
-  s.linear_solver = *named;
+  s.follow_interfaces = o.follow_interfaces;
+  for (const FixedBox& box : o.fixed) s.fixed.push_back(region_of(box, {0, 0, 0}));
+  for (const DisplacementBox& box : o.displacements) s.displacements.push_back(region_of(box, box.displacement_mm));
+  for (const LoadBox& box : o.loads) s.loads.push_back(region_of(box, box.force_n));
+  for (const auto& q : o.probes) s.probes.emplace_back(q[0], q[1], q[2]);
+  s.solve.nonlinear = o.nonlinear;
+  s.solve.load_steps = o.load_steps;
+  s.solve.max_newton_iterations = o.max_newton_iterations;
+  s.solve.tolerance = o.tolerance;
+  s.write_calculix_deck = o.write_calculix_deck;
+  s.linear_solver = *std::find_if(std::begin(kLinearSolvers), std::end(kLinearSolvers),
+                                  [&](LinearSolver k) { return o.linear_solver == to_string(k); });
   return s;
 }
 
@@ -105,30 +177,7 @@ const char* to_string(LinearSolver solver) {
   return "?";
 }
 
-std::vector<PropertyDoc> FemSettings::docs() {
-  return {
-      {"max_tet_volume_mm3", "number", "1.0", "largest tet TetGen makes (-a)"},
-      {"radius_edge", "number", "1.5", "TetGen's radius-edge quality bound (-q)"},
-      {"refine", "{min, max, max_tet_volume_mm3}", "none", "a box meshed finer"},
-      {"follow_interfaces", "bool", "true",
-       "split tets along the tree's material interfaces (layers, cells, cuts)"},
-      {"fixed", "array of {min, max}", "required*", "boxes whose nodes are clamped"},
-      {"displacements", "array of {min, max, displacement_mm}", "[]",
-       "boxes whose nodes move by a given vector (*this or fixed)"},
-      {"loads", "array of {min, max, force_n}", "[]",
-       "a total force spread over the boundary faces inside the box by area"},
-      {"probes", "array of [x, y, z]", "[]", "points whose displacement is reported (mm)"},
-      {"nonlinear", "bool", "true", "co-rotated large deformation (Newton); false: small strain"},
-      {"load_steps", "integer", "10", "load increments for the nonlinear solve"},
-      {"max_newton_iterations", "integer", "30", "per load step"},
-      {"tolerance", "number", "1e-9", "relative force residual for convergence"},
-      {"linear_solver", "\"cholesky\"|\"amg\"|\"cg\"", "\"cholesky\"",
-       "sparse Cholesky (CHOLMOD: exact, fastest on small meshes); conjugate gradients with "
-       "algebraic multigrid (hypre BoomerAMG: fastest and smallest on big meshes); or with "
-       "incomplete Cholesky (small, slow)"},
-      {"write_calculix_deck", "bool", "false",
-       "also write calculix.inp: the same mesh, materials and loads for CalculiX (ccx)"}};
-}
+std::vector<PropertyDoc> FemSettings::docs() { return option_docs<FemOptions>(); }
 
 Constraints make_constraints(const TetMesh& mesh, const std::vector<Face>& boundary,
                              const FemSettings& settings) {

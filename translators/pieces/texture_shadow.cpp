@@ -35,7 +35,8 @@ TextureShadow::TextureShadow(std::vector<size_t> texture, std::array<int, 2> cel
 TextureShadow::TextureShadow(const Properties& phase, const CouplingContext& context) {
   if (context.tuners == nullptr || context.earlier == nullptr || context.palette == nullptr)
     phase.fail("coupling", "texture_shadow needs the tuners and phases of a schedule");
-  const std::string source = phase.get<std::string>("texture_phase");
+  const Options options = read_options<Options>(phase);
+  const std::string& source = options.texture_phase;
   std::vector<std::string> names;
   for (const Phase& earlier : *context.earlier) {
     names.push_back(earlier.name);
@@ -45,13 +46,12 @@ TextureShadow::TextureShadow(const Properties& phase, const CouplingContext& con
     phase.fail("texture_phase", "no earlier phase '" + source + "'" + did_you_mean(source, names) +
                                     (names.empty() ? std::string(" (it must come before this one)")
                                                    : " (earlier phases: " + join(names) + ")"));
-  cells_ = phase.get<std::array<int, 2>>("cells");
-  if (cells_[0] < 1 || cells_[1] < 1 ||
-      static_cast<size_t>(cells_[0]) * static_cast<size_t>(cells_[1]) != texture_.size())
+  cells_ = options.cells;
+  if (static_cast<size_t>(cells_[0]) * static_cast<size_t>(cells_[1]) != texture_.size())
     phase.fail("cells", fmt::format("{} x {} cells for the {} tuners of phase '{}'", cells_[0], cells_[1],
                                     texture_.size(), source));
-  depth_mm_ = phase.get_in_range("depth_mm", 1.0, 1e-4, 1e3);
-  step_mm_ = phase.get_in_range("step_mm", depth_mm_ / 64, 1e-5, depth_mm_);
+  depth_mm_ = options.depth_mm;
+  step_mm_ = options.step_mm > 0 ? options.step_mm : depth_mm_ / 64;
   palette_ = context.palette;
   for (size_t t : context.members) {
     bool takes = false;
@@ -66,10 +66,7 @@ TypeDoc TextureShadow::doc() {
   return {"A texture printed in an earlier phase filters the light: before each sweep, each texture column's "
           "collimated transmittance (Beer-Lambert, luminance-weighted) goes to the phase's simulators as their "
           "input exit_transmittance (the caustics simulator has it) and their goals are scaled by the mean.",
-          {{"texture_phase", "phase name", "required", "the earlier phase whose tuners' subtrees are the texture's columns"},
-           {"cells", "[nx, ny]", "required", "those tuners' grid over the footprint, row by row from the lowest y"},
-           {"depth_mm", "number (mm)", "1", "how deep each column is sampled from its top"},
-           {"step_mm", "number (mm)", "depth_mm / 64", "sampling step"}},
+          option_docs<Options>(),
           R"({"coupling": "texture_shadow", "texture_phase": "texture", "cells": [32, 32], "depth_mm": 0.5})"};
 }
 

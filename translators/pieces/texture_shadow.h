@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "core/options.h"
 #include "materials/palette.h"
 #include "tuning/schedule.h"
 
@@ -32,6 +33,27 @@ double collimated_transmittance(std::span<const MaterialId> samples, double step
 
 class TextureShadow final : public Coupling {
  public:
+  /// The phase's keys, declared once (core/options.h).
+  struct Options {
+    std::string texture_phase;
+    std::array<int, 2> cells{};
+    double depth_mm = 1, step_mm = 0;  ///< step 0: depth_mm / 64
+
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.required(o.texture_phase, "texture_phase", "the earlier phase whose tuners' subtrees are the texture's columns");
+      d.required(o.cells, "cells", Range::at_least(1),
+                 "those tuners' grid (nx, ny) over the footprint, row by row from the lowest y");
+      d.number(o.depth_mm, "depth_mm", Range::closed(1e-4, 1e3), "how deep each column is sampled from its top");
+      d.number(o.step_mm, "step_mm", Range::at_least(1e-5), "sampling step, at most depth_mm", Default{"depth_mm / 64"});
+    }
+    bool check(std::string* why) const {
+      if (step_mm <= depth_mm) return true;
+      *why = "step_mm: more than depth_mm";
+      return false;
+    }
+  };
+
   /// `texture`: the tuners whose subtrees are the texture's columns, row by
   /// row over `cells`; each is sampled from its top down to `depth_mm`, every `step_mm`.
   TextureShadow(std::vector<size_t> texture, std::array<int, 2> cells, double depth_mm, double step_mm,
