@@ -84,6 +84,14 @@ struct Range {
   }
 };
 
+/// For a check(): `name` = `value` may not exceed `bound_name` = `bound`
+/// (a sampling step and the depth it samples).
+inline bool at_most(double value, const char* name, double bound, const char* bound_name, std::string* why) {
+  if (value <= bound) return true;
+  *why = std::string(name) + ": " + number_text(value) + " is more than " + bound_name + " (" + number_text(bound) + ")";
+  return false;
+}
+
 /// The documented default of an option whose default another option sets.
 struct Default {
   const char* text;

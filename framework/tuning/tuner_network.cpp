@@ -1,9 +1,9 @@
 #include "tuning/tuner_network.h"
 
-#include "core/options.h"
-
 #include <algorithm>
 #include <stdexcept>
+
+#include "core/options.h"
 
 namespace spec2fab {
 

@@ -58,11 +58,7 @@ class AlbedoSimulator final : public SimulatorFor<AlbedoObservation> {
       d.value(o.at, "at", "lateral position (a, b) in the subtree's frame");
       d.number(o.max_table, "max_table", Range::closed(0, 1e8), "largest table to build; 0 never tabulates");
     }
-    bool check(std::string* why) const {
-      if (step_mm <= depth_mm) return true;
-      *why = fmt::format("step_mm: {:g} is more than depth_mm ({:g})", step_mm, depth_mm);
-      return false;
-    }
+    bool check(std::string* why) const { return at_most(step_mm, "step_mm", depth_mm, "depth_mm", why); }
   };
 
   AlbedoSimulator(const Properties& properties, const PartContext& context)

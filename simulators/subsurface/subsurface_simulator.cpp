@@ -7,8 +7,6 @@
 
 #include <cmath>
 
-#include <fmt/format.h>
-
 #include "core/options.h"
 #include "subsurface/layer_stack.h"
 #include "subsurface/subsurface_parts.h"
@@ -33,11 +31,7 @@ class SubsurfaceSimulator final : public SimulatorFor<RadialProfileObservation> 
                "depth sampling step, at most depth_mm; layer thicknesses are multiples of it");
       d.value(o.at, "at", "lateral position (a, b) in the subtree's frame");
     }
-    bool check(std::string* why) const {
-      if (step_mm <= depth_mm) return true;
-      *why = fmt::format("step_mm: {:g} is more than depth_mm ({:g})", step_mm, depth_mm);
-      return false;
-    }
+    bool check(std::string* why) const { return at_most(step_mm, "step_mm", depth_mm, "depth_mm", why); }
   };
 
   SubsurfaceSimulator(const Properties& properties, const PartContext& context) {

@@ -89,5 +89,85 @@ TEST(Options, DocumentedFromTheDeclaration) {
   EXPECT_EQ(rows[4].meaning, "cells");
 }
 
+// What the simulators' declarations need: required keys, element-wise array
+// ranges, defaults set by another option, nested objects that remember their
+// JSON place, and a check between two options.
+struct Box {
+  std::array<double, 3> min{};
+  double weight = 1;
+  std::string where;
+  template <class Declare, class Self>
+  static void declare(Declare& d, Self& o) {
+    d.required(o.min, "min", Range::any(), "corner");
+    d.number(o.weight, "weight", Range::above(0), "how heavy");
+  }
+};
+struct Nested {
+  std::array<int, 2> size{};
+  std::array<int, 2> rays{0, 0};  // 0: twice size
+  double depth_mm = 1, step_mm = 0.1;
+  std::vector<Box> boxes;
+  std::optional<Box> refine;
+  template <class Declare, class Self>
+  static void declare(Declare& d, Self& o) {
+    d.required(o.size, "size", Range::at_least(1), "pixels");
+    d.number(o.rays, "rays", Range::at_least(1), "samples", Default{"2 × size"});
+    d.number(o.depth_mm, "depth_mm", Range::above(0), "depth");
+    d.number(o.step_mm, "step_mm", Range::above(0), "step");
+    d.objects(o.boxes, "boxes", "boxes");
+    d.object(o.refine, "refine", "a finer box");
+  }
+  bool check(std::string* why) const { return at_most(step_mm, "step_mm", depth_mm, "depth_mm", why); }
+};
+
+std::string nested_error(const std::string& json) {
+  try {
+    read_options<Nested>(Properties::parse(json, "n.json"));
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "accepted";
+}
+
+TEST(Options, RequiredArraysDefaultsAndNestedObjects) {
+  const Nested n = read_options<Nested>(Properties::parse(
+      R"({"size": [4, 3], "boxes": [{"min": [0, 0, 0]}, {"min": [1, 2, 3], "weight": 2}], "refine": {"min": [5, 5, 5]}})",
+      "n.json"));
+  EXPECT_EQ(n.rays, (std::array<int, 2>{0, 0}));  // the sentinel stays; the part derives it
+  ASSERT_EQ(n.boxes.size(), 2u);
+  EXPECT_EQ(n.boxes[1].min, (std::array<double, 3>{1, 2, 3}));
+  EXPECT_EQ(n.boxes[1].weight, 2);
+  EXPECT_EQ(n.boxes[1].where, "n.json: /boxes/1");
+  ASSERT_TRUE(n.refine.has_value());
+  EXPECT_EQ(n.refine->where, "n.json: /refine");
+
+  EXPECT_EQ(nested_error("{}"), "n.json: /size: missing required key");
+  EXPECT_EQ(nested_error(R"({"size": [4, 0]})"), "n.json: /size: 0 is not at least 1");
+  EXPECT_EQ(nested_error(R"({"size": [4, 4], "rays": [0, 8]})"), "n.json: /rays: 0 is not at least 1");
+  EXPECT_EQ(nested_error(R"({"size": [4, 4], "boxes": [{"min": [0, 0, 0], "weight": 0}]})"),
+            "n.json: /boxes/0/weight: 0 is not above 0");
+  EXPECT_EQ(nested_error(R"({"size": [4, 4], "step_mm": 2})"), "n.json: /: step_mm: 2 is more than depth_mm (1)");
+
+  const std::vector<PropertyDoc> rows = option_docs<Nested>();
+  ASSERT_EQ(rows.size(), 6u);
+  EXPECT_EQ(rows[0].type, "[integer, integer] at least 1");
+  EXPECT_EQ(rows[0].default_value, "required");
+  EXPECT_EQ(rows[1].default_value, "2 × size");
+  EXPECT_EQ(rows[2].type, "number (mm) above 0");
+  EXPECT_EQ(rows[4].type, "array of {min, weight}");
+  EXPECT_EQ(rows[4].default_value, "[]");
+  EXPECT_EQ(rows[5].type, "{min, weight}");
+  EXPECT_EQ(rows[5].default_value, "none");
+}
+
+TEST(Options, NumbersAreWrittenAsPeopleWriteThem) {
+  EXPECT_EQ(number_text(1e6), "1000000");
+  EXPECT_EQ(number_text(0.999), "0.999");
+  EXPECT_EQ(number_text(1e-5), "1e-5");
+  EXPECT_EQ(number_text(1e12), "1e12");
+  EXPECT_EQ(number_text(4294967295.0), "4294967295");
+  EXPECT_EQ(number_text(-2.5e-7), "-2.5e-7");
+}
+
 }  // namespace
 }  // namespace spec2fab

@@ -47,11 +47,7 @@ class TextureShadow final : public Coupling {
       d.number(o.depth_mm, "depth_mm", Range::closed(1e-4, 1e3), "how deep each column is sampled from its top");
       d.number(o.step_mm, "step_mm", Range::at_least(1e-5), "sampling step, at most depth_mm", Default{"depth_mm / 64"});
     }
-    bool check(std::string* why) const {
-      if (step_mm <= depth_mm) return true;
-      *why = "step_mm: more than depth_mm";
-      return false;
-    }
+    bool check(std::string* why) const { return at_most(step_mm, "step_mm", depth_mm, "depth_mm", why); }
   };
 
   /// `texture`: the tuners whose subtrees are the texture's columns, row by
