@@ -26,7 +26,13 @@
 /// default; an option whose default depends on others (rays: twice the image)
 /// keeps a sentinel and says so in the docs with Default{"2 × image"}. A name
 /// ending in _mm is documented as millimetres. file() is a required path to
-/// an existing file, relative to the document's folder.
+/// an existing file, relative to the document's folder. parameter() is a
+/// node's tunable Parameter: its default value and limits are the member's.
+///
+/// custom() is for a value whose type reads and documents itself (a child
+/// node, a material): it has read(properties, name, context),
+/// type_text() and default_text(). read_options(properties, context)
+/// hands the context to it, and to nested structs.
 
 #include <algorithm>
 #include <array>
@@ -41,6 +47,7 @@
 #include <fmt/format.h>
 
 #include "core/properties.h"
+#include "core/parameter.h"
 #include "core/registry.h"
 #include "core/strings.h"
 
@@ -97,6 +104,9 @@ struct Default {
   const char* text;
 };
 
+/// The sentinel of a number with a Default: not given.
+inline constexpr double kUnset = std::numeric_limits<double>::quiet_NaN();
+
 namespace options_detail {
 
 template <class T>
@@ -148,6 +158,8 @@ std::string type_text() {
     return "number";
   } else if constexpr (std::is_same_v<T, std::string>) {
     return "string";
+  } else if constexpr (std::is_same_v<T, Parameter>) {
+    return "parameter";
   } else if constexpr (is_std_array<T>::value) {
     const std::vector<std::string> items(std::tuple_size_v<T>, type_text<typename T::value_type>());
     // Appended, not "[" + …: GCC 12 warns (-Wrestrict) wrongly on that form.
@@ -193,13 +205,24 @@ concept HasWhere = requires(O& o) { o.where = std::string(); };
 template <class O>
 std::string keys_text();
 
-template <class O>
-O read_nested(const Properties& properties);
+/// What reading hands to custom() values: nothing, unless the reader of a
+/// part gives a context (a node's palette).
+struct NoContext {};
+
+template <class O, class Context>
+O read_nested(const Properties& properties, const Context& context);
+
+/// The type of a parameter() as documented: "parameter (mm) in [0, 1000]".
+inline std::string parameter_type_text(const char* name, Range limits) {
+  const std::string bound = limits.text();
+  return full_type_text<Parameter>(name) + (bound.empty() ? "" : " " + bound);
+}
 
 /// Reads each option from JSON (absent: the default stays).
+template <class Context = NoContext>
 class Reader {
  public:
-  explicit Reader(const Properties& properties) : p_(properties) {}
+  Reader(const Properties& properties, const Context& context) : p_(properties), context_(context) {}
   template <class T>
   void number(T& value, const char* name, Range range, const char*) {
     value = p_.get<T>(name, value);
@@ -233,16 +256,29 @@ class Reader {
   void objects(std::vector<E>& value, const char* name, const char*) {
     if (!p_.has(name)) return;
     value.clear();
-    for (const Properties& item : p_.objects(name)) value.push_back(read_nested<E>(item));
+    for (const Properties& item : p_.objects(name)) value.push_back(read_nested<E>(item, context_));
   }
   /// An optional object.
   template <class E>
   void object(std::optional<E>& value, const char* name, const char*) {
-    if (const auto item = p_.optional_object(name)) value = read_nested<E>(*item);
+    if (const auto item = p_.optional_object(name)) value = read_nested<E>(*item, context_);
+  }
+  /// A tunable parameter; a plain number is fixed, limits as the default's.
+  void parameter(Parameter& value, const char* name, const char*) {
+    value = read_numeric_parameter(p_, name, value.value(), value.lower(), value.upper());
+  }
+  /// The same, absent unless given.
+  void parameter(std::optional<Parameter>& value, const char* name, Range limits, const char*, Default) {
+    if (p_.has(name)) value = read_numeric_parameter(p_, name, 0, limits.min, limits.max);
+  }
+  template <class T>
+  void custom(T& value, const char* name, const char*) {
+    value.read(p_, name, context_);
   }
 
  private:
   const Properties& p_;
+  const Context& context_;
 };
 
 /// Finds the first option out of its range or choices (a struct built in C++).
@@ -274,6 +310,12 @@ class Checker {
   void objects(const std::vector<E>&, const char*, const char*) {}
   template <class E>
   void object(const std::optional<E>&, const char*, const char*) {}
+  template <class P>
+  void parameter(const P&, const char*, const char*) {}
+  template <class P>
+  void parameter(const P&, const char*, Range, const char*, Default) {}
+  template <class T>
+  void custom(const T&, const char*, const char*) {}
 };
 
 /// The options as documentation rows: name, type, default, meaning.
@@ -315,6 +357,18 @@ class Documenter {
   void object(const std::optional<E>&, const char* name, const char* meaning) {
     rows.push_back({name, keys_text<E>(), "none", meaning});
   }
+  void parameter(const Parameter& value, const char* name, const char* meaning) {
+    rows.push_back({name, parameter_type_text(name, Range::closed(value.lower(), value.upper())),
+                    number_text(value.value()), meaning});
+  }
+  void parameter(const std::optional<Parameter>&, const char* name, Range limits, const char* meaning,
+                 Default absent) {
+    rows.push_back({name, parameter_type_text(name, limits), absent.text, meaning});
+  }
+  template <class T>
+  void custom(const T& value, const char* name, const char* meaning) {
+    rows.push_back({name, value.type_text(), value.default_text(), meaning});
+  }
 
  private:
   template <class T>
@@ -344,10 +398,10 @@ bool options_valid(const O& options, std::string* why) {
 
 /// The defaults, overridden by what `properties` holds; throws InputError at
 /// the offending key (or at the object, for a constraint between options).
-template <class O>
-O read_options(const Properties& properties) {
+template <class O, class Context = options_detail::NoContext>
+O read_options(const Properties& properties, const Context& context = {}) {
   O options;
-  options_detail::Reader reader(properties);
+  options_detail::Reader<Context> reader(properties, context);
   O::declare(reader, options);
   if constexpr (options_detail::HasCheck<O>) {
     std::string why;
@@ -378,9 +432,9 @@ std::string keys_text() {
 }
 
 /// A nested options struct; one with a `where` member learns its JSON place.
-template <class O>
-O read_nested(const Properties& properties) {
-  O options = read_options<O>(properties);
+template <class O, class Context>
+O read_nested(const Properties& properties, const Context& context) {
+  O options = read_options<O>(properties, context);
   if constexpr (HasWhere<O>) options.where = properties.where();
   return options;
 }

@@ -25,7 +25,8 @@ int edit_distance(std::string_view a, std::string_view b) {
 
 std::string closest_match(std::string_view word, const std::vector<std::string>& candidates) {
   std::string best;
-  int best_distance = std::max<int>(2, static_cast<int>(word.size()) / 3) + 1;
+  // A suggestion must keep part of the word: 'q' is not a typo of 'a'.
+  int best_distance = std::min(std::max<int>(2, static_cast<int>(word.size()) / 3) + 1, static_cast<int>(word.size()));
   for (const std::string& candidate : candidates) {
     const int d = edit_distance(word, candidate);
     if (d < best_distance) {

@@ -63,29 +63,39 @@ nlohmann::json material_parameter_to_json(const Parameter& parameter,
   return {{"value", name}, {"choices", parameter.labels()}};
 }
 
-std::vector<NodePtr> read_repeated_children(const Properties& properties, size_t count,
-                                            const NodeContext& context) {
-  const bool has_template = properties.has("child");
-  const bool has_list = properties.has("children");
-  if (has_template == has_list) {
-    properties.fail("give either \"child\" (one node for every cell) or \"children\" (" +
-                    std::to_string(count) + " nodes)");
+void ChildNode::read(const Properties& properties, const char* name, const NodeContext& context) {
+  if (required || properties.has(name)) node = build_node(properties.object(name), context);
+}
+
+void ChildNodes::read(const Properties& properties, const char* name, const NodeContext& context) {
+  given = properties.has(name);
+  if (!given) return;
+  for (const Properties& child : properties.objects(name)) nodes.push_back(build_node(child, context));
+}
+
+void MaterialOption::read(const Properties& properties, const char* name, const NodeContext& context) {
+  if (!absent || properties.has(name)) parameter = read_material_parameter(properties, name, context);
+}
+
+bool RepeatedChildren::check(std::string* why) const {
+  if ((child.node != nullptr) != children.given) return true;
+  *why = "give either \"child\" (one node for every cell) or \"children\" (one per cell)";
+  return false;
+}
+
+std::vector<NodePtr> RepeatedChildren::take(size_t count, const std::string& where) {
+  std::vector<NodePtr> out;
+  if (child.node) {
+    out.reserve(count);
+    for (size_t i = 1; i < count; ++i) out.push_back(child.node->clone());
+    out.push_back(std::move(child.node));
+    return out;
   }
-  std::vector<NodePtr> children;
-  children.reserve(count);
-  if (has_template) {
-    NodePtr prototype = build_node(properties.object("child"), context);
-    for (size_t i = 1; i < count; ++i) children.push_back(prototype->clone());
-    children.push_back(std::move(prototype));
-    return children;
+  if (children.nodes.size() != count) {
+    throw InputError(where + ": expected " + std::to_string(count) + " nodes, got " +
+                     std::to_string(children.nodes.size()));
   }
-  const std::vector<Properties> list = properties.objects("children");
-  if (list.size() != count) {
-    properties.fail("children", "expected " + std::to_string(count) + " nodes, got " +
-                                    std::to_string(list.size()));
-  }
-  for (const Properties& child : list) children.push_back(build_node(child, context));
-  return children;
+  return std::move(children.nodes);
 }
 
 void repeated_children_to_json(const std::vector<NodePtr>& children,

@@ -13,6 +13,7 @@
 /// overrides below.
 
 #include <functional>
+#include <optional>
 #include <memory>
 #include <span>
 #include <string>
@@ -175,10 +176,53 @@ Parameter read_material_parameter(const Properties& properties, const std::strin
 nlohmann::json material_parameter_to_json(const Parameter& parameter,
                                           const MaterialPalette& palette);
 
+// What a node's options struct (core/options.h) declares with custom():
+// its children and its materials, which need the palette to be read.
+
+/// A child node: `d.custom(o.shell, "shell", "child for depth < d")`.
+struct ChildNode {
+  bool required = true;
+  NodePtr node;
+  void read(const Properties& properties, const char* name, const NodeContext& context);
+  std::string type_text() const { return "node"; }
+  std::string default_text() const { return required ? "required" : "-"; }
+};
+
+/// An array of child nodes (absent: none).
+struct ChildNodes {
+  std::vector<NodePtr> nodes;
+  bool given = false;
+  void read(const Properties& properties, const char* name, const NodeContext& context);
+  std::string type_text() const { return "array of nodes"; }
+  std::string default_text() const { return "-"; }
+};
+
+/// A material parameter (read_material_parameter's forms); `absent` is the
+/// documented default, or nullptr when the key is required.
+struct MaterialOption {
+  const char* absent = nullptr;
+  std::optional<Parameter> parameter;
+  void read(const Properties& properties, const char* name, const NodeContext& context);
+  std::string type_text() const { return "material parameter"; }
+  std::string default_text() const { return absent ? absent : "required"; }
+};
+
 /// Children given either as one "child" template (copied `count` times) or as
-/// an explicit "children" array of `count` nodes.
-std::vector<NodePtr> read_repeated_children(const Properties& properties, size_t count,
-                                            const NodeContext& context);
+/// an explicit "children" array of `count` nodes: the two options below, and
+/// what they make.
+struct RepeatedChildren {
+  ChildNode child{false, nullptr};
+  ChildNodes children;
+  template <class Declare, class Self>
+  static void declare(Declare& d, Self& o) {
+    d.custom(o.child, "child", "one node copied into every cell");
+    d.custom(o.children, "children", "one node per cell, in the cells' order");
+  }
+  /// "give either …" unless exactly one of the two is given.
+  bool check(std::string* why) const;
+  /// `count` nodes: the template cloned, or the list (which must hold `count`).
+  std::vector<NodePtr> take(size_t count, const std::string& where);
+};
 /// Writes children back: as "child" when all are identical, else as "children".
 void repeated_children_to_json(const std::vector<NodePtr>& children,
                                const MaterialPalette& palette, nlohmann::json& out);

@@ -169,5 +169,64 @@ TEST(Options, NumbersAreWrittenAsPeopleWriteThem) {
   EXPECT_EQ(number_text(-2.5e-7), "-2.5e-7");
 }
 
+// What custom() hands a value: the reader's context (a node's palette).
+struct Scale {
+  double factor = 1;
+};
+struct Scaled {
+  double value = 0;
+  void read(const Properties& p, const char* name, const Scale& scale) {
+    if (p.has(name)) value = p.get<double>(name) * scale.factor;
+  }
+  std::string type_text() const { return "scaled number"; }
+  std::string default_text() const { return "0"; }
+};
+
+struct WithParameters {
+  Parameter depth_mm = Parameter::continuous(1, 0, 10);
+  std::optional<Parameter> step;
+  Scaled length;
+  template <class Declare, class Self>
+  static void declare(Declare& d, Self& o) {
+    d.parameter(o.depth_mm, "depth_mm", "how deep");
+    d.parameter(o.step, "step", Range::closed(0, 2), "how far", Default{"none"});
+    d.custom(o.length, "length", "how long");
+  }
+};
+
+TEST(Options, ParametersAndCustomValuesWithAContext) {
+  const Scale times_ten{10};
+  const WithParameters defaults = read_options<WithParameters>(Properties::parse("{}", "p.json"), times_ten);
+  EXPECT_EQ(defaults.depth_mm.value(), 1);
+  EXPECT_FALSE(defaults.depth_mm.is_free());
+  EXPECT_FALSE(defaults.step.has_value());
+  EXPECT_EQ(defaults.length.value, 0);
+
+  const WithParameters given = read_options<WithParameters>(
+      Properties::parse(R"({"depth_mm": {"value": 2, "min": 1, "max": 3}, "step": 0.5, "length": 4})", "p.json"),
+      times_ten);
+  EXPECT_TRUE(given.depth_mm.is_free());
+  EXPECT_EQ(given.depth_mm.lower(), 1);
+  EXPECT_EQ(given.depth_mm.upper(), 3);
+  EXPECT_EQ(given.step->value(), 0.5);
+  EXPECT_EQ(given.length.value, 40);
+
+  // The default's limits bound what may be given.
+  try {
+    read_options<WithParameters>(Properties::parse(R"({"depth_mm": 11})", "p.json"), times_ten);
+    ADD_FAILURE() << "11 is outside the default's limits";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("p.json: /depth_mm: value 11 is outside [0, 10]"));
+  }
+
+  const std::vector<PropertyDoc> rows = option_docs<WithParameters>();
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_EQ(rows[0].type, "parameter (mm) in [0, 10]");
+  EXPECT_EQ(rows[0].default_value, "1");
+  EXPECT_EQ(rows[1].type, "parameter in [0, 2]");
+  EXPECT_EQ(rows[1].default_value, "none");
+  EXPECT_EQ(rows[2].type, "scaled number");
+}
+
 }  // namespace
 }  // namespace spec2fab

@@ -221,7 +221,7 @@ TEST_F(NodesInBox, StructuralErrors) {
   EXPECT_THAT(build_error(R"({"type": "column", "count": [2, 2], "children": [{"type": "layered", "material": "A"}]})", *palette_),
               HasSubstr("/children: expected 4 nodes, got 1"));
   EXPECT_THAT(build_error(R"({"type": "plane", "axis": "q", "below": {}, "above": {}})", *palette_),
-              HasSubstr("/axis: expected one of a, b, w"));
+              HasSubstr("tree.json: /axis: unknown value 'q' (known: a, b, w, x, y, z)"));
 }
 
 }  // namespace

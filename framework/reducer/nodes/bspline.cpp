@@ -20,30 +20,59 @@ inline void cubic_basis(double t, double w[4]) {
 
 class BSplineNode final : public ClonableNode<BSplineNode, GeometryNode>, public HeightSurface {
  public:
+  // "heights_mm": one parameter for every control point, or one number each.
+  struct ControlHeights {
+    Parameter common = Parameter::continuous(0, -1e5, 1e5);
+    std::vector<double> each;
+    void read(const Properties& properties, const char* name, const NodeContext&) {
+      if (properties.has(name) && properties.peek(name).is_array()) {
+        each = properties.get<std::vector<double>>(name);
+      } else {
+        common = read_numeric_parameter(properties, name, 0, common.lower(), common.upper());
+      }
+    }
+    std::string type_text() const { return "parameter (mm), or array of na·nb numbers"; }
+    std::string default_text() const { return "0"; }
+  };
+
+  struct Options {
+    std::array<int, 2> control{};
+    ControlHeights heights_mm;
+    std::array<double, 4> domain{kUnset, kUnset, kUnset, kUnset};
+    HeightCut::Options cut;
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.required(o.control, "control", Range::at_least(1), "control points along a and b");
+      d.custom(o.heights_mm, "heights_mm", "control heights, row by row (a fastest)");
+      d.number(o.domain, "domain", Range::any(), "[a_min, b_min, a_max, b_max], the area the control grid spans",
+               Default{"the incoming frame's extent"});
+      HeightCut::Options::declare(d, o.cut);
+    }
+    bool check(std::string* why) const {
+      const size_t n = static_cast<size_t>(control[0]) * static_cast<size_t>(control[1]);
+      if (n > 4'000'000) *why = "control: more than 4 million control points";
+      else if (!heights_mm.each.empty() && heights_mm.each.size() != n)
+        *why = "heights_mm: expected " + std::to_string(n) + " heights, got " + std::to_string(heights_mm.each.size());
+      else if (!std::isnan(domain[0]) && !(domain[2] > domain[0] && domain[3] > domain[1]))
+        *why = "domain: expected [a_min, b_min, a_max, b_max] with max > min";
+      else return true;
+      return false;
+    }
+  };
+
   BSplineNode(const Properties& properties, const NodeContext& context)
-      : cut_(properties, context, children_) {
-    counts_ = properties.get<std::array<int, 2>>("control");
-    if (counts_[0] < 1 || counts_[1] < 1 || static_cast<long long>(counts_[0]) * counts_[1] > 4'000'000) {
-      properties.fail("control", "expected 1 to 4 million control points per side product");
-    }
+      : BSplineNode(read_options<Options>(properties, context)) {}
+  explicit BSplineNode(Options o) : cut_(std::move(o.cut), children_), counts_(o.control) {
     const size_t n = static_cast<size_t>(counts_[0]) * counts_[1];
-    if (properties.has("heights_mm") && properties.peek("heights_mm").is_array()) {
-      const auto values = properties.get<std::vector<double>>("heights_mm");
-      if (values.size() != n) {
-        properties.fail("heights_mm", "expected " + std::to_string(n) + " heights, got " +
-                                          std::to_string(values.size()));
-      }
-      for (double v : values) heights_.push_back(Parameter::continuous(v, -1e5, 1e5));
+    if (o.heights_mm.each.empty()) {
+      heights_.assign(n, o.heights_mm.common);
     } else {
-      heights_.assign(n, read_numeric_parameter(properties, "heights_mm", 0, -1e5, 1e5));
+      for (double v : o.heights_mm.each)
+        heights_.push_back(Parameter::continuous(v, o.heights_mm.common.lower(), o.heights_mm.common.upper()));
     }
-    if (properties.has("domain")) {
-      const auto domain = properties.get<std::array<double, 4>>("domain");
-      lower_ = Vec2(domain[0], domain[1]);
-      upper_ = Vec2(domain[2], domain[3]);
-      if (!(upper_.array() > lower_.array()).all()) {
-        properties.fail("domain", "expected [a_min, b_min, a_max, b_max] with max > min");
-      }
+    if (!std::isnan(o.domain[0])) {
+      lower_ = Vec2(o.domain[0], o.domain[1]);
+      upper_ = Vec2(o.domain[2], o.domain[3]);
       explicit_domain_ = true;
       update_spacing();
     }
@@ -149,15 +178,10 @@ class BSplineNode final : public ClonableNode<BSplineNode, GeometryNode>, public
                 "control heights, spread over the domain of two incoming coordinates, splits "
                 "the incoming frame into below and above. Beyond the grid the edge heights "
                 "repeat.",
-                {{"control", "[na, nb]", "required", "control points along a and b"},
-                 {"heights_mm", "parameter, or array of na·nb numbers", "0",
-                  "control heights (mm), row by row (a fastest)"},
-                 {"domain", "[a_min, b_min, a_max, b_max]", "the incoming frame's extent",
-                  "area the control grid spans"}},
+                option_docs<Options>(),
                 R"({"type": "bspline", "control": [4, 4], "heights_mm": 2.0, "below": )"
                 R"({"type": "layered", "material": "VeroClear"}, "above": {"type": "layered", )"
                 R"("material": "void"}})"};
-    for (auto& p : HeightCut::property_docs()) doc.properties.push_back(p);
     return doc;
   }
 

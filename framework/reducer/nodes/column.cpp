@@ -3,6 +3,7 @@
 
 #include <cmath>
 
+#include "core/options.h"
 #include "reducer/node.h"
 
 namespace spec2fab {
@@ -10,22 +11,35 @@ namespace {
 
 class ColumnNode final : public ClonableNode<ColumnNode, GeometryNode> {
  public:
-  ColumnNode(const Properties& properties, const NodeContext& context) {
-    counts_ = properties.get<std::array<int, 2>>("count");
-    if (counts_[0] < 1 || counts_[1] < 1) properties.fail("count", "column counts must be >= 1");
-    if (static_cast<long long>(counts_[0]) * counts_[1] > 16'000'000) {
-      properties.fail("count", "more than 16 million columns");
+  struct Options {
+    std::array<int, 2> count{};
+    std::array<double, 4> domain{kUnset, kUnset, kUnset, kUnset};
+    RepeatedChildren cells;
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.required(o.count, "count", Range::at_least(1), "columns along a and b; column (i, j) is cell i + na·j");
+      d.number(o.domain, "domain", Range::any(), "[a_min, b_min, a_max, b_max], the area the grid covers",
+               Default{"the incoming frame's extent"});
+      RepeatedChildren::declare(d, o.cells);
     }
-    if (properties.has("domain")) {
-      const auto domain = properties.get<std::array<double, 4>>("domain");
-      lower_ = {domain[0], domain[1]};
-      upper_ = {domain[2], domain[3]};
-      if (!(upper_[0] > lower_[0] && upper_[1] > lower_[1])) {
-        properties.fail("domain", "expected [a_min, b_min, a_max, b_max] with max > min");
-      }
+    bool check(std::string* why) const {
+      if (static_cast<long long>(count[0]) * count[1] > 16'000'000) *why = "count: more than 16 million columns";
+      else if (!std::isnan(domain[0]) && !(domain[2] > domain[0] && domain[3] > domain[1]))
+        *why = "domain: expected [a_min, b_min, a_max, b_max] with max > min";
+      else return cells.check(why);
+      return false;
+    }
+  };
+
+  ColumnNode(const Properties& properties, const NodeContext& context) {
+    Options o = read_options<Options>(properties, context);
+    counts_ = o.count;
+    if (!std::isnan(o.domain[0])) {
+      lower_ = {o.domain[0], o.domain[1]};
+      upper_ = {o.domain[2], o.domain[3]};
       explicit_domain_ = true;
     }
-    children_ = read_repeated_children(properties, static_cast<size_t>(counts_[0]) * counts_[1], context);
+    children_ = o.cells.take(static_cast<size_t>(counts_[0]) * counts_[1], properties.where("children"));
   }
 
   std::string type_name() const override { return "column"; }
@@ -78,11 +92,7 @@ class ColumnNode final : public ClonableNode<ColumnNode, GeometryNode> {
             "incoming frame — texture pixels over a Stratum's (u, v), or columns over the "
             "world's x and y. Child (i, j) is number i + count[0]·j; its frame is relative to "
             "the column's corner. Points outside the domain go to the nearest edge column.",
-            {{"count", "[na, nb]", "required", "columns along a and b"},
-             {"domain", "[a_min, b_min, a_max, b_max]", "the incoming frame's extent",
-              "area the grid covers"},
-             {"child", "node", "-", "one node copied into every column"},
-             {"children", "array of nodes", "-", "one node per column, na·nb of them"}},
+            option_docs<Options>(),
             R"({"type": "column", "count": [4, 2], "child": {"type": "layered", "material": )"
             R"("VeroCyan"}})"};
   }

@@ -2,15 +2,11 @@
 
 namespace spec2fab {
 
-HeightCut::HeightCut(const Properties& properties, const NodeContext& context,
-                     std::vector<NodePtr>& children) {
-  const std::string axis = properties.get<std::string>("axis", "w");
-  if (axis == "a" || axis == "x") axis_ = 0;
-  else if (axis == "b" || axis == "y") axis_ = 1;
-  else if (axis == "w" || axis == "z") axis_ = 2;
-  else properties.fail("axis", "expected one of a, b, w (or x, y, z), got '" + axis + "'");
-  children.push_back(build_node(properties.object("below"), context));
-  children.push_back(build_node(properties.object("above"), context));
+HeightCut::HeightCut(Options&& options, std::vector<NodePtr>& children) {
+  const char axis = options.axis[0];
+  axis_ = axis == 'a' || axis == 'x' ? 0 : axis == 'b' || axis == 'y' ? 1 : 2;
+  children.push_back(std::move(options.below.node));
+  children.push_back(std::move(options.above.node));
 }
 
 Eigen::AlignedBox3d HeightCut::cut_domain(const FrameDomain& incoming) const {
@@ -39,13 +35,6 @@ void HeightCut::to_json(const std::vector<NodePtr>& children, const MaterialPale
   out["axis"] = names[axis_];
   out["below"] = children[0]->to_json(palette);
   out["above"] = children[1]->to_json(palette);
-}
-
-std::vector<PropertyDoc> HeightCut::property_docs() {
-  return {{"axis", "\"a\"|\"b\"|\"w\" (or x|y|z)", "\"w\"",
-           "incoming coordinate the height is measured along"},
-          {"below", "node", "required", "child under the surface; its w is the depth below it"},
-          {"above", "node", "required", "child over the surface; its w is the height above it"}};
 }
 
 }  // namespace spec2fab

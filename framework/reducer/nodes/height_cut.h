@@ -4,6 +4,7 @@
 // (child 1). Each side's frame is (lateral, lateral, distance from the cut),
 // so a Layered child counts its layers from the cut surface.
 
+#include "core/options.h"
 #include "reducer/height_surface.h"
 #include "reducer/node.h"
 
@@ -11,10 +12,23 @@ namespace spec2fab {
 
 class HeightCut {
  public:
-  /// Reads "axis" ("a"/"x", "b"/"y", "w"/"z": the incoming coordinate the
-  /// height is measured along) and the "below"/"above" children.
-  HeightCut(const Properties& properties, const NodeContext& context,
-            std::vector<NodePtr>& children);
+  /// "axis" and the "below"/"above" children: what a cutting node's options
+  /// declare besides its own.
+  struct Options {
+    std::string axis = "w";
+    ChildNode below, above;
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.choice(o.axis, "axis", {"a", "b", "w", "x", "y", "z"},
+               "incoming coordinate the height is measured along (x, y, z name a, b, w)");
+      d.custom(o.below, "below", "child under the surface; its w is the depth below it");
+      d.custom(o.above, "above", "child over the surface; its w is the height above it");
+    }
+  };
+
+  HeightCut() = default;
+  /// Takes the axis, and moves the children into `children`.
+  HeightCut(Options&& options, std::vector<NodePtr>& children);
 
   /// The incoming frame's coordinates as (lateral 1, lateral 2, height).
   Vec3 to_cut_axes(const LocalFrame& frame) const {
@@ -47,7 +61,6 @@ class HeightCut {
 
   static std::string child_label(size_t i) { return i == 0 ? "below" : "above"; }
   int axis() const { return axis_; }
-  static std::vector<PropertyDoc> property_docs();
 
  private:
   int axis_ = 2;

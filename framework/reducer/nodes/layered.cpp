@@ -3,6 +3,7 @@
 
 #include <limits>
 
+#include "core/options.h"
 #include "reducer/node.h"
 
 namespace spec2fab {
@@ -10,24 +11,47 @@ namespace {
 
 class LayeredNode final : public ClonableNode<LayeredNode, MaterialNode> {
  public:
-  LayeredNode(const Properties& properties, const NodeContext& context) {
-    if (properties.has("material")) {
-      if (properties.has("layers")) properties.fail("material", "give \"material\" or \"layers\", not both");
-      layers_.push_back({read_material_parameter(properties, "material", context), std::nullopt});
-    } else {
-      const std::vector<Properties> layers = properties.objects("layers");
-      if (layers.empty()) properties.fail("layers", "needs at least one layer");
-      for (size_t i = 0; i < layers.size(); ++i) {
-        Layer layer{read_material_parameter(layers[i], "material", context), std::nullopt};
-        if (layers[i].has("thickness_mm")) {
-          layer.thickness_mm = read_numeric_parameter(layers[i], "thickness_mm", 0, 0, 1e4);
-        } else if (i + 1 < layers.size()) {
-          layers[i].fail("thickness_mm", "missing: only the last layer may be unbounded");
-        }
-        layers_.push_back(std::move(layer));
-      }
+  struct LayerOptions {
+    MaterialOption material;
+    std::optional<Parameter> thickness_mm;
+    std::string where;
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.custom(o.material, "material", "the layer's material");
+      d.parameter(o.thickness_mm, "thickness_mm", Range::closed(0, 1e4), "the layer's thickness",
+                  Default{"unbounded (the last layer only)"});
     }
-    if (properties.has("fill")) fill_ = read_material_parameter(properties, "fill", context);
+  };
+
+  struct Options {
+    std::vector<LayerOptions> layers;
+    MaterialOption material{"-", std::nullopt}, fill{"the last layer's material", std::nullopt};
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.objects(o.layers, "layers",
+                "outermost first; thickness_mm is a parameter (mm); the last layer may omit it and extend "
+                "without end; give this or \"material\"");
+      d.custom(o.material, "material", "shorthand for one unbounded layer");
+      d.custom(o.fill, "fill", "material deeper than every layer");
+    }
+    bool check(std::string* why) const {
+      if (material.parameter && !layers.empty()) *why = "give \"material\" or \"layers\", not both";
+      else if (!material.parameter && layers.empty()) *why = "give \"layers\" (at least one) or \"material\"";
+      else return true;
+      return false;
+    }
+  };
+
+  LayeredNode(const Properties& properties, const NodeContext& context) {
+    Options o = read_options<Options>(properties, context);
+    if (o.material.parameter) layers_.push_back({*o.material.parameter, std::nullopt});
+    for (size_t i = 0; i < o.layers.size(); ++i) {
+      LayerOptions& layer = o.layers[i];
+      if (!layer.thickness_mm && i + 1 < o.layers.size())
+        throw InputError(layer.where + "/thickness_mm: missing: only the last layer may be unbounded");
+      layers_.push_back({*layer.material.parameter, layer.thickness_mm});
+    }
+    fill_ = o.fill.parameter;
     evaluate();
   }
 
@@ -90,12 +114,7 @@ class LayeredNode final : public ClonableNode<LayeredNode, MaterialNode> {
         "Material node: layers of given thickness and material along the local depth axis "
         "(w); deeper than all layers, the fill material. One layer is a constant material; "
         "\"void\" is a material, so layers can also carve the surface.",
-        {{"layers", "array of {material, thickness_mm}", "required (or \"material\")",
-          "outermost first; thickness_mm is a parameter (mm); the last layer may omit it "
-          "and extend without end"},
-         {"material", "material parameter", "-", "shorthand for one unbounded layer"},
-         {"fill", "material parameter", "the last layer's material",
-          "material deeper than every layer"}},
+        option_docs<Options>(),
         R"({"type": "layered", "layers": [{"material": "VeroCyan", "thickness_mm": 0.3}, )"
         R"({"material": "VeroWhitePlus"}]})"};
   }

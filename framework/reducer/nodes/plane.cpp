@@ -8,16 +8,31 @@ namespace {
 
 class PlaneNode final : public ClonableNode<PlaneNode, GeometryNode>, public HeightSurface {
  public:
-  PlaneNode(const Properties& properties, const NodeContext& context)
-      : cut_(properties, context, children_),
-        offset_mm_(read_numeric_parameter(properties, "offset_mm", 0, -1e5, 1e5)),
-        slope_a_(read_numeric_parameter(properties, "slope_a", 0, -1e3, 1e3)),
-        slope_b_(read_numeric_parameter(properties, "slope_b", 0, -1e3, 1e3)) {
-    if (properties.has("center")) {
-      const auto center = properties.get<std::array<double, 2>>("center");
-      center_ = Vec2(center[0], center[1]);
-      explicit_center_ = true;
+  struct Options {
+    Parameter offset_mm = Parameter::continuous(0, -1e5, 1e5);
+    Parameter slope_a = Parameter::continuous(0, -1e3, 1e3), slope_b = slope_a;
+    std::array<double, 2> center{kUnset, kUnset};
+    HeightCut::Options cut;
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.parameter(o.offset_mm, "offset_mm", "height at the centre");
+      d.parameter(o.slope_a, "slope_a", "dHeight/da");
+      d.parameter(o.slope_b, "slope_b", "dHeight/db");
+      d.number(o.center, "center", Range::any(), "[a0, b0], the pivot of the slopes",
+               Default{"centre of the incoming domain"});
+      HeightCut::Options::declare(d, o.cut);
     }
+  };
+
+  PlaneNode(const Properties& properties, const NodeContext& context)
+      : PlaneNode(read_options<Options>(properties, context)) {}
+  explicit PlaneNode(Options o)
+      : cut_(std::move(o.cut), children_),
+        offset_mm_(o.offset_mm),
+        slope_a_(o.slope_a),
+        slope_b_(o.slope_b),
+        explicit_center_(!std::isnan(o.center[0])) {
+    if (explicit_center_) center_ = Vec2(o.center[0], o.center[1]);
     evaluate();
   }
 
@@ -88,13 +103,9 @@ class PlaneNode final : public ClonableNode<PlaneNode, GeometryNode>, public Hei
                 "height along `axis` is offset + slope_a·(a − a0) + slope_b·(b − b0) over the "
                 "two other coordinates, (a0, b0) the centre of the incoming domain — tilted "
                 "planes make the facets of a facet-caustic surface.",
-                {{"offset_mm", "parameter (mm)", "0", "height at the centre"},
-                 {"slope_a", "parameter", "0", "dHeight/da"},
-                 {"slope_b", "parameter", "0", "dHeight/db"},
-                 {"center", "[a0, b0]", "centre of the incoming domain", "pivot of the slopes"}},
+                option_docs<Options>(),
                 R"({"type": "plane", "axis": "z", "offset_mm": 5, "below": {"type": "layered", )"
                 R"("material": "VeroClear"}, "above": {"type": "layered", "material": "void"}})"};
-    for (auto& p : HeightCut::property_docs()) doc.properties.push_back(p);
     return doc;
   }
 

@@ -1,6 +1,7 @@
 // Stratum geometry node: the iso-distance surface at depth d below the solid's
 // surface splits a shell (child 0) from a core (child 1).
 
+#include "core/options.h"
 #include "geometry/solid.h"
 #include "reducer/node.h"
 
@@ -9,10 +10,22 @@ namespace {
 
 class StratumNode final : public ClonableNode<StratumNode, GeometryNode> {
  public:
-  StratumNode(const Properties& properties, const NodeContext& context)
-      : depth_mm_(read_numeric_parameter(properties, "depth_mm", 1.0, 0, 1e3)) {
-    children_.push_back(build_node(properties.object("shell"), context));
-    children_.push_back(build_node(properties.object("core"), context));
+  struct Options {
+    Parameter depth_mm = Parameter::continuous(1.0, 0, 1e3);
+    ChildNode shell, core;
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.parameter(o.depth_mm, "depth_mm", "shell thickness d");
+      d.custom(o.shell, "shell", "child for depth < d");
+      d.custom(o.core, "core", "child for depth >= d");
+    }
+  };
+
+  StratumNode(const Properties& properties, const NodeContext& context) {
+    Options o = read_options<Options>(properties, context);
+    depth_mm_ = o.depth_mm;
+    children_.push_back(std::move(o.shell.node));
+    children_.push_back(std::move(o.core.node));
   }
 
   std::string type_name() const override { return "stratum"; }
@@ -61,9 +74,7 @@ class StratumNode final : public ClonableNode<StratumNode, GeometryNode> {
     return {"Geometry node: the surface at depth d below the solid's surface splits the "
             "shell (depth < d) from the core. The shell's frame is (u, v, depth): surface "
             "coordinates and depth below the surface in mm; the core keeps the incoming frame.",
-            {{"depth_mm", "parameter (mm)", "1.0", "shell thickness d"},
-             {"shell", "node", "required", "child for depth < d"},
-             {"core", "node", "required", "child for depth >= d"}},
+            option_docs<Options>(),
             R"({"type": "stratum", "depth_mm": 1.0, "shell": {"type": "layered", "material": )"
             R"("VeroCyan"}, "core": {"type": "layered", "material": "VeroWhitePlus"}})"};
   }

@@ -3,6 +3,7 @@
 
 #include <cmath>
 
+#include "core/options.h"
 #include "reducer/node.h"
 
 namespace spec2fab {
@@ -10,30 +11,48 @@ namespace {
 
 class VoxelNode final : public ClonableNode<VoxelNode, GeometryNode> {
  public:
+  // "size_mm": one edge for a cube, or three.
+  struct CellSize {
+    std::array<double, 3> edges{};
+    void read(const Properties& properties, const char* name, const NodeContext&) {
+      if (properties.peek(name).is_array()) {
+        edges = properties.get<std::array<double, 3>>(name);
+      } else {
+        edges.fill(properties.get<double>(name));
+      }
+      for (double e : edges)
+        if (!(e > 0)) properties.fail(name, "cell sizes must be positive");
+    }
+    std::string type_text() const { return "number or [sa, sb, sw] (mm)"; }
+    std::string default_text() const { return "required"; }
+  };
+
+  struct Options {
+    CellSize size_mm;
+    std::array<double, 3> origin{kUnset, kUnset, kUnset};
+    RepeatedChildren cells;
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.custom(o.size_mm, "size_mm", "cell size");
+      d.number(o.origin, "origin", Range::any(), "[a, b, w], the corner of cell 0",
+               Default{"the incoming domain's lower corner"});
+      RepeatedChildren::declare(d, o.cells);
+    }
+    bool check(std::string* why) const { return cells.check(why); }
+  };
+
   VoxelNode(const Properties& properties, const NodeContext& context)
       : children_where_(properties.where("children")) {
-    if (properties.has("size_mm") && properties.peek("size_mm").is_array()) {
-      const auto size = properties.get<std::array<double, 3>>("size_mm");
-      size_ = Vec3(size[0], size[1], size[2]);
-    } else {
-      size_ = Vec3::Constant(properties.get<double>("size_mm"));
-    }
-    if (!(size_.array() > 0).all()) properties.fail("size_mm", "cell sizes must be positive");
-    if (properties.has("origin")) {
-      const auto origin = properties.get<std::array<double, 3>>("origin");
-      origin_ = Vec3(origin[0], origin[1], origin[2]);
+    Options o = read_options<Options>(properties, context);
+    size_ = Vec3(o.size_mm.edges[0], o.size_mm.edges[1], o.size_mm.edges[2]);
+    if (!std::isnan(o.origin[0])) {
+      origin_ = Vec3(o.origin[0], o.origin[1], o.origin[2]);
       explicit_origin_ = true;
     }
-    const bool has_template = properties.has("child");
-    if (has_template == properties.has("children")) {
-      properties.fail("give either \"child\" (one node for every cell) or \"children\" (one per cell)");
-    }
-    if (has_template) {
-      prototype_ = build_node(properties.object("child"), context);
+    if (o.cells.child.node) {
+      prototype_ = std::move(o.cells.child.node);
     } else {
-      for (const Properties& child : properties.objects("children")) {
-        children_.push_back(build_node(child, context));
-      }
+      children_ = std::move(o.cells.children.nodes);
     }
   }
 
@@ -119,10 +138,7 @@ class VoxelNode final : public ClonableNode<VoxelNode, GeometryNode> {
             "(all three coordinates). Cell (i, j, k) is child i + na·(j + nb·k); its frame is "
             "relative to the cell's corner. The cell count follows from the shape when the "
             "tree is bound.",
-            {{"size_mm", "number or [sa, sb, sw]", "required", "cell size"},
-             {"origin", "[a, b, w]", "the incoming domain's lower corner", "corner of cell 0"},
-             {"child", "node", "-", "one node copied into every cell"},
-             {"children", "array of nodes", "-", "one node per cell"}},
+            option_docs<Options>(),
             R"({"type": "voxel", "size_mm": 2.0, "child": {"type": "layered", "material": )"
             R"("VeroCyan"}})"};
   }
