@@ -250,6 +250,15 @@ class Reader {
   void value(T& value, const char* name, const char*) {
     value = p_.get<T>(name, value);
   }
+  /// A value whose default another option or the experiment sets.
+  template <class T>
+  void value(T& value, const char* name, const char*, Default) {
+    value = p_.get<T>(name, value);
+  }
+  template <class T>
+  void value(std::optional<T>& value, const char* name, const char*, Default) {
+    if (p_.has(name)) value = p_.get<T>(name);
+  }
   void file(std::filesystem::path& value, const char* name, const char*) { value = p_.existing_file(name); }
   /// An array of objects, each an options struct of its own.
   template <class E>
@@ -305,6 +314,8 @@ class Checker {
   }
   template <class T>
   void value(const T&, const char*, const char*) {}
+  template <class T>
+  void value(const T&, const char*, const char*, Default) {}
   void file(const std::filesystem::path&, const char*, const char*) {}
   template <class E>
   void objects(const std::vector<E>&, const char*, const char*) {}
@@ -345,6 +356,14 @@ class Documenter {
   template <class T>
   void value(const T& value, const char* name, const char* meaning) {
     rows.push_back({name, full_type_text<T>(name), default_text(value), meaning});
+  }
+  template <class T>
+  void value(const T&, const char* name, const char* meaning, Default fallback) {
+    rows.push_back({name, full_type_text<T>(name), fallback.text, meaning});
+  }
+  template <class T>
+  void value(const std::optional<T>&, const char* name, const char* meaning, Default fallback) {
+    rows.push_back({name, full_type_text<T>(name), fallback.text, meaning});
   }
   void file(const std::filesystem::path&, const char* name, const char* meaning) {
     rows.push_back({name, "file", "required", meaning});
@@ -399,24 +418,46 @@ bool options_valid(const O& options, std::string* why) {
 /// The defaults, overridden by what `properties` holds; throws InputError at
 /// the offending key (or at the object, for a constraint between options).
 template <class O, class Context = options_detail::NoContext>
-O read_options(const Properties& properties, const Context& context = {}) {
-  O options;
+void read_options_into(O& options, const Properties& properties, const Context& context = {}) {
   options_detail::Reader<Context> reader(properties, context);
   O::declare(reader, options);
   if constexpr (options_detail::HasCheck<O>) {
     std::string why;
     if (!options.check(&why)) properties.fail(why);
   }
+}
+
+template <class O, class Context = options_detail::NoContext>
+O read_options(const Properties& properties, const Context& context = {}) {
+  O options;
+  read_options_into(options, properties, context);
   return options;
 }
 
-/// The options' rows for a part's TypeDoc.
+/// The options' rows for a part's TypeDoc; `defaults` for a struct whose
+/// members name its keys (a piece whose keys a translator renames).
 template <class O>
-std::vector<PropertyDoc> option_docs() {
-  const O defaults;
+std::vector<PropertyDoc> option_docs(const O& defaults = O{}) {
   options_detail::Documenter documenter;
   O::declare(documenter, defaults);
   return documenter.rows;
+}
+
+/// A piece's rows where a translator finds them ("goal." + key).
+inline std::vector<PropertyDoc> prefixed(std::vector<PropertyDoc> rows, const std::string& prefix) {
+  for (PropertyDoc& row : rows) row.name = prefix + row.name;
+  return rows;
+}
+
+/// Appends rows to a TypeDoc's.
+inline void append(std::vector<PropertyDoc>& to, std::vector<PropertyDoc> rows) {
+  for (PropertyDoc& row : rows) to.push_back(std::move(row));
+}
+
+/// For a range that other options or the experiment set (heights within the
+/// solid): fails at `name` as a declared range would.
+inline void require_in(const Properties& properties, const char* name, double value, Range range) {
+  if (!range.contains(value)) properties.fail(name, number_text(value) + " is not " + range.text());
 }
 
 namespace options_detail {

@@ -1,5 +1,6 @@
 #include "fabrication/fabricate.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -25,14 +26,19 @@ FabricationOptions FabricationOptions::from_properties(const std::optional<Prope
     for (const OptionalPart& part : module.parts)
       if (!module.built && part.kind == "print writer" && output->get<bool>(part.name, false))
         output->fail(part.name, left_out_of_build(part.kind, part.name));
-  options.max_voxels = static_cast<long long>(
-      output->get_in_range("max_voxels", static_cast<double>(options.max_voxels), 1, 1e15));
-  options.mesh_voxel_mm = output->get_in_range("mesh_voxel_mm", options.mesh_voxel_mm, 0, 1000);
-  options.render_pixels =
-      static_cast<int>(output->get_in_range("render_pixels", options.render_pixels, 16, 8192));
-  options.png_compression =
-      static_cast<int>(output->get_in_range("png_compression", options.png_compression, 0, 9));
+  const OutputNumbers numbers = read_options<OutputNumbers>(*output);
+  options.max_voxels = static_cast<long long>(numbers.max_voxels);
+  options.mesh_voxel_mm = numbers.mesh_voxel_mm;
+  options.render_pixels = numbers.render_pixels;
+  options.png_compression = numbers.png_compression;
   return options;
+}
+
+std::vector<PropertyDoc> output_option_docs(std::initializer_list<std::string_view> keys) {
+  std::vector<PropertyDoc> rows;
+  for (const PropertyDoc& row : option_docs<OutputNumbers>())
+    if (std::find(keys.begin(), keys.end(), row.name) != keys.end()) rows.push_back(row);
+  return prefixed(std::move(rows), "output.");
 }
 
 bool FabricationOptions::any() const {

@@ -10,6 +10,7 @@
 ///   preview/render.png                             ("render": ray-traced picture of the print)
 
 #include <cstdint>
+#include <initializer_list>
 #include <map>
 #include <string>
 #include <string_view>
@@ -18,6 +19,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/options.h"
 #include "core/properties.h"
 #include "materials/printer_profile.h"
 #include "reducer/reducer_tree.h"
@@ -30,6 +32,28 @@ namespace spec2fab {
 ///   "output": {"slices": true, "stl": true, "3mf": true, "render": true,
 ///              "max_voxels": 5e9, "mesh_voxel_mm": 0, "render_pixels": 512,
 ///              "png_compression": 1}
+/// The output section's numbers, declared once: read by
+/// FabricationOptions::from_properties, documented by the print writers
+/// that use them (output_option_docs).
+struct OutputNumbers {
+  double max_voxels = 5e9;
+  double mesh_voxel_mm = 0;
+  int render_pixels = 512;
+  int png_compression = 1;
+  template <class Declare, class Self>
+  static void declare(Declare& d, Self& o) {
+    d.number(o.max_voxels, "max_voxels", Range::closed(1, 1e15),
+             "refuse (exit 2, before any work) to fabricate more print voxels than this");
+    d.number(o.mesh_voxel_mm, "mesh_voxel_mm", Range::closed(0, 1000),
+             "voxel of the STL/3MF surfaces; 0: print voxels, coarsened to <= 512 along the longest side");
+    d.number(o.render_pixels, "render_pixels", Range::closed(16, 8192), "preview/render.png's width and height");
+    d.number(o.png_compression, "png_compression", Range::closed(0, 9), "zlib level of the slice PNGs");
+  }
+};
+
+/// The rows of OutputNumbers named `keys`, as "output.<key>".
+std::vector<PropertyDoc> output_option_docs(std::initializer_list<std::string_view> keys);
+
 struct FabricationOptions {
   /// Print writers switched on or off by name (PrintWriterRegistry: "slices",
   /// "stl", "3mf", "render", …); a writer not named here runs.

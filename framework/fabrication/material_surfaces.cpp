@@ -234,8 +234,7 @@ class StlFiles final : public PrintWriter {
   static TypeDoc doc() {
     return {"print/<material>.stl: one closed surface per material (binary STL, mm), as the paper sent "
             "to its printer; the surfaces share their common boundaries.",
-            {{"output.mesh_voxel_mm", "number (mm)", "0 (auto)",
-              "voxel of the surfaces; 0: print voxels, coarsened to <= 512 along the longest side"}},
+            output_option_docs({"mesh_voxel_mm"}),
             R"({"output": {"stl": true}})"};
   }
   bool needs_surfaces() const override { return true; }

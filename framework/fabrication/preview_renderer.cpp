@@ -163,7 +163,7 @@ class RenderPreview final : public PrintWriter {
   static TypeDoc doc() {
     return {"preview/render.png: the print's material surfaces ray-traced (Embree), each material in its "
             "display colour.",
-            {{"output.render_pixels", "integer", "512", "the picture's width and height"}},
+            output_option_docs({"render_pixels"}),
             R"({"output": {"render": true}})"};
   }
   bool needs_surfaces() const override { return true; }

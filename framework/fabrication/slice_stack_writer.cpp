@@ -147,7 +147,7 @@ class SliceStackFiles final : public PrintWriter {
   static TypeDoc doc() {
     return {"print/slices/: one indexed-colour PNG per printer layer (palette index = material) and "
             "manifest.json, the voxel-print input of PolyJet printers.",
-            {{"output.png_compression", "integer", "1", "zlib level of the slice PNGs (0-9)"}},
+            output_option_docs({"png_compression"}),
             R"({"output": {"slices": true}})"};
   }
   SliceSink* sink() override { return &writer_; }

@@ -12,21 +12,19 @@ TreeOutputOptions TreeOutputOptions::read(const Properties& goal, const Experime
                                           const ReducerTree& tree) {
   TreeOutputOptions options;
   const double longest = experiment.solid().bounds().size().maxCoeff();
-  options.census_voxel_mm =
-      goal.get_in_range("census_voxel_mm", longest / 128, longest / 2048, longest);
+  const GoalKeys goal_keys = read_options<GoalKeys>(goal);
+  options.census_voxel_mm = std::isnan(goal_keys.census_voxel_mm) ? longest / 128 : goal_keys.census_voxel_mm;
+  require_in(goal, "census_voxel_mm", options.census_voxel_mm, Range::closed(longest / 2048, longest));
   const auto output = experiment.output();
-  if (output) {
-    options.section_pixels = static_cast<int>(output->get_in_range("section_pixels", 512, 16, 8192));
-  }
+  if (output) options.section_pixels = read_options<OutputKeys>(*output).section_pixels;
   options.fabrication = FabricationOptions::from_properties(output);
   check_fabrication(tree, experiment.printer(), options.fabrication);
   return options;
 }
 
 std::vector<PropertyDoc> TreeOutputOptions::docs() {
-  std::vector<PropertyDoc> docs = {
-      {"goal.census_voxel_mm", "number (mm)", "longest side / 128", "voxel size of the material census in result.json"},
-      {"output.section_pixels", "integer", "512", "size of the cross-section previews"}};
+  std::vector<PropertyDoc> docs = prefixed(option_docs<GoalKeys>(), "goal.");
+  append(docs, prefixed(option_docs<OutputKeys>(), "output."));
   // A switch per registered print writer, and the writers' own options.
   const PrintWriterRegistry& writers = PrintWriterRegistry::instance();
   for (const std::string& name : writers.names()) {
@@ -34,7 +32,7 @@ std::vector<PropertyDoc> TreeOutputOptions::docs() {
     docs.push_back({"output." + name, "bool", "true", first_sentence(doc.summary)});
     for (const PropertyDoc& option : doc.properties) docs.push_back(option);
   }
-  docs.push_back({"output.max_voxels", "number", "5e9", "refuse to fabricate more print voxels than this"});
+  append(docs, output_option_docs({"max_voxels"}));
   return docs;
 }
 

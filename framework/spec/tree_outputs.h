@@ -16,6 +16,23 @@ struct TreeOutputOptions {
   int section_pixels = 512;
   FabricationOptions fabrication;
 
+  /// Its keys in the goal and in the output section (fabrication's aside).
+  struct GoalKeys {
+    double census_voxel_mm = kUnset;
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.number(o.census_voxel_mm, "census_voxel_mm", Range::above(0),
+               "voxel size of the material census in result.json", Default{"longest side / 128"});
+    }
+  };
+  struct OutputKeys {
+    int section_pixels = 512;
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.number(o.section_pixels, "section_pixels", Range::closed(16, 8192), "size of the cross-section previews");
+    }
+  };
+
   /// Reads goal.census_voxel_mm and the experiment's output section; refuses
   /// an oversized print for `tree` now, so that `validate` says so.
   static TreeOutputOptions read(const Properties& goal, const Experiment& experiment,

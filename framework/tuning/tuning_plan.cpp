@@ -16,9 +16,10 @@ std::unique_ptr<TuningPlan> build_tuning_plan(const Properties& goal, ReducerTre
   if (tuners.empty()) goal.fail("tuners", "needs at least one tuner");
   for (size_t i = 0; i < tuners.size(); ++i) {
     const Properties& t = tuners[i];
-    const std::string name = t.get<std::string>("name", "tuner" + std::to_string(i));
+    const TunerKeys keys = read_options<TunerKeys>(t);
+    const std::string name = keys.name.value_or("tuner" + std::to_string(i));
     if (index_of.count(name)) t.fail("name", "a second tuner named '" + name + "'");
-    const std::string path = t.get<std::string>("node", "");
+    const std::string& path = keys.node;
     ReducerNode* node = nullptr;
     try {
       node = &tree.node(path);
@@ -49,9 +50,10 @@ std::unique_ptr<TuningPlan> build_tuning_plan(const Properties& goal, ReducerTre
   }
   for (size_t p = 0; p < phases.size(); ++p) {
     const Properties& spec = phases[p];
+    const PhaseKeys keys = read_options<PhaseKeys>(spec);
     Phase phase;
-    phase.name = spec.get<std::string>("name", "phase" + std::to_string(p));
-    for (const std::string& name : spec.get<std::vector<std::string>>("tuners", {})) {
+    phase.name = keys.name.value_or("phase" + std::to_string(p));
+    for (const std::string& name : keys.tuners) {
       const auto found = index_of.find(name);
       if (found == index_of.end()) {
         spec.fail("tuners", "no tuner '" + name + "'" + did_you_mean(name, names) +
@@ -59,11 +61,9 @@ std::unique_ptr<TuningPlan> build_tuning_plan(const Properties& goal, ReducerTre
       }
       phase.tuners.push_back(found->second);
     }
-    phase.sweeps = static_cast<int>(spec.get_in_range("sweeps", 1, 1, 1e6));
-    const std::string mode = spec.get<std::string>("mode", "serial");
-    if (mode != "serial" && mode != "parallel") spec.fail("mode", "must be serial or parallel");
-    phase.mode = mode == "parallel" ? Phase::Mode::parallel : Phase::Mode::serial;
-    const std::string coupling = spec.get<std::string>("coupling", "none");
+    phase.sweeps = keys.sweeps;
+    phase.mode = keys.mode == "parallel" ? Phase::Mode::parallel : Phase::Mode::serial;
+    const std::string& coupling = keys.coupling;
     const CouplingContext coupling_context{*shape, phase.mode == Phase::Mode::parallel, &plan->network,
                                            phase.members(plan->network.size()), &plan->schedule.phases(),
                                            &context.palette};
@@ -75,10 +75,27 @@ std::unique_ptr<TuningPlan> build_tuning_plan(const Properties& goal, ReducerTre
                               "parameters at once); make the phase serial");
       }
     }
-    phase.fix_after = spec.get<bool>("fix_after", false);
+    phase.fix_after = keys.fix_after;
     plan->schedule.add(std::move(phase));
   }
   return plan;
+}
+
+std::vector<PropertyDoc> tuning_plan_docs(const std::string& prefix) {
+  std::vector<PropertyDoc> rows = {
+      {prefix + "tuners", "array of {" + join([] {
+                            std::vector<std::string> keys;
+                            for (const PropertyDoc& row : option_docs<TunerKeys>()) keys.push_back(row.name);
+                            for (const char* part : {"simulator", "metric", "goal", "optimizer"}) keys.push_back(part);
+                            return keys;
+                          }()) + "}",
+       "none", "the tuners; each part a registered type with its options (`spec2fab list simulator` ...)"}};
+  append(rows, prefixed(option_docs<TunerKeys>(), prefix + "tuners[]."));
+  rows.push_back({prefix + "network", "object", "none",
+                  "{type, ...}: a registered network shape (`spec2fab list network`), tuners row-major"});
+  rows.push_back({prefix + "schedule", "array of phases", "one serial phase of all tuners", "the phases, in order"});
+  append(rows, prefixed(option_docs<PhaseKeys>(), prefix + "schedule[]."));
+  return rows;
 }
 
 }  // namespace spec2fab

@@ -83,24 +83,37 @@ namespace {
 /// The profile of a homogeneous medium (semi-infinite, under air) as the target.
 class RadialProfileGoal final : public GoalFor<RadialProfileObservation> {
  public:
-  RadialProfileGoal(const Properties& properties, const PartContext& context) {
-    const ProfileGrid grid = ProfileGrid::read(properties);
-    if (properties.has("medium") == properties.has("material")) {
-      properties.fail("give the target as \"medium\" (measured coefficients) or \"material\" (a print material)");
+  struct Options {
+    MediumOption medium;
+    std::optional<std::string> material;
+    ProfileGrid grid;
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.custom(o.medium, "medium", kMediumMeaning);
+      d.value(o.material, "material", "a material of the run's palette", Default{"-"});
+      ProfileGrid::declare(d, o.grid);
     }
+    bool check(std::string* why) const {
+      if (medium.medium.has_value() != material.has_value()) return true;
+      *why = "give the target as \"medium\" (measured coefficients) or \"material\" (a print material)";
+      return false;
+    }
+  };
+
+  RadialProfileGoal(const Properties& properties, const PartContext& context) {
+    const Options o = read_options<Options>(properties);
     MeasuredMedium medium;
-    if (properties.has("medium")) {
-      medium = read_medium(properties, "medium");
+    if (o.medium.medium) {
+      medium = *o.medium.medium;
     } else {
-      const std::string name = properties.get<std::string>("material");
-      const Material& m = context.palette.material(context.palette.id(name, properties.where("material")));
-      medium.name = name;
+      const Material& m = context.palette.material(context.palette.id(*o.material, properties.where("material")));
+      medium.name = *o.material;
       medium.refractive_index = m.refractive_index.value;
       for (size_t c = 0; c < 3; ++c) {
         medium.rgb[c] = {m.absorption_per_mm.value[c], m.reduced_scattering_per_mm.value[c]};
       }
     }
-    target_.reset(grid.basis(context.cache));
+    target_.reset(o.grid.basis(context.cache));
     target_.coefficients = dipole_profile_coefficients(medium, *target_.basis);
   }
   std::string name() const override { return "radial_profile"; }
@@ -108,12 +121,8 @@ class RadialProfileGoal final : public GoalFor<RadialProfileObservation> {
   static TypeDoc doc() {
     TypeDoc doc{"The reflectance profile of a homogeneous semi-infinite medium under air (Jensen et "
             "al. 2001's dipole). Describes radial_profile.",
-            {{"medium", "name or object", "required (or material)",
-              "apple, chicken1, cream, ketchup, marble, potato, skimmilk, skin1, skin2, wholemilk "
-              "(Jensen et al. 2001), or {absorption_per_mm, reduced_scattering_per_mm, refractive_index}"},
-             {"material", "material name", "required (or medium)", "a material of the run's palette"}},
+            option_docs<Options>(),
             R"({"type": "radial_profile", "medium": "marble"})"};
-    for (PropertyDoc& row : option_docs<ProfileGrid>()) doc.properties.push_back(std::move(row));
     return doc;
   }
 

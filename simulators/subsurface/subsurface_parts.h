@@ -4,6 +4,7 @@
 
 #include <array>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -47,6 +48,22 @@ const std::vector<MeasuredMedium>& jensen2001_media();
 /// A medium from JSON: a name from jensen2001_media(), or
 /// {"absorption_per_mm": [r,g,b], "reduced_scattering_per_mm": [r,g,b], "refractive_index": η}.
 MeasuredMedium read_medium(const Properties& properties, const std::string& key);
+
+/// A medium as an option (core/options.h custom()): read_medium's forms.
+struct MediumOption {
+  std::optional<MeasuredMedium> medium;
+  template <class Context>
+  void read(const Properties& properties, const char* name, const Context&) {
+    if (properties.has(name)) medium = read_medium(properties, name);
+  }
+  std::string type_text() const { return "name or object"; }
+  std::string default_text() const { return "-"; }
+};
+
+/// What documents a medium option: the measured names, or the coefficients.
+inline constexpr const char* kMediumMeaning =
+    "apple, chicken1, cream, ketchup, marble, potato, skimmilk, skin1, skin2, wholemilk (Jensen et al. 2001), or "
+    "{absorption_per_mm, reduced_scattering_per_mm, refractive_index}";
 
 /// The semi-infinite dipole profile of a medium under air, as basis coefficients (RGB interleaved).
 std::vector<double> dipole_profile_coefficients(const MeasuredMedium& medium, const RadialBasis& basis);

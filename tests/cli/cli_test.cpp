@@ -187,9 +187,39 @@ TEST_F(Cli, PartsReferenceInDocsIsCurrent) {
   const Result r = run_spec2fab("list --markdown");
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_THAT(r.out, HasSubstr("\n### texture_shadow\n"));
-  EXPECT_THAT(r.out, HasSubstr("| `output.png_compression` | integer | 1 |"));
+  EXPECT_THAT(r.out, HasSubstr("| `output.png_compression` | integer in [0, 9] | 1 |"));
   EXPECT_TRUE(r.out == read(kDatasets / "../docs/parts.md"))
       << "docs/parts.md is stale: regenerate it with `build/spec2fab list --markdown > docs/parts.md`";
+}
+
+// The option tables of docs/experiment-format.md are the code's, regenerated
+// on a copy: nothing changes.
+TEST_F(Cli, OptionTablesInExperimentFormatAreCurrent) {
+  if (!(SPEC2FAB_WITH_CERES && SPEC2FAB_WITH_NLOPT && SPEC2FAB_WITH_LIB3MF && SPEC2FAB_WITH_TETGEN && SPEC2FAB_WITH_HYPRE))
+    GTEST_SKIP() << "an optional module is off in this build";
+  const fs::path original = kDatasets / "../docs/experiment-format.md";
+  const fs::path copy = dir_ / "experiment-format.md";
+  fs::copy_file(original, copy);
+  const Result r = run_spec2fab("list --update-doc " + copy.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_THAT(r.out, HasSubstr(": current"))
+      << "docs/experiment-format.md is stale: `build/spec2fab list --update-doc docs/experiment-format.md`";
+  EXPECT_EQ(read(copy), read(original));
+
+  // A changed table is put back, between its markers only.
+  std::string text = read(copy);
+  const size_t row = text.find("| `goal.facets` |");
+  ASSERT_NE(row, std::string::npos);
+  text.insert(row, "| `goal.stale` | number | 1 | gone |\n");
+  std::ofstream(copy) << text;
+  EXPECT_THAT(run_spec2fab("list --update-doc " + copy.string()).out, HasSubstr(": updated"));
+  EXPECT_EQ(read(copy), read(original));
+
+  // A marker naming no part is an input error.
+  std::ofstream(copy) << "<!-- options: translator nonesuch -->\n<!-- end options -->\n";
+  const Result bad = run_spec2fab("list --update-doc " + copy.string());
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_THAT(bad.out, HasSubstr("no translator 'nonesuch' in this build"));
 }
 
 TEST_F(Cli, RunWritesFolderIdenticalForAnyThreadCount) {

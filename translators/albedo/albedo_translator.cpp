@@ -20,9 +20,17 @@ namespace {
 
 class AlbedoTranslator final : public TuningTranslator {
  public:
+  /// Its own goal key; the texture piece declares the rest.
+  struct Options {
+    std::string backing = "VeroWhitePlus";
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.value(o.backing, "backing", "material below the inks and in the core");
+    }
+  };
+
   AlbedoTranslator(const Properties& /*root*/, const Experiment& experiment)
-      : backing_(experiment.goal().get<std::string>("backing", "VeroWhitePlus")),
-        texture_(read_texture(experiment, backing_)) {
+      : backing_(read_options<Options>(experiment.goal()).backing), texture_(read_texture(experiment, backing_)) {
     const Properties goal = experiment.goal();
     // The shell holds the thickest stack and one step of backing under it.
     const double shell = texture_.ink_mm() + texture_.step_mm();
@@ -46,11 +54,10 @@ class AlbedoTranslator final : public TuningTranslator {
         "Spatially varying albedo (paper Fig. 7): a goal image over the surface's (u, v); "
         "Stratum -> Column (one per pixel) -> Layered (one layer per ink over the backing), one "
         "tuner per column with error diffusion over a 4-neighbour network.",
-        TexturePiece::docs(TextureKeys{}, "printer materials but backing and clear"),
+        TexturePiece::docs(TextureOptions{}),
         R"({"translator": "albedo", "goal": {"image": "../images/earth_96x48.png"}})"};
-    doc.properties.insert(doc.properties.begin() + 3,
-                          {"goal.backing", "material", "VeroWhitePlus", "below the inks and in the core"});
-    for (PropertyDoc& d : TreeOutputOptions::docs()) doc.properties.push_back(std::move(d));
+    doc.properties.insert(doc.properties.begin() + 3, prefixed(option_docs<Options>(), "goal.").front());
+    append(doc.properties, TreeOutputOptions::docs());
     return doc;
   }
 
@@ -58,7 +65,7 @@ class AlbedoTranslator final : public TuningTranslator {
   static TexturePiece read_texture(const Experiment& experiment, const std::string& backing) {
     const Properties goal = experiment.goal();
     experiment.palette().id(backing, goal.where("backing"));
-    return TexturePiece(goal, experiment, TextureKeys{}, {}, backing);
+    return TexturePiece(goal, experiment, TextureOptions{}, backing);
   }
 
   void report(const RunRecord& /*record*/, RunContext& context) override {

@@ -21,28 +21,12 @@
 namespace spec2fab {
 
 CausticGoalSettings CausticGoalSettings::read(const Properties& goal, const Experiment& experiment) {
-  CausticGoalSettings s;
-  s.slab = experiment.solid().bounds();
-  const Vec3 size = s.slab.size();
-  s.image_file = goal.existing_file("image");
-  s.material = goal.get<std::string>("material", s.material);
+  CausticGoalSettings s = read_options<CausticGoalSettings>(goal);
   experiment.palette().id(s.material, goal.where("material"));
-  s.image = goal.get<std::array<int, 2>>("image_size", s.image);
-  s.receiver_mm = goal.get<std::array<double, 2>>("receiver_mm", {size.x(), size.y()});
-  s.distance_mm = goal.get_in_range("distance_mm", s.distance_mm, 1e-3, 1e6);
-  s.rays = goal.get<std::array<int, 2>>("rays", {2 * s.image[0], 2 * s.image[1]});
-  s.refractive_index = goal.get_in_range("refractive_index", s.refractive_index, 1.0, 4.0);
+  s.slab = experiment.solid().bounds();
+  if (std::isnan(s.receiver_mm[0])) s.receiver_mm = {s.slab.size().x(), s.slab.size().y()};
+  if (s.rays[0] == 0) s.rays = {2 * s.image[0], 2 * s.image[1]};
   return s;
-}
-
-std::vector<PropertyDoc> CausticGoalSettings::docs() {
-  return {{"goal.image", "file", "required", "the picture to cast (grey levels)"},
-          {"goal.material", "material", "VeroClear", "the slab's material"},
-          {"goal.distance_mm", "number (mm)", "200", "receiver below the slab's bottom"},
-          {"goal.receiver_mm", "[x, y]", "the footprint", "receiver extent"},
-          {"goal.image_size", "[width, height]", "[240, 240]", "simulated image"},
-          {"goal.rays", "[nx, ny]", "2 x image_size", "stratified rays"},
-          {"goal.refractive_index", "number", "1.5", "of the slab's material"}};
 }
 
 nlohmann::json CausticGoalSettings::simulator(std::array<int, 2> vertices) const {
@@ -77,20 +61,6 @@ nlohmann::json CausticGoalSettings::image_report(std::span<const double> achieve
   report["receiver_mm"] = receiver_mm;
   report["distance_mm"] = distance_mm;
   return report;
-}
-
-CausticSurfaceSettings CausticSurfaceSettings::read(const Properties& goal) {
-  CausticSurfaceSettings s;
-  s.control = goal.get<std::array<int, 2>>("control", s.control);
-  if (s.control[0] < 2 || s.control[1] < 2 || s.control[0] * s.control[1] > 1'000'000)
-    goal.fail("control", "expected [na, nb], at least 2 each");
-  s.vertices_per_span = static_cast<int>(goal.get_in_range("vertices_per_span", s.vertices_per_span, 1, 16));
-  return s;
-}
-
-std::vector<PropertyDoc> CausticSurfaceSettings::docs() {
-  return {{"goal.control", "[na, nb]", "[60, 60]", "B-spline control points of the shaped face"},
-          {"goal.vertices_per_span", "integer", "3", "mesh vertices per control span"}};
 }
 
 std::array<int, 2> CausticSurfaceSettings::vertices() const {

@@ -14,6 +14,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/options.h"
 #include "core/registry.h"
 #include "geometry/mesh.h"
 #include "tuning/observation.h"
@@ -33,13 +34,24 @@ struct GridField;
 struct CausticGoalSettings {
   std::filesystem::path image_file;
   std::string material = "VeroClear";
-  std::array<int, 2> image{240, 240}, rays{480, 480};
-  std::array<double, 2> receiver_mm{50, 50};
+  std::array<int, 2> image{240, 240}, rays{0, 0};
+  std::array<double, 2> receiver_mm{kUnset, kUnset};
   double distance_mm = 200, refractive_index = 1.5;
   Bounds slab;
 
+  template <class Declare, class Self>
+  static void declare(Declare& d, Self& o) {
+    d.file(o.image_file, "image", "the picture to cast (grey levels)");
+    d.value(o.material, "material", "the slab's material");
+    d.number(o.distance_mm, "distance_mm", Range::closed(1e-3, 1e6), "receiver below the slab's bottom");
+    d.number(o.receiver_mm, "receiver_mm", Range::above(0), "receiver extent [x, y]", Default{"the footprint"});
+    d.number(o.image, "image_size", Range::at_least(1), "simulated image [width, height]");
+    d.number(o.rays, "rays", Range::at_least(1), "stratified rays [nx, ny]", Default{"2 × image_size"});
+    d.number(o.refractive_index, "refractive_index", Range::closed(1, 4), "of the slab's material");
+  }
   static CausticGoalSettings read(const Properties& goal, const Experiment& experiment);
-  static std::vector<PropertyDoc> docs();
+  /// The rows as goal keys, for a translator's TypeDoc.
+  static std::vector<PropertyDoc> docs() { return prefixed(option_docs<CausticGoalSettings>(), "goal."); }
   /// The "caustics" simulator's properties for this slab, its top meshed
   /// with `vertices`.
   nlohmann::json simulator(std::array<int, 2> vertices) const;
@@ -58,8 +70,18 @@ struct CausticSurfaceSettings {
   std::array<int, 2> control{60, 60};
   int vertices_per_span = 3;
 
-  static CausticSurfaceSettings read(const Properties& goal);
-  static std::vector<PropertyDoc> docs();
+  template <class Declare, class Self>
+  static void declare(Declare& d, Self& o) {
+    d.number(o.control, "control", Range::at_least(2), "B-spline control points of the shaped face");
+    d.number(o.vertices_per_span, "vertices_per_span", Range::closed(1, 16), "mesh vertices per control span");
+  }
+  bool check(std::string* why) const {
+    if (static_cast<long long>(control[0]) * control[1] <= 1'000'000) return true;
+    *why = "control: more than a million control points";
+    return false;
+  }
+  static CausticSurfaceSettings read(const Properties& goal) { return read_options<CausticSurfaceSettings>(goal); }
+  static std::vector<PropertyDoc> docs() { return prefixed(option_docs<CausticSurfaceSettings>(), "goal."); }
   /// Mesh vertices of the simulated surface along each axis.
   std::array<int, 2> vertices() const;
   /// The B-spline node: along `axis` ("z", or "w" under a cut), heights

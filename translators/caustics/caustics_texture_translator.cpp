@@ -40,19 +40,38 @@
 namespace spec2fab {
 namespace {
 
-const TextureKeys kTextureKeys{"texture", "texture_columns", "texture_metric", "texture_optimizer"};
+// The texture's keys: "image" is the caustic's.
+TextureOptions texture_options() {
+  return {{"texture", "texture_columns", "texture_metric", "texture_optimizer"},
+          {"VeroCyan", "VeroMagenta", "VeroYellow", "VeroWhitePlus"}};
+}
 
 class CausticsTextureTranslator final : public TuningTranslator {
  public:
+  /// Its own goal keys; the texture and caustic pieces declare the rest.
+  struct Options {
+    bool compensate_texture = true;
+    double min_thickness_mm = kUnset, start_thickness_mm = kUnset;
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.value(o.compensate_texture, "compensate_texture",
+              "the caustic phase sees the texture's shadow; false tunes as if it were clear");
+      d.number(o.min_thickness_mm, "min_thickness_mm", Range::above(0), "thinnest the slab may get",
+               Default{"t + 1/4 of the rest"});
+      d.number(o.start_thickness_mm, "start_thickness_mm", Range::above(0), "the flat start",
+               Default{"t + 3/4 of the rest"});
+    }
+  };
+
   CausticsTextureTranslator(const Properties& /*root*/, const Experiment& experiment)
       : settings_(CausticGoalSettings::read(experiment.goal(), experiment)),
-        texture_(experiment.goal(), experiment, kTextureKeys,
-                 {"VeroCyan", "VeroMagenta", "VeroYellow", "VeroWhitePlus"}, settings_.material) {
+        texture_(experiment.goal(), experiment, texture_options(), settings_.material) {
     const Properties goal = experiment.goal();
+    const Options options = read_options<Options>(goal);
     const Bounds bounds = experiment.solid().bounds();
     const Vec3 size = bounds.size();
     texture_mm_ = texture_.ink_mm();
-    compensate_ = goal.get<bool>("compensate_texture", true);
+    compensate_ = options.compensate_texture;
 
     // The shaped face: thicknesses of the clear slab, measured from the top face.
     surface_ = CausticSurfaceSettings::read(goal);
@@ -60,8 +79,11 @@ class CausticsTextureTranslator final : public TuningTranslator {
     if (!(body > 0.1 * size.z()))
       goal.fail("max_ink_mm", fmt::format("the texture ({:g} mm of ink) leaves too little of the {:g} mm slab under it",
                                          texture_mm_, size.z()));
-    const double thinnest = goal.get_in_range("min_thickness_mm", texture_mm_ + 0.25 * body, texture_mm_ + 1e-3, size.z());
-    const double start = goal.get_in_range("start_thickness_mm", texture_mm_ + 0.75 * body, thinnest, size.z());
+    const double thinnest =
+        std::isnan(options.min_thickness_mm) ? texture_mm_ + 0.25 * body : options.min_thickness_mm;
+    require_in(goal, "min_thickness_mm", thinnest, Range::closed(texture_mm_ + 1e-3, size.z()));
+    const double start = std::isnan(options.start_thickness_mm) ? texture_mm_ + 0.75 * body : options.start_thickness_mm;
+    require_in(goal, "start_thickness_mm", start, Range::closed(thinnest, size.z()));
     cut_z_ = bounds.upper.z() - texture_mm_;
 
     nlohmann::json layers = texture_.ink_layers();
@@ -141,24 +163,22 @@ class CausticsTextureTranslator final : public TuningTranslator {
         "phase sees the fixed texture's collimated transmittance (exp(-(sigma_a + sigma_s') d), "
         "luminance-weighted) as a filter on the exit face. Writes the clear slab's outline as "
         "print/surface.stl besides the voxel outputs (which carry the inks).",
-        {{"goal.compensate_texture", "bool", "true",
-          "the caustic phase sees the texture's shadow; false tunes as if it were clear"},
-         {"goal.min_thickness_mm", "number (mm)", "t + 1/4 of the rest", "thinnest the slab may get"},
-         {"goal.start_thickness_mm", "number (mm)", "t + 3/4 of the rest", "the flat start"},
-         {"optimizer", "object", "nlopt LD_LBFGS, 1000 evaluations", "the bottom face's optimizer"}},
+        prefixed(option_docs<Options>(), "goal."),
         R"({"translator": "caustics_texture", "goal": {"image": "ring.png", "texture": "logo.png"}})"};
-    for (PropertyDoc& d : TexturePiece::docs(kTextureKeys, "[VeroCyan, VeroMagenta, VeroYellow, VeroWhitePlus]")) {
+    doc.properties.push_back(
+        {"optimizer", "optimizer", "nlopt LD_LBFGS, 1000 evaluations", "the bottom face's optimizer"});
+    for (PropertyDoc& d : TexturePiece::docs(texture_options())) {
       // Black is clear: no ink, and the albedo model sees a dark ground through the slab.
       if (d.name == "goal.texture") d.meaning = "the picture on the top face (sRGB), row 0 at the lowest y; black is clear";
       if (d.name == "goal.max_ink_mm") d.meaning = "thickest layer of each ink; t is their sum";
       doc.properties.push_back(std::move(d));
     }
-    for (PropertyDoc& d : CausticSurfaceSettings::docs()) doc.properties.push_back(std::move(d));
+    append(doc.properties, CausticSurfaceSettings::docs());
     for (PropertyDoc& d : CausticGoalSettings::docs()) {
       if (d.name == "goal.distance_mm") d.meaning = "receiver beyond the textured top face";
       doc.properties.push_back(std::move(d));
     }
-    for (PropertyDoc& d : TreeOutputOptions::docs()) doc.properties.push_back(std::move(d));
+    append(doc.properties, TreeOutputOptions::docs());
     return doc;
   }
 

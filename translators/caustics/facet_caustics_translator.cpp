@@ -48,24 +48,49 @@ namespace {
 
 class FacetCausticsTranslator final : public TuningTranslator {
  public:
+  /// Its own goal keys; the caustic piece declares the rest.
+  struct Options {
+    std::array<int, 2> facets{45, 45};
+    double min_height_mm = kUnset, start_height_mm = kUnset, max_slope = 1;
+    int kernel_iterations = 20, assignment_sweeps = 200;
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.number(o.facets, "facets", Range::at_least(1), "facets (and kernels) [nx, ny]");
+      d.number(o.min_height_mm, "min_height_mm", Range::above(0), "lowest a facet may go",
+               Default{"1/4 of the solid's height"});
+      d.number(o.start_height_mm, "start_height_mm", Range::above(0), "facets' mean height",
+               Default{"3/4 of the solid's height"});
+      d.number(o.max_slope, "max_slope", Range::closed(1e-3, 10), "steepest facet (|dh/dx|, |dh/dy|)");
+      d.number(o.kernel_iterations, "kernel_iterations", Range::closed(0, 1000), "EM iterations refining the kernels");
+      d.number(o.assignment_sweeps, "assignment_sweeps", Range::closed(0, 1e6),
+               "serial sweeps of the swap phase (0: no swaps)");
+    }
+    bool check(std::string* why) const {
+      if (static_cast<long long>(facets[0]) * facets[1] <= 250'000) return true;
+      *why = "facets: more than 250,000 facets";
+      return false;
+    }
+  };
+
   FacetCausticsTranslator(const Properties& root, const Experiment& experiment) {
     const Properties goal = experiment.goal();
     const MaterialPalette& palette = experiment.palette();
     settings_ = CausticGoalSettings::read(goal, experiment);
+    const Options options = read_options<Options>(goal);
     const Vec3 size = settings_.slab.size();
-    facets_ = goal.get<std::array<int, 2>>("facets", {45, 45});
-    if (facets_[0] < 1 || facets_[1] < 1 || facets_[0] * facets_[1] > 250'000)
-      goal.fail("facets", "expected [nx, ny], at least 1 each and at most 250,000 facets");
-    low_mm_ = goal.get_in_range("min_height_mm", 0.25 * size.z(), 1e-3, size.z());
-    start_mm_ = goal.get_in_range("start_height_mm", 0.75 * size.z(), low_mm_, size.z());
-    max_slope_ = goal.get_in_range("max_slope", 1.0, 1e-3, 10.0);
+    facets_ = options.facets;
+    low_mm_ = std::isnan(options.min_height_mm) ? 0.25 * size.z() : options.min_height_mm;
+    require_in(goal, "min_height_mm", low_mm_, Range::closed(1e-3, size.z()));
+    start_mm_ = std::isnan(options.start_height_mm) ? 0.75 * size.z() : options.start_height_mm;
+    require_in(goal, "start_height_mm", start_mm_, Range::closed(low_mm_, size.z()));
+    max_slope_ = options.max_slope;
     facet_mm_ = {size.x() / facets_[0], size.y() / facets_[1]};
     if (max_slope_ * (facet_mm_[0] + facet_mm_[1]) > size.z() - low_mm_)
       goal.fail("max_slope", fmt::format("a facet {:.3g} x {:.3g} mm at slope {:g} rises more than the {:.3g} mm "
                                          "between min_height_mm and the top",
                                          facet_mm_[0], facet_mm_[1], max_slope_, size.z() - low_mm_));
-    const int kernel_iterations = static_cast<int>(goal.get_in_range("kernel_iterations", 20, 0, 1000));
-    sweeps_ = static_cast<int>(goal.get_in_range("assignment_sweeps", 200, 0, 1e6));
+    const int kernel_iterations = options.kernel_iterations;
+    sweeps_ = options.assignment_sweeps;
     // The caustics simulator's slab and light (the top's vertex grid unused:
     // the faceted slab is meshed exactly).
     setup_ = CausticSlabConfig::read(
@@ -211,18 +236,14 @@ class FacetCausticsTranslator final : public TuningTranslator {
         "offsets are stitched by least squares. Writes the faceted slab, walls included, as "
         "print/surface.stl besides the voxel outputs; result.json reports RMSE and SSIM of the "
         "traced surface, of the kernels themselves, and the roughness the swaps removed.",
-        {{"goal.facets", "[nx, ny]", "[45, 45]", "facets (and kernels)"},
-         {"goal.min_height_mm", "number (mm)", "1/4 of the solid's height", "lowest a facet may go"},
-         {"goal.start_height_mm", "number (mm)", "3/4 of the solid's height", "facets' mean height"},
-         {"goal.max_slope", "number", "1", "steepest facet (|dh/dx|, |dh/dy|)"},
-         {"goal.kernel_iterations", "integer", "20", "EM iterations refining the kernels"},
-         {"goal.assignment_sweeps", "integer", "200", "serial sweeps of the swap phase (0: no swaps)"},
-         {"swap_optimizer", "optimizer", "annealing, 10 swaps per run, 2000 over the sweeps, T 1 -> 0.001 mm^2",
-          "the swap phase's optimizer (each tuner's own copy)"},
-         {"optimizer", "optimizer", "nlopt LN_BOBYQA, 200 evaluations", "each facet's aiming optimizer"}},
+        prefixed(option_docs<Options>(), "goal."),
         R"({"translator": "facet_caustics", "goal": {"image": "ring.png", "facets": [45, 45]}})"};
-    for (PropertyDoc& d : CausticGoalSettings::docs()) doc.properties.push_back(std::move(d));
-    for (PropertyDoc& d : TreeOutputOptions::docs()) doc.properties.push_back(std::move(d));
+    doc.properties.push_back({"swap_optimizer", "optimizer",
+                              "annealing, 10 swaps per run, 2000 over the sweeps, T 1 -> 0.001 mm^2",
+                              "the swap phase's optimizer (each tuner's own copy)"});
+    doc.properties.push_back({"optimizer", "optimizer", "nlopt LN_BOBYQA, 200 evaluations", "each facet's aiming optimizer"});
+    append(doc.properties, CausticGoalSettings::docs());
+    append(doc.properties, TreeOutputOptions::docs());
     return doc;
   }
 

@@ -26,14 +26,29 @@ namespace {
 
 class SmoothCausticsTranslator final : public TuningTranslator {
  public:
+  /// Its own goal keys; the caustic piece declares the rest.
+  struct Options {
+    double min_height_mm = kUnset, start_height_mm = kUnset;
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.number(o.min_height_mm, "min_height_mm", Range::above(0), "lowest the top may go",
+               Default{"1/4 of the solid's height"});
+      d.number(o.start_height_mm, "start_height_mm", Range::above(0), "the flat start",
+               Default{"3/4 of the solid's height"});
+    }
+  };
+
   SmoothCausticsTranslator(const Properties& /*root*/, const Experiment& experiment) {
     const Properties goal = experiment.goal();
     const Bounds bounds = experiment.solid().bounds();
     const Vec3 size = bounds.size();
     surface_ = CausticSurfaceSettings::read(goal);
     settings_ = CausticGoalSettings::read(goal, experiment);
-    const double low = goal.get_in_range("min_height_mm", 0.25 * size.z(), 1e-3, size.z());
-    const double start = goal.get_in_range("start_height_mm", 0.75 * size.z(), low, size.z());
+    const Options options = read_options<Options>(goal);
+    const double low = std::isnan(options.min_height_mm) ? 0.25 * size.z() : options.min_height_mm;
+    require_in(goal, "min_height_mm", low, Range::closed(1e-3, size.z()));
+    const double start = std::isnan(options.start_height_mm) ? 0.75 * size.z() : options.start_height_mm;
+    require_in(goal, "start_height_mm", start, Range::closed(low, size.z()));
     set_tree(surface_.node("z", {bounds.lower.z() + start, bounds.lower.z() + low, bounds.upper.z()}, bounds,
                            settings_.material),
              "smooth caustics tree", goal, experiment);
@@ -84,15 +99,14 @@ class SmoothCausticsTranslator final : public TuningTranslator {
         "image_mse against the goal picture, L-BFGS on the tracer's derivative unless `optimizer` "
         "says otherwise (the paper's SPSA: {\"type\": \"spsa\", \"c\": 0.002, \"first_step\": 0.01}). "
         "Writes the smooth slab as print/surface.stl besides the voxel outputs.",
-        {{"goal.min_height_mm", "number (mm)", "1/4 of the solid's height", "lowest the top may go"},
-         {"goal.start_height_mm", "number (mm)", "3/4 of the solid's height", "the flat start"},
-         {"optimizer", "object", "nlopt LD_LBFGS, 1000 evaluations", "the surface's optimizer"},
-         {"compare_optimizers", "array of optimizers", "none",
-          "also run each from the same start first; reports and plots them against the main one"}},
+        prefixed(option_docs<Options>(), "goal."),
         R"({"translator": "smooth_caustics", "goal": {"image": "ring.png", "distance_mm": 200}})"};
-    for (PropertyDoc& d : CausticSurfaceSettings::docs()) doc.properties.push_back(std::move(d));
-    for (PropertyDoc& d : CausticGoalSettings::docs()) doc.properties.push_back(std::move(d));
-    for (PropertyDoc& d : TreeOutputOptions::docs()) doc.properties.push_back(std::move(d));
+    doc.properties.push_back({"optimizer", "optimizer", "nlopt LD_LBFGS, 1000 evaluations", "the surface's optimizer"});
+    doc.properties.push_back({"compare_optimizers", "array of optimizers", "none",
+                              "also run each from the same start first; reports and plots them against the main one"});
+    append(doc.properties, CausticSurfaceSettings::docs());
+    append(doc.properties, CausticGoalSettings::docs());
+    append(doc.properties, TreeOutputOptions::docs());
     return doc;
   }
 

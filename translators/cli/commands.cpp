@@ -23,6 +23,7 @@
 #include "reducer/reducer_tree.h"
 #include "spec/run_folder.h"
 #include "spec/translator.h"
+#include "spec/tree_outputs.h"
 #include "tuning/optimizer.h"
 #include "tuning/parts.h"
 
@@ -310,17 +311,31 @@ std::vector<ListedRegistry> sorted_registries() {
 
 }  // namespace
 
+namespace {
+
+// A table cell holds no '|' or newline.
+std::string table_cell(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    if (c == '|') out += "\\|";
+    else if (c == '\n') out += ' ';
+    else out += c;
+  }
+  return out;
+}
+
+std::string option_table(const TypeDoc& doc) {
+  std::ostringstream md;
+  md << "| option | type | default | meaning |\n|---|---|---|---|\n";
+  for (const PropertyDoc& p : doc.properties)
+    md << "| `" << table_cell(p.name) << "` | " << table_cell(p.type) << " | " << table_cell(p.default_value)
+       << " | " << table_cell(p.meaning) << " |\n";
+  return md.str();
+}
+
+}  // namespace
+
 std::string parts_reference() {
-  // A table cell holds no '|' or newline.
-  const auto cell = [](std::string text) {
-    std::string out;
-    for (char c : text) {
-      if (c == '|') out += "\\|";
-      else if (c == '\n') out += ' ';
-      else out += c;
-    }
-    return out;
-  };
   std::ostringstream md;
   md << "# Parts reference\n\n"
      << "Every registered part of this build, with its options, defaults and an example: what\n"
@@ -331,16 +346,51 @@ std::string parts_reference() {
     md << "\n## " << registry.heading << " (`spec2fab list " << registry.kind << "`)\n";
     for (const auto& [name, doc] : registry.entries()) {
       md << "\n### " << name << "\n\n" << doc.summary << "\n";
-      if (!doc.properties.empty()) {
-        md << "\n| option | type | default | meaning |\n|---|---|---|---|\n";
-        for (const PropertyDoc& p : doc.properties)
-          md << "| `" << cell(p.name) << "` | " << cell(p.type) << " | " << cell(p.default_value) << " | "
-             << cell(p.meaning) << " |\n";
-      }
+      if (!doc.properties.empty()) md << "\n" << option_table(doc);
       if (!doc.example.empty()) md << "\nExample: `" << doc.example << "`\n";
     }
   }
   return md.str();
+}
+
+bool update_option_tables(const fs::path& file) {
+  std::ifstream in(file);
+  if (!in) throw InputError(file.string() + ": cannot read");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  const std::string text = buffer.str();
+  const std::string open = "<!-- options: ", close = "<!-- end options -->";
+  std::string out;
+  size_t at = 0;
+  for (size_t start; (start = text.find(open, at)) != std::string::npos;) {
+    const size_t line_end = text.find('\n', start);
+    const size_t end = text.find(close, start);
+    if (line_end == std::string::npos || end == std::string::npos)
+      throw InputError(file.string() + ": an '" + open + "' block has no '" + close + "'");
+    std::istringstream words(text.substr(start + open.size(), line_end - start - open.size()));
+    std::string kind, name, scope;
+    words >> kind >> name >> scope;
+    std::optional<TypeDoc> doc;
+    for (const ListedRegistry& registry : sorted_registries()) {
+      if (registry.kind != kind) continue;
+      for (auto& [entry, entry_doc] : registry.entries())
+        if (entry == name) doc = std::move(entry_doc);
+    }
+    if (!doc) throw InputError(file.string() + ": no " + kind + " '" + name + "' in this build");
+    if (scope == "own") {  // without the tree outputs' rows, which the tree translator's table shows
+      std::vector<std::string> shared;
+      for (const PropertyDoc& row : TreeOutputOptions::docs()) shared.push_back(row.name);
+      std::erase_if(doc->properties, [&](const PropertyDoc& row) {
+        return std::find(shared.begin(), shared.end(), row.name) != shared.end();
+      });
+    }
+    out += text.substr(at, line_end + 1 - at) + option_table(*doc);
+    at = end;
+  }
+  out += text.substr(at);
+  if (out == text) return false;
+  std::ofstream(file) << out;
+  return true;
 }
 
 std::vector<std::string> list_kinds() {

@@ -42,6 +42,13 @@ int list_command(const std::string& kind, bool verbose, const std::filesystem::p
 /// docs/parts.md: every registered part, its options and an example, as
 /// Markdown (`list --markdown`; a test keeps the committed file current).
 std::string parts_reference();
+/// Rewrites, in a Markdown file, every block between
+///   <!-- options: KIND NAME … -->  and  <!-- end options -->
+/// with that part's option table (`list --update-doc`; a test keeps
+/// docs/experiment-format.md current); "KIND NAME own" leaves out the tree
+/// outputs' rows that every tree-making translator shares. Returns whether
+/// the file changed.
+bool update_option_tables(const std::filesystem::path& file);
 /// What `list` can show: every listed registry's kind, then material and printer.
 std::vector<std::string> list_kinds();
 

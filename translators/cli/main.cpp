@@ -124,6 +124,10 @@ int main(int argc, char** argv) {
   bool list_markdown = false;
   list_cmd->add_flag("--markdown", list_markdown,
                      "every registered part with its options as Markdown (what docs/parts.md holds)");
+  std::filesystem::path update_doc;
+  list_cmd->add_option("--update-doc", update_doc,
+                       "rewrite the option tables of a Markdown file (between '<!-- options: KIND NAME -->' and "
+                       "'<!-- end options -->') from the code, e.g. docs/experiment-format.md");
   list_cmd->add_option("--datasets", datasets,
                        "datasets folder (default $SPEC2FAB_DATASETS or the source tree's)");
 
@@ -147,6 +151,10 @@ int main(int argc, char** argv) {
     if (*validate_cmd) return cli::validate_command(validate_file);
     if (*simulate_cmd) return cli::simulate_command(simulate);
     if (*export_cmd) return cli::export_command(export_arguments);
+    if (*list_cmd && !update_doc.empty()) {
+      std::cout << update_doc.string() << (cli::update_option_tables(update_doc) ? ": updated\n" : ": current\n");
+      return 0;
+    }
     if (*list_cmd && list_markdown) {
       std::cout << cli::parts_reference();
       return 0;

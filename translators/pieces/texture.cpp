@@ -13,6 +13,7 @@
 #include "core/colour.h"
 #include "core/parameter.h"
 #include "core/properties.h"
+#include "core/strings.h"
 #include "reducer/reducer_tree.h"
 #include "spec/experiment.h"
 #include "tuning/tuner.h"
@@ -168,61 +169,52 @@ void write_colour_panels(const std::vector<const std::vector<Rgb>*>& panels, int
   if (!cv::imwrite(file.string(), image)) throw std::runtime_error("cannot write " + file.string());
 }
 
-TexturePiece::TexturePiece(const Properties& goal, const Experiment& experiment, const TextureKeys& keys,
-                           std::vector<std::string> default_inks, const std::string& ground) {
+TextureOptions::TextureOptions(TextureKeys renamed, std::vector<std::string> inks_by_default)
+    : keys(std::move(renamed)), default_inks(std::move(inks_by_default)) {
+  if (!default_inks.empty()) default_inks_text = "[" + join(default_inks) + "]";
+}
+
+TexturePiece::TexturePiece(const Properties& goal, const Experiment& experiment, TextureOptions o,
+                           const std::string& ground) {
+  read_options_into(o, goal);
   const MaterialPalette& palette = experiment.palette();
   const PrinterProfile& printer = experiment.printer();
-  columns_ = goal.get<std::array<int, 2>>(keys.columns, {0, 0});
-  if (columns_[0] < 0 || columns_[1] < 0 || (columns_[0] == 0) != (columns_[1] == 0) ||
-      static_cast<long long>(columns_[0]) * columns_[1] > 1'000'000)
-    goal.fail(keys.columns, "give two positive counts (at most a million columns), or leave out for the image's size");
-  image_ = load_goal_image(goal, keys.image, columns_);
-  if (goal.has("inks")) {
-    inks_ = goal.get<std::vector<std::string>>("inks");
+  columns_ = o.columns;
+  image_ = load_goal_image(goal, o.keys.image, columns_);
+  if (o.inks) {
+    inks_ = *o.inks;
     for (const std::string& ink : inks_) palette.id(ink, goal.where("inks"));
-  } else if (!default_inks.empty()) {
-    inks_ = std::move(default_inks);
+  } else if (!o.default_inks.empty()) {
+    inks_ = o.default_inks;
   } else {
     for (const std::string& m : printer.model_materials) {
       if (m != ground && palette.material(palette.id(m, goal.where())).kind != "transparent") inks_.push_back(m);
     }
   }
   if (inks_.empty()) goal.fail("inks", "no ink to print the texture with");
-  step_mm_ = goal.get_in_range("layer_step_mm", printer.layer_mm, 1e-3, 10);
-  // One thickest layer for every ink, or one each: a bright texture needs
-  // a thicker white than its colours do.
-  max_ink_mm_.assign(inks_.size(), 5 * step_mm_);
-  if (goal.has("max_ink_mm") && goal.peek("max_ink_mm").is_array()) {
-    max_ink_mm_ = goal.get<std::vector<double>>("max_ink_mm");
+  step_mm_ = std::isnan(o.layer_step_mm) ? printer.layer_mm : o.layer_step_mm;
+  if (o.max_ink_mm.per_ink) {
+    max_ink_mm_ = o.max_ink_mm.mm;
     if (max_ink_mm_.size() != inks_.size()) goal.fail("max_ink_mm", "give one thickness per ink, or one for all");
-    for (double m : max_ink_mm_)
-      if (!(m >= step_mm_ && m <= 10)) goal.fail("max_ink_mm", fmt::format("{} is outside [{}, 10] mm", m, step_mm_));
+    for (double m : max_ink_mm_) require_in(goal, "max_ink_mm", m, Range::closed(step_mm_, 10));
     ink_mm_ = std::accumulate(max_ink_mm_.begin(), max_ink_mm_.end(), 0.0);
   } else {
-    const double each = goal.get_in_range("max_ink_mm", 5 * step_mm_, step_mm_, 10);
+    const double each = o.max_ink_mm.mm.empty() ? 5 * step_mm_ : o.max_ink_mm.mm.front();
+    require_in(goal, "max_ink_mm", each, Range::closed(step_mm_, 10));
     max_ink_mm_.assign(inks_.size(), each);
     ink_mm_ = static_cast<double>(inks_.size()) * each;
   }
-  metric_ = goal.get<std::string>(keys.metric, "ciede2000");
-  diffusion_ = goal.get<bool>("error_diffusion", true);
-  gamut_map_ = goal.get<bool>("gamut_map", diffusion_);
-  low_pass_sigma_ = goal.get_in_range("low_pass_sigma_px", 1.5, 0.1, 100);
-  optimizer_ = experiment.section_or(keys.optimizer, {{"type", "exhaustive"}});
+  metric_ = o.metric;
+  diffusion_ = o.error_diffusion;
+  gamut_map_ = o.gamut_map.value_or(diffusion_);
+  low_pass_sigma_ = o.low_pass_sigma_px;
+  optimizer_ = experiment.section_or(o.keys.optimizer, {{"type", "exhaustive"}});
 }
 
-std::vector<PropertyDoc> TexturePiece::docs(const TextureKeys& keys, const std::string& default_inks) {
-  return {{"goal." + keys.image, "file", "required", "the picture (sRGB PNG/JPEG), row 0 at v = 0"},
-          {"goal." + keys.columns, "[nu, nv]", "the image's size", "columns over (u, v); the image is resampled by area"},
-          {"goal.inks", "[materials]", default_inks, "one layer each, in this order from the surface down"},
-          {"goal.layer_step_mm", "number (mm)", "the printer's layer", "thickness step of each ink layer"},
-          {"goal.max_ink_mm", "number or [per ink] (mm)", "5 steps", "thickest layer of each ink"},
-          {"goal." + keys.metric, "name", "ciede2000", "ciede2000 or rgb_mse"},
-          {"goal.error_diffusion", "bool", "true",
-           "diffuse residuals (serial raster); false: nearest stack per column, in parallel"},
-          {"goal.gamut_map", "bool", "= error_diffusion",
-           "first move each goal colour into the convex hull of the printable stacks' colours (what diffusion can mix)"},
-          {"goal.low_pass_sigma_px", "number", "1.5", "blur (in columns) of the low-pass error in result.json"},
-          {keys.optimizer, "object", "{\"type\": \"exhaustive\"}", "each column's optimizer"}};
+std::vector<PropertyDoc> TexturePiece::docs(const TextureOptions& options) {
+  std::vector<PropertyDoc> rows = prefixed(option_docs(options), "goal.");
+  rows.push_back({options.keys.optimizer, "optimizer", "{\"type\": \"exhaustive\"}", "each column's optimizer"});
+  return rows;
 }
 
 nlohmann::json TexturePiece::ink_layers() const {

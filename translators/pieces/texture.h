@@ -8,13 +8,15 @@
 /// ΔE00 figures reported.
 
 #include <array>
-#include <functional>
 #include <filesystem>
+#include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "core/options.h"
 #include "core/registry.h"
 #include "materials/material.h"
 #include "tuning/schedule.h"
@@ -66,15 +68,76 @@ struct TextureKeys {
   std::string optimizer = "optimizer";  ///< top level of the experiment: each column's optimizer
 };
 
+/// "max_ink_mm": one thickness for every ink, or one each (a bright
+/// texture needs a thicker white than its colours do).
+struct InkThickness {
+  std::vector<double> mm;  ///< empty: 5 layer steps each
+  bool per_ink = false;
+  template <class Context>
+  void read(const Properties& goal, const char* name, const Context&) {
+    if (!goal.has(name)) return;
+    per_ink = goal.peek(name).is_array();
+    mm = per_ink ? goal.get<std::vector<double>>(name) : std::vector<double>{goal.get<double>(name)};
+  }
+  std::string type_text() const { return "number or array of numbers (mm)"; }
+  std::string default_text() const { return "5 layer steps"; }
+};
+
+/// The texture's goal keys, declared once; a translator renames some
+/// (`keys`) and gives its own default inks.
+struct TextureOptions {
+  TextureKeys keys;
+  std::vector<std::string> default_inks;  ///< empty: the printer's materials but the ground and clear ones
+  std::string default_inks_text = "the printer's materials but the backing and clear ones";
+
+  std::filesystem::path image;
+  std::array<int, 2> columns{0, 0};
+  std::optional<std::vector<std::string>> inks;
+  double layer_step_mm = kUnset;
+  InkThickness max_ink_mm;
+  std::string metric = "ciede2000";
+  bool error_diffusion = true;
+  std::optional<bool> gamut_map;
+  double low_pass_sigma_px = 1.5;
+
+  TextureOptions() = default;
+  TextureOptions(TextureKeys renamed, std::vector<std::string> inks_by_default);
+
+  template <class Declare, class Self>
+  static void declare(Declare& d, Self& o) {
+    d.file(o.image, o.keys.image.c_str(), "the picture (sRGB PNG/JPEG), row 0 at v = 0");
+    d.number(o.columns, o.keys.columns.c_str(), Range::at_least(1),
+             "columns over (u, v); the image is resampled by area", Default{"the image's size"});
+    d.value(o.inks, "inks", "one layer each, in this order from the surface down",
+            Default{o.default_inks_text.c_str()});
+    d.number(o.layer_step_mm, "layer_step_mm", Range::closed(1e-3, 10), "thickness step of each ink layer",
+             Default{"the printer's layer"});
+    d.custom(o.max_ink_mm, "max_ink_mm", "thickest layer, one for all inks or one per ink (at least one step)");
+    d.value(o.metric, o.keys.metric.c_str(), "an albedo metric: ciede2000 or rgb_mse");
+    d.value(o.error_diffusion, "error_diffusion",
+            "diffuse residuals (serial raster); false: nearest stack per column, in parallel");
+    d.value(o.gamut_map, "gamut_map",
+            "first move each goal colour into the convex hull of the printable stacks' colours (what diffusion can "
+            "mix)",
+            Default{"= error_diffusion"});
+    d.number(o.low_pass_sigma_px, "low_pass_sigma_px", Range::closed(0.1, 100),
+             "blur (in columns) of the low-pass error in result.json");
+  }
+  bool check(std::string* why) const {
+    if (static_cast<long long>(columns[0]) * columns[1] <= 1'000'000) return true;
+    *why = keys.columns + ": more than a million columns";
+    return false;
+  }
+};
+
 class TexturePiece {
  public:
-  /// Reads the texture's options from `goal`. The inks default to
-  /// `default_inks`, or when that is empty to the printer's materials but
-  /// `ground` and clear ones.
-  TexturePiece(const Properties& goal, const Experiment& experiment, const TextureKeys& keys,
-               std::vector<std::string> default_inks, const std::string& ground);
-  /// The options' rows for a translator's TypeDoc.
-  static std::vector<PropertyDoc> docs(const TextureKeys& keys, const std::string& default_inks);
+  /// Reads the texture's options from `goal` (`options` holds their names
+  /// and default inks); `ground` is what the inks lie on.
+  TexturePiece(const Properties& goal, const Experiment& experiment, TextureOptions options,
+               const std::string& ground);
+  /// The options' rows for a translator's TypeDoc, the optimizer's included.
+  static std::vector<PropertyDoc> docs(const TextureOptions& options);
 
   std::array<int, 2> columns() const { return columns_; }
   int column_count() const { return columns_[0] * columns_[1]; }

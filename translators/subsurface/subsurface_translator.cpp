@@ -31,33 +31,69 @@ namespace {
 
 class SubsurfaceTranslator final : public TuningTranslator {
  public:
+  // "media": the chessboard's two media.
+  struct ChessboardMedia {
+    std::vector<MeasuredMedium> media;
+    template <class Context>
+    void read(const Properties& goal, const char* name, const Context&) {
+      const nlohmann::json& given = goal.raw(name);
+      if (!given.is_array() || given.size() != 2) goal.fail(name, "give the chessboard's two media");
+      for (size_t i = 0; i < 2; ++i) {
+        const nlohmann::json holder = {{"medium", given[i]}};
+        media.push_back(read_medium(Properties::wrap(holder, goal.where(name) + "/" + std::to_string(i)), "medium"));
+      }
+    }
+    std::string type_text() const { return "[medium, medium]"; }
+    std::string default_text() const { return "required"; }
+  };
+
+  struct Options {
+    ChessboardMedia media;
+    std::array<int, 2> columns{10, 10}, squares{0, 0};
+    int layers = 4;
+    std::optional<std::vector<std::string>> materials;
+    std::vector<int> thickness_steps{5, 10, 20, 40};
+    double layer_step_mm = kUnset;
+    std::string backing = "VeroWhitePlus";
+    ProfileGrid grid;
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.custom(o.media, "media", std::string("the chessboard's two media, each ").append(kMediumMeaning).c_str());
+      d.number(o.columns, "columns", Range::at_least(1), "columns (goal profiles) over (u, v)");
+      d.number(o.squares, "squares", Range::at_least(1), "chessboard squares over (u, v)", Default{"= columns"});
+      d.number(o.layers, "layers", Range::closed(1, 8), "layers per column");
+      d.value(o.materials, "materials", "what each layer may be", Default{"the printer's model materials"});
+      d.number(o.thickness_steps, "thickness_steps", Range::at_least(1),
+               "what each layer's thickness may be, in layer steps");
+      d.number(o.layer_step_mm, "layer_step_mm", Range::closed(1e-3, 10), "the thickness step",
+               Default{"the printer's layer"});
+      d.value(o.backing, "backing", "material below the layers and in the core");
+      ProfileGrid::declare(d, o.grid);
+    }
+    bool check(std::string* why) const {
+      if (thickness_steps.empty()) *why = "thickness_steps: no thickness to choose from";
+      else if (materials && materials->empty()) *why = "materials: no material to stack";
+      else return true;
+      return false;
+    }
+  };
+
   SubsurfaceTranslator(const Properties& /*root*/, const Experiment& experiment) {
     const Properties goal = experiment.goal();
     const MaterialPalette& palette = experiment.palette();
     const PrinterProfile& printer = experiment.printer();
-    columns_ = goal.get<std::array<int, 2>>("columns", {10, 10});
-    if (columns_[0] < 1 || columns_[1] < 1) goal.fail("columns", "give two positive counts");
-    squares_ = goal.get<std::array<int, 2>>("squares", columns_);
-    if (squares_[0] < 1 || squares_[1] < 1) goal.fail("squares", "give two positive counts");
-    if (goal.peek("media").size() != 2) goal.fail("media", "give the chessboard's two media");
-    const auto media_json = goal.peek("media");
-    for (size_t i = 0; i < 2; ++i) {
-      const nlohmann::json holder = {{"medium", media_json[i]}};
-      media_.push_back(read_medium(Properties::wrap(holder, goal.where("media") + "/" + std::to_string(i)), "medium"));
-    }
-    grid_ = ProfileGrid::read(goal);
-    layer_count_ = static_cast<int>(goal.get_in_range("layers", 4, 1, 8));
-    backing_ = goal.get<std::string>("backing", "VeroWhitePlus");
+    Options o = read_options<Options>(goal);
+    columns_ = o.columns;
+    squares_ = o.squares[0] == 0 ? columns_ : o.squares;
+    media_ = std::move(o.media.media);
+    grid_ = o.grid;
+    layer_count_ = o.layers;
+    backing_ = o.backing;
     palette.id(backing_, goal.where("backing"));
-    materials_ = goal.get<std::vector<std::string>>("materials", printer.model_materials);
-    if (materials_.empty()) goal.fail("materials", "no material to stack");
+    materials_ = o.materials.value_or(printer.model_materials);
     for (const std::string& m : materials_) palette.id(m, goal.where("materials"));
-    step_mm_ = goal.get_in_range("layer_step_mm", printer.layer_mm, 1e-3, 10);
-    thickness_steps_ = goal.get<std::vector<int>>("thickness_steps", {5, 10, 20, 40});
-    if (thickness_steps_.empty()) goal.fail("thickness_steps", "no thickness to choose from");
-    for (int s : thickness_steps_) {
-      if (s < 1) goal.fail("thickness_steps", "thicknesses are positive numbers of layer steps");
-    }
+    step_mm_ = std::isnan(o.layer_step_mm) ? printer.layer_mm : o.layer_step_mm;
+    thickness_steps_ = o.thickness_steps;
     std::sort(thickness_steps_.begin(), thickness_steps_.end());
     const double thickest = thickness_steps_.back() * step_mm_;
     const double shell = layer_count_ * thickest + step_mm_;
@@ -175,21 +211,11 @@ class SubsurfaceTranslator final : public TuningTranslator {
         "points, a chessboard of two measured media; Stratum -> Column (one per goal point) -> "
         "Layered (layers of tunable material and thickness over a backing), one independent "
         "tuner per column (branch and bound with a profile bound), run in parallel.",
-        {{"goal.media", "[medium, medium]", "required",
-          "the chessboard's two media: names (marble, skimmilk, skin1, ... Jensen et al. 2001) or "
-          "{absorption_per_mm, reduced_scattering_per_mm, refractive_index}"},
-         {"goal.columns", "[nu, nv]", "[10, 10]", "columns (goal profiles) over (u, v)"},
-         {"goal.squares", "[nu, nv]", "= columns", "chessboard squares over (u, v)"},
-         {"goal.layers", "integer", "4", "layers per column"},
-         {"goal.materials", "[materials]", "the printer's model materials", "what each layer may be"},
-         {"goal.thickness_steps", "[integers]", "[5, 10, 20, 40]", "what each layer's thickness may be, in layer steps"},
-         {"goal.layer_step_mm", "number (mm)", "the printer's layer", "the thickness step"},
-         {"goal.backing", "material", "VeroWhitePlus", "below the layers and in the core"},
-         {"goal.radius_mm", "number (mm)", "16", "profiles are compared on [0, radius_mm]"},
-         {"goal.samples", "integer", "400", "coefficients (and radii) per profile and channel"},
-         {"optimizer", "object", "branch_and_bound, best_bound_first", "each column's optimizer"}},
+        prefixed(option_docs<Options>(), "goal."),
         R"({"translator": "subsurface", "goal": {"media": ["marble", "skimmilk"]}})"};
-    for (PropertyDoc& d : TreeOutputOptions::docs()) doc.properties.push_back(std::move(d));
+    doc.properties.push_back(
+        {"optimizer", "optimizer", "branch_and_bound, best_bound_first", "each column's optimizer"});
+    append(doc.properties, TreeOutputOptions::docs());
     return doc;
   }
 

@@ -50,18 +50,11 @@ class TreeTranslator final : public TuningTranslator {
     TypeDoc doc{
         "A reducer tree, directly specified or tuned by tuners assembled from JSON. Binds it "
         "to the shape, tunes its free parameters, reports what it assigns and fabricates it.",
-        {{"goal.tree", "node", "required", "the reducer tree (see `spec2fab list node`)"},
-         {"goal.tuners", "array", "none",
-          "tuners: {name, node (path of child labels, \"\" = root), simulator, metric, goal, "
-          "optimizer}, each a registered type with its options (`spec2fab list simulator` ...)"},
-         {"goal.network", "object", "none", "{type: none | grid4 | grid8, width}: tuners row-major"},
-         {"goal.schedule", "array", "one serial phase of all tuners",
-          "phases: {name, tuners (names), sweeps, mode: serial | parallel, coupling (a registered "
-          "coupling with its options: `spec2fab list coupling`), fix_after}"},
-        },
+        {{"goal.tree", "node", "required", "the reducer tree (see `spec2fab list node`)"}},
         R"({"translator": "tree", "goal": {"tree": {"type": "layered", "material": )"
         R"("VeroWhitePlus"}}})"};
-    for (PropertyDoc& d : TreeOutputOptions::docs()) doc.properties.push_back(std::move(d));
+    append(doc.properties, tuning_plan_docs("goal."));
+    append(doc.properties, TreeOutputOptions::docs());
     return doc;
   }
 
