@@ -25,14 +25,29 @@ using namespace spec2fab;
 
 class TargetMassTranslator final : public TuningTranslator {
  public:
+  /// The goal's keys, declared once: read here, documented by doc().
+  struct Options {
+    double grams = 10, wall_mm = 2, step_mm = 0.1;
+    std::string material = "VeroWhitePlus";
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.number(o.grams, "grams", Range::closed(1e-6, 1e9), "the mass (g)");
+      d.value(o.material, "material", "what the print is made of");
+      d.number(o.wall_mm, "wall_mm", Range::at_least(0.1), "wall above the cut (at most half the smallest side)");
+      d.number(o.step_mm, "step_mm", Range::closed(1e-3, 10), "the cut's step");
+    }
+  };
+
   TargetMassTranslator(const Properties& /*root*/, const Experiment& experiment) {
     const Properties goal = experiment.goal();
     const Bounds box = experiment.solid().bounds();
-    grams_ = goal.get_in_range("grams", 10.0, 1e-6, 1e9);
-    material_ = goal.get<std::string>("material", "VeroWhitePlus");
+    const Options options = read_options<Options>(goal);
+    grams_ = options.grams;
+    material_ = options.material;
     experiment.palette().id(material_, goal.where("material"));
-    wall_mm_ = goal.get_in_range("wall_mm", 2.0, 0.1, 0.5 * box.size().minCoeff());
-    const double step = goal.get_in_range("step_mm", 0.1, 1e-3, 10);
+    wall_mm_ = options.wall_mm;
+    require_in(goal, "wall_mm", wall_mm_, Range::closed(0.1, 0.5 * box.size().minCoeff()));
+    const double step = options.step_mm;
     const nlohmann::json tree = {
         {"type", "plane"},
         {"axis", "z"},
@@ -69,13 +84,10 @@ class TargetMassTranslator final : public TuningTranslator {
   static TypeDoc doc() {
     TypeDoc doc{"A print of a given mass: solid below a tuned horizontal cut, hollow with a wall above it "
                 "(mass simulator, relative_mass_error, exhaustive search over the cut's steps).",
-                {{"goal.grams", "number (g)", "10", "the mass"},
-                 {"goal.material", "material", "VeroWhitePlus", "what the print is made of"},
-                 {"goal.wall_mm", "number (mm)", "2", "wall above the cut"},
-                 {"goal.step_mm", "number (mm)", "0.1", "the cut's step"},
-                 {"optimizer", "object", "{\"type\": \"exhaustive\"}", "the cut's optimizer"}},
+                prefixed(option_docs<Options>(), "goal."),
                 R"({"translator": "target_mass", "goal": {"grams": 20}})"};
-    for (PropertyDoc& d : TreeOutputOptions::docs()) doc.properties.push_back(std::move(d));
+    doc.properties.push_back({"optimizer", "optimizer", "{\"type\": \"exhaustive\"}", "the cut's optimizer"});
+    append(doc.properties, TreeOutputOptions::docs());
     return doc;
   }
 

@@ -26,7 +26,8 @@
 /// default; an option whose default depends on others (rays: twice the image)
 /// keeps a sentinel and says so in the docs with Default{"2 × image"}. A name
 /// ending in _mm is documented as millimetres. file() is a required path to
-/// an existing file, relative to the document's folder. parameter() is a
+/// an existing file, relative to the document's folder (optional when the
+/// member is a std::optional). parameter() is a
 /// node's tunable Parameter: its default value and limits are the member's.
 ///
 /// custom() is for a value whose type reads and documents itself (a child
@@ -260,6 +261,9 @@ class Reader {
     if (p_.has(name)) value = p_.get<T>(name);
   }
   void file(std::filesystem::path& value, const char* name, const char*) { value = p_.existing_file(name); }
+  void file(std::optional<std::filesystem::path>& value, const char* name, const char*) {
+    if (p_.has(name)) value = p_.existing_file(name);
+  }
   /// An array of objects, each an options struct of its own.
   template <class E>
   void objects(std::vector<E>& value, const char* name, const char*) {
@@ -317,6 +321,7 @@ class Checker {
   template <class T>
   void value(const T&, const char*, const char*, Default) {}
   void file(const std::filesystem::path&, const char*, const char*) {}
+  void file(const std::optional<std::filesystem::path>&, const char*, const char*) {}
   template <class E>
   void objects(const std::vector<E>&, const char*, const char*) {}
   template <class E>
@@ -367,6 +372,9 @@ class Documenter {
   }
   void file(const std::filesystem::path&, const char* name, const char* meaning) {
     rows.push_back({name, "file", "required", meaning});
+  }
+  void file(const std::optional<std::filesystem::path>&, const char* name, const char* meaning) {
+    rows.push_back({name, "file", "-", meaning});
   }
   template <class E>
   void objects(const std::vector<E>&, const char* name, const char* meaning) {

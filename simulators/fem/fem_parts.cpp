@@ -3,12 +3,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
 
 #include <fmt/format.h>
 
 #include "core/error.h"
+#include "core/options.h"
 #include "geometry/mesh_io.h"
 #include "tuning/parts.h"
 
@@ -87,16 +90,38 @@ class ShapeMse final : public MetricFor<DisplacementsObservation> {
 /// deformed mesh with the same vertices (every vertex a probe).
 class DeformedShapeGoal final : public GoalFor<DisplacementsObservation> {
  public:
+  struct Options {
+    std::vector<std::array<double, 3>> points, targets;
+    std::optional<std::filesystem::path> csv, rest_mesh, deformed_mesh;
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.number(o.points, "points", Range::any(), "rest positions (with \"targets\")", Default{"-"});
+      d.number(o.targets, "targets", Range::any(), "their goal positions", Default{"-"});
+      d.file(o.csv, "csv", "rows x,y,z,tx,ty,tz after one header line");
+      d.file(o.rest_mesh, "rest_mesh", "with deformed_mesh: every vertex is a probe");
+      d.file(o.deformed_mesh, "deformed_mesh", "the same surface deformed (same vertices)");
+    }
+    bool check(std::string* why) const {
+      const int forms = !points.empty() + csv.has_value() + deformed_mesh.has_value();
+      if (forms != 1)
+        *why = "give exactly one of \"points\" (with \"targets\"), \"csv\", or \"deformed_mesh\" (with \"rest_mesh\")";
+      else if (points.size() != targets.size())
+        *why = fmt::format("targets: {} targets for {} points", targets.size(), points.size());
+      else if (deformed_mesh.has_value() != rest_mesh.has_value())
+        *why = "give \"rest_mesh\" and \"deformed_mesh\" together";
+      else return true;
+      return false;
+    }
+  };
+
   DeformedShapeGoal(const Properties& p, const PartContext& /*context*/) {
-    const int forms = p.has("points") + p.has("csv") + p.has("deformed_mesh");
-    if (forms != 1) p.fail("give exactly one of \"points\" (with \"targets\"), \"csv\", or \"deformed_mesh\" (with \"rest_mesh\")");
+    const Options o = read_options<Options>(p);
     std::vector<Vec3> rest, goal;
-    if (p.has("points")) {
-      for (const auto& q : p.get<std::vector<std::array<double, 3>>>("points")) rest.emplace_back(q[0], q[1], q[2]);
-      for (const auto& q : p.get<std::vector<std::array<double, 3>>>("targets")) goal.emplace_back(q[0], q[1], q[2]);
-      if (rest.size() != goal.size()) p.fail("targets", fmt::format("{} targets for {} points", goal.size(), rest.size()));
-    } else if (p.has("csv")) {
-      const auto file = p.existing_file("csv");
+    if (!o.points.empty()) {
+      for (const auto& q : o.points) rest.emplace_back(q[0], q[1], q[2]);
+      for (const auto& q : o.targets) goal.emplace_back(q[0], q[1], q[2]);
+    } else if (o.csv) {
+      const std::filesystem::path& file = *o.csv;
       std::ifstream in(file);
       std::string line;
       std::getline(in, line);  // header: x,y,z,tx,ty,tz
@@ -114,8 +139,8 @@ class DeformedShapeGoal final : public GoalFor<DisplacementsObservation> {
         goal.emplace_back(v[3], v[4], v[5]);
       }
     } else {
-      const Mesh rest_mesh = load_mesh(p.existing_file("rest_mesh"));
-      const Mesh goal_mesh = load_mesh(p.existing_file("deformed_mesh"));
+      const Mesh rest_mesh = load_mesh(*o.rest_mesh);
+      const Mesh goal_mesh = load_mesh(*o.deformed_mesh);
       if (rest_mesh.vertices.size() != goal_mesh.vertices.size()) {
         p.fail("deformed_mesh", fmt::format("{} vertices, but the rest mesh has {}: give the same surface deformed",
                                             goal_mesh.vertices.size(), rest_mesh.vertices.size()));
@@ -140,11 +165,7 @@ class DeformedShapeGoal final : public GoalFor<DisplacementsObservation> {
   static TypeDoc doc() {
     return {"Target positions (mm) of probe points of the deformed shape; the simulator's "
             "\"probes\" must be the same points in the same order.",
-            {{"points", "array of [x, y, z]", "-", "rest positions (with \"targets\")"},
-             {"targets", "array of [x, y, z]", "-", "their goal positions"},
-             {"csv", "file", "-", "rows x,y,z,tx,ty,tz after one header line"},
-             {"rest_mesh", "mesh file", "-", "with deformed_mesh: every vertex is a probe"},
-             {"deformed_mesh", "mesh file", "-", "the same surface deformed (same vertices)"}},
+            option_docs<Options>(),
             R"({"type": "deformed_shape", "points": [[100, 5, 5]], "targets": [[99, 5, -20]]})"};
   }
 
