@@ -10,31 +10,15 @@ namespace spec2fab {
 
 namespace {
 
-double unit_to_mm(const Properties& geometry) {
-  const std::string unit = geometry.get<std::string>("unit", "mm");
-  if (unit == "mm") return 1.0;
-  if (unit == "cm") return 10.0;
-  if (unit == "m") return 1000.0;
-  if (unit == "in" || unit == "inch") return 25.4;
-  geometry.fail("unit", "unknown unit '" + unit + "' (known: mm, cm, m, in)");
-}
-
 GeometrySpec read_geometry(const Properties& geometry) {
+  const GeometryKeys keys = read_options<GeometryKeys>(geometry);
   GeometrySpec spec;
-  spec.mesh = geometry.existing_file("mesh");
-  spec.scale_to_mm = unit_to_mm(geometry) * geometry.get_in_range("scale", 1.0, 1e-6, 1e6);
-  const std::string uv = geometry.get<std::string>("uv", "mesh");
-  try {
-    spec.uv = parse_uv_source(uv);
-  } catch (const std::invalid_argument&) {
-    geometry.fail("uv", "unknown uv source '" + uv + "' (known: mesh, planar, cylindrical, spherical)");
-  }
-  const std::string axis = geometry.get<std::string>("uv_axis", "z");
-  if (axis.size() != 1 || axis[0] < 'x' || axis[0] > 'z') {
-    geometry.fail("uv_axis", "expected x, y or z, got '" + axis + "'");
-  }
-  spec.uv_axis = axis[0] - 'x';
-  spec.field_voxel_mm = geometry.get_in_range("field_voxel_mm", 0.0, 0.0, 1e3);
+  spec.mesh = keys.mesh;
+  const double unit_mm = keys.unit == "mm" ? 1.0 : keys.unit == "cm" ? 10.0 : keys.unit == "m" ? 1000.0 : 25.4;
+  spec.scale_to_mm = unit_mm * keys.scale;
+  spec.uv = parse_uv_source(keys.uv);
+  spec.uv_axis = keys.uv_axis[0] - 'x';
+  spec.field_voxel_mm = keys.field_voxel_mm;
   return spec;
 }
 
@@ -42,27 +26,36 @@ std::string default_name(const std::filesystem::path& file) { return file.stem()
 
 }  // namespace
 
+bool ExperimentKeys::check(std::string* why) const {
+  if (seed == static_cast<double>(static_cast<std::uint64_t>(seed))) return true;
+  *why = "seed: expected a non-negative integer";
+  return false;
+}
+
+std::vector<PropertyDoc> ExperimentKeys::docs() {
+  std::vector<PropertyDoc> rows = option_docs<ExperimentKeys>();
+  rows.insert(rows.begin() + 2, {{"geometry", "object", "required", "the shape (below)"},
+                                 {"goal", "object", "required", "what the print should do; its keys are the translator's"},
+                                 {"optimizer", "optimizer", "the translator's", "the translator's optimizer, overriding its default"},
+                                 {"output", "object", "-", "output choices; its keys are the translator's"}});
+  return rows;
+}
+
 Experiment Experiment::load(const std::filesystem::path& file) {
   Experiment experiment(Properties::load(file));
   const Properties& root = experiment.root_;
   experiment.file_ = file;
-  experiment.name_ = root.get<std::string>("name", default_name(file));
+  const ExperimentKeys keys = read_options<ExperimentKeys>(root);
+  experiment.name_ = keys.name.empty() ? default_name(file) : keys.name;
   for (char c : experiment.name_) {
     if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.')) {
       root.fail("name", "use letters, digits, '_', '-' and '.' only (it names the output folder)");
     }
   }
-  experiment.translator_ = root.get<std::string>("translator");
-  const double seed = root.get<double>("seed", 1);
-  if (seed < 0 || seed != static_cast<double>(static_cast<std::uint64_t>(seed))) {
-    root.fail("seed", "expected a non-negative integer");
-  }
-  experiment.seed_ = static_cast<std::uint64_t>(seed);
-
-  experiment.library_ =
-      std::make_shared<MaterialLibrary>(MaterialLibrary::load(root.existing_file("materials")));
-  experiment.printer_ =
-      std::make_shared<PrinterProfile>(PrinterProfile::load(root.existing_file("printer")));
+  experiment.translator_ = keys.translator;
+  experiment.seed_ = static_cast<std::uint64_t>(keys.seed);
+  experiment.library_ = std::make_shared<MaterialLibrary>(MaterialLibrary::load(keys.materials));
+  experiment.printer_ = std::make_shared<PrinterProfile>(PrinterProfile::load(keys.printer));
   experiment.palette_ = std::make_shared<MaterialPalette>(*experiment.library_, *experiment.printer_);
 
   const Properties geometry = root.object("geometry");

@@ -1,19 +1,22 @@
 #pragma once
 /// An experiment file: the translator to run and the paper's five inputs —
-/// geometry, goal, simulation configuration, materials, printer — plus
-/// optimizer overrides, output choices and a seed. See docs/experiment-format.md.
+/// geometry, goal, materials, printer (the simulation's configuration is the
+/// translator's, in its goal keys) — plus optimizer overrides, output choices
+/// and a seed. See docs/experiment-format.md.
 ///
 /// `Experiment::load` reads and checks the common parts and loads the inputs
 /// every translator shares (mesh → Solid, material library, printer,
-/// palette). The translator then reads its own sections (goal, simulation,
-/// optimizer); after that, any key nobody read is an error.
+/// palette). The translator then reads its own sections (goal, optimizer,
+/// output); after that, any key nobody read is an error.
 
 #include <cstdint>
 #include <filesystem>
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
+#include "core/options.h"
 #include "core/properties.h"
 #include "core/run_cache.h"
 #include "geometry/solid.h"
@@ -22,6 +25,53 @@
 #include "materials/printer_profile.h"
 
 namespace spec2fab {
+
+/// The experiment file's own keys, declared once (core/options.h); the
+/// sections it names (geometry, goal, optimizer, output) are read by the
+/// geometry below and by the translator.
+struct ExperimentKeys {
+  std::string name;
+  std::string translator;
+  double seed = 1;
+  std::filesystem::path materials, printer;
+  template <class Declare, class Self>
+  static void declare(Declare& d, Self& o) {
+    d.value(o.name, "name", "names the run folder out/<name>/; letters, digits, _ - .",
+            Default{"file name without .json"});
+    d.required(o.translator, "translator", "a registered translator (`spec2fab list translator`)");
+    d.number(o.seed, "seed", Range::closed(0, 1.8e19), "random seed, a whole number (`run --seed` overrides it)");
+    d.file(o.materials, "materials",
+           "a material library (datasets/materials/*.json, format in datasets/materials/README.md)");
+    d.file(o.printer, "printer",
+           "a printer profile (datasets/printers/*.json); a run may use only the model materials it holds, and void");
+  }
+  bool check(std::string* why) const;
+  /// These rows and the sections', for docs/experiment-format.md.
+  static std::vector<PropertyDoc> docs();
+};
+
+/// The "geometry" section's keys.
+struct GeometryKeys {
+  std::filesystem::path mesh;
+  std::string unit = "mm", uv = "mesh", uv_axis = "z";
+  double scale = 1, field_voxel_mm = 0;
+  template <class Declare, class Self>
+  static void declare(Declare& d, Self& o) {
+    d.file(o.mesh, "mesh",
+           "OBJ, STL (ASCII or binary), PLY or OFF; closed, manifold and consistently oriented (an inside-out mesh "
+           "is flipped)");
+    d.choice(o.unit, "unit", {"mm", "cm", "m", "in", "inch"}, "unit of the file's coordinates");
+    d.number(o.scale, "scale", Range::closed(1e-6, 1e6), "extra scale factor");
+    d.choice(o.uv, "uv", {"mesh", "planar", "cylindrical", "spherical"},
+             "where surface coordinates (u, v) come from: the mesh's texture coordinates, or a projection of the "
+             "closest surface point about the bounds");
+    d.choice(o.uv_axis, "uv_axis", {"x", "y", "z"},
+             "axis of the projection (planar: normal; cylindrical: axis; spherical: pole)");
+    d.number(o.field_voxel_mm, "field_voxel_mm", Range::closed(0, 1e3),
+             "cell of the narrow-band field behind depth and (u, v) queries; 0: chosen from the shape; smaller is "
+             "more exact near sharp features and slower to build");
+  }
+};
 
 struct GeometrySpec {
   std::filesystem::path mesh;
@@ -45,7 +95,6 @@ class Experiment {
   /// The sections translators read.
   const Properties& root() const { return root_; }
   Properties goal() const { return root_.object("goal"); }
-  std::optional<Properties> simulation() const { return root_.optional_object("simulation"); }
   std::optional<Properties> optimizer() const { return root_.optional_object("optimizer"); }
   /// What a translator hands its tuners: the "optimizer" section as JSON —
   /// its keys are checked where the tuner is built (build_tuner), so they

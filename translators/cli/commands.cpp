@@ -21,6 +21,7 @@
 #include "materials/printer_profile.h"
 #include "reducer/node.h"
 #include "reducer/reducer_tree.h"
+#include "spec/experiment.h"
 #include "spec/run_folder.h"
 #include "spec/translator.h"
 #include "spec/tree_outputs.h"
@@ -371,6 +372,8 @@ bool update_option_tables(const fs::path& file) {
     std::string kind, name, scope;
     words >> kind >> name >> scope;
     std::optional<TypeDoc> doc;
+    if (kind == "experiment" && name == "file") doc = TypeDoc{"", ExperimentKeys::docs(), ""};
+    if (kind == "experiment" && name == "geometry") doc = TypeDoc{"", option_docs<GeometryKeys>(), ""};
     for (const ListedRegistry& registry : sorted_registries()) {
       if (registry.kind != kind) continue;
       for (auto& [entry, entry_doc] : registry.entries())

@@ -44,7 +44,8 @@ int list_command(const std::string& kind, bool verbose, const std::filesystem::p
 std::string parts_reference();
 /// Rewrites, in a Markdown file, every block between
 ///   <!-- options: KIND NAME … -->  and  <!-- end options -->
-/// with that part's option table (`list --update-doc`; a test keeps
+/// with that part's option table ("experiment file" and "experiment
+/// geometry" are the file's own keys) (`list --update-doc`; a test keeps
 /// docs/experiment-format.md current); "KIND NAME own" leaves out the tree
 /// outputs' rows that every tree-making translator shares. Returns whether
 /// the file changed.
