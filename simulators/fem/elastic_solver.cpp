@@ -284,6 +284,35 @@ void ElasticSolver::set_materials(std::span<const double> lambda, std::span<cons
   }
 }
 
+std::vector<std::vector<double>> ElasticSolver::solve_linear(std::span<const std::vector<double>> loads) {
+  Impl& m = *impl_;
+  const size_t dofs = 3 * mesh_.nodes.size();
+  std::vector<double> rest(dofs, 0.0);
+  m.form(mesh_, rest, false, true);
+  std::vector<std::vector<double>> out;
+  SolveReport report;
+  for (size_t k = 0; k < loads.size(); ++k) {
+    for (size_t d = 0; d < dofs; ++d)
+      if (const int i = m.dof_index[d]; i >= 0) m.residual[i] = loads[k][d];
+    if (k == 0 || m.kind != LinearSolver::cholesky) {
+      // The first factorises; the iterative solvers set up again each time.
+      if (m.kind == LinearSolver::cholesky) {
+        if (!m.cholesky.factorize(m.stiffness)) return {};
+        m.cholesky.solve(m.residual, m.step);
+      } else if (!m.factorize_and_solve(report)) {
+        return {};
+      }
+    } else {
+      m.cholesky.solve(m.residual, m.step);
+    }
+    if (!m.step.allFinite()) return {};
+    std::vector<double>& u = out.emplace_back(dofs, 0.0);
+    for (size_t d = 0; d < dofs; ++d)
+      if (const int i = m.dof_index[d]; i >= 0) u[d] = m.step[i];
+  }
+  return out;
+}
+
 SolveReport ElasticSolver::solve(const Constraints& c, const SolveOptions& options,
                                  std::vector<double>& u) {
   Impl& m = *impl_;

@@ -76,6 +76,13 @@ class ElasticSolver {
   SolveReport solve(const Constraints& constraints, const SolveOptions& options,
                     std::vector<double>& displacement_mm);
 
+  /// Small strain only, for linear functionals of the solution: assembles
+  /// the stiffness K of the free DOFs at rest, factorises it once and
+  /// returns K⁻¹·b for each right-hand side in `loads` (3 per node; entries
+  /// on fixed DOFs are ignored and zero in the answer). Prescribed
+  /// displacements play no part. Empty when K is not positive definite.
+  std::vector<std::vector<double>> solve_linear(std::span<const std::vector<double>> loads);
+
   size_t free_dofs() const;
   double factor_nonzeros() const;  ///< nnz of the Cholesky factor (CHOLMOD's analysis)
   double factor_flops() const;     ///< flops of one numeric factorisation

@@ -1,0 +1,175 @@
+#include "fem/elastic_bound.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <fmt/format.h>
+
+#include "fem/corotated_tet.h"
+#include "reducer/reducer_tree.h"
+#include "tuning/simulation_domain.h"
+#include "tuning/tuner.h"
+
+namespace spec2fab::fem {
+
+ElasticBound::ElasticBound(const Properties& simulator, const PartContext& context, ReducerTree& tree,
+                           ReducerNode& node, Tuner& tuner)
+    : settings_(FemSettings::read(simulator)) {
+  const std::string where = simulator.where();
+  if (settings_.solve.nonlinear)
+    throw InputError(where + ": the elastic bound holds for small strain only; set \"nonlinear\": false");
+  for (const BoxRegion& box : settings_.displacements)
+    if (!box.value.isZero())
+      throw InputError(box.where + ": the elastic bound needs clamped supports; a prescribed displacement makes "
+                                   "the loads depend on the stiffness");
+  if (settings_.probes.empty()) throw InputError(where + "/probes: the elastic bound needs probe points");
+
+  const SimulationDomain domain(tree, node);
+  const Solid& solid = domain.require_solid("fem");
+  meshed_ = conformed_mesh(solid, tree, settings_.mesh, settings_.follow_interfaces, context.cache);
+  mesh_ = &meshed_->mesh;
+  constraints_ = make_constraints(*mesh_, mesh_->boundary_faces(), settings_);
+  probes_ = locate_probes(*mesh_, settings_.probes, where + "/probes");
+  solver_ = std::make_unique<ElasticSolver>(*mesh_, constraints_.fixed, LinearSolver::cholesky);
+
+  // Lamé parameters (MPa) of each material; void is inactive.
+  auto lame = [&](MaterialId id) -> std::pair<double, double> {
+    if (id == kVoid) return {0.0, 0.0};
+    const Material& m = context.palette.material(id);
+    const double e = m.youngs_modulus_pa.value * 1e-6, nu = m.poisson_ratio.value;
+    return {lame_lambda(e, nu), lame_mu(e, nu)};
+  };
+
+  // Which variable sets each element's material: try every value of every
+  // variable once from the current assignment, and see which elements change.
+  const size_t tets = mesh_->tets.size();
+  std::vector<Vec3> centroids(tets);
+  for (size_t t = 0; t < tets; ++t) centroids[t] = mesh_->centroid(t);
+  SearchSpace& space = tuner.search_space();
+  const std::vector<double> start = space.values();
+  std::vector<MaterialId> base(tets), trial(tets);
+  tuner.set_values(start);
+  domain.materials_at(centroids, base);
+  elements_.assign(tets, Element{});
+  active_.assign(tets, 1);
+  for (size_t t = 0; t < tets; ++t) {
+    const auto [l, m] = lame(base[t]);
+    elements_[t].lambda = {l};
+    elements_[t].mu = {m};
+    active_[t] = base[t] != kVoid;
+  }
+  admissible_.resize(space.dimension());
+  for (size_t v = 0; v < space.dimension(); ++v) {
+    const Parameter& p = space.parameter(v);
+    if (p.kind() == ParameterKind::continuous)
+      throw InputError(where + ": the elastic bound needs discrete variables; '" + space.entries()[v].name +
+                       "' is continuous");
+    for (long long k = 0; k < p.cardinality(); ++k) admissible_[v].push_back(p.admissible(k));
+    std::vector<std::vector<MaterialId>> per_value;
+    for (double value : admissible_[v]) {
+      std::vector<double> x = start;
+      x[v] = value;
+      tuner.set_values(x);
+      domain.materials_at(centroids, trial);
+      per_value.push_back(trial);
+    }
+    for (size_t t = 0; t < tets; ++t) {
+      bool varies = false;
+      for (const auto& materials : per_value) varies |= materials[t] != base[t];
+      if (!varies) continue;
+      Element& e = elements_[t];
+      if (e.variable >= 0)
+        throw InputError(fmt::format("{}: element {} takes its material from two variables ('{}' and '{}'); the "
+                                     "elastic bound needs one variable per element (a Voxel or Column of Layered "
+                                     "nodes)",
+                                     where, t, space.entries()[static_cast<size_t>(e.variable)].name,
+                                     space.entries()[v].name));
+      e.variable = static_cast<int>(v);
+      e.lambda.clear();
+      e.mu.clear();
+      for (const auto& materials : per_value) {
+        if (materials[t] == kVoid)
+          throw InputError(where + ": '" + space.entries()[v].name + "' may make an element void; the elastic "
+                                   "bound needs a solid material in every choice");
+        const auto [l, m] = lame(materials[t]);
+        e.lambda.push_back(l);
+        e.mu.push_back(m);
+      }
+    }
+  }
+  tuner.set_values(start);
+
+  // Right-hand sides: the loads, then each probe component's weights.
+  loads_.push_back(constraints_.force_n);
+  for (const ProbeLocation& probe : probes_) {
+    for (int d = 0; d < 3; ++d) {
+      std::vector<double>& g = loads_.emplace_back(3 * mesh_->nodes.size(), 0.0);
+      for (size_t k = 0; k < 4; ++k) {
+        const auto node_index = static_cast<size_t>(mesh_->tets[static_cast<size_t>(probe.tet)][k]);
+        g[3 * node_index + static_cast<size_t>(d)] += probe.weights[k];
+      }
+    }
+  }
+}
+
+ElasticBound::~ElasticBound() = default;
+
+double ElasticBound::lower_bound(std::span<const double> x, int assigned, const DisplacementsObservation& target) {
+  ++calls_;
+  const size_t tets = elements_.size();
+  std::vector<double> lambda_stiff(tets), mu_stiff(tets), lambda_soft(tets), mu_soft(tets);
+  for (size_t t = 0; t < tets; ++t) {
+    const Element& e = elements_[t];
+    if (e.variable >= 0 && e.variable < assigned) {
+      const std::vector<double>& values = admissible_[static_cast<size_t>(e.variable)];
+      const auto k = static_cast<size_t>(
+          std::find(values.begin(), values.end(), x[static_cast<size_t>(e.variable)]) - values.begin());
+      if (k == values.size()) throw std::logic_error("ElasticBound: a value that is not admissible");
+      lambda_stiff[t] = lambda_soft[t] = e.lambda[k];
+      mu_stiff[t] = mu_soft[t] = e.mu[k];
+    } else {
+      lambda_stiff[t] = *std::max_element(e.lambda.begin(), e.lambda.end());
+      mu_stiff[t] = *std::max_element(e.mu.begin(), e.mu.end());
+      lambda_soft[t] = *std::min_element(e.lambda.begin(), e.lambda.end());
+      mu_soft[t] = *std::min_element(e.mu.begin(), e.mu.end());
+    }
+  }
+  solver_->set_materials(lambda_stiff, mu_stiff, active_);
+  const std::vector<std::vector<double>> stiff = solver_->solve_linear(loads_);
+  solver_->set_materials(lambda_soft, mu_soft, active_);
+  const std::vector<std::vector<double>> soft = solver_->solve_linear(loads_);
+  if (stiff.empty()) return 0;  // even the stiffest completion is singular: nothing to bound
+
+  auto dot = [](const std::vector<double>& a, const std::vector<double>& b) {
+    double sum = 0;
+    for (size_t i = 0; i < a.size(); ++i) sum += a[i] * b[i];
+    return sum;
+  };
+  const std::vector<double>& f = loads_[0];
+  // fᵀΔf, ≥ 0 up to rounding; infinite when the softest completion is singular.
+  const double spread_f = soft.empty() ? std::numeric_limits<double>::infinity()
+                                       : std::max(0.0, dot(f, soft[0]) - dot(f, stiff[0]));
+  const std::span<const double> goal = target.probes();
+  double sum = 0;
+  for (size_t j = 0; j + 1 < loads_.size(); ++j) {
+    const std::vector<double>& g = loads_[j + 1];
+    const double at_stiff = dot(g, stiff[0]);
+    double low = at_stiff, high = at_stiff, width = spread_f;
+    if (!soft.empty()) {
+      const double at_soft = dot(g, soft[0]);
+      low = std::max(at_stiff, at_soft);
+      high = std::min(at_stiff, at_soft);
+      width = std::sqrt(spread_f * std::max(0.0, dot(g, soft[j + 1]) - dot(g, stiff[j + 1])));
+    }
+    // Both intervals hold every completion's value: their intersection.
+    low -= width;
+    high += width;
+    const double u = goal[j];
+    const double outside = u < low ? low - u : u > high ? u - high : 0.0;
+    sum += outside * outside;
+  }
+  return sum / static_cast<double>(target.probe_count);
+}
+
+}  // namespace spec2fab::fem

@@ -1,0 +1,87 @@
+#pragma once
+/// The bound callback of branch and bound for material assignments under
+/// small-strain elasticity (paper §6.2: the same search as the subsurface
+/// stacks, another bound): a lower bound on shape_mse for every assignment
+/// that completes a partial one.
+///
+/// Why it holds. With clamped supports and dead loads f, the displacement is
+/// u = K⁻¹f, and a probe's displacement along an axis is gᵀK⁻¹f for a fixed
+/// vector g (the probe's interpolation weights). An isotropic tet's
+/// stiffness is λ·A + μ·B with A, B positive semidefinite, so K grows (in
+/// the Loewner order) with every element's λ and μ. Give each undecided
+/// element the largest λ and μ any of its choices has (K⁺, stiffer than every
+/// completion) and, separately, the smallest (K⁻, softer than all): every
+/// completion's K⁻¹ lies between K⁺⁻¹ and K⁻⁻¹. Writing K⁻¹ = K⁺⁻¹ + D with
+/// 0 ⪯ D ⪯ Δ = K⁻⁻¹ − K⁺⁻¹, Cauchy–Schwarz gives
+///   |gᵀK⁻¹f − gᵀK⁺⁻¹f| ≤ √(gᵀΔg · fᵀΔf),
+/// and the same about K⁻⁻¹. Each probe component therefore lies in an
+/// interval, and shape_mse = (1/n) Σ ‖u_probe − u_goal‖² is at least the
+/// mean squared distance from the goal to those intervals. On a complete
+/// assignment K⁺ = K⁻ and the bound is the error itself.
+///
+/// What it does not cover: large deformation (the co-rotated model's
+/// stiffness depends on the displacement; the simulator must be
+/// "nonlinear": false), prescribed non-zero displacements (they make the
+/// right-hand side depend on K; only clamps), and void among a cell's
+/// choices (the softest completion would lose elements, and with them the
+/// ordering): each is refused when the bound is built. It also assumes that
+/// every element's material is set by at most one variable of the search
+/// space (a Voxel or Column of Layered nodes: the mesh follows the cells),
+/// which it checks by trying every value of every variable once.
+///
+/// Cost of one bound: two factorisations and 2(1 + 3·probes) triangular
+/// solves on the tuner's mesh.
+
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "core/properties.h"
+#include "fem/elastic_solver.h"
+#include "fem/fem_setup.h"
+#include "fem/mesh_cache.h"
+#include "tuning/observation.h"
+
+namespace spec2fab {
+class ReducerTree;
+class ReducerNode;
+class Tuner;
+struct PartContext;
+}  // namespace spec2fab
+
+namespace spec2fab::fem {
+
+class ElasticBound {
+ public:
+  /// `simulator` is the tuner's "fem" options; `tuner` must be bound to
+  /// `node` of `tree` (its parameters are tried, then set back).
+  ElasticBound(const Properties& simulator, const PartContext& context, ReducerTree& tree, ReducerNode& node,
+               Tuner& tuner);
+  ~ElasticBound();
+
+  /// Variables 0..assigned-1 take x[0..assigned); the rest are free.
+  double lower_bound(std::span<const double> x, int assigned, const DisplacementsObservation& target);
+
+  /// How often the bound was asked.
+  long calls() const { return calls_; }
+
+ private:
+  struct Element {
+    int variable = -1;                  ///< the search variable that sets its material, or -1
+    std::vector<double> lambda, mu;     ///< per admissible value of that variable; one entry when fixed
+  };
+  FemSettings settings_;
+  std::shared_ptr<const ConformedMesh> meshed_;
+  const TetMesh* mesh_ = nullptr;
+  Constraints constraints_;
+  std::vector<ProbeLocation> probes_;
+  std::unique_ptr<ElasticSolver> solver_;
+  std::vector<Element> elements_;
+  std::vector<char> active_;
+  std::vector<std::vector<double>> loads_;  ///< f, then one g per probe component
+  std::vector<std::vector<double>> admissible_;  ///< per variable, its values in search order
+  long calls_ = 0;
+};
+
+}  // namespace spec2fab::fem
