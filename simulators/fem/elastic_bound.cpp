@@ -139,7 +139,10 @@ double ElasticBound::lower_bound(std::span<const double> x, int assigned, const 
   const std::vector<std::vector<double>> stiff = solver_->solve_linear(loads_);
   solver_->set_materials(lambda_soft, mu_soft, active_);
   const std::vector<std::vector<double>> soft = solver_->solve_linear(loads_);
-  if (stiff.empty()) return 0;  // even the stiffest completion is singular: nothing to bound
+  if (stiff.empty()) {  // even the stiffest completion is singular: nothing to bound
+    history_.push_back({assigned, 0.0});
+    return 0;
+  }
 
   auto dot = [](const std::vector<double>& a, const std::vector<double>& b) {
     double sum = 0;
@@ -169,7 +172,9 @@ double ElasticBound::lower_bound(std::span<const double> x, int assigned, const 
     const double outside = u < low ? low - u : u > high ? u - high : 0.0;
     sum += outside * outside;
   }
-  return sum / static_cast<double>(target.probe_count);
+  const double bound = sum / static_cast<double>(target.probe_count);
+  history_.push_back({assigned, bound});
+  return bound;
 }
 
 }  // namespace spec2fab::fem

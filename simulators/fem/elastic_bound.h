@@ -65,6 +65,15 @@ class ElasticBound {
 
   /// How often the bound was asked.
   long calls() const { return calls_; }
+  /// Every call in order: how many variables were assigned, and the bound
+  /// (on a complete assignment, its error) — the search's progress through
+  /// the subtrees, as the paper's Fig. 10 plots it.
+  struct Call {
+    int assigned = 0;
+    double bound = 0;
+  };
+  const std::vector<Call>& history() const { return history_; }
+  size_t variables() const { return admissible_.size(); }
 
  private:
   struct Element {
@@ -82,6 +91,7 @@ class ElasticBound {
   std::vector<std::vector<double>> loads_;  ///< f, then one g per probe component
   std::vector<std::vector<double>> admissible_;  ///< per variable, its values in search order
   long calls_ = 0;
+  std::vector<Call> history_;
 };
 
 }  // namespace spec2fab::fem
