@@ -25,7 +25,8 @@ ElasticBound::ElasticBound(const Properties& simulator, const PartContext& conte
                                    "the loads depend on the stiffness");
   if (settings_.probes.empty()) throw InputError(where + "/probes: the elastic bound needs probe points");
 
-  const SimulationDomain domain(tree, node);
+  domain_ = SimulationDomain(tree, node);
+  const SimulationDomain& domain = domain_;
   const Solid& solid = domain.require_solid("fem");
   meshed_ = conformed_mesh(solid, tree, settings_.mesh, settings_.follow_interfaces, context.cache);
   mesh_ = &meshed_->mesh;
@@ -34,18 +35,21 @@ ElasticBound::ElasticBound(const Properties& simulator, const PartContext& conte
   solver_ = std::make_unique<ElasticSolver>(*mesh_, constraints_.fixed, LinearSolver::cholesky);
 
   // Lamé parameters (MPa) of each material; void is inactive.
-  auto lame = [&](MaterialId id) -> std::pair<double, double> {
-    if (id == kVoid) return {0.0, 0.0};
+  lame_.assign(context.palette.size(), {0.0, 0.0});
+  for (MaterialId id = 1; id < context.palette.size(); ++id) {
     const Material& m = context.palette.material(id);
     const double e = m.youngs_modulus_pa.value * 1e-6, nu = m.poisson_ratio.value;
-    return {lame_lambda(e, nu), lame_mu(e, nu)};
-  };
+    lame_[id] = {lame_lambda(e, nu), lame_mu(e, nu)};
+  }
+  auto lame = [&](MaterialId id) { return lame_[id]; };
 
   // Which variable sets each element's material: try every value of every
   // variable once from the current assignment, and see which elements change.
   const size_t tets = mesh_->tets.size();
-  std::vector<Vec3> centroids(tets);
-  for (size_t t = 0; t < tets; ++t) centroids[t] = mesh_->centroid(t);
+  centroids_.resize(tets);
+  current_.resize(tets);
+  for (size_t t = 0; t < tets; ++t) centroids_[t] = mesh_->centroid(t);
+  const std::vector<Vec3>& centroids = centroids_;
   SearchSpace& space = tuner.search_space();
   const std::vector<double> start = space.values();
   std::vector<MaterialId> base(tets), trial(tets);
@@ -118,6 +122,14 @@ ElasticBound::~ElasticBound() = default;
 double ElasticBound::lower_bound(std::span<const double> x, int assigned, const DisplacementsObservation& target) {
   ++calls_;
   const size_t tets = elements_.size();
+  domain_.materials_at(centroids_, current_);
+  for (size_t t = 0; t < tets; ++t) {
+    Element& e = elements_[t];
+    if (e.variable >= 0) continue;
+    e.lambda[0] = lame_[current_[t]].first;
+    e.mu[0] = lame_[current_[t]].second;
+    active_[t] = current_[t] != kVoid;
+  }
   std::vector<double> lambda_stiff(tets), mu_stiff(tets), lambda_soft(tets), mu_soft(tets);
   for (size_t t = 0; t < tets; ++t) {
     const Element& e = elements_[t];

@@ -29,8 +29,12 @@
 /// space (a Voxel or Column of Layered nodes: the mesh follows the cells),
 /// which it checks by trying every value of every variable once.
 ///
-/// Cost of one bound: two factorisations and 2(1 + 3·probes) triangular
-/// solves on the tuner's mesh.
+/// The elements no variable sets are read from the tree again at every call:
+/// an earlier schedule phase may have changed them (a texture printed into a
+/// shell over the tuned core), and the bound must see the print as it is.
+///
+/// Cost of one bound: one pass over the elements' materials, two
+/// factorisations and 2(1 + 3·probes) triangular solves on the tuner's mesh.
 
 #include <memory>
 #include <span>
@@ -42,6 +46,7 @@
 #include "fem/fem_setup.h"
 #include "fem/mesh_cache.h"
 #include "tuning/observation.h"
+#include "tuning/simulation_domain.h"
 
 namespace spec2fab {
 class ReducerTree;
@@ -88,6 +93,10 @@ class ElasticBound {
   std::unique_ptr<ElasticSolver> solver_;
   std::vector<Element> elements_;
   std::vector<char> active_;
+  SimulationDomain domain_;
+  std::vector<Vec3> centroids_;
+  std::vector<MaterialId> current_;                 ///< the tree's materials at the centroids, per call
+  std::vector<std::pair<double, double>> lame_;  ///< (λ, μ) in MPa per material id; void (0, 0)
   std::vector<std::vector<double>> loads_;  ///< f, then one g per probe component
   std::vector<std::vector<double>> admissible_;  ///< per variable, its values in search order
   long calls_ = 0;

@@ -134,6 +134,39 @@ TEST(ElasticBound, BranchAndBoundRecoversAHiddenAssignmentWithFewerLeaves) {
   EXPECT_GT(bound.calls(), 0);
 }
 
+// An earlier phase may change what no variable of this tuner sets (here the
+// bar's first third, fixed for the tuner): the bound reads it again at every
+// call, so that on a complete assignment it is still the error itself.
+TEST(ElasticBound, SeesWhatChangedOutsideItsVariables) {
+  auto tree = std::make_unique<ReducerTree>(
+      Properties::parse(R"({"type": "voxel", "size_mm": [4, 2, 2], "children": [
+          {"type": "layered", "material": {"value": "stiff", "choices": ["stiff", "soft"], "free": false}},
+          {"type": "layered", "material": {"value": "soft", "choices": ["stiff", "medium", "soft"]}},
+          {"type": "layered", "material": {"value": "soft", "choices": ["stiff", "medium", "soft"]}}]})",
+                        "tree.json"),
+      palette());
+  const Solid solid(make_box(Vec3(0, 0, 0), Vec3(12, 2, 2), 1), UvSource::planar);
+  tree->bind(solid);
+  const std::string json = std::string(R"({"simulator": )") + kSimulator + R"(,
+      "metric": {"type": "shape_mse"},
+      "goal": {"type": "deformed_shape", "points": [[12, 1, 1], [8, 2, 2], [5, 0, 1], [12, 0, 0]],
+               "targets": [[12, 1, 0], [8, 2, 1.5], [5, 0, 1], [12, 0, -1]]},
+      "optimizer": {"type": "exhaustive"}})";
+  auto tuner = build_tuner(Properties::parse(json, "tuner.json"), "bar", PartContext{palette()});
+  tuner->set_node(*tree, tree->root());
+  ASSERT_EQ(tuner->search_space().dimension(), 2u);
+  ElasticBound bound(Properties::parse(kSimulator, "sim.json"), PartContext{palette()}, *tree, tree->root(), *tuner);
+  const auto& goal = static_cast<const DisplacementsObservation&>(tuner->goal().target());
+  const std::vector<double> x = {id("medium"), id("stiff")};
+  for (const char* first_third : {"stiff", "soft"}) {
+    SearchSpace fixed = tree->all_parameters("0");
+    fixed.set_values({id(first_third)});
+    tree->evaluate();
+    const double error = tuner->error_at(x);
+    EXPECT_NEAR(bound.lower_bound(x, 2, goal), error, 1e-9 * error) << first_third;
+  }
+}
+
 TEST(ElasticBound, RefusesWhatItDoesNotCover) {
   Bar bar;
   auto error_of = [&](const std::string& simulator) -> std::string {
