@@ -20,7 +20,8 @@
 ///   TypeDoc doc{summary, option_docs<Options>(), example};  // `spec2fab list --verbose`, docs/parts.md
 ///
 /// A constraint between options (one at least another) goes in an optional
-/// `bool check(std::string* why) const`, which reading and IsValid also run.
+/// `bool check(std::string* why) const`, which reading and IsValid also run;
+/// a reason that starts "key: " is reported at that key.
 ///
 /// number() also takes arrays (each element in the range); required() has no
 /// default; an option whose default depends on others (rays: twice the image)
@@ -217,6 +218,20 @@ O read_nested(const Properties& properties, const Context& context);
 inline std::string parameter_type_text(const char* name, Range limits) {
   const std::string bound = limits.text();
   return full_type_text<Parameter>(name) + (bound.empty() ? "" : " " + bound);
+}
+
+/// A check()'s "key: problem" fails at that key's JSON path when the object
+/// holds the key; any other message, at the object.
+inline void fail_at_key(const Properties& properties, const std::string& why) {
+  const size_t colon = why.find(": ");
+  if (colon != std::string::npos && colon > 0) {
+    const std::string key = why.substr(0, colon);
+    const bool plain = std::all_of(key.begin(), key.end(), [](char c) {
+      return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_';
+    });
+    if (plain && properties.has(key)) properties.fail(key, why.substr(colon + 2));
+  }
+  properties.fail(why);
 }
 
 /// Reads each option from JSON (absent: the default stays).
@@ -431,7 +446,7 @@ void read_options_into(O& options, const Properties& properties, const Context& 
   O::declare(reader, options);
   if constexpr (options_detail::HasCheck<O>) {
     std::string why;
-    if (!options.check(&why)) properties.fail(why);
+    if (!options.check(&why)) options_detail::fail_at_key(properties, why);
   }
 }
 

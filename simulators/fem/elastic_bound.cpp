@@ -26,8 +26,7 @@ ElasticBound::ElasticBound(const Properties& simulator, const PartContext& conte
   if (settings_.probes.empty()) throw InputError(where + "/probes: the elastic bound needs probe points");
 
   domain_ = SimulationDomain(tree, node);
-  const SimulationDomain& domain = domain_;
-  const Solid& solid = domain.require_solid("fem");
+  const Solid& solid = domain_.require_solid("fem");
   meshed_ = conformed_mesh(solid, tree, settings_.mesh, settings_.follow_interfaces, context.cache);
   mesh_ = &meshed_->mesh;
   constraints_ = make_constraints(*mesh_, mesh_->boundary_faces(), settings_);
@@ -41,7 +40,6 @@ ElasticBound::ElasticBound(const Properties& simulator, const PartContext& conte
     const double e = m.youngs_modulus_pa.value * 1e-6, nu = m.poisson_ratio.value;
     lame_[id] = {lame_lambda(e, nu), lame_mu(e, nu)};
   }
-  auto lame = [&](MaterialId id) { return lame_[id]; };
 
   // Which variable sets each element's material: try every value of every
   // variable once from the current assignment, and see which elements change.
@@ -49,20 +47,14 @@ ElasticBound::ElasticBound(const Properties& simulator, const PartContext& conte
   centroids_.resize(tets);
   current_.resize(tets);
   for (size_t t = 0; t < tets; ++t) centroids_[t] = mesh_->centroid(t);
-  const std::vector<Vec3>& centroids = centroids_;
   SearchSpace& space = tuner.search_space();
   const std::vector<double> start = space.values();
   std::vector<MaterialId> base(tets), trial(tets);
   tuner.set_values(start);
-  domain.materials_at(centroids, base);
-  elements_.assign(tets, Element{});
+  domain_.materials_at(centroids_, base);
+  // Elements no variable sets hold one entry, which lower_bound reads afresh.
+  elements_.assign(tets, Element{-1, {0.0}, {0.0}});
   active_.assign(tets, 1);
-  for (size_t t = 0; t < tets; ++t) {
-    const auto [l, m] = lame(base[t]);
-    elements_[t].lambda = {l};
-    elements_[t].mu = {m};
-    active_[t] = base[t] != kVoid;
-  }
   admissible_.resize(space.dimension());
   for (size_t v = 0; v < space.dimension(); ++v) {
     const Parameter& p = space.parameter(v);
@@ -75,7 +67,7 @@ ElasticBound::ElasticBound(const Properties& simulator, const PartContext& conte
       std::vector<double> x = start;
       x[v] = value;
       tuner.set_values(x);
-      domain.materials_at(centroids, trial);
+      domain_.materials_at(centroids_, trial);
       per_value.push_back(trial);
     }
     for (size_t t = 0; t < tets; ++t) {
@@ -96,9 +88,8 @@ ElasticBound::ElasticBound(const Properties& simulator, const PartContext& conte
         if (materials[t] == kVoid)
           throw InputError(where + ": '" + space.entries()[v].name + "' may make an element void; the elastic "
                                    "bound needs a solid material in every choice");
-        const auto [l, m] = lame(materials[t]);
-        e.lambda.push_back(l);
-        e.mu.push_back(m);
+        e.lambda.push_back(lame_[materials[t]].first);
+        e.mu.push_back(lame_[materials[t]].second);
       }
     }
   }
@@ -130,7 +121,10 @@ double ElasticBound::lower_bound(std::span<const double> x, int assigned, const 
     e.mu[0] = lame_[current_[t]].second;
     active_[t] = current_[t] != kVoid;
   }
-  std::vector<double> lambda_stiff(tets), mu_stiff(tets), lambda_soft(tets), mu_soft(tets);
+  lambda_stiff_.resize(tets);
+  mu_stiff_.resize(tets);
+  lambda_soft_.resize(tets);
+  mu_soft_.resize(tets);
   for (size_t t = 0; t < tets; ++t) {
     const Element& e = elements_[t];
     if (e.variable >= 0 && e.variable < assigned) {
@@ -138,18 +132,18 @@ double ElasticBound::lower_bound(std::span<const double> x, int assigned, const 
       const auto k = static_cast<size_t>(
           std::find(values.begin(), values.end(), x[static_cast<size_t>(e.variable)]) - values.begin());
       if (k == values.size()) throw std::logic_error("ElasticBound: a value that is not admissible");
-      lambda_stiff[t] = lambda_soft[t] = e.lambda[k];
-      mu_stiff[t] = mu_soft[t] = e.mu[k];
+      lambda_stiff_[t] = lambda_soft_[t] = e.lambda[k];
+      mu_stiff_[t] = mu_soft_[t] = e.mu[k];
     } else {
-      lambda_stiff[t] = *std::max_element(e.lambda.begin(), e.lambda.end());
-      mu_stiff[t] = *std::max_element(e.mu.begin(), e.mu.end());
-      lambda_soft[t] = *std::min_element(e.lambda.begin(), e.lambda.end());
-      mu_soft[t] = *std::min_element(e.mu.begin(), e.mu.end());
+      lambda_stiff_[t] = *std::max_element(e.lambda.begin(), e.lambda.end());
+      mu_stiff_[t] = *std::max_element(e.mu.begin(), e.mu.end());
+      lambda_soft_[t] = *std::min_element(e.lambda.begin(), e.lambda.end());
+      mu_soft_[t] = *std::min_element(e.mu.begin(), e.mu.end());
     }
   }
-  solver_->set_materials(lambda_stiff, mu_stiff, active_);
+  solver_->set_materials(lambda_stiff_, mu_stiff_, active_);
   const std::vector<std::vector<double>> stiff = solver_->solve_linear(loads_);
-  solver_->set_materials(lambda_soft, mu_soft, active_);
+  solver_->set_materials(lambda_soft_, mu_soft_, active_);
   const std::vector<std::vector<double>> soft = solver_->solve_linear(loads_);
   if (stiff.empty()) {  // even the stiffest completion is singular: nothing to bound
     history_.push_back({assigned, 0.0});

@@ -97,6 +97,7 @@ class ElasticBound {
   std::vector<Vec3> centroids_;
   std::vector<MaterialId> current_;                 ///< the tree's materials at the centroids, per call
   std::vector<std::pair<double, double>> lame_;  ///< (λ, μ) in MPa per material id; void (0, 0)
+  std::vector<double> lambda_stiff_, mu_stiff_, lambda_soft_, mu_soft_;  ///< per call, kept to reuse
   std::vector<std::vector<double>> loads_;  ///< f, then one g per probe component
   std::vector<std::vector<double>> admissible_;  ///< per variable, its values in search order
   long calls_ = 0;

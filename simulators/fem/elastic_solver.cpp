@@ -294,16 +294,11 @@ std::vector<std::vector<double>> ElasticSolver::solve_linear(std::span<const std
   for (size_t k = 0; k < loads.size(); ++k) {
     for (size_t d = 0; d < dofs; ++d)
       if (const int i = m.dof_index[d]; i >= 0) m.residual[i] = loads[k][d];
-    if (k == 0 || m.kind != LinearSolver::cholesky) {
-      // The first factorises; the iterative solvers set up again each time.
-      if (m.kind == LinearSolver::cholesky) {
-        if (!m.cholesky.factorize(m.stiffness)) return {};
-        m.cholesky.solve(m.residual, m.step);
-      } else if (!m.factorize_and_solve(report)) {
-        return {};
-      }
-    } else {
+    if (m.kind == LinearSolver::cholesky) {  // factorised once, for every right-hand side
+      if (k == 0 && !m.cholesky.factorize(m.stiffness)) return {};
       m.cholesky.solve(m.residual, m.step);
+    } else if (!m.factorize_and_solve(report)) {  // the iterative solvers set up again each time
+      return {};
     }
     if (!m.step.allFinite()) return {};
     std::vector<double>& u = out.emplace_back(dofs, 0.0);

@@ -58,7 +58,8 @@ TEST(Options, ReadRefusesAtTheKey) {
   EXPECT_THAT(error_of(R"({"mode": "fats"})"),
               HasSubstr("s.json: /mode: unknown value 'fats'; did you mean 'fast'? (known: fast, exact)"));
   EXPECT_THAT(error_of(R"({"count": 2.5})"), HasSubstr("s.json: /count: expected an integer"));
-  EXPECT_EQ(error_of(R"({"count": 20, "mode": "exact"})"), "s.json: /: count: at most 10 when exact");
+  // A check()'s "key: problem" is reported at the key.
+  EXPECT_EQ(error_of(R"({"count": 20, "mode": "exact"})"), "s.json: /count: at most 10 when exact");
 }
 
 TEST(Options, CheckedWhenBuiltInCpp) {
@@ -146,7 +147,7 @@ TEST(Options, RequiredArraysDefaultsAndNestedObjects) {
   EXPECT_EQ(nested_error(R"({"size": [4, 4], "rays": [0, 8]})"), "n.json: /rays: 0 is not at least 1");
   EXPECT_EQ(nested_error(R"({"size": [4, 4], "boxes": [{"min": [0, 0, 0], "weight": 0}]})"),
             "n.json: /boxes/0/weight: 0 is not above 0");
-  EXPECT_EQ(nested_error(R"({"size": [4, 4], "step_mm": 2})"), "n.json: /: step_mm: 2 is more than depth_mm (1)");
+  EXPECT_EQ(nested_error(R"({"size": [4, 4], "step_mm": 2})"), "n.json: /step_mm: 2 is more than depth_mm (1)");
 
   const std::vector<PropertyDoc> rows = option_docs<Nested>();
   ASSERT_EQ(rows.size(), 6u);

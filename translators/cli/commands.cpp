@@ -392,7 +392,7 @@ bool update_option_tables(const fs::path& file) {
   }
   out += text.substr(at);
   if (out == text) return false;
-  std::ofstream(file) << out;
+  if (!(std::ofstream(file) << out)) throw InputError(file.string() + ": cannot write");
   return true;
 }
 
