@@ -1,5 +1,7 @@
 #include "reducer/node.h"
 
+#include <algorithm>
+
 #include "core/strings.h"
 
 namespace spec2fab {
@@ -118,6 +120,22 @@ void ReducerNode::read_parameters(
   // visit_parameters is non-const only so that tuners can set what they
   // visit; this visitor hands out const references and changes nothing.
   const_cast<ReducerNode*>(this)->visit_parameters([&](const std::string& name, Parameter& p) { read(name, p); });
+}
+
+std::optional<std::vector<MaterialId>> possible_materials(const ReducerNode& subtree) {
+  std::vector<MaterialId> out;
+  std::vector<const ReducerNode*> pending{&subtree};
+  while (!pending.empty()) {
+    const ReducerNode* node = pending.back();
+    pending.pop_back();
+    if (node->role() == ReducerNode::Role::material) {
+      if (!static_cast<const MaterialNode*>(node)->possible_materials(out)) return std::nullopt;
+    }
+    for (size_t i = 0; i < node->child_count(); ++i) pending.push_back(&node->child(i));
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
 }
 
 MaterialId route_to_material(const ReducerNode& subtree, const QueryPoint& point, LocalFrame frame) {

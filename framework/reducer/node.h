@@ -135,11 +135,19 @@ class GeometryNode : public ReducerNode {
 class MaterialNode : public ReducerNode {
  public:
   virtual MaterialId material(const QueryPoint& point, const LocalFrame& frame) const = 0;
+  /// Adds every material this node may assign, whatever its tuners choose
+  /// (its fixed materials and every choice of its free ones); false where
+  /// the node cannot say (then callers must assume anything).
+  virtual bool possible_materials(std::vector<MaterialId>& /*out*/) const { return false; }
 
  protected:
   MaterialNode() : ReducerNode(Role::material) {}
   MaterialNode(const MaterialNode&) = default;
 };
+
+/// Every material a subtree may assign (sorted, unique), or nullopt where a
+/// material node in it cannot say.
+std::optional<std::vector<MaterialId>> possible_materials(const ReducerNode& subtree);
 
 /// The material a subtree assigns to `point`, given in `frame` (the frame the
 /// subtree's root reads): routes through geometry nodes down to a material node.

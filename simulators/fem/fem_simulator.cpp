@@ -152,6 +152,7 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
                       {"reused_from_an_earlier_setup", mesh_reused_},
                       {"interfaces_followed", conform_.interfaces_cut},
                       {"edges_split", conform_.edges_split},
+                      {"subtrees_elastically_uniform", conform_.subtrees_uniform},
                       {"free_dofs", solver_->free_dofs()},
                       {"cholesky_factor_nonzeros", solver_->factor_nonzeros()},
                       {"cholesky_factor_flops", solver_->factor_flops()},

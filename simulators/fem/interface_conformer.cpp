@@ -63,10 +63,13 @@ class Conformer {
   void process(int id) {
     const RegionNode& region = regions_[static_cast<size_t>(id)];
     const ReducerNode& node = *region.node;
-    for (int k = 0; k < node.interface_count(); ++k) cut(id, k);
+    const bool uniform = elastically_uniform(node);
+    if (uniform) ++report_.subtrees_uniform;
+    else
+      for (int k = 0; k < node.interface_count(); ++k) cut(id, k);
     std::vector<int> tets = std::move(members_[static_cast<size_t>(id)]);
     members_[static_cast<size_t>(id)].clear();
-    if (node.role() == ReducerNode::Role::material) {
+    if (uniform || node.role() == ReducerNode::Role::material) {
       for (int t : tets) owner_[static_cast<size_t>(t)] = -1;
       return;
     }
@@ -79,6 +82,27 @@ class Conformer {
       members_[static_cast<size_t>(child)].push_back(t);
     }
     for (int child : region.children) process(child);
+  }
+
+  // Whether every material the subtree may assign, whatever its tuners
+  // choose, has one E and ν (and none is void, unless all are): then no
+  // interface inside it separates different stiffnesses, and a tet may
+  // straddle them (an ink stack of rigid Vero colours need not be meshed
+  // layer by layer).
+  bool elastically_uniform(const ReducerNode& subtree) const {
+    const auto materials = possible_materials(subtree);
+    if (!materials || materials->empty()) return false;
+    if (materials->size() == 1) return true;
+    const MaterialPalette& palette = tree_.palette();
+    const Material& first = palette.material(materials->front());
+    for (MaterialId id : *materials) {
+      if (id == kVoid || materials->front() == kVoid) return false;
+      const Material& m = palette.material(id);
+      if (m.youngs_modulus_pa.value != first.youngs_modulus_pa.value ||
+          m.poisson_ratio.value != first.poisson_ratio.value)
+        return false;
+    }
+    return true;
   }
 
   // Cuts the tets of region `id` by its interface k.

@@ -18,6 +18,10 @@
 /// routes to, and the walk goes on. Plane, column, voxel and layer interfaces
 /// are planes in their frames and are followed exactly; a B-spline or
 /// stratum surface is followed to within its linear interpolation per edge.
+///
+/// A subtree whose every possible material (every choice its tuners have)
+/// has the same E and ν is not cut inside: its interfaces separate nothing
+/// the elastic model sees (a texture's rigid ink layers and columns).
 
 #include "fem/tet_mesh.h"
 #include "reducer/reducer_tree.h"
@@ -26,6 +30,7 @@ namespace spec2fab::fem {
 
 struct ConformReport {
   size_t interfaces_cut = 0;  ///< level sets that crossed at least one tet
+  size_t subtrees_uniform = 0;  ///< subtrees left whole: all their materials one E and ν
   size_t edges_split = 0;
   size_t tets_before = 0, tets_after = 0;
 };

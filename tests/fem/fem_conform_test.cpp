@@ -1,5 +1,6 @@
-// The interface conformer: after splitting, no tet straddles a material
-// interface of the tree, and the mesh stays conforming (no hanging faces).
+// The interface conformer: after splitting, no tet straddles an interface
+// between materials of different stiffness, and the mesh stays conforming
+// (no hanging faces).
 
 #include "fem/interface_conformer.h"
 #include "fem/mesh_cache.h"
@@ -20,10 +21,15 @@ void expect_conforming_and_single_material(const TetMesh& mesh, const ReducerTre
   for (size_t t = 0; t < mesh.tets.size(); ++t) {
     ASSERT_GT(mesh.volume(t), 0);
     const Vec3 c = mesh.centroid(t);
-    const MaterialId at_centre = tree.material_at(c);
+    // What the elastic model sees of a material: E and ν.
+    auto stiffness = [&](const Vec3& p) {
+      const Material& m = tree.palette().material(tree.material_at(p));
+      return std::pair{m.youngs_modulus_pa.value, m.poisson_ratio.value};
+    };
+    const auto at_centre = stiffness(c);
     for (int v : mesh.tets[t]) {
       const Vec3 corner = c + 0.999 * (mesh.nodes[static_cast<size_t>(v)] - c);
-      if (tree.material_at(corner) != at_centre) {
+      if (stiffness(corner) != at_centre) {
         ++straddling;
         break;
       }
@@ -61,6 +67,42 @@ TEST(InterfaceConformer, ColumnsAndATiltedPlaneAreFollowedExactly) {
   TetMesh mesh = testing::box_mesh(Vec3(0, 0, 0), Vec3(10, 8, 6), 1.0);
   conform_to_interfaces(mesh, tree);
   expect_conforming_and_single_material(mesh, tree, 2 * (80.0 + 60.0 + 48.0), 480.0);
+}
+
+// Inside a subtree whose every possible material has one E and ν (a stack
+// of rigid inks of different colours), interfaces separate nothing the
+// elastic model sees: the mesh is not cut there. A choice of a different
+// stiffness anywhere in the subtree, even one not chosen now, makes it cut.
+TEST(InterfaceConformer, LeavesElasticallyUniformSubtreesWhole) {
+  const MaterialPalette palette({testing::elastic_material("a", 1e9, 0.3), testing::elastic_material("b", 1e8, 0.3),
+                                 testing::elastic_material("c", 1e9, 0.3)});
+  Solid solid(make_box(Vec3(0, 0, 0), Vec3(10, 8, 6), 1), UvSource::planar);
+  auto conformed = [&](const std::string& above) {
+    ReducerTree tree(Properties::parse(R"({"type": "plane", "offset_mm": 3.1, "above": )" + above +
+                                           R"(, "below": {"type": "layered", "material": "b"}})",
+                                       "tree.json"),
+                     palette);
+    tree.bind(solid);
+    TetMesh mesh = testing::box_mesh(Vec3(0, 0, 0), Vec3(10, 8, 6), 1.0);
+    const ConformReport report = conform_to_interfaces(mesh, tree);
+    expect_conforming_and_single_material(mesh, tree, 2 * (80.0 + 60.0 + 48.0), 480.0);
+    return std::pair{report, mesh.tets.size()};
+  };
+  const auto [plain_report, plain] = conformed(R"({"type": "layered", "material": "a"})");
+  const std::string columns = R"({"type": "column", "count": [3, 2], "child": {"type": "layered",
+      "layers": [{"material": "c", "thickness_mm": 0.9}, {"material": MATERIAL}]}})";
+  auto with = [&](const std::string& material) {
+    std::string json = columns;
+    return json.replace(json.find("MATERIAL"), 8, material);
+  };
+  // The stiffness is one everywhere above the plane: only the plane is cut.
+  const auto [uniform_report, uniform] = conformed(with(R"("a")"));
+  EXPECT_EQ(uniform, plain);
+  EXPECT_GE(uniform_report.subtrees_uniform, 1u);
+  // Materials the same but stiffnesses not: every column and layer is cut.
+  const auto [mixed_report, mixed] = conformed(with(R"({"value": "a", "choices": ["a", "b"]})"));
+  EXPECT_GT(mixed, plain + 100);
+  EXPECT_GT(mixed_report.interfaces_cut, uniform_report.interfaces_cut + 3);
 }
 
 TEST(MeshCache, SharesAMeshWithinARunForTheSameSolidTreeAndOptionsOnly) {

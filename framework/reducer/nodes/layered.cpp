@@ -88,6 +88,19 @@ class LayeredNode final : public ClonableNode<LayeredNode, MaterialNode> {
     return beyond_;
   }
 
+  bool possible_materials(std::vector<MaterialId>& out) const override {
+    bool known = true;
+    auto add = [&](const Parameter& material) {
+      if (!material.is_free()) out.push_back(static_cast<MaterialId>(material.value()));
+      else if (material.kind() != ParameterKind::choice) known = false;
+      else
+        for (double id : material.choices()) out.push_back(static_cast<MaterialId>(id));
+    };
+    for (const Layer& layer : layers_) add(layer.material);
+    if (fill_) add(*fill_);
+    return known;
+  }
+
   // Every finite layer boundary (whether the materials on either side differ
   // or not: a tuner may change them).
   int interface_count() const override { return finite_boundaries_; }
