@@ -1,0 +1,142 @@
+#pragma once
+/// The elastic piece: cells of a Voxel node, each one material of a list,
+/// tuned so that the print deforms as a goal says under one load case —
+/// what the elastic book is, and what deformation_texture composes under a
+/// textured shell. One tuner: the fem simulator (small strain) over the
+/// whole solid (so whatever the rest of the tree prints there, a shell
+/// included, takes its share of the load), shape_mse over probe points,
+/// branch and bound with the elastic bound (fem/elastic_bound.h). The goal
+/// is either the deformation a hidden reference assignment produces (so
+/// that recovery can be checked) or a deformed copy of the shape's mesh.
+/// Its options, tuner, phase, report and previews are written once here.
+
+#include <array>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+#include <nlohmann/json.hpp>
+
+#include "core/options.h"
+#include "geometry/mesh.h"
+#include "materials/material.h"
+#include "tuning/schedule.h"
+#include "tuning/tuner_network.h"
+
+namespace spec2fab {
+
+class Experiment;
+class Properties;
+class ReducerTree;
+struct RunContext;
+struct Summary;
+namespace fem {
+class ElasticBound;
+}
+
+/// The goal keys every elastic translator shares, declared once.
+struct ElasticOptions {
+  std::vector<std::string> materials;
+  double max_tet_volume_mm3 = 60;
+  std::optional<std::vector<std::string>> reference;
+  std::optional<std::filesystem::path> deformed_mesh;
+  std::optional<int> probes;  ///< mesh vertices used as probes; none: every vertex
+
+  template <class Declare, class Self>
+  static void declare(Declare& d, Self& o) {
+    d.value(o.materials, "materials", "what each cell may be (the printer's rigid, rubber and digital materials)");
+    d.number(o.max_tet_volume_mm3, "max_tet_volume_mm3", Range::closed(1e-3, 1e6), "largest tet of the FEM mesh");
+    d.value(o.reference, "reference",
+            "goal form 1: the hidden assignment, one material per cell (x fastest), whose deformation is the goal",
+            Default{"-"});
+    d.file(o.deformed_mesh, "deformed_mesh",
+           "goal form 2: the shape's mesh deformed (same vertices, mm); its vertices are the probes");
+    d.value(o.probes, "probes", "goal form 2: this many of the vertices, spread over the mesh, are the probes",
+            Default{"every vertex"});
+  }
+  bool check(std::string* why) const {
+    if (reference.has_value() == deformed_mesh.has_value())
+      *why = "give the goal as \"reference\" (a hidden assignment) or as \"deformed_mesh\", one of them";
+    else if (probes && *probes < 1)
+      *why = "probes: at least one";
+    else if (materials.size() < 2)
+      *why = "materials: give at least two to choose from";
+    else return true;
+    return false;
+  }
+};
+
+/// Where the print is held and pushed (rest-shape world mm).
+struct LoadCase {
+  Eigen::AlignedBox3d fixed;   ///< nodes in it are clamped
+  Eigen::AlignedBox3d loaded;  ///< the force is spread over the boundary faces in it
+  Vec3 force_n = Vec3::Zero();
+  std::string description;     ///< for the summary: "spine clamped, 5 N on the cover's free edge"
+};
+
+/// `count` of a mesh's vertices, spread over it: farthest-point sampling
+/// from the vertex with the highest z (ties: lowest index), deterministic.
+std::vector<size_t> spread_vertices(std::span<const Vec3> vertices, size_t count);
+
+class ElasticPiece {
+ public:
+  /// Reads the options from `goal` (`cells` voxel cells over the solid's
+  /// bounds; the reference must have one material per cell).
+  ElasticPiece(const Properties& goal, const Experiment& experiment, ElasticOptions options,
+               std::array<int, 3> cells);
+
+  const ElasticOptions& options() const { return options_; }
+  std::array<int, 3> cells() const { return cells_; }
+  int cell_count() const { return cells_[0] * cells_[1] * cells_[2]; }
+  /// The Voxel node of the cells over `bounds`, each a Layered node choosing
+  /// among the materials (JSON, for a tree).
+  nlohmann::json cell_node(const Eigen::AlignedBox3d& bounds) const;
+
+  /// The probes of the mesh goal form: the rest mesh's vertices (a spread of
+  /// `probes` of them when given), and their goal positions. Empty for the
+  /// reference form.
+  std::vector<Vec3> mesh_probes() const { return mesh_probes_; }
+
+  /// Adds the tuner (after every tuner already in `network`), bound to the
+  /// cells at `cells_path` of `tree`, with `probes` (the mesh goal form uses
+  /// its own: pass mesh_probes()) under `load`; for the reference form
+  /// simulates the hidden assignment first (every other part of the tree as
+  /// it is now). Returns the phase that tunes it.
+  Phase add_tuner(TunerNetwork& network, ReducerTree& tree, const std::string& cells_path, const LoadCase& load,
+                  std::vector<Vec3> probes, const Experiment& experiment);
+  size_t tuner() const { return tuner_; }
+  /// The tuner's fem options (for another tuner or simulator of the same model).
+  const nlohmann::json& simulator() const { return simulator_; }
+  /// Names of the cells' materials as `tree` has them now.
+  std::vector<std::string> assignment(TunerNetwork& network, const ReducerTree& tree) const;
+
+  /// result.json's figures (assignment, shape_mse_mm2, probe_rms_mm, the
+  /// search's counts, recovery of the reference) and the previews
+  /// preview/search.png (the paper's Fig. 10) and preview/goal_vs_achieved.png
+  /// (probes from the side), for the tree as it is now.
+  nlohmann::json report(TunerNetwork& network, const ReducerTree& tree, const Summary& summary,
+                        RunContext& context) const;
+  /// The previews report() writes.
+  static std::vector<std::string> previews() { return {"preview/search.png", "preview/goal_vs_achieved.png"}; }
+  /// The options' rows for a translator's TypeDoc (prefixed "goal."), with
+  /// the translator's defaults.
+  static std::vector<PropertyDoc> docs(const ElasticOptions& defaults);
+
+ private:
+  ElasticOptions options_;
+  std::array<int, 3> cells_;
+  std::vector<Vec3> mesh_probes_, mesh_targets_;
+  std::vector<Vec3> probes_;
+  std::vector<MaterialId> reference_ids_;
+  Eigen::AlignedBox3d bounds_;
+  LoadCase load_;
+  nlohmann::json simulator_;
+  std::shared_ptr<fem::ElasticBound> bound_;
+  size_t tuner_ = 0;
+};
+
+}  // namespace spec2fab
