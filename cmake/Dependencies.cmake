@@ -44,6 +44,8 @@ if(SPEC2FAB_WITH_LIB3MF)
   target_link_libraries(spec2fab_lib3mf INTERFACE PkgConfig::LIB3MF PkgConfig::LIBZIP)
 endif()
 find_package(PNG REQUIRED)
+# OpenMP's runtime API only: the fem module keeps CHOLMOD's OpenMP regions serial.
+find_package(OpenMP REQUIRED COMPONENTS CXX)
 
 # The FEM's sparse Cholesky (CHOLMOD, supernodal) spends its time in BLAS.
 # Ceres brings ATLAS's libf77blas, whose dgemm would otherwise serve CHOLMOD

@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   const std::filesystem::path out = argv[1];
   std::filesystem::create_directories(out);
   save_mesh(make_sphere(25.0, 64, 32), out / "sphere_r25.obj");
+  save_mesh(make_sphere(25.0, 32, 16), out / "sphere_r25_coarse.obj");
   save_mesh(make_torus(20.0, 8.0, 64, 24), out / "torus_R20_r8.obj");
   save_mesh(make_box(Vec3(0, 0, 0), Vec3(40, 30, 20), 2), out / "box_40x30x20.stl");
   save_mesh(make_box(Vec3(0, 0, 0), Vec3(60, 60, 8), 2), out / "board_60x60x8.stl");

@@ -1,8 +1,10 @@
 #include "fem/cholmod_factor.h"
 
+#include <mutex>
 #include <stdexcept>
 
 #include <cholmod.h>
+#include <omp.h>
 
 namespace spec2fab::fem {
 
@@ -46,11 +48,47 @@ struct CholmodFactor::Impl {
   }
 };
 
+namespace {
+
+// CHOLMOD 3 (SuiteSparse 5) asks OpenMP for a fixed 4 threads (num_threads
+// clauses, whatever the machine or OMP_NUM_THREADS) in loops that only
+// clear and scatter arrays; the factorisation's work is in the (serial)
+// BLAS. Woken for every supernode, those threads cost more than they save:
+// on the 2-core CI machine the elastic bound's 12-cell search took 8.1 s
+// with them and 5.5 s with OMP_THREAD_LIMIT=1. OpenMP's active levels are
+// set to 0 (every region runs on its calling thread) while any thread is in
+// CHOLMOD, and set back when the last one leaves; hypre's OpenMP (the AMG
+// solver) keeps its threads outside that window. The loops write disjoint
+// entries, so the answer does not change.
+class SerialOpenMp {
+ public:
+  SerialOpenMp() {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    if (inside_++ == 0) {
+      saved_ = omp_get_max_active_levels();
+      omp_set_max_active_levels(0);
+    }
+  }
+  ~SerialOpenMp() {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    if (--inside_ == 0) omp_set_max_active_levels(saved_);
+  }
+  SerialOpenMp(const SerialOpenMp&) = delete;
+  SerialOpenMp& operator=(const SerialOpenMp&) = delete;
+
+ private:
+  static inline std::mutex mutex_;
+  static inline int inside_ = 0, saved_ = 1;
+};
+
+}  // namespace
+
 CholmodFactor::CholmodFactor() : impl_(std::make_unique<Impl>()) {}
 CholmodFactor::~CholmodFactor() = default;
 
 void CholmodFactor::analyze(const Matrix& lower) {
   if (!lower.isCompressed()) throw std::logic_error("CholmodFactor: the matrix must be compressed");
+  const SerialOpenMp serial;
   cholmod_sparse a = Impl::view(lower);
   if (impl_->factor) cholmod_free_factor(&impl_->factor, &impl_->common);
   impl_->factor = cholmod_analyze(&a, &impl_->common);
@@ -58,27 +96,37 @@ void CholmodFactor::analyze(const Matrix& lower) {
 }
 
 bool CholmodFactor::factorize(const Matrix& lower) {
+  const SerialOpenMp serial;
   cholmod_sparse a = Impl::view(lower);
   cholmod_factorize(&a, impl_->factor, &impl_->common);
   if (impl_->common.status == CHOLMOD_OUT_OF_MEMORY) throw std::runtime_error("CHOLMOD: out of memory");
   return impl_->common.status == CHOLMOD_OK && impl_->factor->minor == impl_->factor->n;
 }
 
-void CholmodFactor::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
+const double* CholmodFactor::solve_columns(const double* b, size_t rows, size_t columns) {
   cholmod_dense rhs{};
-  rhs.nrow = static_cast<size_t>(b.size());
-  rhs.ncol = 1;
-  rhs.nzmax = rhs.nrow;
-  rhs.d = rhs.nrow;
-  rhs.x = const_cast<double*>(b.data());
+  rhs.nrow = rows;
+  rhs.ncol = columns;
+  rhs.nzmax = rows * columns;
+  rhs.d = rows;
+  rhs.x = const_cast<double*>(b);
   rhs.xtype = CHOLMOD_REAL;
   rhs.dtype = CHOLMOD_DOUBLE;
+  const SerialOpenMp serial;
   if (!cholmod_solve2(CHOLMOD_A, impl_->factor, &rhs, nullptr, &impl_->x, nullptr, &impl_->y, &impl_->e,
                       &impl_->common)) {
     throw std::runtime_error("CHOLMOD: solve failed");
   }
-  const auto* values = static_cast<const double*>(impl_->x->x);
-  x = Eigen::Map<const Eigen::VectorXd>(values, b.size());
+  return static_cast<const double*>(impl_->x->x);
+}
+
+void CholmodFactor::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
+  x = Eigen::Map<const Eigen::VectorXd>(solve_columns(b.data(), static_cast<size_t>(b.size()), 1), b.size());
+}
+
+void CholmodFactor::solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) {
+  const double* values = solve_columns(b.data(), static_cast<size_t>(b.rows()), static_cast<size_t>(b.cols()));
+  x = Eigen::Map<const Eigen::MatrixXd>(values, b.rows(), b.cols());
 }
 
 double CholmodFactor::factor_nonzeros() const { return impl_->common.lnz; }

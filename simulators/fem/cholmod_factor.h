@@ -5,8 +5,10 @@
 /// repeated factorise-and-solve allocates nothing after the first.
 /// Eigen's CholmodSupport wrapper allocates a result vector per solve.
 
+#include <Eigen/Dense>
 #include <Eigen/SparseCore>
 
+#include <cstddef>
 #include <memory>
 
 namespace spec2fab::fem {
@@ -27,11 +29,18 @@ class CholmodFactor {
   bool factorize(const Matrix& lower);
   /// x = A⁻¹ b (sizes n).
   void solve(const Eigen::VectorXd& b, Eigen::VectorXd& x);
+  /// X = A⁻¹ B for many right-hand sides at once (n × k, column-major):
+  /// the supernodal solve then works on blocks (BLAS 3), several times
+  /// faster per column than k single solves.
+  void solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x);
 
   double factor_nonzeros() const;  ///< nnz(L) from the analysis
   double factor_flops() const;     ///< flop count of one factorisation
 
  private:
+  /// Solves the column-major n × k block at `b`; the result lives in the
+  /// kept workspace until the next solve.
+  const double* solve_columns(const double* b, size_t rows, size_t columns);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

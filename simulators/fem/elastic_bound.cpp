@@ -141,40 +141,33 @@ double ElasticBound::lower_bound(std::span<const double> x, int assigned, const 
       mu_soft_[t] = *std::min_element(e.mu.begin(), e.mu.end());
     }
   }
+  // M(i, k) = loads[i]ᵀ K⁻¹ loads[k]: loads[0] is f, loads[j + 1] probe component j's g.
   solver_->set_materials(lambda_stiff_, mu_stiff_, active_);
-  const std::vector<std::vector<double>> stiff = solver_->solve_linear(loads_);
+  const Eigen::MatrixXd stiff = solver_->solve_linear(loads_, loads_);
   solver_->set_materials(lambda_soft_, mu_soft_, active_);
-  const std::vector<std::vector<double>> soft = solver_->solve_linear(loads_);
-  if (stiff.empty()) {  // even the stiffest completion is singular: nothing to bound
+  const Eigen::MatrixXd soft = solver_->solve_linear(loads_, loads_);
+  if (stiff.size() == 0) {  // even the stiffest completion is singular: nothing to bound
     history_.push_back({assigned, 0.0});
     return 0;
   }
-
-  auto dot = [](const std::vector<double>& a, const std::vector<double>& b) {
-    double sum = 0;
-    for (size_t i = 0; i < a.size(); ++i) sum += a[i] * b[i];
-    return sum;
-  };
-  const std::vector<double>& f = loads_[0];
   // fᵀΔf, ≥ 0 up to rounding; infinite when the softest completion is singular.
-  const double spread_f = soft.empty() ? std::numeric_limits<double>::infinity()
-                                       : std::max(0.0, dot(f, soft[0]) - dot(f, stiff[0]));
+  const double spread_f =
+      soft.size() == 0 ? std::numeric_limits<double>::infinity() : std::max(0.0, soft(0, 0) - stiff(0, 0));
   const std::span<const double> goal = target.probes();
   double sum = 0;
-  for (size_t j = 0; j + 1 < loads_.size(); ++j) {
-    const std::vector<double>& g = loads_[j + 1];
-    const double at_stiff = dot(g, stiff[0]);
+  for (Eigen::Index j = 1; j < static_cast<Eigen::Index>(loads_.size()); ++j) {
+    const double at_stiff = stiff(j, 0);
     double low = at_stiff, high = at_stiff, width = spread_f;
-    if (!soft.empty()) {
-      const double at_soft = dot(g, soft[0]);
+    if (soft.size() != 0) {
+      const double at_soft = soft(j, 0);
       low = std::max(at_stiff, at_soft);
       high = std::min(at_stiff, at_soft);
-      width = std::sqrt(spread_f * std::max(0.0, dot(g, soft[j + 1]) - dot(g, stiff[j + 1])));
+      width = std::sqrt(spread_f * std::max(0.0, soft(j, j) - stiff(j, j)));
     }
     // Both intervals hold every completion's value: their intersection.
     low -= width;
     high += width;
-    const double u = goal[j];
+    const double u = goal[static_cast<size_t>(j - 1)];
     const double outside = u < low ? low - u : u > high ? u - high : 0.0;
     sum += outside * outside;
   }

@@ -284,27 +284,38 @@ void ElasticSolver::set_materials(std::span<const double> lambda, std::span<cons
   }
 }
 
-std::vector<std::vector<double>> ElasticSolver::solve_linear(std::span<const std::vector<double>> loads) {
+Eigen::MatrixXd ElasticSolver::solve_linear(std::span<const std::vector<double>> loads,
+                                            std::span<const std::vector<double>> observers) {
   Impl& m = *impl_;
   const size_t dofs = 3 * mesh_.nodes.size();
   std::vector<double> rest(dofs, 0.0);
   m.form(mesh_, rest, false, true);
-  std::vector<std::vector<double>> out;
-  SolveReport report;
-  for (size_t k = 0; k < loads.size(); ++k) {
+  const auto free = static_cast<Eigen::Index>(m.residual.size());
+  const auto columns = static_cast<Eigen::Index>(loads.size());
+  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(free, columns), solution;
+  for (Eigen::Index k = 0; k < columns; ++k)
     for (size_t d = 0; d < dofs; ++d)
-      if (const int i = m.dof_index[d]; i >= 0) m.residual[i] = loads[k][d];
-    if (m.kind == LinearSolver::cholesky) {  // factorised once, for every right-hand side
-      if (k == 0 && !m.cholesky.factorize(m.stiffness)) return {};
-      m.cholesky.solve(m.residual, m.step);
-    } else if (!m.factorize_and_solve(report)) {  // the iterative solvers set up again each time
-      return {};
+      if (const int i = m.dof_index[d]; i >= 0) rhs(i, k) = loads[static_cast<size_t>(k)][d];
+  if (m.kind == LinearSolver::cholesky) {  // factorised once, every right-hand side in one block solve
+    if (!m.cholesky.factorize(m.stiffness)) return {};
+    m.cholesky.solve(rhs, solution);
+  } else {  // the iterative solvers set up again for each right-hand side
+    solution.resize(free, columns);
+    SolveReport report;
+    for (Eigen::Index k = 0; k < columns; ++k) {
+      m.residual = rhs.col(k);
+      if (!m.factorize_and_solve(report)) return {};
+      solution.col(k) = m.step;
     }
-    if (!m.step.allFinite()) return {};
-    std::vector<double>& u = out.emplace_back(dofs, 0.0);
-    for (size_t d = 0; d < dofs; ++d)
-      if (const int i = m.dof_index[d]; i >= 0) u[d] = m.step[i];
   }
+  if (!solution.allFinite()) return {};
+  // The observers are sparse (a probe's interpolation weights): dot products
+  // over their non-zero free entries only.
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(observers.size()), columns);
+  for (size_t o = 0; o < observers.size(); ++o)
+    for (size_t d = 0; d < dofs; ++d)
+      if (const int i = m.dof_index[d]; i >= 0 && observers[o][d] != 0.0)
+        out.row(static_cast<Eigen::Index>(o)) += observers[o][d] * solution.row(i);
   return out;
 }
 

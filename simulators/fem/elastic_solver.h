@@ -17,6 +17,8 @@
 #include <span>
 #include <vector>
 
+#include <Eigen/Dense>
+
 #include "fem/corotated_tet.h"
 #include "fem/tet_mesh.h"
 
@@ -78,10 +80,14 @@ class ElasticSolver {
 
   /// Small strain only, for linear functionals of the solution: assembles
   /// the stiffness K of the free DOFs at rest, factorises it once and
-  /// returns K⁻¹·b for each right-hand side in `loads` (3 per node; entries
-  /// on fixed DOFs are ignored and zero in the answer). Prescribed
-  /// displacements play no part. Empty when K is not positive definite.
-  std::vector<std::vector<double>> solve_linear(std::span<const std::vector<double>> loads);
+  /// returns the matrix M with M(i, k) = observers[i]ᵀ K⁻¹ loads[k] (all
+  /// vectors 3 per node; entries on fixed DOFs are ignored). The loads are
+  /// solved as one block, and only the functionals leave the solver: a
+  /// caller that needs a few numbers per solve allocates no displacement
+  /// field. Prescribed displacements play no part. Empty (0 × 0) when K is
+  /// not positive definite.
+  Eigen::MatrixXd solve_linear(std::span<const std::vector<double>> loads,
+                               std::span<const std::vector<double>> observers);
 
   size_t free_dofs() const;
   double factor_nonzeros() const;  ///< nnz of the Cholesky factor (CHOLMOD's analysis)

@@ -160,18 +160,18 @@ ElasticPiece::ElasticPiece(const Properties& goal, const Experiment& experiment,
   }
   const Bounds bounds = experiment.solid().bounds();
   bounds_ = Eigen::AlignedBox3d(bounds.lower, bounds.upper);
-  if (options_.deformed_mesh) {
+  if (options_.deformed_mesh || options_.probes) {
     const Mesh rest = load_mesh(experiment.geometry_spec().mesh, experiment.geometry_spec().scale_to_mm);
-    const Mesh deformed = load_mesh(*options_.deformed_mesh);
-    if (deformed.vertices.size() != rest.vertices.size())
-      goal.fail("deformed_mesh", fmt::format("{} vertices, but the shape's mesh has {}: give the same mesh deformed",
-                                             deformed.vertices.size(), rest.vertices.size()));
     std::vector<size_t> chosen(rest.vertices.size());
     for (size_t v = 0; v < chosen.size(); ++v) chosen[v] = v;
     if (options_.probes) chosen = spread_vertices(rest.vertices, static_cast<size_t>(*options_.probes));
-    for (size_t v : chosen) {
-      mesh_probes_.push_back(rest.vertices[v]);
-      mesh_targets_.push_back(deformed.vertices[v]);
+    for (size_t v : chosen) mesh_probes_.push_back(rest.vertices[v]);
+    if (options_.deformed_mesh) {
+      const Mesh deformed = load_mesh(*options_.deformed_mesh);
+      if (deformed.vertices.size() != rest.vertices.size())
+        goal.fail("deformed_mesh", fmt::format("{} vertices, but the shape's mesh has {}: give the same mesh deformed",
+                                               deformed.vertices.size(), rest.vertices.size()));
+      for (size_t v : chosen) mesh_targets_.push_back(deformed.vertices[v]);
     }
   }
 }
@@ -189,7 +189,7 @@ nlohmann::json ElasticPiece::cell_node(const Eigen::AlignedBox3d& bounds) const 
 Phase ElasticPiece::add_tuner(TunerNetwork& network, ReducerTree& tree, const std::string& cells_path,
                               const LoadCase& load, std::vector<Vec3> probes, const Experiment& experiment) {
   load_ = load;
-  probes_ = options_.deformed_mesh ? mesh_probes_ : std::move(probes);
+  probes_ = mesh_probes_.empty() ? std::move(probes) : mesh_probes_;
   simulator_ = {{"type", "fem"},
                 {"max_tet_volume_mm3", options_.max_tet_volume_mm3},
                 {"nonlinear", false},
@@ -224,24 +224,34 @@ Phase ElasticPiece::add_tuner(TunerNetwork& network, ReducerTree& tree, const st
 
   const nlohmann::json optimizer =
       experiment.optimizer_or({{"type", "branch_and_bound"}, {"value_order", "best_bound_first"}});
-  const nlohmann::json parts = {
-      {"simulator", simulator_},
-      {"metric", {{"type", "shape_mse"}}},
-      {"goal", {{"type", "deformed_shape"}, {"points", points_json(probes_)}, {"targets", points_json(targets)}}},
-      {"optimizer", optimizer}};
-  auto tuner = build_tuner(Properties::wrap(parts, origin + " (tuner)"), "cells", context);
-  tuner->set_node(tree, cells);
-  bound_ = std::make_shared<fem::ElasticBound>(Properties::wrap(simulator_, origin + " (bound)"), context, tree, cells,
-                                               *tuner);
-  tuner->set_lower_bound([bound = bound_](std::span<const double> x, int assigned, const Observation& target) {
-    return bound->lower_bound(x, assigned, static_cast<const DisplacementsObservation&>(target));
-  });
+  parts_ = {{"simulator", simulator_},
+            {"metric", {{"type", "shape_mse"}}},
+            {"goal", {{"type", "deformed_shape"}, {"points", points_json(probes_)}, {"targets", points_json(targets)}}},
+            {"optimizer", optimizer}};
+  auto [tuner, bound] = make_tuner(tree, cells_path, experiment);
+  bound_ = std::move(bound);
   tuner_ = network.size();
   network.add(std::move(tuner));
   Phase phase;
   phase.name = "materials";
   phase.tuners = {tuner_};
   return phase;
+}
+
+std::pair<std::unique_ptr<Tuner>, std::shared_ptr<fem::ElasticBound>> ElasticPiece::make_tuner(
+    ReducerTree& tree, const std::string& cells_path, const Experiment& experiment) const {
+  if (parts_.is_null()) throw std::logic_error("ElasticPiece::make_tuner before add_tuner");
+  const PartContext context{experiment.palette(), &experiment.cache()};
+  const std::string origin = experiment.file().string();
+  ReducerNode& cells = tree.node(cells_path);
+  auto tuner = build_tuner(Properties::wrap(parts_, origin + " (tuner)"), "cells", context);
+  tuner->set_node(tree, cells);
+  auto bound = std::make_shared<fem::ElasticBound>(Properties::wrap(simulator_, origin + " (bound)"), context, tree,
+                                                   cells, *tuner);
+  tuner->set_lower_bound([bound](std::span<const double> x, int assigned, const Observation& target) {
+    return bound->lower_bound(x, assigned, static_cast<const DisplacementsObservation&>(target));
+  });
+  return {std::move(tuner), std::move(bound)};
 }
 
 std::vector<std::string> ElasticPiece::assignment(TunerNetwork& network, const ReducerTree& tree) const {

@@ -32,6 +32,7 @@ namespace spec2fab {
 class Experiment;
 class Properties;
 class ReducerTree;
+class Tuner;
 struct RunContext;
 struct Summary;
 namespace fem {
@@ -55,8 +56,8 @@ struct ElasticOptions {
             Default{"-"});
     d.file(o.deformed_mesh, "deformed_mesh",
            "goal form 2: the shape's mesh deformed (same vertices, mm); its vertices are the probes");
-    d.value(o.probes, "probes", "goal form 2: this many of the vertices, spread over the mesh, are the probes",
-            Default{"every vertex"});
+    d.value(o.probes, "probes", "this many of the shape's mesh vertices, spread over it, are the probes",
+            Default{"deformed_mesh: every vertex; reference: the translator's probes"});
   }
   bool check(std::string* why) const {
     if (reference.has_value() == deformed_mesh.has_value())
@@ -96,19 +97,20 @@ class ElasticPiece {
   /// among the materials (JSON, for a tree).
   nlohmann::json cell_node(const Eigen::AlignedBox3d& bounds) const;
 
-  /// The probes of the mesh goal form: the rest mesh's vertices (a spread of
-  /// `probes` of them when given), and their goal positions. Empty for the
-  /// reference form.
-  std::vector<Vec3> mesh_probes() const { return mesh_probes_; }
-
   /// Adds the tuner (after every tuner already in `network`), bound to the
-  /// cells at `cells_path` of `tree`, with `probes` (the mesh goal form uses
-  /// its own: pass mesh_probes()) under `load`; for the reference form
+  /// cells at `cells_path` of `tree`, under `load`, with `probes` (unless
+  /// the goal's mesh gives them: deformed_mesh, or "probes" vertices); for the reference form
   /// simulates the hidden assignment first (every other part of the tree as
   /// it is now). Returns the phase that tunes it.
   Phase add_tuner(TunerNetwork& network, ReducerTree& tree, const std::string& cells_path, const LoadCase& load,
                   std::vector<Vec3> probes, const Experiment& experiment);
   size_t tuner() const { return tuner_; }
+  /// Another tuner with the same simulator, goal and optimizer (its bound
+  /// set), bound to the cells at `cells_path` of another tree over the same
+  /// solid: the same search under a different model (deformation_texture's
+  /// comparison with the shell left out). After add_tuner.
+  std::pair<std::unique_ptr<Tuner>, std::shared_ptr<fem::ElasticBound>> make_tuner(
+      ReducerTree& tree, const std::string& cells_path, const Experiment& experiment) const;
   /// The tuner's fem options (for another tuner or simulator of the same model).
   const nlohmann::json& simulator() const { return simulator_; }
   /// Names of the cells' materials as `tree` has them now.
@@ -134,7 +136,7 @@ class ElasticPiece {
   std::vector<MaterialId> reference_ids_;
   Eigen::AlignedBox3d bounds_;
   LoadCase load_;
-  nlohmann::json simulator_;
+  nlohmann::json simulator_, parts_;
   std::shared_ptr<fem::ElasticBound> bound_;
   size_t tuner_ = 0;
 };
