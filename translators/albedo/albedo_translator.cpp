@@ -30,7 +30,8 @@ class AlbedoTranslator final : public TuningTranslator {
   };
 
   AlbedoTranslator(const Properties& /*root*/, const Experiment& experiment)
-      : backing_(read_options<Options>(experiment.goal()).backing), texture_(read_texture(experiment, backing_)) {
+      : backing_(read_options<Options>(experiment.goal()).backing),
+        texture_(experiment.goal(), experiment, TextureOptions{}, backing_, "backing") {
     const Properties goal = experiment.goal();
     // The shell holds the thickest stack and one step of backing under it.
     const double shell = texture_.ink_mm() + texture_.step_mm();
@@ -62,12 +63,6 @@ class AlbedoTranslator final : public TuningTranslator {
   }
 
  private:
-  static TexturePiece read_texture(const Experiment& experiment, const std::string& backing) {
-    const Properties goal = experiment.goal();
-    experiment.palette().id(backing, goal.where("backing"));
-    return TexturePiece(goal, experiment, TextureOptions{}, backing);
-  }
-
   void report(const RunRecord& /*record*/, RunContext& context) override {
     const std::vector<Rgb> achieved = texture_.achieved(network_);
     const std::vector<Rgb> nearest = texture_.diffusion() ? texture_.nearest_only(network_) : achieved;

@@ -69,7 +69,7 @@ class DeformationTextureTranslator final : public TuningTranslator {
 
   DeformationTextureTranslator(const Properties& /*root*/, const Experiment& experiment)
       : options_(read_options<Options>(experiment.goal())),
-        texture_(read_texture(experiment, options_.backing)),
+        texture_(experiment.goal(), experiment, texture_options(), options_.backing, "backing"),
         elastic_(experiment.goal(), experiment, elastic_defaults(), options_.cells) {
     const Properties goal = experiment.goal();
     const Bounds solid = experiment.solid().bounds();
@@ -130,12 +130,6 @@ class DeformationTextureTranslator final : public TuningTranslator {
   }
 
  private:
-  static TexturePiece read_texture(const Experiment& experiment, const std::string& backing) {
-    const Properties goal = experiment.goal();
-    experiment.palette().id(backing, goal.where("backing"));
-    return TexturePiece(goal, experiment, texture_options(), backing);
-  }
-
   /// The paper's model: the same search on a tree whose cells reach the
   /// surface (no shell), then its assignment printed under the shell.
   nlohmann::json compare_without_shell(const nlohmann::json& with_shell, const RunContext& context) {

@@ -175,9 +175,10 @@ TextureOptions::TextureOptions(TextureKeys renamed, std::vector<std::string> ink
 }
 
 TexturePiece::TexturePiece(const Properties& goal, const Experiment& experiment, TextureOptions o,
-                           const std::string& ground) {
+                           const std::string& ground, const char* ground_key) {
   read_options_into(o, goal);
   const MaterialPalette& palette = experiment.palette();
+  if (ground_key) palette.id(ground, goal.where(ground_key));
   const PrinterProfile& printer = experiment.printer();
   columns_ = o.columns;
   image_ = load_goal_image(goal, o.keys.image, columns_);

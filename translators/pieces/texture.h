@@ -133,9 +133,10 @@ struct TextureOptions {
 class TexturePiece {
  public:
   /// Reads the texture's options from `goal` (`options` holds their names
-  /// and default inks); `ground` is what the inks lie on.
+  /// and default inks); `ground` is what the inks lie on, checked against
+  /// the palette at `ground_key` of the goal when one is given.
   TexturePiece(const Properties& goal, const Experiment& experiment, TextureOptions options,
-               const std::string& ground);
+               const std::string& ground, const char* ground_key = nullptr);
   /// The options' rows for a translator's TypeDoc, the optimizer's included.
   static std::vector<PropertyDoc> docs(const TextureOptions& options);
 
