@@ -51,6 +51,7 @@ struct ElasticSolver::Impl {
 
   // Work buffers, sized once.
   Eigen::VectorXd residual, step;
+  Eigen::MatrixXd block_rhs, block_solution;  // solve_linear's, kept: the elastic bound calls it per subtree
   std::vector<double> forces, trial, last_converged, previous_converged;
   Eigen::VectorXd saved_residual;
 
@@ -292,7 +293,9 @@ Eigen::MatrixXd ElasticSolver::solve_linear(std::span<const std::vector<double>>
   m.form(mesh_, rest, false, true);
   const auto free = static_cast<Eigen::Index>(m.residual.size());
   const auto columns = static_cast<Eigen::Index>(loads.size());
-  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(free, columns), solution;
+  Eigen::MatrixXd& rhs = m.block_rhs;
+  Eigen::MatrixXd& solution = m.block_solution;
+  rhs.setZero(free, columns);  // no reallocation when the size is the last call's
   for (Eigen::Index k = 0; k < columns; ++k)
     for (size_t d = 0; d < dofs; ++d)
       if (const int i = m.dof_index[d]; i >= 0) rhs(i, k) = loads[static_cast<size_t>(k)][d];

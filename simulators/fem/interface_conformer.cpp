@@ -93,10 +93,10 @@ class Conformer {
     const auto materials = possible_materials(subtree);
     if (!materials || materials->empty()) return false;
     if (materials->size() == 1) return true;
+    if (materials->front() == kVoid) return false;  // void (id 0, sorted first) beside a solid
     const MaterialPalette& palette = tree_.palette();
     const Material& first = palette.material(materials->front());
     for (MaterialId id : *materials) {
-      if (id == kVoid || materials->front() == kVoid) return false;
       const Material& m = palette.material(id);
       if (m.youngs_modulus_pa.value != first.youngs_modulus_pa.value ||
           m.poisson_ratio.value != first.poisson_ratio.value)

@@ -206,11 +206,12 @@ TEST_F(FemCli, DeformationTextureRecoversTheCoreUnderItsShell) {
             1e-6 * deformation.at("goal_mean_squared_displacement_mm2").get<double>());
   EXPECT_EQ(deformation.at("branch_and_bound").at("assignments").get<double>(), 4);
   EXPECT_EQ(result.at("texture").at("columns"), nlohmann::json::array({8, 4})) << result.at("texture").dump();
-  // The paper's model is tuned without the shell; printed under it, its
-  // assignment can do no better than ours, which is exact.
+  // The paper's model is tuned without the shell: in that model its choice
+  // is the best of all, ours included (the comparison searched that model,
+  // not the print).
   const auto& paper = deformation.at("shell_left_out_of_the_fem");
-  EXPECT_GE(paper.at("shape_mse_mm2_as_printed_with_shell").get<double>(),
-            deformation.at("shape_mse_mm2").get<double>());
+  EXPECT_LE(paper.at("shape_mse_mm2_as_modelled_without_shell").get<double>(),
+            paper.at("tuned_with_shell_shape_mse_mm2_if_modelled_without_shell").get<double>());
   // Leaving the rigid shell out makes our print look softer than it is.
   EXPECT_GT(paper.at("tuned_with_shell_shape_mse_mm2_if_modelled_without_shell").get<double>(),
             deformation.at("goal_mean_squared_displacement_mm2").get<double>());

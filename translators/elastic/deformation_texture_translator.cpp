@@ -60,11 +60,6 @@ class DeformationTextureTranslator final : public TuningTranslator {
       d.value(o.compare_without_shell, "compare_without_shell",
               "also tune as the paper did (the FEM without the shell) and report what that assignment does printed");
     }
-    bool check(std::string* why) const {
-      if (static_cast<long long>(cells[0]) * cells[1] * cells[2] <= 64) return true;
-      *why = "cells: more than 64 (branch and bound over materials per cell is for coarse grids)";
-      return false;
-    }
   };
 
   DeformationTextureTranslator(const Properties& /*root*/, const Experiment& experiment)
@@ -123,8 +118,6 @@ class DeformationTextureTranslator final : public TuningTranslator {
       if (d.name == "goal.probes") d.default_value = std::to_string(*elastic_defaults().probes);
       doc.properties.push_back(std::move(d));
     }
-    doc.properties.push_back(
-        {"optimizer", "optimizer", "branch_and_bound, best_bound_first", "the cells' optimizer (the bound is set)"});
     append(doc.properties, TreeOutputOptions::docs());
     return doc;
   }
@@ -147,8 +140,7 @@ class DeformationTextureTranslator final : public TuningTranslator {
     const double ours_without_shell = tuner->error_at(tuned);
     // The paper's assignment as printed, under the textured shell.
     const double as_printed = ours.error_at(chosen);
-    ours.set_values(tuned);
-    ours.error();
+    ours.set_values(tuned);  // the tree outputs come next
     tree_->evaluate();
     std::vector<std::string> names;
     int differ = 0;

@@ -36,11 +36,6 @@ class ElasticBookTranslator final : public TuningTranslator {
       d.number(o.probe_grid, "probe_grid", Range::at_least(2),
                "probes over the cover (x, y), reference goal only (a deformed mesh's vertices are its probes)");
     }
-    bool check(std::string* why) const {
-      if (static_cast<long long>(cells[0]) * cells[1] * cells[2] <= 64) return true;
-      *why = "cells: more than 64 (branch and bound over materials per cell is for coarse grids)";
-      return false;
-    }
   };
 
   static ElasticOptions elastic_defaults() {
@@ -94,8 +89,6 @@ class ElasticBookTranslator final : public TuningTranslator {
                 R"({"translator": "elastic_book", "goal": {"reference": ["VeroWhitePlus", "TangoBlackPlus", )"
                 R"("DM9860", "VeroWhitePlus", "TangoBlackPlus", "DM9860", "VeroWhitePlus", "TangoBlackPlus"]}})"};
     append(doc.properties, ElasticPiece::docs(elastic_defaults()));
-    doc.properties.push_back(
-        {"optimizer", "optimizer", "branch_and_bound, best_bound_first", "the cells' optimizer (the bound is set)"});
     append(doc.properties, TreeOutputOptions::docs());
     return doc;
   }

@@ -147,6 +147,10 @@ ElasticPiece::ElasticPiece(const Properties& goal, const Experiment& experiment,
                            std::array<int, 3> cells)
     : options_(std::move(options)), cells_(cells) {
   read_options_into(options_, goal);
+  if (cell_count() > 64)
+    goal.fail("cells", fmt::format("{} cells: at most 64 (branch and bound over materials per cell is for coarse "
+                                   "grids)",
+                                   cell_count()));
   const MaterialPalette& palette = experiment.palette();
   for (const std::string& m : options_.materials) palette.id(m, goal.where("materials"));
   if (options_.reference) {
@@ -161,7 +165,7 @@ ElasticPiece::ElasticPiece(const Properties& goal, const Experiment& experiment,
   const Bounds bounds = experiment.solid().bounds();
   bounds_ = Eigen::AlignedBox3d(bounds.lower, bounds.upper);
   if (options_.deformed_mesh || options_.probes) {
-    const Mesh rest = load_mesh(experiment.geometry_spec().mesh, experiment.geometry_spec().scale_to_mm);
+    const Mesh& rest = experiment.solid().mesh();  // the shape's mesh as loaded, in mm
     std::vector<size_t> chosen(rest.vertices.size());
     for (size_t v = 0; v < chosen.size(); ++v) chosen[v] = v;
     if (options_.probes) chosen = spread_vertices(rest.vertices, static_cast<size_t>(*options_.probes));
@@ -304,7 +308,10 @@ nlohmann::json ElasticPiece::report(TunerNetwork& network, const ReducerTree& tr
 }
 
 std::vector<PropertyDoc> ElasticPiece::docs(const ElasticOptions& defaults) {
-  return prefixed(option_docs<ElasticOptions>(defaults), "goal.");
+  std::vector<PropertyDoc> rows = prefixed(option_docs<ElasticOptions>(defaults), "goal.");
+  rows.push_back(
+      {"optimizer", "optimizer", "branch_and_bound, best_bound_first", "the cells' optimizer (the bound is set)"});
+  return rows;
 }
 
 }  // namespace spec2fab

@@ -76,7 +76,6 @@ struct LoadCase {
   Eigen::AlignedBox3d fixed;   ///< nodes in it are clamped
   Eigen::AlignedBox3d loaded;  ///< the force is spread over the boundary faces in it
   Vec3 force_n = Vec3::Zero();
-  std::string description;     ///< for the summary: "spine clamped, 5 N on the cover's free edge"
 };
 
 /// `count` of a mesh's vertices, spread over it: farthest-point sampling
@@ -86,12 +85,12 @@ std::vector<size_t> spread_vertices(std::span<const Vec3> vertices, size_t count
 class ElasticPiece {
  public:
   /// Reads the options from `goal` (`cells` voxel cells over the solid's
-  /// bounds; the reference must have one material per cell).
+  /// bounds, at most 64: branch and bound over materials per cell is for
+  /// coarse grids; the reference must have one material per cell).
   ElasticPiece(const Properties& goal, const Experiment& experiment, ElasticOptions options,
                std::array<int, 3> cells);
 
   const ElasticOptions& options() const { return options_; }
-  std::array<int, 3> cells() const { return cells_; }
   int cell_count() const { return cells_[0] * cells_[1] * cells_[2]; }
   /// The Voxel node of the cells over `bounds`, each a Layered node choosing
   /// among the materials (JSON, for a tree).
@@ -111,8 +110,6 @@ class ElasticPiece {
   /// comparison with the shell left out). After add_tuner.
   std::pair<std::unique_ptr<Tuner>, std::shared_ptr<fem::ElasticBound>> make_tuner(
       ReducerTree& tree, const std::string& cells_path, const Experiment& experiment) const;
-  /// The tuner's fem options (for another tuner or simulator of the same model).
-  const nlohmann::json& simulator() const { return simulator_; }
   /// Names of the cells' materials as `tree` has them now.
   std::vector<std::string> assignment(TunerNetwork& network, const ReducerTree& tree) const;
 
@@ -125,7 +122,7 @@ class ElasticPiece {
   /// The previews report() writes.
   static std::vector<std::string> previews() { return {"preview/search.png", "preview/goal_vs_achieved.png"}; }
   /// The options' rows for a translator's TypeDoc (prefixed "goal."), with
-  /// the translator's defaults.
+  /// the translator's defaults, and the cells' optimizer.
   static std::vector<PropertyDoc> docs(const ElasticOptions& defaults);
 
  private:
