@@ -80,6 +80,15 @@ class Optimizer {
   virtual std::string name() const = 0;
   /// Capabilities a problem must offer.
   virtual std::vector<Capability> requirements() const { return {}; }
+  /// Whether runs that differ only in seed may differ (the bench runs these
+  /// over many seeds, the others once).
+  virtual bool stochastic() const { return false; }
+  /// Tells the method that a run will be stopped after `evaluations` error
+  /// evaluations (the start's included), as the bench's budget does, so that
+  /// a schedule it has (annealing's temperatures, SPSA's gains, an
+  /// evaluation limit) spans that budget instead of its own default length.
+  /// Methods without a schedule ignore it; the caller still stops the run.
+  virtual void plan_evaluations(long long /*evaluations*/) {}
   /// A schedule gives every tuner run a seed derived from (run seed, phase,
   /// sweep, tuner), so results never depend on which thread ran what.
   /// Stochastic optimizers draw from random_seed(their "seed" option).

@@ -153,6 +153,11 @@ double Tuner::error() {
   return metric_->error(*simulated_, *effective_target_);
 }
 
+const Observation& Tuner::simulate() {
+  simulator_->simulate(*node_, *simulated_);
+  return *simulated_;
+}
+
 void Tuner::set_values(std::span<const double> x) {
   const auto& entries = space_.entries();
   for (size_t i = 0; i < x.size(); ++i) {

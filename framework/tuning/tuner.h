@@ -43,6 +43,9 @@ class Tuner {
   /// getError: simulates the subtree at its current parameters and compares
   /// with the effective target.
   double error();
+  /// Simulates the subtree at its current parameters and compares it with
+  /// nothing: how a goal is made from a reference assignment (bench problems).
+  const Observation& simulate();
   /// The same at parameter values x (leaves them set).
   double error_at(std::span<const double> x);
   /// Sets the free parameters to x and refreshes the subtree, simulating

@@ -80,6 +80,17 @@ class Annealing final : public Optimizer {
   }
 
   std::string name() const override { return "annealing"; }
+  bool stochastic() const override { return true; }
+  /// One evaluation per move after the start's; the exponential schedule is
+  /// stretched to keep the final temperature its options give.
+  void plan_evaluations(long long evaluations) override {
+    const int iterations = static_cast<int>(std::clamp<long long>(evaluations - 1, 1, 1'000'000'000));
+    const double length = static_cast<double>(schedule_length());
+    options_.cooling = std::pow(options_.cooling, length / iterations);
+    options_.iterations = iterations;
+    options_.schedule_iterations = 0;
+    scheduled_ = 0;
+  }
 
  protected:
   void run(Problem& problem, std::vector<double>& x, Summary& summary,

@@ -157,7 +157,17 @@ class CeresAdapter final : public Optimizer {
   }
 
   std::string name() const override { return "ceres"; }
-  std::vector<Capability> requirements() const override { return {Capability::residuals}; }
+  /// Analytic derivatives need the problem's Jacobian, which a tuner has
+  /// where its simulator and metric are differentiable (Capability::gradient).
+  std::vector<Capability> requirements() const override {
+    if (options_.derivatives == "analytic") return {Capability::residuals, Capability::gradient};
+    return {Capability::residuals};
+  }
+  /// Ceres has no evaluation limit: iterations (each one or more evaluations)
+  /// are let run up to the budget, and the caller's callback ends the run.
+  void plan_evaluations(long long evaluations) override {
+    options_.max_iterations = static_cast<int>(std::clamp<long long>(evaluations, 1, 1'000'000'000));
+  }
 
  protected:
   void run(Problem& problem, std::vector<double>& x, Summary& summary,

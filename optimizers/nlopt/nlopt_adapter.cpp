@@ -150,6 +150,14 @@ class NloptAdapter final : public Optimizer {
     if (gradient_based()) return {Capability::gradient};
     return {};
   }
+  /// The algorithms that draw random numbers (NLopt's nlopt_srand stream).
+  bool stochastic() const override {
+    return starts_with_any(algorithm_, {"GN_CRS2", "GN_ISRES", "GN_ESCH", "GN_MLSL", "GD_MLSL", "G_MLSL",
+                                        "GD_STOGO_RAND"});
+  }
+  void plan_evaluations(long long evaluations) override {
+    options_.max_evaluations = static_cast<int>(std::clamp<long long>(evaluations - 1, 1, 1'000'000'000));
+  }
 
  protected:
   void run(Problem& problem, std::vector<double>& x, Summary& summary,

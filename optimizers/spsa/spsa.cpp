@@ -78,6 +78,13 @@ class Spsa final : public Optimizer {
   }
 
   std::string name() const override { return "spsa"; }
+  bool stochastic() const override { return true; }
+  /// Two evaluations per iteration, after the start's, the gain calibration's
+  /// and before the final iterate's.
+  void plan_evaluations(long long evaluations) override {
+    const long long fixed = 1 + (options_.a == 0 ? 2 * kCalibrationSamples : 0) + 1;
+    options_.iterations = static_cast<int>(std::clamp<long long>((evaluations - fixed) / 2, 1, 1'000'000'000));
+  }
 
  protected:
   void run(Problem& problem, std::vector<double>& x, Summary& summary,
@@ -137,7 +144,7 @@ class Spsa final : public Optimizer {
     double a = options_.a;
     if (a == 0) {
       // Spall's rule: a_0·mean|ĝ| ≈ the wanted first step (10% of the range).
-      constexpr int samples = 4;
+      const int samples = kCalibrationSamples;
       double magnitude = 0;
       for (int s = 0; s < samples; ++s) {
         estimate(options_.c);
@@ -173,6 +180,7 @@ class Spsa final : public Optimizer {
 
 
  private:
+  static constexpr int kCalibrationSamples = 4;  ///< gradient estimates that calibrate a
   Options options_;
 };
 

@@ -11,8 +11,11 @@
 #include <fstream>
 #include <thread>
 
+#include <unistd.h>
+
 #include <tbb/global_control.h>
 
+#include "bench/harness.h"
 #include "core/error.h"
 #include "core/strings.h"
 #include "fabrication/fabricate.h"
@@ -39,6 +42,68 @@ int run_command(const RunArguments& arguments) {
   options.seed = arguments.seed;
   const fs::path folder = run_experiment(arguments.experiment, options);
   std::cout << "wrote " << folder.string() << "/ (result.json, tree.json, preview/, print/)\n";
+  return 0;
+}
+
+int bench_command(BenchArguments arguments) {
+  if (arguments.quick) {
+    // A smoke test of every problem and entrant: a short budget, few seeds.
+    arguments.seeds = std::min(arguments.seeds, 3);
+    arguments.budget = "12d";
+  }
+  const fs::path entrants_file =
+      arguments.entrants.empty() ? arguments.datasets / "bench" / "entrants.json" : arguments.entrants;
+  std::vector<Entrant> entrants = read_entrants(entrants_file);
+  if (!arguments.optimizers.empty()) {
+    std::vector<Entrant> chosen;
+    std::vector<std::string> labels;
+    for (const Entrant& e : entrants) labels.push_back(e.label);
+    for (const std::string& label : arguments.optimizers) {
+      const auto found = std::find_if(entrants.begin(), entrants.end(), [&](const Entrant& e) { return e.label == label; });
+      if (found == entrants.end()) {
+        throw InputError("--optimizers: unknown entrant '" + label + "'" + did_you_mean(label, labels) +
+                         " (known: " + join(labels) + "; entrants come from " + entrants_file.string() +
+                         " and every registered optimizer)");
+      }
+      chosen.push_back(*found);
+    }
+    entrants = std::move(chosen);
+  }
+  BenchOptions options;
+  options.problems = arguments.problems;
+  options.entrants = std::move(entrants);
+  options.seeds = arguments.seeds;
+  options.budget = Budget::parse(arguments.budget);
+  options.threads = arguments.threads;
+  const auto start = std::chrono::steady_clock::now();
+  if (arguments.progress) {
+    // On a terminal one line rewritten at most 4 times a second; into a
+    // file or pipe, a line every 10 s.
+    const bool terminal = isatty(STDERR_FILENO) != 0;
+    options.progress = [start, terminal, shown = -1.0](const BenchProgress& p) mutable {
+      const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      const bool last = p.runs_done == p.runs;
+      if (!last && elapsed - shown < (terminal ? 0.25 : 10.0)) return;
+      shown = elapsed;
+      const double left = p.runs_done > 0 ? elapsed * static_cast<double>(p.runs - p.runs_done) / p.runs_done : 0;
+      std::cerr << (terminal ? "\r" : "") << "bench: pairs " << p.pairs_done << "/" << p.pairs << " done, runs "
+                << p.runs_done << "/" << p.runs << ", " << format_seconds(elapsed) << " elapsed, ETA "
+                << format_seconds(left) << (terminal && !last ? "   " : "\n") << std::flush;
+    };
+  }
+  RunCache cache;
+  const BenchResult result = run_bench(options, BenchmarkContext{arguments.datasets, &cache});
+  RunFolder folder(arguments.out);
+  write_bench_report(result, folder.path("."));
+  folder.commit();
+  size_t ran = 0, incompatible = 0;
+  for (const BenchPair& pair : result.pairs) (pair.missing.empty() ? ran : incompatible) += 1;
+  std::cout << "wrote " << arguments.out.string() << "/ (report.md, report.json, ioh/, plots/, timing/): "
+            << result.runs.size() << " runs of " << ran << " pairs (" << incompatible
+            << " incompatible pairs listed) in " << format_seconds(result.wall_seconds) << "\n";
+  for (const BenchProblem& problem : result.problems) {
+    if (!problem.unavailable.empty()) std::cout << "  not run: " << problem.name << ": " << problem.unavailable << "\n";
+  }
   return 0;
 }
 

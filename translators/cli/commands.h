@@ -32,7 +32,22 @@ struct SimulateArguments {
   int repeat = 0;  ///< evaluations timed; 0: up to 100, stopping once 2 s have passed
 };
 
+struct BenchArguments {
+  std::vector<std::string> problems;    ///< empty: every registered problem
+  std::vector<std::string> optimizers;  ///< entrant labels; empty: every entrant
+  std::filesystem::path entrants;       ///< entrant list (JSON); empty: the shipped one
+  std::filesystem::path datasets;
+  std::filesystem::path out;
+  int seeds = 15;
+  std::string budget = "100d";
+  int threads = 0;
+  bool quick = false;
+  bool progress = false;
+};
+
 int run_command(const RunArguments& arguments);
+/// Runs the optimizer x problem matrix and writes its report (docs/benchmarking.md).
+int bench_command(BenchArguments arguments);
 /// Re-fabricates a run's tuned tree for another printer (device independence).
 int export_command(const ExportArguments& arguments);
 /// Runs one simulator standalone on a subtree and writes its observation.

@@ -108,6 +108,38 @@ int main(int argc, char** argv) {
       "albedo; fem adds displacements.csv, deformed.stl and deformation.png. Prints setup and\n"
       "per-evaluation times (mean of --repeat runs).");
 
+  cli::BenchArguments bench;
+  bench.datasets = default_datasets();
+  CLI::App* bench_cmd = app.add_subcommand(
+      "bench", "run every compatible optimizer on every benchmark problem and report the matrix");
+  bench_cmd->add_option("--out", bench.out, "output folder")->required();
+  bench_cmd->add_option("--problems", bench.problems, "problems to run, comma-separated (default: all; "
+                                                       "spec2fab list bench)")
+      ->delimiter(',');
+  bench_cmd->add_option("--optimizers", bench.optimizers,
+                        "entrants to run, by label, comma-separated (default: all)")
+      ->delimiter(',');
+  bench_cmd->add_option("--entrants", bench.entrants,
+                        "entrant list (JSON; default datasets/bench/entrants.json); registered optimizers it "
+                        "does not name join at their defaults");
+  bench_cmd->add_option("--seeds", bench.seeds, "runs of each stochastic entrant per problem (default 15)")
+      ->check(CLI::Range(1, 10000));
+  bench_cmd->add_option("--budget", bench.budget,
+                        "per run: 100d (evaluations per variable), 5000 (evaluations), 30s (seconds; makes "
+                        "results machine-dependent), or several joined by commas (default 100d)");
+  bench_cmd->add_option("--threads", bench.threads, "worker threads (default: all cores)")->check(CLI::Range(1, 1024));
+  bench_cmd->add_flag("--quick", bench.quick, "a smoke test: budget 12d, at most 3 seeds");
+  bench_cmd->add_flag("--progress", bench.progress, "show pairs and runs done and an ETA on stderr");
+  bench_cmd->add_option("--datasets", bench.datasets, "datasets folder (default $SPEC2FAB_DATASETS or the source tree's)");
+  bench_cmd->add_flag("-q,--quiet", quiet, "only warnings and errors");
+  bench_cmd->footer(
+      "Writes <out>/report.md (the matrix: median final error with quartiles, success rate, ERT to a\n"
+      "ladder of targets; incompatible pairs with the capability missing; the fight matrix),\n"
+      "report.json, plots/ (convergence with quartile bands, runtime ECDFs, fight matrix),\n"
+      "ioh/ (IOHprofiler's format: IOHanalyzer reads the folder as it is) and timing/ (wall and\n"
+      "simulator seconds). Everything but timing/ is byte-identical for any --threads.\n"
+      "Add a problem or optimizer: docs/benchmarking.md.");
+
   std::filesystem::path validate_file;
   CLI::App* validate_cmd =
       app.add_subcommand("validate", "check an experiment and everything it names, run nothing");
@@ -149,6 +181,7 @@ int main(int argc, char** argv) {
   try {
     if (*run_cmd) return cli::run_command(run);
     if (*validate_cmd) return cli::validate_command(validate_file);
+    if (*bench_cmd) return cli::bench_command(bench);
     if (*simulate_cmd) return cli::simulate_command(simulate);
     if (*export_cmd) return cli::export_command(export_arguments);
     if (*list_cmd && !update_doc.empty()) {
