@@ -40,7 +40,7 @@ struct TunerBenchmark::Shared {
   MaterialLibrary library;
   PrinterProfile printer;
   std::unique_ptr<MaterialPalette> palette;
-  std::unique_ptr<Solid> solid;
+  std::optional<Mesh> mesh;  ///< each instance binds its own Solid to it
   RunCache* cache = nullptr;
   std::once_flag facts_once;
   BenchmarkFacts facts;
@@ -51,7 +51,12 @@ class TunerBenchmark::Instance final : public BenchmarkInstance {
   Instance(const TunerBenchmark& problem, const Shared& shared) {
     const Properties spec = Properties::wrap(problem.spec_, problem.origin_);
     tree_ = std::make_unique<ReducerTree>(spec.object("subtree"), *shared.palette);
-    if (shared.solid) tree_->bind(*shared.solid);
+    // Its own Solid: a Solid builds its distance field on first use, which
+    // is not thread-safe, and instances run on different threads.
+    if (shared.mesh) {
+      solid_ = std::make_unique<Solid>(*shared.mesh, UvSource::planar);
+      tree_->bind(*solid_);
+    }
     const PartContext context{*shared.palette, shared.cache};
     auto simulator = SimulatorRegistry::instance().create(spec.object("simulator"), "simulator", context);
     auto metric = MetricRegistry::instance().create(spec.object("metric"), "metric", context);
@@ -82,6 +87,7 @@ class TunerBenchmark::Instance final : public BenchmarkInstance {
   std::vector<double> start() const override { return start_; }
 
  private:
+  std::unique_ptr<Solid> solid_;
   std::unique_ptr<ReducerTree> tree_;
   std::unique_ptr<Tuner> tuner_;
   std::vector<double> start_;
@@ -93,8 +99,7 @@ TunerBenchmark::TunerBenchmark(nlohmann::json spec, std::string origin, const Be
   shared_->library = MaterialLibrary::load(properties.existing_file("materials"));
   shared_->printer = PrinterProfile::load(properties.existing_file("printer"));
   shared_->palette = std::make_unique<MaterialPalette>(shared_->library, shared_->printer);
-  if (properties.has("mesh"))
-    shared_->solid = std::make_unique<Solid>(load_mesh(properties.existing_file("mesh")), UvSource::planar);
+  if (properties.has("mesh")) shared_->mesh = load_mesh(properties.existing_file("mesh"));
   shared_->cache = context.cache;
 }
 

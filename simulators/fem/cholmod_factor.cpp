@@ -81,6 +81,19 @@ class SerialOpenMp {
   static inline int inside_ = 0, saved_ = 1;
 };
 
+/// Debian's serial OpenBLAS (libopenblas0-serial 0.3.21, built without
+/// USE_LOCKING) shares its work buffers between calling threads: two
+/// factorisations at once on two threads corrupt each other (found by
+/// `spec2fab bench`, whose fem_book runs went different ways on every run
+/// with 2 threads and agreed with reference BLAS or with this lock). So
+/// CHOLMOD's numeric work, where its BLAS calls are, runs on one thread at a
+/// time process-wide. Solvers on one thread (every translator's FEM tuner)
+/// never wait; concurrent ones (bench runs) queue for their factorisations.
+std::mutex& blas_mutex() {
+  static std::mutex mutex;
+  return mutex;
+}
+
 }  // namespace
 
 CholmodFactor::CholmodFactor() : impl_(std::make_unique<Impl>()) {}
@@ -96,6 +109,7 @@ void CholmodFactor::analyze(const Matrix& lower) {
 }
 
 bool CholmodFactor::factorize(const Matrix& lower) {
+  const std::lock_guard<std::mutex> one_at_a_time(blas_mutex());
   const SerialOpenMp serial;
   cholmod_sparse a = Impl::view(lower);
   cholmod_factorize(&a, impl_->factor, &impl_->common);
@@ -112,6 +126,7 @@ const double* CholmodFactor::solve_columns(const double* b, size_t rows, size_t 
   rhs.x = const_cast<double*>(b);
   rhs.xtype = CHOLMOD_REAL;
   rhs.dtype = CHOLMOD_DOUBLE;
+  const std::lock_guard<std::mutex> one_at_a_time(blas_mutex());
   const SerialOpenMp serial;
   if (!cholmod_solve2(CHOLMOD_A, impl_->factor, &rhs, nullptr, &impl_->x, nullptr, &impl_->y, &impl_->e,
                       &impl_->common)) {
