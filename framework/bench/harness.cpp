@@ -67,6 +67,7 @@ class RecordingProblem final : public Problem {
     run_.simulator_seconds += seconds_since(begin);
     run_.errors.push_back(error);
     run_.seconds.push_back(seconds_since(start_));
+    run_.simulator_seconds_at.push_back(run_.simulator_seconds);
     return error;
   }
 
@@ -294,6 +295,7 @@ BenchResult run_bench(const BenchOptions& options, const BenchmarkContext& conte
           if (!run.errors.empty()) {
             run.errors.pop_back();
             run.seconds.pop_back();
+            run.simulator_seconds_at.pop_back();
           }
           run.termination = summary.usable() ? to_string(summary.termination)
                                              : to_string(summary.termination) + ": " + summary.message;

@@ -89,8 +89,9 @@ struct BenchRun {
   std::vector<double> errors;  ///< every evaluation's error, the start's first
   long long bound_evaluations = 0;
   double wall_seconds = 0, simulator_seconds = 0;
-  /// Wall time at each evaluation (seconds since the run began).
-  std::vector<double> seconds;
+  /// Wall time at each evaluation's end (seconds since the run began), and
+  /// the time spent inside evaluations (simulator and metric) by then.
+  std::vector<double> seconds, simulator_seconds_at;
   /// The optimizer's own account of the run (its evaluations, trace).
   Summary summary;
   std::string termination;

@@ -464,7 +464,7 @@ void write_bench_report(const BenchResult& result, const fs::path& folder) {
 
   // Wall and simulator seconds: these vary with the machine and the load.
   nlohmann::json timing = {{"threads", result.threads}, {"wall_seconds", result.wall_seconds}, {"runs", nlohmann::json::array()}};
-  std::string csv = "problem,entrant,seed,evaluation,best_error,wall_seconds\n";
+  std::string csv = "problem,entrant,seed,evaluation,best_error,wall_seconds,simulator_seconds\n";
   for (const BenchRun& run : result.runs) {
     const BenchPair& pair = result.pairs[run.pair];
     const std::string& problem = result.problems[pair.problem].name;
@@ -479,7 +479,8 @@ void write_bench_report(const BenchResult& result, const fs::path& folder) {
     for (size_t e = 0; e < run.errors.size(); ++e) {
       if (!(run.errors[e] < best) && e + 1 != run.errors.size()) continue;
       best = std::min(best, run.errors[e]);
-      csv += fmt::format("{},{},{},{},{:.17g},{:.6f}\n", problem, label, run.seed, e + 1, best, run.seconds[e]);
+      csv += fmt::format("{},{},{},{},{:.17g},{:.6f},{:.6f}\n", problem, label, run.seed, e + 1, best, run.seconds[e],
+                         run.simulator_seconds_at[e]);
     }
   }
   write_file(folder / "timing" / "timing.json", timing.dump(1) + "\n");

@@ -87,8 +87,8 @@ int bench_command(BenchArguments arguments) {
       shown = elapsed;
       const double left = p.runs_done > 0 ? elapsed * static_cast<double>(p.runs - p.runs_done) / p.runs_done : 0;
       std::cerr << (terminal ? "\r" : "") << "bench: pairs " << p.pairs_done << "/" << p.pairs << " done, runs "
-                << p.runs_done << "/" << p.runs << ", " << format_seconds(elapsed) << " elapsed, ETA "
-                << format_seconds(left) << (terminal && !last ? "   " : "\n") << std::flush;
+                << p.runs_done << "/" << p.runs << ", " << format_seconds(elapsed) << " elapsed"
+                << (last ? "" : ", ETA " + format_seconds(left)) << (terminal && !last ? "   " : "\n") << std::flush;
     };
   }
   RunCache cache;
