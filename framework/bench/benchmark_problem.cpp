@@ -58,24 +58,28 @@ class TunerBenchmark::Instance final : public BenchmarkInstance {
       tree_->bind(*solid_);
     }
     const PartContext context{*shared.palette, shared.cache};
-    auto simulator = SimulatorRegistry::instance().create(spec.object("simulator"), "simulator", context);
+    auto simulator =
+        SimulatorRegistry::instance().create(spec.object("simulator"), "simulator", context);
     auto metric = MetricRegistry::instance().create(spec.object("metric"), "metric", context);
     auto goal = std::make_unique<ObservedGoal>(simulator->make_observation());
     ObservedGoal& hidden = *goal;
     // The bench hands the tuner's problem to each optimizer itself: the
     // tuner's own optimizer is never asked.
-    tuner_ = std::make_unique<Tuner>("bench", std::move(simulator), std::move(metric), std::move(goal), nullptr);
+    tuner_ = std::make_unique<Tuner>("bench", std::move(simulator), std::move(metric),
+                                     std::move(goal), nullptr);
     tuner_->set_node(*tree_, tree_->root());
     start_ = tuner_->search_space().values();
     // Values, or material names for material parameters.
     std::vector<double> reference;
     for (const nlohmann::json& value : spec.raw("reference")) {
-      reference.push_back(value.is_string() ? shared.palette->id(value.get<std::string>(), spec.where("reference"))
-                                            : value.get<double>());
+      reference.push_back(
+          value.is_string() ? shared.palette->id(value.get<std::string>(), spec.where("reference"))
+                            : value.get<double>());
     }
     if (reference.size() != start_.size()) {
-      spec.fail("reference", "has " + std::to_string(reference.size()) + " values; the subtree has " +
-                                 std::to_string(start_.size()) + " free parameters");
+      spec.fail("reference", "has " + std::to_string(reference.size()) +
+                                 " values; the subtree has " + std::to_string(start_.size()) +
+                                 " free parameters");
     }
     tuner_->set_values(reference);
     hidden.set(tuner_->simulate());
@@ -93,8 +97,21 @@ class TunerBenchmark::Instance final : public BenchmarkInstance {
   std::vector<double> start_;
 };
 
-TunerBenchmark::TunerBenchmark(nlohmann::json spec, std::string origin, const BenchmarkContext& context)
-    : spec_(std::move(spec)), origin_(std::move(origin)), shared_(std::make_shared<Shared>()) {
+TypeDoc benchmark_doc(const BenchmarkDescription& description) {
+  return {description.summary,
+          {},
+          "spec2fab bench --problems " + description.name + " --out out/" + description.name};
+}
+
+TunerBenchmark::TunerBenchmark(nlohmann::json spec, const BenchmarkDescription& description,
+                               const BenchmarkContext& context)
+    : spec_(std::move(spec)),
+      origin_("bench problem " + description.name),
+      shared_(std::make_shared<Shared>()) {
+  facts_.simulator = description.simulator;
+  facts_.metric = description.metric;
+  facts_.goal = description.goal;
+  facts_.variables = description.variables;
   const Properties properties = Properties::wrap(spec_, origin_, context.datasets);
   shared_->library = MaterialLibrary::load(properties.existing_file("materials"));
   shared_->printer = PrinterProfile::load(properties.existing_file("printer"));
@@ -112,9 +129,11 @@ BenchmarkFacts TunerBenchmark::facts() const {
     Problem& problem = instance->problem();
     facts.dimension = problem.dimension();
     facts.assignments = 1;
-    for (int i = 0; i < problem.dimension(); ++i) facts.assignments *= static_cast<double>(problem.domain(i).cardinality());
+    for (int i = 0; i < problem.dimension(); ++i)
+      facts.assignments *= static_cast<double>(problem.domain(i).cardinality());
     facts.optimum = 0;  // the hidden reference reproduces its own simulation
-    for (Capability c : {Capability::gradient, Capability::residuals, Capability::lower_bound, Capability::discrete_only})
+    for (Capability c : {Capability::gradient, Capability::residuals, Capability::lower_bound,
+                         Capability::discrete_only})
       if (problem.has(c)) facts.capabilities.push_back(c);
     shared_->facts = std::move(facts);
   });

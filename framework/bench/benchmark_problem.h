@@ -55,10 +55,10 @@ class BenchmarkInstance {
 
 /// What the report says of a problem.
 struct BenchmarkFacts {
-  std::string simulator;     ///< e.g. "albedo (Kubelka-Munk, 0.6 mm deep)"
-  std::string metric;        ///< e.g. "delta_e2000"
-  std::string goal;          ///< e.g. "albedo of a hidden reference stack"
-  std::string variables;     ///< e.g. "3 ink thicknesses, 0-0.14 mm in 0.014 mm steps"
+  std::string simulator;  ///< e.g. "albedo (Kubelka-Munk, 0.6 mm deep)"
+  std::string metric;     ///< e.g. "delta_e2000"
+  std::string goal;       ///< e.g. "albedo of a hidden reference stack"
+  std::string variables;  ///< e.g. "3 ink thicknesses, 0-0.14 mm in 0.014 mm steps"
   int dimension = 0;
   /// Admissible assignments of an all-discrete problem; 0 when any variable is continuous.
   double assignments = 0;
@@ -77,6 +77,19 @@ class BenchmarkProblem {
 
 using BenchmarkRegistry = Registry<BenchmarkProblem, const BenchmarkContext&>;
 
+/// What a TunerBenchmark says of itself, in the report and in `spec2fab list bench`.
+struct BenchmarkDescription {
+  std::string name;       ///< as registered
+  std::string summary;    ///< the list's sentence and more
+  std::string simulator;  ///< BenchmarkFacts' descriptions
+  std::string metric;
+  std::string goal;
+  std::string variables;
+};
+
+/// A problem's registry doc from its description.
+TypeDoc benchmark_doc(const BenchmarkDescription& description);
+
 /// The common kind of problem: one tuner on a subtree, its goal the
 /// simulation of a hidden reference assignment. `spec` is a simulation file's
 /// content (`spec2fab simulate`): "materials", "printer", optional "mesh",
@@ -87,14 +100,13 @@ using BenchmarkRegistry = Registry<BenchmarkProblem, const BenchmarkContext&>;
 /// cheap next to a run, and keeps instances independent).
 class TunerBenchmark : public BenchmarkProblem {
  public:
-  TunerBenchmark(nlohmann::json spec, std::string origin, const BenchmarkContext& context);
+  TunerBenchmark(nlohmann::json spec, const BenchmarkDescription& description,
+                 const BenchmarkContext& context);
   ~TunerBenchmark() override;
   BenchmarkFacts facts() const override;
   std::unique_ptr<BenchmarkInstance> instantiate() const override;
 
  protected:
-  /// Descriptions for the report, set by the problem's constructor.
-  BenchmarkFacts facts_;
   /// A problem that has a bound for branch and bound installs it here (on a
   /// tuner already bound to `node` of `tree`); none by default.
   virtual void install_bound(Tuner& /*tuner*/, ReducerTree& /*tree*/, ReducerNode& /*node*/,
@@ -105,6 +117,7 @@ class TunerBenchmark : public BenchmarkProblem {
   class Instance;
   nlohmann::json spec_;
   std::string origin_;
+  BenchmarkFacts facts_;  ///< the description's part; facts() completes it
   std::shared_ptr<Shared> shared_;
 };
 

@@ -9,9 +9,9 @@
 #include <set>
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <spdlog/spdlog.h>
 #include <tbb/task_arena.h>
 
 #include "core/error.h"
@@ -33,7 +33,8 @@ double seconds_since(Clock::time_point start) {
 /// metric's). A residual evaluation's error is ½‖r‖², as Problem defines it.
 class RecordingProblem final : public Problem {
  public:
-  RecordingProblem(Problem& inner, BenchRun& run) : inner_(inner), run_(run), start_(Clock::now()) {}
+  RecordingProblem(Problem& inner, BenchRun& run)
+      : inner_(inner), run_(run), start_(Clock::now()) {}
 
   int dimension() const override { return inner_.dimension(); }
   const VariableDomain& domain(int i) const override { return inner_.domain(i); }
@@ -47,7 +48,8 @@ class RecordingProblem final : public Problem {
     return record(inner_.error_and_gradient(x, gradient), begin);
   }
   int residual_count() const override { return inner_.residual_count(); }
-  void residuals(std::span<const double> x, std::span<double> residuals, std::span<double> jacobian) override {
+  void residuals(std::span<const double> x, std::span<double> residuals,
+                 std::span<double> jacobian) override {
     const auto begin = Clock::now();
     inner_.residuals(x, residuals, jacobian);
     double half_square = 0;
@@ -79,13 +81,20 @@ class RecordingProblem final : public Problem {
 /// What a problem lacks that an optimizer needs, as the report says it.
 std::string missing_capability(const Optimizer& optimizer, const BenchmarkFacts& facts) {
   for (Capability needed : optimizer.requirements()) {
-    if (std::find(facts.capabilities.begin(), facts.capabilities.end(), needed) != facts.capabilities.end()) continue;
+    if (std::find(facts.capabilities.begin(), facts.capabilities.end(), needed) !=
+        facts.capabilities.end())
+      continue;
     switch (needed) {
-      case Capability::gradient: return "gradient";
-      case Capability::residuals: return "residuals";
-      case Capability::lower_bound: return "bound";
-      case Capability::discrete_only: return "discrete domain";
-      case Capability::neighbour_moves: return "neighbour moves";
+      case Capability::gradient:
+        return "gradient";
+      case Capability::residuals:
+        return "residuals";
+      case Capability::lower_bound:
+        return "bound";
+      case Capability::discrete_only:
+        return "discrete domain";
+      case Capability::neighbour_moves:
+        return "neighbour moves";
     }
   }
   return {};
@@ -96,7 +105,8 @@ std::vector<std::string> comma_separated(const std::string& text) {
   size_t begin = 0;
   while (true) {
     const size_t end = text.find(',', begin);
-    std::string part = text.substr(begin, end == std::string::npos ? std::string::npos : end - begin);
+    std::string part =
+        text.substr(begin, end == std::string::npos ? std::string::npos : end - begin);
     part.erase(0, part.find_first_not_of(' '));
     part.erase(part.find_last_not_of(' ') + 1);
     parts.push_back(part);
@@ -105,7 +115,9 @@ std::vector<std::string> comma_separated(const std::string& text) {
   }
 }
 
-double or_infinity(double error) { return std::isnan(error) ? std::numeric_limits<double>::infinity() : error; }
+double or_infinity(double error) {
+  return std::isnan(error) ? std::numeric_limits<double>::infinity() : error;
+}
 
 }  // namespace
 
@@ -119,8 +131,10 @@ std::vector<Entrant> read_entrants(const std::filesystem::path& file) {
       const Properties optimizer = p.object("optimizer");
       const std::string type = optimizer.get<std::string>("type");
       named_types.insert(type);
-      if (!OptimizerRegistry::instance().contains(type) && !left_out_of_build("optimizer", type).empty()) {
-        spdlog::info("bench: entrant '{}' left out: {}", entrant.label, left_out_of_build("optimizer", type));
+      if (!OptimizerRegistry::instance().contains(type) &&
+          !left_out_of_build("optimizer", type).empty()) {
+        spdlog::info("bench: entrant '{}' left out: {}", entrant.label,
+                     left_out_of_build("optimizer", type));
         continue;
       }
       build_optimizer(optimizer);  // a malformed one is reported here, with its place
@@ -139,12 +153,14 @@ Budget Budget::parse(const std::string& text) {
   Budget budget;
   for (const std::string& part : comma_separated(text)) {
     const auto fail = [&] {
-      throw InputError("--budget: '" + part + "' is not a budget (e.g. 100d: 100 evaluations per variable; 5000: "
+      throw InputError("--budget: '" + part +
+                       "' is not a budget (e.g. 100d: 100 evaluations per variable; 5000: "
                        "evaluations; 30s: seconds per run; or several joined by commas)");
     };
     if (part.empty()) fail();
     const char unit = part.back();
-    const std::string number = std::isdigit(static_cast<unsigned char>(unit)) ? part : part.substr(0, part.size() - 1);
+    const std::string number =
+        std::isdigit(static_cast<unsigned char>(unit)) ? part : part.substr(0, part.size() - 1);
     double value = 0;
     try {
       size_t used = 0;
@@ -153,24 +169,30 @@ Budget Budget::parse(const std::string& text) {
     } catch (const std::logic_error&) {
       fail();
     }
-    if (unit == 'd') budget.per_dimension = value;
-    else if (unit == 's') budget.seconds = value;
-    else if (std::isdigit(static_cast<unsigned char>(unit))) budget.evaluations = std::llround(value);
-    else fail();
+    if (unit == 'd')
+      budget.per_dimension = value;
+    else if (unit == 's')
+      budget.seconds = value;
+    else if (std::isdigit(static_cast<unsigned char>(unit)))
+      budget.evaluations = std::llround(value);
+    else
+      fail();
   }
   return budget;
 }
 
 long long Budget::evaluations_for(int dimension) const {
   long long limit = 0;
-  if (per_dimension > 0) limit = std::max<long long>(1, std::llround(per_dimension * std::max(1, dimension)));
+  if (per_dimension > 0)
+    limit = std::max<long long>(1, std::llround(per_dimension * std::max(1, dimension)));
   if (evaluations > 0) limit = limit > 0 ? std::min(limit, evaluations) : evaluations;
   return limit;
 }
 
 std::string Budget::describe() const {
   std::vector<std::string> parts;
-  if (per_dimension > 0) parts.push_back(fmt::format("{:g} evaluations per variable", per_dimension));
+  if (per_dimension > 0)
+    parts.push_back(fmt::format("{:g} evaluations per variable", per_dimension));
   if (evaluations > 0) parts.push_back(fmt::format("{} evaluations", evaluations));
   if (seconds > 0) parts.push_back(fmt::format("{:g} s per run", seconds));
   return join(parts, ", ");
@@ -188,7 +210,8 @@ std::optional<long long> BenchRun::hitting_time(double target) const {
   return std::nullopt;
 }
 
-std::optional<double> expected_running_time(const std::vector<const BenchRun*>& runs, double target) {
+std::optional<double> expected_running_time(const std::vector<const BenchRun*>& runs,
+                                            double target) {
   double spent = 0;
   int hits = 0;
   for (const BenchRun* run : runs) {
@@ -216,13 +239,14 @@ BenchResult run_bench(const BenchOptions& options, const BenchmarkContext& conte
     problem.name = name;
     const auto known = std::find(all.begin(), all.end(), name);
     if (known == all.end()) {
-      throw InputError("--problems: unknown benchmark problem '" + name + "'" + did_you_mean(name, all) +
-                       " (known: " + join(all) + ")");
+      throw InputError("--problems: unknown benchmark problem '" + name + "'" +
+                       did_you_mean(name, all) + " (known: " + join(all) + ")");
     }
     problem.function_id = static_cast<int>(known - all.begin()) + 1;
     try {
-      built.push_back(registry.create_named(name, Properties::wrap(nlohmann::json::object(), "bench problem " + name),
-                                            "benchmark problem", context));
+      built.push_back(registry.create_named(
+          name, Properties::wrap(nlohmann::json::object(), "bench problem " + name),
+          "benchmark problem", context));
       problem.facts = built.back()->facts();
       const auto instance = built.back()->instantiate();
       std::vector<double> x = instance->start();
@@ -240,9 +264,10 @@ BenchResult run_bench(const BenchOptions& options, const BenchmarkContext& conte
   for (size_t p = 0; p < result.problems.size(); ++p) {
     if (!result.problems[p].unavailable.empty()) continue;
     for (size_t e = 0; e < result.entrants.size(); ++e) {
-      const auto optimizer =
-          build_optimizer(Properties::wrap(result.entrants[e].optimizer, "entrant " + result.entrants[e].label));
-      BenchPair pair{e, p, missing_capability(*optimizer, result.problems[p].facts), optimizer->stochastic()};
+      const auto optimizer = build_optimizer(
+          Properties::wrap(result.entrants[e].optimizer, "entrant " + result.entrants[e].label));
+      BenchPair pair{e, p, missing_capability(*optimizer, result.problems[p].facts),
+                     optimizer->stochastic()};
       result.pairs.push_back(pair);
     }
   }
@@ -264,52 +289,57 @@ BenchResult run_bench(const BenchOptions& options, const BenchmarkContext& conte
   for (const BenchRun& run : result.runs) {
     if (runs_left[run.pair]++ == 0) ++progress.pairs;
   }
-  const int threads = options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
+  const int threads =
+      options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
   result.threads = threads;
   tbb::task_arena arena(threads);
   arena.execute([&] {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, result.runs.size(), 1), [&](const tbb::blocked_range<size_t>& range) {
-      for (size_t r = range.begin(); r != range.end(); ++r) {
-        BenchRun& run = result.runs[r];
-        const BenchPair& pair = result.pairs[run.pair];
-        const BenchProblem& facts = result.problems[pair.problem];
-        const Entrant& entrant = result.entrants[pair.entrant];
-        const auto run_start = Clock::now();
-        try {
-          const auto instance = built[pair.problem]->instantiate();
-          auto optimizer = build_optimizer(Properties::wrap(entrant.optimizer, "entrant " + entrant.label));
-          if (pair.stochastic) optimizer->set_seed(static_cast<std::uint64_t>(run.seed));
-          if (facts.budget > 0) optimizer->plan_evaluations(facts.budget);
-          RecordingProblem recording(instance->problem(), run);
-          const long long budget = facts.budget;
-          const double seconds = options.budget.seconds;
-          const IterationCallback stop = [budget, seconds](const IterationRecord& row) {
-            if (budget > 0 && row.evaluations >= budget) return CallbackResult::terminate;
-            if (seconds > 0 && row.seconds >= seconds) return CallbackResult::terminate;
-            return CallbackResult::proceed;
-          };
-          std::vector<double> x = instance->start();
-          run.summary = optimizer->minimize(recording, x, stop);
-          const Summary& summary = run.summary;
-          // minimize() evaluates the point it returns once more, uncounted.
-          if (!run.errors.empty()) {
-            run.errors.pop_back();
-            run.seconds.pop_back();
-            run.simulator_seconds_at.pop_back();
+    tbb::parallel_for(
+        tbb::blocked_range<size_t>(0, result.runs.size(), 1),
+        [&](const tbb::blocked_range<size_t>& range) {
+          for (size_t r = range.begin(); r != range.end(); ++r) {
+            BenchRun& run = result.runs[r];
+            const BenchPair& pair = result.pairs[run.pair];
+            const BenchProblem& facts = result.problems[pair.problem];
+            const Entrant& entrant = result.entrants[pair.entrant];
+            const auto run_start = Clock::now();
+            try {
+              const auto instance = built[pair.problem]->instantiate();
+              auto optimizer =
+                  build_optimizer(Properties::wrap(entrant.optimizer, "entrant " + entrant.label));
+              if (pair.stochastic) optimizer->set_seed(static_cast<std::uint64_t>(run.seed));
+              if (facts.budget > 0) optimizer->plan_evaluations(facts.budget);
+              RecordingProblem recording(instance->problem(), run);
+              const long long budget = facts.budget;
+              const double seconds = options.budget.seconds;
+              const IterationCallback stop = [budget, seconds](const IterationRecord& row) {
+                if (budget > 0 && row.evaluations >= budget) return CallbackResult::terminate;
+                if (seconds > 0 && row.seconds >= seconds) return CallbackResult::terminate;
+                return CallbackResult::proceed;
+              };
+              std::vector<double> x = instance->start();
+              run.summary = optimizer->minimize(recording, x, stop);
+              const Summary& summary = run.summary;
+              // minimize() evaluates the point it returns once more, uncounted.
+              if (!run.errors.empty()) {
+                run.errors.pop_back();
+                run.seconds.pop_back();
+                run.simulator_seconds_at.pop_back();
+              }
+              run.termination = summary.usable()
+                                    ? to_string(summary.termination)
+                                    : to_string(summary.termination) + ": " + summary.message;
+              run.best_x = x;
+            } catch (const std::exception& e) {
+              run.termination = std::string("error: ") + e.what();
+            }
+            run.wall_seconds = seconds_since(run_start);
+            const std::lock_guard lock(progress_mutex);
+            ++progress.runs_done;
+            if (--runs_left[run.pair] == 0) ++progress.pairs_done;
+            if (options.progress) options.progress(progress);
           }
-          run.termination = summary.usable() ? to_string(summary.termination)
-                                             : to_string(summary.termination) + ": " + summary.message;
-          run.best_x = x;
-        } catch (const std::exception& e) {
-          run.termination = std::string("error: ") + e.what();
-        }
-        run.wall_seconds = seconds_since(run_start);
-        const std::lock_guard lock(progress_mutex);
-        ++progress.runs_done;
-        if (--runs_left[run.pair] == 0) ++progress.pairs_done;
-        if (options.progress) options.progress(progress);
-      }
-    });
+        });
   });
 
   // Targets: from the start to the optimum (or, where it is unknown, the best any run found).
@@ -324,7 +354,8 @@ BenchResult run_bench(const BenchOptions& options, const BenchmarkContext& conte
         if (result.pairs[run.pair].problem == p) optimum = std::min(optimum, run.best());
       problem.facts.optimum = optimum;
     }
-    for (int k = 1; k <= 8; ++k) problem.targets.push_back(optimum + (problem.start_error - optimum) * std::pow(10.0, -k));
+    for (int k = 1; k <= 8; ++k)
+      problem.targets.push_back(optimum + (problem.start_error - optimum) * std::pow(10.0, -k));
   }
   result.wall_seconds = seconds_since(start);
   return result;

@@ -25,7 +25,7 @@ namespace spec2fab {
 
 /// An optimizer as it enters the matrix: a label and its JSON.
 struct Entrant {
-  std::string label;       ///< "lbfgs"
+  std::string label;         ///< "lbfgs"
   nlohmann::json optimizer;  ///< {"type": "nlopt", "algorithm": "LD_LBFGS"}
 };
 
@@ -37,7 +37,7 @@ std::vector<Entrant> read_entrants(const std::filesystem::path& file);
 /// How long each run may go: evaluations (a multiple of the problem's
 /// dimension, or a number) and/or wall seconds; whichever comes first.
 struct Budget {
-  double per_dimension = 0;  ///< "100d"
+  double per_dimension = 0;   ///< "100d"
   long long evaluations = 0;  ///< "5000"
   double seconds = 0;         ///< "30s" (makes results depend on the machine)
   /// "100d", "5000", "30s" or several joined by commas; throws InputError.
@@ -55,9 +55,9 @@ struct BenchProgress {
 struct BenchOptions {
   std::vector<std::string> problems;  ///< empty: every registered problem
   std::vector<Entrant> entrants;
-  int seeds = 15;                     ///< runs of a stochastic entrant per problem
+  int seeds = 15;  ///< runs of a stochastic entrant per problem
   Budget budget{100, 0, 0};
-  int threads = 0;                    ///< 0: all cores
+  int threads = 0;  ///< 0: all cores
   /// Called after each run (from one thread at a time).
   std::function<void(const BenchProgress&)> progress;
 };
@@ -119,7 +119,8 @@ BenchResult run_bench(const BenchOptions& options, const BenchmarkContext& conte
 /// Expected running time to `target` over `runs`: evaluations spent by all
 /// runs (to the hit, or their whole length) over the number that hit;
 /// nothing when none did.
-std::optional<double> expected_running_time(const std::vector<const BenchRun*>& runs, double target);
+std::optional<double> expected_running_time(const std::vector<const BenchRun*>& runs,
+                                            double target);
 
 /// Writes `folder`/ioh/ (IOHprofiler's JSON format: one folder per entrant,
 /// IOHprofiler_f<id>_<problem>.json + data_f<id>_<problem>/*.dat), report.md

@@ -20,9 +20,10 @@ const cv::Scalar kInk(50, 50, 50), kGrid(225, 225, 225);
 /// Tableau's ten colours (BGR), then darker repeats.
 cv::Scalar colour(size_t k) {
   static const std::array<cv::Scalar, 10> palette{
-      cv::Scalar(180, 119, 31), cv::Scalar(14, 127, 255), cv::Scalar(44, 160, 44),  cv::Scalar(40, 39, 214),
-      cv::Scalar(189, 103, 148), cv::Scalar(75, 86, 140), cv::Scalar(194, 119, 227), cv::Scalar(127, 127, 127),
-      cv::Scalar(34, 189, 188), cv::Scalar(207, 190, 23)};
+      cv::Scalar(180, 119, 31),  cv::Scalar(14, 127, 255),  cv::Scalar(44, 160, 44),
+      cv::Scalar(40, 39, 214),   cv::Scalar(189, 103, 148), cv::Scalar(75, 86, 140),
+      cv::Scalar(194, 119, 227), cv::Scalar(127, 127, 127), cv::Scalar(34, 189, 188),
+      cv::Scalar(207, 190, 23)};
   const cv::Scalar c = palette[k % palette.size()];
   return k < palette.size() ? c : c * 0.6;
 }
@@ -30,7 +31,8 @@ cv::Scalar colour(size_t k) {
 struct Frame {
   const Axes& axes;
   double map(double v, double lo, double hi, bool log) const {
-    if (log) return (std::log10(std::max(v, lo)) - std::log10(lo)) / (std::log10(hi) - std::log10(lo));
+    if (log)
+      return (std::log10(std::max(v, lo)) - std::log10(lo)) / (std::log10(hi) - std::log10(lo));
     return (v - lo) / (hi - lo);
   }
   cv::Point at(double x, double y) const {
@@ -45,7 +47,8 @@ struct Frame {
 std::vector<double> ticks(double lo, double hi, bool log) {
   std::vector<double> out;
   if (log) {
-    for (double e = std::ceil(std::log10(lo) - 1e-9); e <= std::floor(std::log10(hi) + 1e-9); e += 1)
+    for (double e = std::ceil(std::log10(lo) - 1e-9); e <= std::floor(std::log10(hi) + 1e-9);
+         e += 1)
       out.push_back(std::pow(10.0, e));
     // Many decades: label every other one.
     if (out.size() > 10) {
@@ -66,28 +69,31 @@ std::string tick_label(double v, bool log) {
 
 void write_png(const cv::Mat& image, const std::filesystem::path& file) {
   std::filesystem::create_directories(file.parent_path());
-  if (!cv::imwrite(file.string(), image)) throw std::runtime_error("could not write " + file.string());
+  if (!cv::imwrite(file.string(), image))
+    throw std::runtime_error("could not write " + file.string());
 }
 
 }  // namespace
 
-void write_chart(const Axes& axes, const std::vector<Series>& series, const std::filesystem::path& file) {
+void write_chart(const Axes& axes, const std::vector<Series>& series,
+                 const std::filesystem::path& file) {
   cv::Mat image(kHeight, kWidth, CV_8UC3, cv::Scalar(255, 255, 255));
   const Frame frame{axes};
   for (double t : ticks(axes.x_min, axes.x_max, axes.log_x)) {
     cv::line(image, frame.at(t, axes.y_min), frame.at(t, axes.y_max), kGrid, 1);
     const std::string text = tick_label(t, axes.log_x);
-    cv::putText(image, text, frame.at(t, axes.y_min) + cv::Point(-12, 20), kFont, 0.42, kInk, 1, cv::LINE_AA);
+    cv::putText(image, text, frame.at(t, axes.y_min) + cv::Point(-12, 20), kFont, 0.42, kInk, 1,
+                cv::LINE_AA);
   }
   for (double t : ticks(axes.y_min, axes.y_max, axes.log_y)) {
     cv::line(image, frame.at(axes.x_min, t), frame.at(axes.x_max, t), kGrid, 1);
-    cv::putText(image, tick_label(t, axes.log_y), frame.at(axes.x_min, t) + cv::Point(-62, 5), kFont, 0.42, kInk, 1,
-                cv::LINE_AA);
+    cv::putText(image, tick_label(t, axes.log_y), frame.at(axes.x_min, t) + cv::Point(-62, 5),
+                kFont, 0.42, kInk, 1, cv::LINE_AA);
   }
   cv::rectangle(image, frame.at(axes.x_min, axes.y_max), frame.at(axes.x_max, axes.y_min), kInk, 1);
   cv::putText(image, axes.title, {8, 24}, kFont, 0.6, kInk, 1, cv::LINE_AA);
-  cv::putText(image, axes.x_label, {kLeft + (kWidth - kLeft - kRight) / 2 - 80, kHeight - 18}, kFont, 0.48, kInk, 1,
-              cv::LINE_AA);
+  cv::putText(image, axes.x_label, {kLeft + (kWidth - kLeft - kRight) / 2 - 80, kHeight - 18},
+              kFont, 0.48, kInk, 1, cv::LINE_AA);
   cv::putText(image, axes.y_label, {8, kTop - 14}, kFont, 0.45, kInk, 1, cv::LINE_AA);
 
   // Bands first, blended, so that every line stays visible over them.
@@ -95,8 +101,10 @@ void write_chart(const Axes& axes, const std::vector<Series>& series, const std:
     const Series& one = series[s];
     if (one.band.empty()) continue;
     std::vector<cv::Point> outline;
-    for (size_t k = 0; k < one.points.size(); ++k) outline.push_back(frame.at(one.points[k][0], one.band[k][1]));
-    for (size_t k = one.points.size(); k-- > 0;) outline.push_back(frame.at(one.points[k][0], one.band[k][0]));
+    for (size_t k = 0; k < one.points.size(); ++k)
+      outline.push_back(frame.at(one.points[k][0], one.band[k][1]));
+    for (size_t k = one.points.size(); k-- > 0;)
+      outline.push_back(frame.at(one.points[k][0], one.band[k][0]));
     cv::Mat layer = image.clone();
     cv::fillPoly(layer, std::vector<std::vector<cv::Point>>{outline}, colour(s), cv::LINE_AA);
     cv::addWeighted(layer, 0.18, image, 0.82, 0, image);
@@ -119,17 +127,20 @@ void write_chart(const Axes& axes, const std::vector<Series>& series, const std:
 }
 
 void write_heat_map(const std::string& title, const std::vector<std::string>& labels,
-                    const std::vector<std::vector<double>>& values, const std::filesystem::path& file) {
+                    const std::vector<std::vector<double>>& values,
+                    const std::filesystem::path& file) {
   const int n = static_cast<int>(labels.size());
   constexpr int kCell = 64, kLabel = 150, kHead = 60;
-  cv::Mat image(kHead + kLabel + n * kCell + 20, kLabel + n * kCell + 20, CV_8UC3, cv::Scalar(255, 255, 255));
+  cv::Mat image(kHead + kLabel + n * kCell + 20, kLabel + n * kCell + 20, CV_8UC3,
+                cv::Scalar(255, 255, 255));
   cv::putText(image, title, {10, 28}, kFont, 0.55, kInk, 1, cv::LINE_AA);
   for (int i = 0; i < n; ++i) {
-    cv::putText(image, labels[static_cast<size_t>(i)], {8, kHead + kLabel + i * kCell + kCell / 2 + 5}, kFont, 0.45,
-                kInk, 1, cv::LINE_AA);
+    cv::putText(image, labels[static_cast<size_t>(i)],
+                {8, kHead + kLabel + i * kCell + kCell / 2 + 5}, kFont, 0.45, kInk, 1, cv::LINE_AA);
     // Column labels written upwards: text rotated by drawing into a strip.
     cv::Mat strip(kCell, kLabel, CV_8UC3, cv::Scalar(255, 255, 255));
-    cv::putText(strip, labels[static_cast<size_t>(i)], {4, kCell / 2 + 5}, kFont, 0.45, kInk, 1, cv::LINE_AA);
+    cv::putText(strip, labels[static_cast<size_t>(i)], {4, kCell / 2 + 5}, kFont, 0.45, kInk, 1,
+                cv::LINE_AA);
     cv::Mat upright;
     cv::rotate(strip, upright, cv::ROTATE_90_COUNTERCLOCKWISE);
     upright.copyTo(image(cv::Rect(kLabel + i * kCell, kHead, kCell, kLabel)));
@@ -142,12 +153,13 @@ void write_heat_map(const std::string& title, const std::vector<std::string>& la
       }
       // Red (loses) through white to blue (wins).
       const double w = std::clamp(v, 0.0, 1.0);
-      const cv::Scalar fill = w >= 0.5 ? cv::Scalar(255, 255 - 2 * (w - 0.5) * 150, 255 - 2 * (w - 0.5) * 200)
-                                       : cv::Scalar(255 - 2 * (0.5 - w) * 200, 255 - 2 * (0.5 - w) * 150, 255);
+      const cv::Scalar fill =
+          w >= 0.5 ? cv::Scalar(255, 255 - 2 * (w - 0.5) * 150, 255 - 2 * (w - 0.5) * 200)
+                   : cv::Scalar(255 - 2 * (0.5 - w) * 200, 255 - 2 * (0.5 - w) * 150, 255);
       cv::rectangle(image, cell, fill, cv::FILLED);
       cv::rectangle(image, cell, kGrid, 1);
-      cv::putText(image, fmt::format("{:.0f}%", 100 * v), {cell.x + 12, cell.y + kCell / 2 + 5}, kFont, 0.45, kInk, 1,
-                  cv::LINE_AA);
+      cv::putText(image, fmt::format("{:.0f}%", 100 * v), {cell.x + 12, cell.y + kCell / 2 + 5},
+                  kFont, 0.45, kInk, 1, cv::LINE_AA);
     }
   }
   write_png(image, file);

@@ -25,11 +25,13 @@ struct Axes {
 };
 
 /// Writes a line chart of `series` on `axes` into `file` (PNG).
-void write_chart(const Axes& axes, const std::vector<Series>& series, const std::filesystem::path& file);
+void write_chart(const Axes& axes, const std::vector<Series>& series,
+                 const std::filesystem::path& file);
 
 /// Writes a square table of values in [0, 1] as a heat map (rows won against
 /// columns); NaN cells are left blank.
 void write_heat_map(const std::string& title, const std::vector<std::string>& labels,
-                    const std::vector<std::vector<double>>& values, const std::filesystem::path& file);
+                    const std::vector<std::vector<double>>& values,
+                    const std::filesystem::path& file);
 
 }  // namespace spec2fab::plot

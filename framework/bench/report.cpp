@@ -77,13 +77,16 @@ double relative_precision(const BenchProblem& problem, double error) {
 
 /// A's win rate over B on one problem: over every pair of their runs, 1 for
 /// a lower final error, ½ for a tie (within 1e-12 of the start's error).
-double win_rate(const std::vector<const BenchRun*>& a, const std::vector<const BenchRun*>& b, double scale) {
+double win_rate(const std::vector<const BenchRun*>& a, const std::vector<const BenchRun*>& b,
+                double scale) {
   double wins = 0;
   for (const BenchRun* x : a) {
     for (const BenchRun* y : b) {
       const double ex = x->best(), ey = y->best();
-      if (std::abs(ex - ey) <= 1e-12 * scale || ex == ey) wins += 0.5;
-      else if (ex < ey) wins += 1;
+      if (std::abs(ex - ey) <= 1e-12 * scale || ex == ey)
+        wins += 0.5;
+      else if (ex < ey)
+        wins += 1;
     }
   }
   return wins / static_cast<double>(a.size() * b.size());
@@ -130,7 +133,8 @@ Fights fight(const BenchResult& result, const std::vector<std::vector<const Benc
   }
   for (size_t a = 0; a < n; ++a)
     if (!std::isnan(f.mean[a])) f.order.push_back(a);
-  std::stable_sort(f.order.begin(), f.order.end(), [&](size_t a, size_t b) { return f.mean[a] > f.mean[b]; });
+  std::stable_sort(f.order.begin(), f.order.end(),
+                   [&](size_t a, size_t b) { return f.mean[a] > f.mean[b]; });
   return f;
 }
 
@@ -148,8 +152,8 @@ void write_ioh(const BenchResult& result, const std::vector<std::vector<const Be
     const BenchProblem& problem = result.problems[pair.problem];
     const Entrant& entrant = result.entrants[pair.entrant];
     const std::string stem = fmt::format("f{}_{}", problem.function_id, file_name(problem.name));
-    const std::string dat =
-        fmt::format("data_{}/IOHprofiler_f{}_DIM{}.dat", stem, problem.function_id, problem.facts.dimension);
+    const std::string dat = fmt::format("data_{}/IOHprofiler_f{}_DIM{}.dat", stem,
+                                        problem.function_id, problem.facts.dimension);
     std::string rows;
     nlohmann::json runs = nlohmann::json::array();
     for (const BenchRun* run : by_pair[k]) {
@@ -158,7 +162,8 @@ void write_ioh(const BenchResult& result, const std::vector<std::vector<const Be
       double best = std::numeric_limits<double>::infinity();
       long long best_at = 1;
       for (size_t e = 0; e < run->errors.size(); ++e) {
-        const double y = std::isfinite(run->errors[e]) ? run->errors[e] : std::numeric_limits<double>::max();
+        const double y =
+            std::isfinite(run->errors[e]) ? run->errors[e] : std::numeric_limits<double>::max();
         const bool last = e + 1 == run->errors.size();
         if (y < best || e == 0) {
           best = y;
@@ -177,15 +182,17 @@ void write_ioh(const BenchResult& result, const std::vector<std::vector<const Be
     write_file(folder / dat, rows);
     std::string info;
     for (const auto& [key, value] : entrant.optimizer.items())
-      info += (info.empty() ? "" : " ") + key + "=" + (value.is_string() ? value.get<std::string>() : value.dump());
-    const nlohmann::json index = {{"version", "0.3.23"},
-                                  {"suite", "Spec2Fab"},
-                                  {"function_id", problem.function_id},
-                                  {"function_name", problem.name},
-                                  {"maximization", false},
-                                  {"algorithm", {{"name", entrant.label}, {"info", ioh_text(info)}}},
-                                  {"attributes", {"evaluations", "raw_y"}},
-                                  {"scenarios", {{{"dimension", problem.facts.dimension}, {"path", dat}, {"runs", runs}}}}};
+      info += (info.empty() ? "" : " ") + key + "=" +
+              (value.is_string() ? value.get<std::string>() : value.dump());
+    const nlohmann::json index = {
+        {"version", "0.3.23"},
+        {"suite", "Spec2Fab"},
+        {"function_id", problem.function_id},
+        {"function_name", problem.name},
+        {"maximization", false},
+        {"algorithm", {{"name", entrant.label}, {"info", ioh_text(info)}}},
+        {"attributes", {"evaluations", "raw_y"}},
+        {"scenarios", {{{"dimension", problem.facts.dimension}, {"path", dat}, {"runs", runs}}}}};
     write_file(folder / ("IOHprofiler_" + stem + ".json"), index.dump(1, '\t') + "\n");
   }
 }
@@ -194,13 +201,15 @@ void write_ioh(const BenchResult& result, const std::vector<std::vector<const Be
 
 /// Fixed-budget convergence: best-so-far relative precision against
 /// evaluations, median over runs with the quartiles as a band.
-void write_convergence(const BenchResult& result, size_t p, const std::vector<std::vector<const BenchRun*>>& by_pair,
+void write_convergence(const BenchResult& result, size_t p,
+                       const std::vector<std::vector<const BenchRun*>>& by_pair,
                        const fs::path& file) {
   const BenchProblem& problem = result.problems[p];
   long long longest = 1;
   for (size_t k = 0; k < result.pairs.size(); ++k)
     if (result.pairs[k].problem == p)
-      for (const BenchRun* run : by_pair[k]) longest = std::max<long long>(longest, static_cast<long long>(run->errors.size()));
+      for (const BenchRun* run : by_pair[k])
+        longest = std::max<long long>(longest, static_cast<long long>(run->errors.size()));
   constexpr double kFloor = 1e-10;
   std::vector<long long> grid;
   for (double t = 0; t <= std::log10(static_cast<double>(longest)) + 1e-9; t += 0.05) {
@@ -220,7 +229,8 @@ void write_convergence(const BenchResult& result, size_t p, const std::vector<st
       double b = std::numeric_limits<double>::infinity();
       size_t e = 0;
       for (long long g : grid) {
-        while (e < run.errors.size() && static_cast<long long>(e) < g) b = std::min(b, run.errors[e++]);
+        while (e < run.errors.size() && static_cast<long long>(e) < g)
+          b = std::min(b, run.errors[e++]);
         best[r].push_back(std::max(kFloor, relative_precision(problem, b)));
       }
     }
@@ -233,15 +243,21 @@ void write_convergence(const BenchResult& result, size_t p, const std::vector<st
     series.push_back(std::move(one));
   }
   plot::Axes axes{fmt::format("{}: best error so far (median, quartile bands)", problem.name),
-                  "evaluations", "(error - optimum) / (start - optimum); 0 drawn at 1e-10", 1, static_cast<double>(longest), kFloor, 2,
-                  true, true};
+                  "evaluations",
+                  "(error - optimum) / (start - optimum); 0 drawn at 1e-10",
+                  1,
+                  static_cast<double>(longest),
+                  kFloor,
+                  2,
+                  true,
+                  true};
   plot::write_chart(axes, series, file);
 }
 
 /// Runtime ECDF: the share of (run, target) pairs of the ladder reached
 /// within x evaluations.
-void write_ecdf(const BenchResult& result, size_t p, const std::vector<std::vector<const BenchRun*>>& by_pair,
-                const fs::path& file) {
+void write_ecdf(const BenchResult& result, size_t p,
+                const std::vector<std::vector<const BenchRun*>>& by_pair, const fs::path& file) {
   const BenchProblem& problem = result.problems[p];
   long long longest = 1;
   std::vector<plot::Series> series;
@@ -260,13 +276,23 @@ void write_ecdf(const BenchResult& result, size_t p, const std::vector<std::vect
     plot::Series one{result.entrants[result.pairs[k].entrant].label, {{1.0, 0.0}}, {}, true};
     for (size_t h = 0; h < hits.size(); ++h) {
       if (h + 1 < hits.size() && hits[h + 1] == hits[h]) continue;
-      one.points.push_back({static_cast<double>(hits[h]), static_cast<double>(h + 1) / static_cast<double>(total)});
+      one.points.push_back(
+          {static_cast<double>(hits[h]), static_cast<double>(h + 1) / static_cast<double>(total)});
     }
     series.push_back(std::move(one));
   }
-  for (plot::Series& one : series) one.points.push_back({static_cast<double>(longest), one.points.back()[1]});
-  plot::Axes axes{fmt::format("{}: runtime ECDF over {} targets (1e-1 .. 1e-8 of the start's gap)", problem.name, kLadder),
-                  "evaluations", "share of (run, target) reached", 1, static_cast<double>(longest), 0, 1, true, false};
+  for (plot::Series& one : series)
+    one.points.push_back({static_cast<double>(longest), one.points.back()[1]});
+  plot::Axes axes{fmt::format("{}: runtime ECDF over {} targets (1e-1 .. 1e-8 of the start's gap)",
+                              problem.name, kLadder),
+                  "evaluations",
+                  "share of (run, target) reached",
+                  1,
+                  static_cast<double>(longest),
+                  0,
+                  1,
+                  true,
+                  false};
   plot::write_chart(axes, series, file);
 }
 
@@ -281,11 +307,21 @@ std::string capabilities_text(const BenchmarkFacts& facts) {
   std::vector<std::string> names;
   for (Capability c : facts.capabilities) {
     switch (c) {
-      case Capability::gradient: names.push_back("gradient"); break;
-      case Capability::residuals: names.push_back("residuals"); break;
-      case Capability::lower_bound: names.push_back("bound"); break;
-      case Capability::discrete_only: names.push_back("discrete"); break;
-      case Capability::neighbour_moves: names.push_back("neighbour moves"); break;
+      case Capability::gradient:
+        names.push_back("gradient");
+        break;
+      case Capability::residuals:
+        names.push_back("residuals");
+        break;
+      case Capability::lower_bound:
+        names.push_back("bound");
+        break;
+      case Capability::discrete_only:
+        names.push_back("discrete");
+        break;
+      case Capability::neighbour_moves:
+        names.push_back("neighbour moves");
+        break;
     }
   }
   if (std::find(facts.capabilities.begin(), facts.capabilities.end(), Capability::discrete_only) ==
@@ -294,7 +330,8 @@ std::string capabilities_text(const BenchmarkFacts& facts) {
   return join(names, ", ");
 }
 
-nlohmann::json pair_statistics(const BenchProblem& problem, const std::vector<const BenchRun*>& runs) {
+nlohmann::json pair_statistics(const BenchProblem& problem,
+                               const std::vector<const BenchRun*>& runs) {
   std::vector<double> finals, used, bounds;
   int successes = 0;
   for (const BenchRun* run : runs) {
@@ -309,8 +346,12 @@ nlohmann::json pair_statistics(const BenchProblem& problem, const std::vector<co
     ert.push_back(e ? nlohmann::json(*e) : nlohmann::json(nullptr));
   }
   return {{"runs", runs.size()},
-          {"final_error", {{"q1", quantile(finals, 0.25)}, {"median", quantile(finals, 0.5)}, {"q3", quantile(finals, 0.75)}}},
-          {"success_rate", runs.empty() ? 0.0 : static_cast<double>(successes) / static_cast<double>(runs.size())},
+          {"final_error",
+           {{"q1", quantile(finals, 0.25)},
+            {"median", quantile(finals, 0.5)},
+            {"q3", quantile(finals, 0.75)}}},
+          {"success_rate",
+           runs.empty() ? 0.0 : static_cast<double>(successes) / static_cast<double>(runs.size())},
           {"ert", ert},
           {"median_evaluations", quantile(used, 0.5)},
           {"median_bound_calls", quantile(bounds, 0.5)}};
@@ -325,14 +366,19 @@ void write_bench_report(const BenchResult& result, const fs::path& folder) {
 
   std::ostringstream md;
   md << "# Optimizer × problem matrix\n\n"
-     << fmt::format("Budget: {} (the start's evaluation included). Stochastic entrants: {} seeds; deterministic: one "
-                    "run. Targets: the optimum plus 10^-1 … 10^-8 of the start's distance to it; *success* is "
-                    "reaching the last. ERT: evaluations spent by all runs (to the hit, or all they made) per run "
-                    "that hit. Logs: ioh/ (IOHprofiler format). Wall and simulator times: timing/.\n\n",
-                    result.budget, result.seeds);
+     << fmt::format(
+            "Budget: {} (the start's evaluation included). Stochastic entrants: {} seeds; "
+            "deterministic: one "
+            "run. Targets: the optimum plus 10^-1 … 10^-8 of the start's distance to it; *success* "
+            "is "
+            "reaching the last. ERT: evaluations spent by all runs (to the hit, or all they made) "
+            "per run "
+            "that hit. Logs: ioh/ (IOHprofiler format). Wall and simulator times: timing/.\n\n",
+            result.budget, result.seeds);
 
   // At a glance: median final relative precision per cell.
-  md << "## At a glance\n\nMedian final error as a share of the start's distance to the optimum (0: optimum "
+  md << "## At a glance\n\nMedian final error as a share of the start's distance to the optimum "
+        "(0: optimum "
         "found); entrants by mean win rate (fight matrix below).\n\n| entrant |";
   std::vector<size_t> shown;
   for (size_t p = 0; p < result.problems.size(); ++p) {
@@ -356,7 +402,8 @@ void write_bench_report(const BenchResult& result, const fs::path& folder) {
           cell = "needs " + result.pairs[k].missing;
         } else {
           std::vector<double> finals;
-          for (const BenchRun* run : by_pair[k]) finals.push_back(relative_precision(problem, run->best()));
+          for (const BenchRun* run : by_pair[k])
+            finals.push_back(relative_precision(problem, run->best()));
           cell = number(quantile(finals, 0.5));
         }
       }
@@ -365,7 +412,8 @@ void write_bench_report(const BenchResult& result, const fs::path& folder) {
     md << "\n";
   }
 
-  nlohmann::json report = {{"budget", result.budget}, {"seeds", result.seeds}, {"problems", nlohmann::json::array()}};
+  nlohmann::json report = {
+      {"budget", result.budget}, {"seeds", result.seeds}, {"problems", nlohmann::json::array()}};
   for (size_t p = 0; p < result.problems.size(); ++p) {
     const BenchProblem& problem = result.problems[p];
     const BenchmarkFacts& f = problem.facts;
@@ -381,15 +429,17 @@ void write_bench_report(const BenchResult& result, const fs::path& folder) {
        << "\n- variables: " << f.variables << " (dimension " << f.dimension;
     if (f.assignments > 0) md << fmt::format(", {:.0f} assignments", f.assignments);
     md << ")\n- offers: " << capabilities_text(f) << "\n"
-       << fmt::format("- start error {}, optimum {}, budget {} evaluations\n\n", number(problem.start_error),
-                      number(f.optimum.value_or(0)), problem.budget > 0 ? std::to_string(problem.budget) : "unlimited");
+       << fmt::format("- start error {}, optimum {}, budget {} evaluations\n\n",
+                      number(problem.start_error), number(f.optimum.value_or(0)),
+                      problem.budget > 0 ? std::to_string(problem.budget) : "unlimited");
     // Bound calls are not evaluations, but they cost time: shown where a problem has a bound.
-    const bool bounded = std::find(f.capabilities.begin(), f.capabilities.end(), Capability::lower_bound) !=
-                         f.capabilities.end();
-    md << "| entrant | runs | final error: median [q1, q3] | success | ERT 1e-2 | ERT 1e-4 | ERT 1e-8 | evaluations "
+    const bool bounded = std::find(f.capabilities.begin(), f.capabilities.end(),
+                                   Capability::lower_bound) != f.capabilities.end();
+    md << "| entrant | runs | final error: median [q1, q3] | success | ERT 1e-2 | ERT 1e-4 | ERT "
+          "1e-8 | evaluations "
           "(median) |"
-       << (bounded ? " bound calls (median) |" : "") << "\n|---|---|---|---|---|---|---|---|" << (bounded ? "---|" : "")
-       << "\n";
+       << (bounded ? " bound calls (median) |" : "") << "\n|---|---|---|---|---|---|---|---|"
+       << (bounded ? "---|" : "") << "\n";
     entry.update({{"dimension", f.dimension},
                   {"assignments", f.assignments},
                   {"start_error", problem.start_error},
@@ -409,12 +459,13 @@ void write_bench_report(const BenchResult& result, const fs::path& folder) {
       }
       const auto& runs = by_pair[k];
       nlohmann::json stats = pair_statistics(problem, runs);
-      md << fmt::format("| {} | {} | {} [{}, {}] | {}/{} | {} | {} | {} | {:.0f} |", label, runs.size(),
-                        number(stats["final_error"]["median"]), number(stats["final_error"]["q1"]),
-                        number(stats["final_error"]["q3"]),
-                        static_cast<int>(std::lround(stats["success_rate"].get<double>() * runs.size())), runs.size(),
-                        ert_text(runs, problem.targets[1]), ert_text(runs, problem.targets[3]),
-                        ert_text(runs, problem.targets.back()), stats["median_evaluations"].get<double>());
+      md << fmt::format(
+          "| {} | {} | {} [{}, {}] | {}/{} | {} | {} | {} | {:.0f} |", label, runs.size(),
+          number(stats["final_error"]["median"]), number(stats["final_error"]["q1"]),
+          number(stats["final_error"]["q3"]),
+          static_cast<int>(std::lround(stats["success_rate"].get<double>() * runs.size())),
+          runs.size(), ert_text(runs, problem.targets[1]), ert_text(runs, problem.targets[3]),
+          ert_text(runs, problem.targets.back()), stats["median_evaluations"].get<double>());
       if (bounded) md << fmt::format(" {:.0f} |", stats["median_bound_calls"].get<double>());
       md << "\n";
       nlohmann::json run_list = nlohmann::json::array();
@@ -437,16 +488,20 @@ void write_bench_report(const BenchResult& result, const fs::path& folder) {
       stats["run_list"] = run_list;
       entrants.push_back(stats);
     }
-    if (!incompatible.empty()) md << "\nNot run (the problem lacks what they need): " << join(incompatible) << ".\n";
-    md << fmt::format("\n![convergence](plots/convergence_{0}.png) ![ECDF](plots/ecdf_{0}.png)\n", file_name(problem.name));
+    if (!incompatible.empty())
+      md << "\nNot run (the problem lacks what they need): " << join(incompatible) << ".\n";
+    md << fmt::format("\n![convergence](plots/convergence_{0}.png) ![ECDF](plots/ecdf_{0}.png)\n",
+                      file_name(problem.name));
     entry["entrants"] = entrants;
     entry["incompatible"] = left_out;
     report["problems"].push_back(entry);
-    write_convergence(result, p, by_pair, folder / "plots" / ("convergence_" + file_name(problem.name) + ".png"));
+    write_convergence(result, p, by_pair,
+                      folder / "plots" / ("convergence_" + file_name(problem.name) + ".png"));
     write_ecdf(result, p, by_pair, folder / "plots" / ("ecdf_" + file_name(problem.name) + ".png"));
   }
 
-  md << "\n## Fight matrix\n\nRow's win rate against column over the problems both run (a run pair won: lower "
+  md << "\n## Fight matrix\n\nRow's win rate against column over the problems both run (a run pair "
+        "won: lower "
         "final error; a tie counts half), averaged over those problems.\n\n| | ";
   std::vector<std::string> labels;
   for (size_t e : fights.order) labels.push_back(result.entrants[e].label);
@@ -459,20 +514,26 @@ void write_bench_report(const BenchResult& result, const fs::path& folder) {
     std::vector<double> row;
     for (size_t b : fights.order) {
       row.push_back(fights.rate[a][b]);
-      md << " " << (std::isnan(fights.rate[a][b]) ? std::string("–") : fmt::format("{:.0f}%", 100 * fights.rate[a][b]))
+      md << " "
+         << (std::isnan(fights.rate[a][b]) ? std::string("–")
+                                           : fmt::format("{:.0f}%", 100 * fights.rate[a][b]))
          << " |";
     }
     table.push_back(row);
     md << fmt::format(" {:.0f}% |\n", 100 * fights.mean[a]);
   }
   md << "\n![fight matrix](plots/fight.png)\n";
-  if (!fights.order.empty()) plot::write_heat_map("win rate of row against column", labels, table, folder / "plots" / "fight.png");
+  if (!fights.order.empty())
+    plot::write_heat_map("win rate of row against column", labels, table,
+                         folder / "plots" / "fight.png");
   report["fights"] = {{"entrants", labels}, {"win_rate", table}};
   write_file(folder / "report.md", md.str());
   write_file(folder / "report.json", report.dump(1) + "\n");
 
   // Wall and simulator seconds: these vary with the machine and the load.
-  nlohmann::json timing = {{"threads", result.threads}, {"wall_seconds", result.wall_seconds}, {"runs", nlohmann::json::array()}};
+  nlohmann::json timing = {{"threads", result.threads},
+                           {"wall_seconds", result.wall_seconds},
+                           {"runs", nlohmann::json::array()}};
   std::string csv = "problem,entrant,seed,evaluation,best_error,wall_seconds,simulator_seconds\n";
   for (const BenchRun& run : result.runs) {
     const BenchPair& pair = result.pairs[run.pair];
@@ -488,8 +549,8 @@ void write_bench_report(const BenchResult& result, const fs::path& folder) {
     for (size_t e = 0; e < run.errors.size(); ++e) {
       if (!(run.errors[e] < best) && e + 1 != run.errors.size()) continue;
       best = std::min(best, run.errors[e]);
-      csv += fmt::format("{},{},{},{},{:.17g},{:.6f},{:.6f}\n", problem, label, run.seed, e + 1, best, run.seconds[e],
-                         run.simulator_seconds_at[e]);
+      csv += fmt::format("{},{},{},{},{:.17g},{:.6f},{:.6f}\n", problem, label, run.seed, e + 1,
+                         best, run.seconds[e], run.simulator_seconds_at[e]);
     }
   }
   write_file(folder / "timing" / "timing.json", timing.dump(1) + "\n");

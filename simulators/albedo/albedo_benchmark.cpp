@@ -14,34 +14,39 @@ constexpr int kMaxSteps = 5;
 nlohmann::json albedo_column_spec() {
   nlohmann::json layers = nlohmann::json::array();
   for (const char* ink : {"VeroCyan", "VeroMagenta", "VeroYellow", "VeroBlackPlus"}) {
-    layers.push_back({{"material", ink},
-                      {"thickness_mm", {{"value", 0.0}, {"min", 0.0}, {"max", kMaxSteps * kLayerMm}, {"step", kLayerMm}}}});
+    layers.push_back(
+        {{"material", ink},
+         {"thickness_mm",
+          {{"value", 0.0}, {"min", 0.0}, {"max", kMaxSteps * kLayerMm}, {"step", kLayerMm}}}});
   }
   layers.push_back({{"material", "VeroWhitePlus"}});
   return {{"materials", "materials/polyjet.json"},
           {"printer", "printers/j750.json"},
           {"subtree", {{"type", "layered"}, {"layers", layers}}},
-          {"simulator", {{"type", "albedo"}, {"depth_mm", 4 * kMaxSteps * kLayerMm + kLayerMm}, {"step_mm", kLayerMm / 8}}},
+          {"simulator",
+           {{"type", "albedo"},
+            {"depth_mm", 4 * kMaxSteps * kLayerMm + kLayerMm},
+            {"step_mm", kLayerMm / 8}}},
           {"metric", {{"type", "ciede2000"}}},
           // 2 layers of cyan, none of magenta, 4 of yellow, 1 of black: a dark green.
           {"reference", {2 * kLayerMm, 0.0, 4 * kLayerMm, kLayerMm}}};
 }
 
+const BenchmarkDescription kAlbedoColumn{
+    "albedo_column",
+    "One albedo texture column (paper Fig. 7): 4 inks over white, 0-5 layers each (1,296 stacks), "
+    "CIEDE2000 to the albedo of a hidden reference stack. Discrete; no gradient, bound or "
+    "residuals.",
+    "albedo (Kubelka-Munk through the stack, 0.567 mm deep)",
+    "ciede2000",
+    "the albedo of a hidden stack (2 cyan, 0 magenta, 4 yellow, 1 black layers)",
+    "4 ink thicknesses, 0-5 layers of 0.027 mm"};
+
 class AlbedoColumn final : public TunerBenchmark {
  public:
   AlbedoColumn(const Properties& /*properties*/, const BenchmarkContext& context)
-      : TunerBenchmark(albedo_column_spec(), "bench problem albedo_column", context) {
-    facts_.simulator = "albedo (Kubelka-Munk through the stack, 0.567 mm deep)";
-    facts_.metric = "ciede2000";
-    facts_.goal = "the albedo of a hidden stack (2 cyan, 0 magenta, 4 yellow, 1 black layers)";
-    facts_.variables = "4 ink thicknesses, 0-5 layers of 0.027 mm";
-  }
-  static TypeDoc doc() {
-    return {"One albedo texture column (paper Fig. 7): 4 inks over white, 0-5 layers each (1,296 stacks), "
-            "CIEDE2000 to the albedo of a hidden reference stack. Discrete; no gradient, bound or residuals.",
-            {},
-            R"({"problems": ["albedo_column"]})"};
-  }
+      : TunerBenchmark(albedo_column_spec(), kAlbedoColumn, context) {}
+  static TypeDoc doc() { return benchmark_doc(kAlbedoColumn); }
 };
 
 }  // namespace

@@ -54,22 +54,23 @@ nlohmann::json smooth_caustics_spec() {
           {"reference", reference_heights()}};
 }
 
+const BenchmarkDescription kSmoothCaustics{
+    "smooth_caustics",
+    "The smooth caustics surface at reduced size (paper Fig. 9): 6 x 6 B-spline control heights of "
+    "a "
+    "30 x 30 mm clear slab, image_mse to the 32 x 32-pixel caustic of a hidden reference surface. "
+    "Continuous, with the tracer's derivative and residuals.",
+    "caustics (Embree-traced refraction through a 31 x 31-vertex top, 64 x 64 rays, 32 x 32 "
+    "pixels)",
+    "image_mse",
+    "the caustic of a hidden surface (flat 4 mm +/- 0.3 mm per control point)",
+    "6 x 6 B-spline control heights, 1.5-6 mm, from a flat 4 mm"};
+
 class SmoothCaustics final : public TunerBenchmark {
  public:
   SmoothCaustics(const Properties& /*properties*/, const BenchmarkContext& context)
-      : TunerBenchmark(smooth_caustics_spec(), "bench problem smooth_caustics", context) {
-    facts_.simulator = "caustics (Embree-traced refraction through a 31 x 31-vertex top, 64 x 64 rays, 32 x 32 pixels)";
-    facts_.metric = "image_mse";
-    facts_.goal = "the caustic of a hidden surface (flat 4 mm +/- 0.3 mm per control point)";
-    facts_.variables = "6 x 6 B-spline control heights, 1.5-6 mm, from a flat 4 mm";
-  }
-  static TypeDoc doc() {
-    return {"The smooth caustics surface at reduced size (paper Fig. 9): 6 x 6 B-spline control heights of a "
-            "30 x 30 mm clear slab, image_mse to the 32 x 32-pixel caustic of a hidden reference surface. "
-            "Continuous, with the tracer's derivative and residuals.",
-            {},
-            R"({"problems": ["smooth_caustics"]})"};
-  }
+      : TunerBenchmark(smooth_caustics_spec(), kSmoothCaustics, context) {}
+  static TypeDoc doc() { return benchmark_doc(kSmoothCaustics); }
 };
 
 nlohmann::json facet_aiming_spec() {
@@ -95,22 +96,21 @@ nlohmann::json facet_aiming_spec() {
           {"reference", {0.12, -0.07}}};
 }
 
+const BenchmarkDescription kFacetAiming{
+    "facet_aiming",
+    "Aiming one facet (paper Fig. 9, facet caustics): the two slopes of a 5 x 5 mm plane, squared "
+    "distance from where its beam lands to where a hidden reference facet's lands. Continuous, 2 "
+    "variables, no derivative.",
+    "facet_beam (the refracted beam of one planar facet, 60 mm below)",
+    "squared_distance (mm^2)",
+    "where a hidden facet (slopes 0.12, -0.07) sends its beam",
+    "2 slopes, -0.3 to 0.3"};
+
 class FacetAiming final : public TunerBenchmark {
  public:
   FacetAiming(const Properties& /*properties*/, const BenchmarkContext& context)
-      : TunerBenchmark(facet_aiming_spec(), "bench problem facet_aiming", context) {
-    facts_.simulator = "facet_beam (the refracted beam of one planar facet, 60 mm below)";
-    facts_.metric = "squared_distance (mm^2)";
-    facts_.goal = "where a hidden facet (slopes 0.12, -0.07) sends its beam";
-    facts_.variables = "2 slopes, -0.3 to 0.3";
-  }
-  static TypeDoc doc() {
-    return {"Aiming one facet (paper Fig. 9, facet caustics): the two slopes of a 5 x 5 mm plane, squared "
-            "distance from where its beam lands to where a hidden reference facet's lands. Continuous, 2 "
-            "variables, no derivative.",
-            {},
-            R"({"problems": ["facet_aiming"]})"};
-  }
+      : TunerBenchmark(facet_aiming_spec(), kFacetAiming, context) {}
+  static TypeDoc doc() { return benchmark_doc(kFacetAiming); }
 };
 
 }  // namespace

@@ -23,44 +23,50 @@ nlohmann::json fem_book_simulator() {
 }
 
 nlohmann::json fem_book_spec() {
-  return {{"materials", "materials/polyjet.json"},
-          {"printer", "printers/objet500_connex_flex.json"},
-          {"mesh", "meshes/book_60x40x20.stl"},
-          {"subtree",
-           {{"type", "voxel"},
-            {"size_mm", 20},
-            {"child",
-             {{"type", "layered"},
-              {"material",
-               {{"value", "VeroWhitePlus"}, {"choices", {"VeroWhitePlus", "TangoBlackPlus", "DM9860"}}}}}}}},
-          {"simulator", fem_book_simulator()},
-          {"metric", {{"type", "shape_mse"}}},
-          {"reference",
-           {"TangoBlackPlus", "VeroWhitePlus", "DM9860", "DM9860", "TangoBlackPlus", "VeroWhitePlus"}}};
+  return {
+      {"materials", "materials/polyjet.json"},
+      {"printer", "printers/objet500_connex_flex.json"},
+      {"mesh", "meshes/book_60x40x20.stl"},
+      {"subtree",
+       {{"type", "voxel"},
+        {"size_mm", 20},
+        {"child",
+         {{"type", "layered"},
+          {"material",
+           {{"value", "VeroWhitePlus"},
+            {"choices", {"VeroWhitePlus", "TangoBlackPlus", "DM9860"}}}}}}}},
+      {"simulator", fem_book_simulator()},
+      {"metric", {{"type", "shape_mse"}}},
+      {"reference",
+       {"TangoBlackPlus", "VeroWhitePlus", "DM9860", "DM9860", "TangoBlackPlus", "VeroWhitePlus"}}};
 }
+
+const BenchmarkDescription kFemBook{
+    "fem_book",
+    "The elastic book at small size (paper Fig. 10): 6 voxel cells of a 60 x 40 x 20 mm block, "
+    "each one "
+    "of 3 materials (729 assignments), spine clamped, 5 N on the cover's edge; shape_mse to a "
+    "hidden "
+    "reference's probe displacements. Discrete, with the elastic bound and residuals.",
+    "fem (small-strain linear tetrahedra, TetGen mesh of <= 200 mm^3 tets, CHOLMOD)",
+    "shape_mse (mm^2)",
+    "the probe displacements of a hidden assignment of the 6 cells",
+    "6 voxel cells x one of 3 materials (rigid, rubber-like, DM9860)"};
 
 class FemBook final : public TunerBenchmark {
  public:
   FemBook(const Properties& /*properties*/, const BenchmarkContext& context)
-      : TunerBenchmark(fem_book_spec(), "bench problem fem_book", context) {
-    facts_.simulator = "fem (small-strain linear tetrahedra, TetGen mesh of <= 200 mm^3 tets, CHOLMOD)";
-    facts_.metric = "shape_mse (mm^2)";
-    facts_.goal = "the probe displacements of a hidden assignment of the 6 cells";
-    facts_.variables = "6 voxel cells x one of 3 materials (rigid, rubber-like, DM9860)";
-  }
-  static TypeDoc doc() {
-    return {"The elastic book at small size (paper Fig. 10): 6 voxel cells of a 60 x 40 x 20 mm block, each one "
-            "of 3 materials (729 assignments), spine clamped, 5 N on the cover's edge; shape_mse to a hidden "
-            "reference's probe displacements. Discrete, with the elastic bound and residuals.",
-            {},
-            R"({"problems": ["fem_book"]})"};
-  }
+      : TunerBenchmark(fem_book_spec(), kFemBook, context) {}
+  static TypeDoc doc() { return benchmark_doc(kFemBook); }
 
  private:
-  void install_bound(Tuner& tuner, ReducerTree& tree, ReducerNode& node, const PartContext& context) const override {
+  void install_bound(Tuner& tuner, ReducerTree& tree, ReducerNode& node,
+                     const PartContext& context) const override {
     auto bound = std::make_shared<fem::ElasticBound>(
-        Properties::wrap(fem_book_simulator(), "bench problem fem_book (bound)"), context, tree, node, tuner);
-    tuner.set_lower_bound([bound](std::span<const double> x, int assigned, const Observation& target) {
+        Properties::wrap(fem_book_simulator(), "bench problem fem_book (bound)"), context, tree,
+        node, tuner);
+    tuner.set_lower_bound([bound](std::span<const double> x, int assigned,
+                                  const Observation& target) {
       return bound->lower_bound(x, assigned, static_cast<const DisplacementsObservation&>(target));
     });
   }

@@ -25,10 +25,12 @@ using ::testing::HasSubstr;
 
 const fs::path kDatasets = SPEC2FAB_DATASETS_DIR;
 
-Entrant entrant(const std::string& label, nlohmann::json optimizer) { return {label, std::move(optimizer)}; }
+Entrant entrant(const std::string& label, nlohmann::json optimizer) {
+  return {label, std::move(optimizer)};
+}
 
-BenchResult bench(std::vector<std::string> problems, std::vector<Entrant> entrants, const std::string& budget,
-                  int seeds = 3, int threads = 2) {
+BenchResult bench(std::vector<std::string> problems, std::vector<Entrant> entrants,
+                  const std::string& budget, int seeds = 3, int threads = 2) {
   BenchOptions options;
   options.problems = std::move(problems);
   options.entrants = std::move(entrants);
@@ -39,11 +41,13 @@ BenchResult bench(std::vector<std::string> problems, std::vector<Entrant> entran
   return run_bench(options, BenchmarkContext{kDatasets, &cache});
 }
 
-std::vector<const BenchRun*> runs_of(const BenchResult& result, const std::string& label, const std::string& problem) {
+std::vector<const BenchRun*> runs_of(const BenchResult& result, const std::string& label,
+                                     const std::string& problem) {
   std::vector<const BenchRun*> runs;
   for (const BenchRun& run : result.runs) {
     const BenchPair& pair = result.pairs[run.pair];
-    if (result.entrants[pair.entrant].label == label && result.problems[pair.problem].name == problem)
+    if (result.entrants[pair.entrant].label == label &&
+        result.problems[pair.problem].name == problem)
       runs.push_back(&run);
   }
   return runs;
@@ -77,13 +81,15 @@ TEST(BenchSanity, ExhaustiveAndBranchAndBoundReachTheKnownOptimum) {
     EXPECT_EQ(run.summary.final_error, 0.0);
     ASSERT_TRUE(run.hitting_time(problem.targets.back()));
     if (result.entrants[pair.entrant].label == "exhaustive") {
-      EXPECT_EQ(static_cast<double>(run.errors.size()), problem.facts.assignments + 1);  // + the start
+      EXPECT_EQ(static_cast<double>(run.errors.size()),
+                problem.facts.assignments + 1);  // + the start
     }
     ++runs;
   }
   EXPECT_EQ(runs, 3);  // albedo_column has no bound: branch and bound does not run there
   const auto& pairs = result.pairs;
-  const auto no_bound = std::find_if(pairs.begin(), pairs.end(), [&](const BenchPair& p) { return !p.missing.empty(); });
+  const auto no_bound = std::find_if(pairs.begin(), pairs.end(),
+                                     [&](const BenchPair& p) { return !p.missing.empty(); });
   ASSERT_NE(no_bound, pairs.end());
   EXPECT_EQ(no_bound->missing, "bound");
   EXPECT_EQ(result.problems[no_bound->problem].name, "albedo_column");
@@ -95,7 +101,8 @@ TEST(BenchSanity, ExhaustiveAndBranchAndBoundReachTheKnownOptimum) {
 TEST(BenchSanity, ErtEqualsTheOneTheOptimizersSummariesGive) {
   // Annealing makes one evaluation per iteration, so its trace says, from
   // its own count, when its best error first reached a target.
-  const BenchResult result = bench({"albedo_column"}, {entrant("annealing", {{"type", "annealing"}})}, "40", 8);
+  const BenchResult result =
+      bench({"albedo_column"}, {entrant("annealing", {{"type", "annealing"}})}, "40", 8);
   const auto runs = runs_of(result, "annealing", "albedo_column");
   ASSERT_EQ(runs.size(), 8u);
   const BenchProblem& problem = result.problems.front();
@@ -165,9 +172,9 @@ TEST(BenchSanity, TheSameSeedsGiveTheSameLogsForAnyThreadCount) {
 TEST(BenchEntrants, EveryRegisteredOptimizerJoinsTheShippedList) {
   const std::vector<Entrant> entrants = read_entrants(kDatasets / "bench/entrants.json");
   for (const std::string& name : OptimizerRegistry::instance().names()) {
-    EXPECT_TRUE(std::any_of(entrants.begin(), entrants.end(),
-                            [&](const Entrant& e) { return e.optimizer.value("type", "") == name; }))
-        << name;
+    EXPECT_TRUE(std::any_of(entrants.begin(), entrants.end(), [&](const Entrant& e) {
+      return e.optimizer.value("type", "") == name;
+    })) << name;
   }
 }
 
@@ -196,7 +203,8 @@ std::vector<std::vector<std::pair<long long, double>>> read_dat(const fs::path& 
 }
 
 TEST(BenchCli, QuickMatrixWritesLogsThatParseAndAddUp) {
-  const fs::path out = fs::temp_directory_path() / ("spec2fab_bench_quick_" + std::to_string(getpid()));
+  const fs::path out =
+      fs::temp_directory_path() / ("spec2fab_bench_quick_" + std::to_string(getpid()));
   fs::remove_all(out);
   const auto result = run_spec2fab("bench --quick --out " + out.string());
   ASSERT_EQ(result.code, 0) << result.out;
@@ -244,7 +252,8 @@ TEST(BenchCli, QuickMatrixWritesLogsThatParseAndAddUp) {
         // The log, the harness's count and the optimizer's Summary agree.
         EXPECT_EQ(evaluations, runs[r]["summary_evaluations"].get<long long>());
         EXPECT_EQ(scenario["runs"][r]["evals"].get<long long>(), evaluations);
-        EXPECT_LE(evaluations, budget + 2);  // the last iteration may end just past it (SPSA's pair)
+        EXPECT_LE(evaluations,
+                  budget + 2);  // the last iteration may end just past it (SPSA's pair)
         const auto& rows = blocks[r];
         ASSERT_FALSE(rows.empty());
         EXPECT_EQ(rows.front().first, 1);

@@ -293,7 +293,7 @@ void print_registry(const ListedRegistry& listed, bool verbose) {
       std::printf("  %-*s  %s\n", static_cast<int>(width), name.c_str(), first_sentence(doc.summary).c_str());
       continue;
     }
-    std::cout << "\n  " << name << "\n    " << doc.summary << "\n    properties:\n";
+    std::cout << "\n  " << name << "\n    " << doc.summary << "\n" << (doc.properties.empty() ? "" : "    properties:\n");
     // Columns as wide as this type's longest name, type and default.
     int name_width = 0, type_width = 0, default_width = 0;
     for (const PropertyDoc& p : doc.properties) {
