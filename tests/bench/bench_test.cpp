@@ -178,6 +178,59 @@ TEST(BenchEntrants, EveryRegisteredOptimizerJoinsTheShippedList) {
   }
 }
 
+// A problem registered here, in the test program only, as a user's would be
+// in their own file: the harness must run it without an edit, and, its
+// optimum unknown, take the best error any run found as the optimum.
+class ShiftedSphere final : public BenchmarkProblem {
+ public:
+  ShiftedSphere(const Properties& /*properties*/, const BenchmarkContext& /*context*/) {}
+  static TypeDoc doc() { return {"Sum of (x_i - 0.3)^2 over 3 variables in [-1, 1] (a test problem).", {}, ""}; }
+  BenchmarkFacts facts() const override {
+    BenchmarkFacts facts;
+    facts.dimension = 3;
+    facts.simulator = "none";
+    return facts;  // optimum left unknown
+  }
+  std::unique_ptr<BenchmarkInstance> instantiate() const override {
+    struct Instance final : BenchmarkInstance {
+      FunctionProblem problem_{std::vector<VariableDomain>(3, VariableDomain::continuous(-1, 1)),
+                               [](std::span<const double> x) {
+                                 double sum = 0;
+                                 for (double v : x) sum += (v - 0.3) * (v - 0.3);
+                                 return sum;
+                               }};
+      Problem& problem() override { return problem_; }
+      std::vector<double> start() const override { return {-1, -1, -1}; }
+    };
+    return std::make_unique<Instance>();
+  }
+};
+
+}  // namespace
+}  // namespace spec2fab
+
+SPEC2FAB_REGISTER(spec2fab::BenchmarkRegistry, spec2fab::ShiftedSphere, "test_shifted_sphere")
+
+namespace spec2fab {
+namespace {
+
+TEST(BenchExtension, AProblemRegisteredElsewhereRunsAndItsOptimumIsTheBestFound) {
+  const BenchResult result = bench({"test_shifted_sphere"}, {entrant("annealing", {{"type", "annealing"}})}, "50d", 4);
+  ASSERT_EQ(result.problems.size(), 1u);
+  const BenchProblem& problem = result.problems.front();
+  EXPECT_TRUE(problem.unavailable.empty()) << problem.unavailable;
+  EXPECT_DOUBLE_EQ(problem.start_error, 3 * 1.3 * 1.3);
+  double best = problem.start_error;
+  for (const BenchRun& run : result.runs) best = std::min(best, run.best());
+  ASSERT_TRUE(problem.facts.optimum);
+  EXPECT_EQ(*problem.facts.optimum, best);
+  EXPECT_GT(best, 0.0);  // annealing does not hit 0 exactly on a continuous problem
+  // The best run reaches every target of the ladder, its own error being the last.
+  EXPECT_EQ(problem.targets.back(), best + (problem.start_error - best) * 1e-8);
+  EXPECT_TRUE(std::any_of(result.runs.begin(), result.runs.end(),
+                          [&](const BenchRun& run) { return run.hitting_time(problem.targets.back()).has_value(); }));
+}
+
 // ---------------------------------------------------------------- the command
 
 using spec2fab_cli_test::run_spec2fab;
