@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <stdexcept>
 
@@ -20,15 +21,14 @@
 
 namespace spec2fab {
 
-double image_ssim(std::span<const double> a, std::span<const double> b, int width, int height) {
-  if (a.size() != b.size() || a.size() != static_cast<size_t>(width) * static_cast<size_t>(height))
+double image_ssim(std::span<const double> image, std::span<const double> reference, int width, int height) {
+  if (image.size() != reference.size() || image.size() != static_cast<size_t>(width) * static_cast<size_t>(height))
     throw std::invalid_argument("image_ssim: sizes differ");
-  const cv::Mat x(height, width, CV_64F, const_cast<double*>(a.data()));
-  const cv::Mat y(height, width, CV_64F, const_cast<double*>(b.data()));
-  double peak_x = 0, peak_y = 0;
-  cv::minMaxLoc(x, nullptr, &peak_x);
-  cv::minMaxLoc(y, nullptr, &peak_y);
-  const double range = std::max({peak_x, peak_y, 1e-12});
+  const cv::Mat x(height, width, CV_64F, const_cast<double*>(image.data()));
+  const cv::Mat y(height, width, CV_64F, const_cast<double*>(reference.data()));
+  double peak = 0;
+  cv::minMaxLoc(y, nullptr, &peak);
+  const double range = std::max(peak, 1e-12);
   const double c1 = std::pow(0.01 * range, 2), c2 = std::pow(0.03 * range, 2);
   const auto blur = [](const cv::Mat& in) {
     cv::Mat out;
@@ -43,6 +43,14 @@ double image_ssim(std::span<const double> a, std::span<const double> b, int widt
   cv::Mat map;
   cv::divide(numerator, denominator, map);
   return cv::mean(map)[0];
+}
+
+double image_psnr(std::span<const double> image, std::span<const double> reference) {
+  if (image.size() != reference.size() || image.empty()) throw std::invalid_argument("image_psnr: sizes differ");
+  const double peak = *std::max_element(reference.begin(), reference.end());
+  const double rmse = rms_difference(image, reference);
+  if (rmse == 0) return std::numeric_limits<double>::infinity();
+  return 20 * std::log10(std::max(peak, 1e-300) / rmse);
 }
 
 CausticSlabConfig CausticSlabConfig::read(const Properties& properties) {
@@ -155,8 +163,8 @@ Mesh faceted_slab_mesh(const CausticSetup& setup, int nx, int ny, std::span<cons
 
 namespace {
 
-/// A goal picture as irradiance: read (grey), resized to the simulator's
-/// image by area averaging, decoded from sRGB to linear, and scaled so it
+/// A goal picture as irradiance: read (grey), decoded from sRGB to linear,
+/// resized to the simulator's image by area averaging, and scaled so it
 /// carries `flux_mm2` — the light the slab lets through — over the receiver.
 class CausticImageGoal final : public GoalFor<ImageObservation> {
  public:
@@ -188,15 +196,22 @@ class CausticImageGoal final : public GoalFor<ImageObservation> {
     const std::array<int, 2>& size = options.size;
     const std::array<double, 2>& receiver = options.receiver_mm;
     const double flux = options.flux_mm2;
+    // Decoded first, then resized: averaging is only meaningful on light,
+    // and sRGB codes are not proportional to it (a black-and-white edge
+    // averaged as codes comes out 2.3 times too dark in linear light).
+    cv::Mat linear(picture.rows, picture.cols, CV_64F);
+    for (int row = 0; row < picture.rows; ++row)
+      for (int col = 0; col < picture.cols; ++col)
+        linear.at<double>(row, col) = srgb_to_linear(picture.at<unsigned char>(row, col) / 255.0);
     cv::Mat resized;
-    cv::resize(picture, resized, cv::Size(size[0], size[1]), 0, 0, cv::INTER_AREA);
+    cv::resize(linear, resized, cv::Size(size[0], size[1]), 0, 0, cv::INTER_AREA);
     target_.width = size[0];
     target_.height = size[1];
     target_.channels = 1;
     target_.pixels.resize(static_cast<size_t>(size[0]) * static_cast<size_t>(size[1]));
     for (int row = 0; row < size[1]; ++row)
       for (int col = 0; col < size[0]; ++col)
-        target_.pixels[static_cast<size_t>(row * size[0] + col)] = srgb_to_linear(resized.at<unsigned char>(row, col) / 255.0);
+        target_.pixels[static_cast<size_t>(row * size[0] + col)] = std::max(0.0, resized.at<double>(row, col));
     const double total = std::accumulate(target_.pixels.begin(), target_.pixels.end(), 0.0);
     if (!(total > 0)) throw InputError(properties.where("image") + ": the goal image is black: it asks for no light");
     const double pixel_area = receiver[0] / size[0] * receiver[1] / size[1];
@@ -208,7 +223,8 @@ class CausticImageGoal final : public GoalFor<ImageObservation> {
 
   static TypeDoc doc() {
     return {"A picture read as the irradiance a caustic should cast: grey levels decoded from "
-            "sRGB, resized to the simulator's image, scaled to carry flux_mm2 over the receiver.",
+            "sRGB, then resized to the simulator's image (averaging light, not codes), scaled to carry flux_mm2 over "
+            "the receiver.",
             option_docs<Options>(),
             R"({"type": "caustic_image", "image": "ring.png", "receiver_mm": [60, 60], "flux_mm2": 3600})"};
   }

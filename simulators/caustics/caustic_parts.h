@@ -16,10 +16,16 @@
 
 namespace spec2fab {
 
-/// Structural similarity (Wang et al. 2004) of two single-channel images of
-/// the same size: 11 × 11 Gaussian window (σ = 1.5), K1 = 0.01, K2 = 0.03,
-/// dynamic range L = the larger of the two images' peaks. 1 for identical images.
-double image_ssim(std::span<const double> a, std::span<const double> b, int width, int height);
+/// Structural similarity (Wang et al. 2004) of `image` against `reference`,
+/// single-channel and the same size: 11 × 11 Gaussian window (σ = 1.5),
+/// K1 = 0.01, K2 = 0.03, dynamic range L = the reference's peak, as for a
+/// reference image (a range taken from the brighter of the two would let hot
+/// spots in `image` raise the constants and flatter it). 1 for identical images.
+double image_ssim(std::span<const double> image, std::span<const double> reference, int width, int height);
+
+/// Peak signal-to-noise ratio (dB) of `image` against `reference`, the peak
+/// being the reference's; +inf for identical images.
+double image_psnr(std::span<const double> image, std::span<const double> reference);
 
 class Properties;
 

@@ -6,7 +6,11 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <numeric>
 #include <vector>
@@ -349,11 +353,16 @@ TEST_F(CausticSimulatorTest, AnySubtreeIsReadByItsMaterialsAsAHeightSurfaceIs) {
 
 TEST(CausticImages, SsimOfConstantImagesIsTheLuminanceTermAndOfEqualImagesOne) {
   // Zero variance leaves SSIM's luminance term: (2 μx μy + C1) / (μx² + μy² + C1),
-  // C1 = (0.01 L)², L the larger peak.
+  // C1 = (0.01 L)², L the reference's peak.
   const int w = 32, h = 24;
   const std::vector<double> a(w * h, 2.0), b(w * h, 3.0);
   const double c1 = std::pow(0.01 * 3.0, 2);
   EXPECT_NEAR(image_ssim(a, b, w, h), (2 * 2.0 * 3.0 + c1) / (4.0 + 9.0 + c1), 1e-12);
+  // The range is the reference's (the second image's) peak, not the brighter one's.
+  const double c1_of_a = std::pow(0.01 * 2.0, 2);
+  EXPECT_NEAR(image_ssim(b, a, w, h), (2 * 2.0 * 3.0 + c1_of_a) / (4.0 + 9.0 + c1_of_a), 1e-12);
+  EXPECT_NEAR(image_psnr(a, b), 20 * std::log10(3.0 / 1.0), 1e-12);
+  EXPECT_EQ(image_psnr(b, b), std::numeric_limits<double>::infinity());
   std::vector<double> ramp(w * h);
   for (size_t i = 0; i < ramp.size(); ++i) ramp[i] = std::sin(0.37 * static_cast<double>(i)) + 1.5;
   EXPECT_NEAR(image_ssim(ramp, ramp, w, h), 1.0, 1e-12);
@@ -388,6 +397,31 @@ TEST_F(CausticSimulatorTest, GoalPictureCarriesTheGivenFluxAndMseComparesPixels)
   ImageObservation small = target;
   small.pixels.resize(10);
   EXPECT_THROW(metric->error(small, target), InputError);
+}
+
+TEST_F(CausticSimulatorTest, GoalPictureIsDecodedToLightBeforeItIsResized) {
+  // 4 x 1 pixels, black then three white, read at 2 x 1: the left pixel is
+  // half black, half white, so it carries half the right one's light. (Codes
+  // averaged first would give code 128, a fifth of the light.)
+  const std::filesystem::path file =
+      std::filesystem::temp_directory_path() / ("spec2fab_edge_" + std::to_string(getpid()) + ".pgm");
+  {
+    std::ofstream pgm(file, std::ios::binary);
+    pgm << "P5\n4 1\n255\n";
+    pgm.put(static_cast<char>(0));
+    for (int k = 0; k < 3; ++k) pgm.put(static_cast<char>(255));
+  }
+  const PartContext context{palette_};
+  auto goal = GoalRegistry::instance().create_named(
+      "caustic_image",
+      Properties::wrap({{"image", file.string()}, {"size", {2, 1}}, {"receiver_mm", {2, 1}}, {"flux_mm2", 3}},
+                       "goal.json"),
+      "goal", context);
+  std::filesystem::remove(file);
+  const auto& target = static_cast<const ImageObservation&>(goal->target());
+  ASSERT_EQ(target.pixels.size(), 2u);
+  EXPECT_NEAR(target.pixels[0] / target.pixels[1], 0.5, 1e-12);
+  EXPECT_NEAR(target.pixels[0] + target.pixels[1], 3.0, 1e-12);  // flux over 1 mm^2 pixels
 }
 
 // The derivative the caustic tuner gives gradient-based optimizers, against

@@ -1,7 +1,10 @@
 #include "caustic_translation.h"
 
+#include <numeric>
+
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 
 #include <fmt/format.h>
 #include <opencv2/core.hpp>
@@ -57,6 +60,7 @@ nlohmann::json CausticGoalSettings::image_report(std::span<const double> achieve
   const nlohmann::json at_start = caustic_image_errors(initial, goal);
   report["initial_rmse"] = at_start["rmse"];
   report["initial_ssim"] = at_start["ssim"];
+  report["initial_psnr_db"] = at_start["psnr_db"];
   report["image_size"] = image;
   report["receiver_mm"] = receiver_mm;
   report["distance_mm"] = distance_mm;
@@ -150,9 +154,16 @@ void write_height_map(std::span<const double> heights, int nx, int ny, const std
 
 nlohmann::json caustic_image_errors(std::span<const double> image, const ImageObservation& goal) {
   const double rmse = rms_difference(image, goal.pixels);
+  // The goal puts all the slab's light on the receiver: what the image lacks
+  // of it fell outside (or was reflected), and the rmse already pays for it.
+  const double cast = std::accumulate(image.begin(), image.end(), 0.0);
+  const double asked = std::accumulate(goal.pixels.begin(), goal.pixels.end(), 0.0);
+  const double psnr = image_psnr(image, goal.pixels);
   return {{"rmse", rmse},
           {"relative_rmse", rmse / root_mean_square(goal.pixels)},
-          {"ssim", image_ssim(image, goal.pixels, goal.width, goal.height)}};
+          {"ssim", image_ssim(image, goal.pixels, goal.width, goal.height)},
+          {"psnr_db", std::isfinite(psnr) ? nlohmann::json(psnr) : nlohmann::json("inf")},
+          {"light_off_receiver", asked > 0 ? 1 - cast / asked : 0.0}};
 }
 
 }  // namespace spec2fab

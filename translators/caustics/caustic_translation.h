@@ -118,7 +118,8 @@ void write_caustic_panels(const std::vector<std::span<const double>>& images, in
 /// yellow high), nx × ny values row by row from the lowest y, scaled up.
 void write_height_map(std::span<const double> heights, int nx, int ny, const std::filesystem::path& file);
 
-/// {"rmse", "relative_rmse", "ssim"} of an image against the goal.
+/// {"rmse", "relative_rmse", "ssim", "psnr_db", "light_off_receiver"} of an
+/// image against the goal (SSIM and PSNR with the goal's peak as their range).
 nlohmann::json caustic_image_errors(std::span<const double> image, const ImageObservation& goal);
 
 }  // namespace spec2fab
