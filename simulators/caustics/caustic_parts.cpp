@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 
 #include <opencv2/core.hpp>
@@ -21,8 +22,10 @@
 
 namespace spec2fab {
 
-double image_ssim(std::span<const double> image, std::span<const double> reference, int width, int height) {
-  if (image.size() != reference.size() || image.size() != static_cast<size_t>(width) * static_cast<size_t>(height))
+double image_ssim(std::span<const double> image, std::span<const double> reference, int width,
+                  int height) {
+  if (image.size() != reference.size() ||
+      image.size() != static_cast<size_t>(width) * static_cast<size_t>(height))
     throw std::invalid_argument("image_ssim: sizes differ");
   const cv::Mat x(height, width, CV_64F, const_cast<double*>(image.data()));
   const cv::Mat y(height, width, CV_64F, const_cast<double*>(reference.data()));
@@ -46,7 +49,8 @@ double image_ssim(std::span<const double> image, std::span<const double> referen
 }
 
 double image_psnr(std::span<const double> image, std::span<const double> reference) {
-  if (image.size() != reference.size() || image.empty()) throw std::invalid_argument("image_psnr: sizes differ");
+  if (image.size() != reference.size() || image.empty())
+    throw std::invalid_argument("image_psnr: sizes differ");
   const double peak = *std::max_element(reference.begin(), reference.end());
   const double rmse = rms_difference(image, reference);
   if (rmse == 0) return std::numeric_limits<double>::infinity();
@@ -81,8 +85,10 @@ CausticSlabConfig CausticSlabConfig::read(const Properties& properties) {
   return config;
 }
 
-Mesh caustic_slab_mesh(const CausticSetup& setup, const HeightSurface& surface, const Eigen::Vector3d& origin_mm) {
-  if (surface.height_axis() != 2) throw InputError("caustics: the slab's surface must give heights along w");
+Mesh caustic_slab_mesh(const CausticSetup& setup, const HeightSurface& surface,
+                       const Eigen::Vector3d& origin_mm) {
+  if (surface.height_axis() != 2)
+    throw InputError("caustics: the slab's surface must give heights along w");
   CausticTracer tracer(setup);
   std::vector<double> heights(tracer.heights().size());
   for_each_slab_vertex(tracer, origin_mm, [&](size_t k, double a, double b) {
@@ -105,57 +111,187 @@ struct TriangleSoup {
     if (normal.squaredNorm() < 1e-24) return;  // degenerate: a wall of zero height
     const int k = static_cast<int>(mesh.vertices.size());
     mesh.vertices.insert(mesh.vertices.end(), {a, b, c});
-    mesh.triangles.emplace_back(k, normal.dot(outward) >= 0 ? k + 1 : k + 2, normal.dot(outward) >= 0 ? k + 2 : k + 1);
+    mesh.triangles.emplace_back(k, normal.dot(outward) >= 0 ? k + 1 : k + 2,
+                                normal.dot(outward) >= 0 ? k + 2 : k + 1);
   }
-  /// The vertical wall over the segment p → q between side A (top heights
-  /// a_p, a_q) and side B (b_p, b_q): it faces from A to B (`a_to_b`) where
-  /// A is higher and back where B is; a crossing splits it in two.
-  void wall(const Vec2& p, const Vec2& q, double a_p, double a_q, double b_p, double b_q, const Vec3& a_to_b) {
-    const double dp = a_p - b_p, dq = a_q - b_q;
-    const auto at = [](const Vec2& xy, double z) { return Vec3(xy.x(), xy.y(), z); };
-    if (dp * dq >= 0) {
-      const Vec3 facing = dp + dq >= 0 ? a_to_b : Vec3(-a_to_b);
-      add(at(p, b_p), at(q, b_q), at(q, a_q), facing);
-      add(at(p, b_p), at(q, a_q), at(p, a_p), facing);
+  /// A convex planar polygon (its corners in order, points on its edges
+  /// included) as a fan from its centroid: no triangle is degenerate even
+  /// where several corners lie on one edge.
+  void polygon(const std::vector<Vec3>& corners, const Vec3& outward) {
+    if (corners.size() == 3) {
+      add(corners[0], corners[1], corners[2], outward);
       return;
     }
-    const double t = dp / (dp - dq);
-    const Vec2 xy = p + t * (q - p);
-    const Vec3 crossing = at(xy, a_p + t * (a_q - a_p));
-    add(at(p, a_p), at(p, b_p), crossing, dp > 0 ? a_to_b : Vec3(-a_to_b));
-    add(at(q, a_q), at(q, b_q), crossing, dq > 0 ? a_to_b : Vec3(-a_to_b));
+    Vec3 centre = Vec3::Zero();
+    for (const Vec3& c : corners) centre += c;
+    centre /= static_cast<double>(corners.size());
+    for (size_t k = 0; k < corners.size(); ++k)
+      add(centre, corners[k], corners[(k + 1) % corners.size()], outward);
   }
+  /// The region between two vertical chains of points (each sorted by
+  /// height, one per end of a wall), as a ladder of triangles, each with
+  /// two corners on one chain and one on the other.
+  void ladder(const std::vector<Vec3>& left, const std::vector<Vec3>& right, const Vec3& outward) {
+    size_t l = 0, r = 0;
+    while (l + 1 < left.size() || r + 1 < right.size()) {
+      if (r + 1 == right.size() || (l + 1 < left.size() && left[l + 1].z() <= right[r + 1].z())) {
+        add(left[l], right[r], left[l + 1], outward);
+        ++l;
+      } else {
+        add(left[l], right[r], right[r + 1], outward);
+        ++r;
+      }
+    }
+  }
+};
+
+/// Heights at which the faceted slab has a vertex on each vertical line
+/// through a grid corner, so that walls meeting there split their sides at
+/// one another's corners (no T-junctions: every edge of the welded mesh is
+/// shared).
+class CornerLines {
+ public:
+  CornerLines(int nx, int ny, std::span<const std::array<double, 4>> heights)
+      : nx_(nx), heights_((nx + 1) * (ny + 1)) {
+    for (int j = 0; j < ny; ++j) {
+      for (int i = 0; i < nx; ++i) {
+        const auto& h = heights[static_cast<size_t>(i + nx * j)];
+        at(i, j).push_back(h[0]);
+        at(i + 1, j).push_back(h[1]);
+        at(i + 1, j + 1).push_back(h[2]);
+        at(i, j + 1).push_back(h[3]);
+      }
+    }
+    for (int j = 0; j <= ny; ++j)
+      for (int i = 0; i <= nx; ++i)
+        if (i == 0 || j == 0 || i == nx || j == ny)
+          at(i, j).push_back(0.0);  // side walls reach the bottom
+    for (auto& line : heights_) {
+      std::sort(line.begin(), line.end());
+      line.erase(std::unique(line.begin(), line.end()), line.end());
+    }
+  }
+  /// The points of line (i, j) at (xy) from height `from` to `to`, both ends included, bottom
+  /// first.
+  std::vector<Vec3> chain(int i, int j, const Vec2& xy, double from, double to) const {
+    const double low = std::min(from, to), high = std::max(from, to);
+    std::vector<Vec3> out;
+    for (double z : heights_[static_cast<size_t>(i + (nx_ + 1) * j)])
+      if (z >= low && z <= high) out.emplace_back(xy.x(), xy.y(), z);
+    return out;
+  }
+
+ private:
+  std::vector<double>& at(int i, int j) { return heights_[static_cast<size_t>(i + (nx_ + 1) * j)]; }
+  int nx_;
+  std::vector<std::vector<double>> heights_;
 };
 
 }  // namespace
 
-Mesh faceted_slab_mesh(const CausticSetup& setup, int nx, int ny, std::span<const std::array<double, 4>> corner_heights) {
-  if (nx < 1 || ny < 1 || corner_heights.size() != static_cast<size_t>(nx) * static_cast<size_t>(ny))
+Mesh faceted_slab_mesh(const CausticSetup& setup, int nx, int ny,
+                       std::span<const std::array<double, 4>> corner_heights) {
+  if (nx < 1 || ny < 1 ||
+      corner_heights.size() != static_cast<size_t>(nx) * static_cast<size_t>(ny))
     throw std::invalid_argument("faceted_slab_mesh: expected nx · ny facets");
   const auto x = [&](int i) { return setup.width_mm * (static_cast<double>(i) / nx - 0.5); };
   const auto y = [&](int j) { return setup.depth_mm * (static_cast<double>(j) / ny - 0.5); };
+  const auto corner = [&](int i, int j) { return Vec2(x(i), y(j)); };
   const auto facet = [&](int i, int j) -> const std::array<double, 4>& {
-    return corner_heights[static_cast<size_t>(i) + static_cast<size_t>(nx) * static_cast<size_t>(j)];
+    return corner_heights[static_cast<size_t>(i) +
+                          static_cast<size_t>(nx) * static_cast<size_t>(j)];
   };
-  const Vec3 up(0, 0, 1), down(0, 0, -1), east(1, 0, 0), north(0, 1, 0);
-  TriangleSoup soup;
+  const CornerLines lines(nx, ny, corner_heights);
+  const auto at = [](const Vec2& xy, double z) { return Vec3(xy.x(), xy.y(), z); };
+
+  // Where two neighbours' top edges cross, their wall narrows to a point on
+  // both: computed once per edge, so that the tops and the wall share it
+  // exactly. east[i + nx·j]: the edge east of facet (i, j); north likewise.
+  const size_t count = static_cast<size_t>(nx) * static_cast<size_t>(ny);
+  std::vector<std::optional<Vec3>> east(count), north(count);
+  const auto crossing = [&](const Vec2& p, const Vec2& q, double a_p, double a_q, double b_p,
+                            double b_q) -> std::optional<Vec3> {
+    const double dp = a_p - b_p, dq = a_q - b_q;
+    if (dp * dq >= 0) return std::nullopt;
+    const double t = dp / (dp - dq);
+    return at(p + t * (q - p), a_p + t * (a_q - a_p));
+  };
   for (int j = 0; j < ny; ++j) {
     for (int i = 0; i < nx; ++i) {
       const auto& h = facet(i, j);
-      const Vec2 c00(x(i), y(j)), c10(x(i + 1), y(j)), c11(x(i + 1), y(j + 1)), c01(x(i), y(j + 1));
-      const auto top = [](const Vec2& xy, double z) { return Vec3(xy.x(), xy.y(), z); };
-      soup.add(top(c00, h[0]), top(c10, h[1]), top(c11, h[2]), up);
-      soup.add(top(c00, h[0]), top(c11, h[2]), top(c01, h[3]), up);
-      soup.add(top(c00, 0), top(c10, 0), top(c11, 0), down);
-      soup.add(top(c00, 0), top(c11, 0), top(c01, 0), down);
-      // East edge: against the next facet, or the slab's side (height 0 beyond).
-      const bool east_edge = i + 1 == nx, north_edge = j + 1 == ny;
-      const auto& e = east_edge ? h : facet(i + 1, j);
-      soup.wall(c10, c11, h[1], h[2], east_edge ? 0 : e[0], east_edge ? 0 : e[3], east);
-      const auto& n = north_edge ? h : facet(i, j + 1);
-      soup.wall(c01, c11, h[3], h[2], north_edge ? 0 : n[0], north_edge ? 0 : n[1], north);
-      if (i == 0) soup.wall(c00, c01, h[0], h[3], 0, 0, -east);
-      if (j == 0) soup.wall(c00, c10, h[0], h[1], 0, 0, -north);
+      if (i + 1 < nx) {
+        const auto& e = facet(i + 1, j);
+        east[static_cast<size_t>(i + nx * j)] =
+            crossing(corner(i + 1, j), corner(i + 1, j + 1), h[1], h[2], e[0], e[3]);
+      }
+      if (j + 1 < ny) {
+        const auto& n = facet(i, j + 1);
+        north[static_cast<size_t>(i + nx * j)] =
+            crossing(corner(i, j + 1), corner(i + 1, j + 1), h[3], h[2], n[0], n[1]);
+      }
+    }
+  }
+  const auto edge_point = [](const std::vector<std::optional<Vec3>>& edges, size_t k,
+                             std::vector<Vec3>& polygon) {
+    if (edges[k]) polygon.push_back(*edges[k]);
+  };
+
+  // The wall over grid edge (pi, pj) → (qi, qj) between side A (tops a_p,
+  // a_q) and side B (b_p, b_q), facing from A to B where A is higher.
+  const Vec3 up(0, 0, 1), down(0, 0, -1), to_east(1, 0, 0), to_north(0, 1, 0);
+  TriangleSoup soup;
+  const auto wall = [&](int pi, int pj, int qi, int qj, double a_p, double a_q, double b_p,
+                        double b_q, const std::optional<Vec3>& cross, const Vec3& a_to_b) {
+    const Vec2 p = corner(pi, pj), q = corner(qi, qj);
+    const std::vector<Vec3> at_p = lines.chain(pi, pj, p, a_p, b_p),
+                            at_q = lines.chain(qi, qj, q, a_q, b_q);
+    if (!cross) {
+      soup.ladder(at_p, at_q, (a_p - b_p) + (a_q - b_q) >= 0 ? a_to_b : Vec3(-a_to_b));
+      return;
+    }
+    // Two triangles' worth, each a fan from the crossing to one end's chain.
+    for (const auto& [chain, higher] : {std::pair{&at_p, a_p > b_p}, std::pair{&at_q, a_q > b_q}}) {
+      for (size_t k = 0; k + 1 < chain->size(); ++k)
+        soup.add((*chain)[k], (*chain)[k + 1], *cross, higher ? a_to_b : Vec3(-a_to_b));
+    }
+  };
+
+  for (int j = 0; j < ny; ++j) {
+    for (int i = 0; i < nx; ++i) {
+      const auto& h = facet(i, j);
+      const Vec3 c00 = at(corner(i, j), h[0]), c10 = at(corner(i + 1, j), h[1]),
+                 c11 = at(corner(i + 1, j + 1), h[2]), c01 = at(corner(i, j + 1), h[3]);
+      const size_t k = static_cast<size_t>(i + nx * j);
+      // The top's two triangles, (00, 10, 11) and (00, 11, 01), with the
+      // crossing points on their outer edges.
+      std::vector<Vec3> first{c00};
+      if (j > 0) edge_point(north, static_cast<size_t>(i + nx * (j - 1)), first);
+      first.push_back(c10);
+      if (i + 1 < nx) edge_point(east, k, first);
+      first.push_back(c11);
+      soup.polygon(first, up);
+      std::vector<Vec3> second{c00, c11};
+      if (j + 1 < ny) edge_point(north, k, second);
+      second.push_back(c01);
+      if (i > 0) edge_point(east, static_cast<size_t>(i - 1 + nx * j), second);
+      soup.polygon(second, up);
+      soup.add(at(corner(i, j), 0), at(corner(i + 1, j), 0), at(corner(i + 1, j + 1), 0), down);
+      soup.add(at(corner(i, j), 0), at(corner(i + 1, j + 1), 0), at(corner(i, j + 1), 0), down);
+      // East and north: against the next facet, or the slab's side (height 0 beyond).
+      if (i + 1 < nx) {
+        const auto& e = facet(i + 1, j);
+        wall(i + 1, j, i + 1, j + 1, h[1], h[2], e[0], e[3], east[k], to_east);
+      } else {
+        wall(i + 1, j, i + 1, j + 1, h[1], h[2], 0, 0, std::nullopt, to_east);
+      }
+      if (j + 1 < ny) {
+        const auto& n = facet(i, j + 1);
+        wall(i, j + 1, i + 1, j + 1, h[3], h[2], n[0], n[1], north[k], to_north);
+      } else {
+        wall(i, j + 1, i + 1, j + 1, h[3], h[2], 0, 0, std::nullopt, to_north);
+      }
+      if (i == 0) wall(i, j, i, j + 1, h[0], h[3], 0, 0, std::nullopt, -to_east);
+      if (j == 0) wall(i, j, i + 1, j, h[0], h[1], 0, 0, std::nullopt, -to_north);
     }
   }
   return std::move(soup.mesh);
@@ -179,7 +315,8 @@ class CausticImageGoal final : public GoalFor<ImageObservation> {
       d.file(o.image, "image", "the picture (any format OpenCV reads)");
       d.number(o.size, "size", Range::at_least(1), "the simulator's image size (width, height)");
       d.required(o.receiver_mm, "receiver_mm", Range::above(0), "the receiver's extent (x, y)");
-      d.required(o.flux_mm2, "flux_mm2", Range::above(0), "light to distribute: incident irradiance x area");
+      d.required(o.flux_mm2, "flux_mm2", Range::above(0),
+                 "light to distribute: incident irradiance x area");
     }
     bool check(std::string* why) const {
       if (static_cast<long long>(size[0]) * size[1] <= 64'000'000) return true;
@@ -192,7 +329,9 @@ class CausticImageGoal final : public GoalFor<ImageObservation> {
     const Options options = read_options<Options>(properties);
     const std::filesystem::path& file = options.image;
     const cv::Mat picture = cv::imread(file.string(), cv::IMREAD_GRAYSCALE);
-    if (picture.empty()) throw InputError(properties.where("image") + ": cannot read " + file.string() + " as an image");
+    if (picture.empty())
+      throw InputError(properties.where("image") + ": cannot read " + file.string() +
+                       " as an image");
     const std::array<int, 2>& size = options.size;
     const std::array<double, 2>& receiver = options.receiver_mm;
     const double flux = options.flux_mm2;
@@ -211,9 +350,12 @@ class CausticImageGoal final : public GoalFor<ImageObservation> {
     target_.pixels.resize(static_cast<size_t>(size[0]) * static_cast<size_t>(size[1]));
     for (int row = 0; row < size[1]; ++row)
       for (int col = 0; col < size[0]; ++col)
-        target_.pixels[static_cast<size_t>(row * size[0] + col)] = std::max(0.0, resized.at<double>(row, col));
+        target_.pixels[static_cast<size_t>(row * size[0] + col)] =
+            std::max(0.0, resized.at<double>(row, col));
     const double total = std::accumulate(target_.pixels.begin(), target_.pixels.end(), 0.0);
-    if (!(total > 0)) throw InputError(properties.where("image") + ": the goal image is black: it asks for no light");
+    if (!(total > 0))
+      throw InputError(properties.where("image") +
+                       ": the goal image is black: it asks for no light");
     const double pixel_area = receiver[0] / size[0] * receiver[1] / size[1];
     for (double& v : target_.pixels) v *= flux / (total * pixel_area);
   }
@@ -222,11 +364,13 @@ class CausticImageGoal final : public GoalFor<ImageObservation> {
   const ImageObservation& typed_target() const override { return target_; }
 
   static TypeDoc doc() {
-    return {"A picture read as the irradiance a caustic should cast: grey levels decoded from "
-            "sRGB, then resized to the simulator's image (averaging light, not codes), scaled to carry flux_mm2 over "
-            "the receiver.",
-            option_docs<Options>(),
-            R"({"type": "caustic_image", "image": "ring.png", "receiver_mm": [60, 60], "flux_mm2": 3600})"};
+    return {
+        "A picture read as the irradiance a caustic should cast: grey levels decoded from "
+        "sRGB, then resized to the simulator's image (averaging light, not codes), scaled to carry "
+        "flux_mm2 over "
+        "the receiver.",
+        option_docs<Options>(),
+        R"({"type": "caustic_image", "image": "ring.png", "receiver_mm": [60, 60], "flux_mm2": 3600})"};
   }
 
  private:
@@ -239,14 +383,19 @@ class ImageMse final : public MetricFor<ImageObservation> {
   std::string name() const override { return "image_mse"; }
   double error(const ImageObservation& simulated, const ImageObservation& target) const override {
     if (simulated.pixels.size() != target.pixels.size())
-      throw InputError("image_mse: the simulated image (" + std::to_string(simulated.width) + " x " +
-                       std::to_string(simulated.height) + ") and the goal (" + std::to_string(target.width) +
-                       " x " + std::to_string(target.height) + ") differ in size");
-    return squared_distance(simulated.pixels, target.pixels) / static_cast<double>(target.pixels.size());
+      throw InputError("image_mse: the simulated image (" + std::to_string(simulated.width) +
+                       " x " + std::to_string(simulated.height) + ") and the goal (" +
+                       std::to_string(target.width) + " x " + std::to_string(target.height) +
+                       ") differ in size");
+    return squared_distance(simulated.pixels, target.pixels) /
+           static_cast<double>(target.pixels.size());
   }
   // ½‖r‖² = error: r = √(2/n) (s − t), one residual per pixel value.
-  int residual_count(const Observation& target) const override { return static_cast<int>(target.values().size()); }
-  void residuals(const Observation& simulated, const Observation& target, std::span<double> out) const override {
+  int residual_count(const Observation& target) const override {
+    return static_cast<int>(target.values().size());
+  }
+  void residuals(const Observation& simulated, const Observation& target,
+                 std::span<double> out) const override {
     const auto& s = static_cast<const ImageObservation&>(simulated);
     const auto& t = static_cast<const ImageObservation&>(target);
     error(s, t);  // the size check
@@ -266,8 +415,10 @@ class ImageMse final : public MetricFor<ImageObservation> {
     for (size_t i = 0; i < t.size(); ++i) sensitivity[i] = scale * (s[i] - t[i]);
   }
   static TypeDoc doc() {
-    return {"Mean squared difference of two images, pixel by pixel; least-squares residuals available.", {},
-            R"({"type": "image_mse"})"};
+    return {
+        "Mean squared difference of two images, pixel by pixel; least-squares residuals available.",
+        {},
+        R"({"type": "image_mse"})"};
   }
 };
 

@@ -4,13 +4,19 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cmath>
+#include <filesystem>
 #include <numeric>
+#include <random>
 #include <vector>
 
 #include "caustics/caustic_parts.h"
 #include "caustics/caustic_tracer.h"
 #include "caustics/gaussian_kernels.h"
+#include "geometry/mesh_check.h"
+#include "geometry/mesh_io.h"
 #include "simulator_fixture.h"
 #include "tuning/observation.h"
 
@@ -21,16 +27,18 @@ class FacetBeamTest : public SimulatorTest {
  protected:
   NodePtr facet(double offset, double slope_a, double slope_b, double size) const {
     return node(R"({"type": "plane", "offset_mm": )" + std::to_string(offset) + R"(, "slope_a": )" +
-                std::to_string(slope_a) + R"(, "slope_b": )" + std::to_string(slope_b) + R"(, "center": [)" +
-                std::to_string(size / 2) + ", " + std::to_string(size / 2) + R"(],
+                std::to_string(slope_a) + R"(, "slope_b": )" + std::to_string(slope_b) +
+                R"(, "center": [)" + std::to_string(size / 2) + ", " + std::to_string(size / 2) +
+                R"(],
         "below": {"type": "layered", "material": "VeroClear"}, "above": {"type": "layered", "material": "void"}})");
   }
-  Eigen::Vector2d landing(const ReducerNode& plane, double size, const Eigen::Vector2d& origin, double distance) const {
+  Eigen::Vector2d landing(const ReducerNode& plane, double size, const Eigen::Vector2d& origin,
+                          double distance) const {
     const auto out = simulate<VectorObservation>(
         "facet_beam", plane,
-        R"({"facet_mm": [)" + std::to_string(size) + ", " + std::to_string(size) + R"(], "facet_origin_mm": [)" +
-            std::to_string(origin.x()) + ", " + std::to_string(origin.y()) + R"(], "distance_mm": )" +
-            std::to_string(distance) + "}");
+        R"({"facet_mm": [)" + std::to_string(size) + ", " + std::to_string(size) +
+            R"(], "facet_origin_mm": [)" + std::to_string(origin.x()) + ", " +
+            std::to_string(origin.y()) + R"(], "distance_mm": )" + std::to_string(distance) + "}");
     return {out.data[0], out.data[1]};
   }
 };
@@ -59,7 +67,8 @@ TEST_F(FacetBeamTest, CentreRayFollowsSnellsLawThroughTopAndBottom) {
 // few rays meet a side wall.
 TEST_F(FacetBeamTest, AgreesWithTheTracedBeamCentroid) {
   const double size = 20, slope_a = 0.06, slope_b = -0.04, offset = 1.2, distance = 150;
-  const Eigen::Vector2d predicted = landing(*facet(offset, slope_a, slope_b, size), size, {-10, -10}, distance);
+  const Eigen::Vector2d predicted =
+      landing(*facet(offset, slope_a, slope_b, size), size, {-10, -10}, distance);
   CausticSetup s;
   s.width_mm = s.depth_mm = size;
   s.receiver_distance_mm = distance;
@@ -67,8 +76,11 @@ TEST_F(FacetBeamTest, AgreesWithTheTracedBeamCentroid) {
   s.receiver_centre_mm = predicted;
   s.image_width = s.image_height = 160;
   s.rays_x = s.rays_y = 400;
-  const auto h = [&](double x, double y) { return offset + slope_a * (x + 10 - size / 2) + slope_b * (y + 10 - size / 2); };
-  const std::vector<std::array<double, 4>> corners{{h(-10, -10), h(10, -10), h(10, 10), h(-10, 10)}};
+  const auto h = [&](double x, double y) {
+    return offset + slope_a * (x + 10 - size / 2) + slope_b * (y + 10 - size / 2);
+  };
+  const std::vector<std::array<double, 4>> corners{
+      {h(-10, -10), h(10, -10), h(10, 10), h(-10, 10)}};
   const Mesh slab = faceted_slab_mesh(s, 1, 1, corners);
   CausticTracer tracer(s, slab.vertices, slab.triangles);
   std::vector<double> image(160 * 160);
@@ -79,10 +91,12 @@ TEST_F(FacetBeamTest, AgreesWithTheTracedBeamCentroid) {
     for (int col = 0; col < 160; ++col) {
       const double e = image[static_cast<size_t>(row * 160 + col)];
       w += e;
-      c += e * Eigen::Vector2d(predicted.x() - 20 + (col + 0.5) * 0.25, predicted.y() + 20 - (row + 0.5) * 0.25);
+      c += e * Eigen::Vector2d(predicted.x() - 20 + (col + 0.5) * 0.25,
+                               predicted.y() + 20 - (row + 0.5) * 0.25);
     }
   c /= w;
-  EXPECT_GT(predicted.norm(), 5.0);  // the beam really moved (from the facet's centre at the origin)
+  EXPECT_GT(predicted.norm(),
+            5.0);  // the beam really moved (from the facet's centre at the origin)
   EXPECT_NEAR(c.x(), predicted.x(), 0.02);
   EXPECT_NEAR(c.y(), predicted.y(), 0.02);
 }
@@ -98,12 +112,14 @@ TEST(FacetedSlab, IsClosedWithTheFacetsVolumeAndConservesFlux) {
   s.receiver_width_mm = s.receiver_depth_mm = 30;
   s.image_width = s.image_height = 60;
   s.rays_x = s.rays_y = 120;
-  const std::vector<std::array<double, 4>> corners{{2, 2.5, 2.2, 1.8}, {3, 3, 3, 3},     {1, 1.5, 1.5, 1},
-                                                   {2.6, 2.1, 1.9, 2}, {1.2, 2.8, 2, 1}, {2, 2, 2, 2}};
+  const std::vector<std::array<double, 4>> corners{{2, 2.5, 2.2, 1.8}, {3, 3, 3, 3},
+                                                   {1, 1.5, 1.5, 1},   {2.6, 2.1, 1.9, 2},
+                                                   {1.2, 2.8, 2, 1},   {2, 2, 2, 2}};
   const Mesh slab = faceted_slab_mesh(s, 3, 2, corners);
   // Each facet: two triangles (00, 10, 11), (00, 11, 01) over a 4 × 4 mm cell.
   double expected = 0;
-  for (const auto& h : corners) expected += 8.0 * ((h[0] + h[1] + h[2]) / 3 + (h[0] + h[2] + h[3]) / 3);
+  for (const auto& h : corners)
+    expected += 8.0 * ((h[0] + h[1] + h[2]) / 3 + (h[0] + h[2] + h[3]) / 3);
   EXPECT_NEAR(slab.signed_volume(), expected, 1e-9);
   CausticTracer tracer(s, slab.vertices, slab.triangles);
   std::vector<double> image(60 * 60);
@@ -111,6 +127,55 @@ TEST(FacetedSlab, IsClosedWithTheFacetsVolumeAndConservesFlux) {
   EXPECT_NEAR(f.emitted, 96.0, 1e-9);
   EXPECT_NEAR(f.received + f.missed + f.returned + f.reflected + f.lost, f.emitted, 1e-9);
   EXPECT_GT(f.received, 0.5 * f.emitted);
+}
+
+// The slab as a printer gets it: written to STL and read back, welded by
+// position. Every edge must be shared — no T-junctions where walls of
+// different heights meet at a corner, or where two neighbours' tops cross.
+// (Where the two higher facets at a corner are diagonal to each other, the
+// solid itself pinches to a line there: that edge is used four times, as
+// two solids touching along an edge would be; admesh pairs them up.)
+TEST(FacetedSlab, WrittenToStlEveryEdgeIsSharedAndTheVolumeIsKept) {
+  CausticSetup s;
+  s.width_mm = 30;
+  s.depth_mm = 25;
+  const int nx = 6, ny = 5;
+  std::vector<std::array<double, 4>> corners;
+  std::mt19937 engine(2014);
+  const auto next = [&](unsigned n) { return static_cast<double>(engine() % n); };
+  for (int k = 0; k < nx * ny; ++k) {
+    // A plane per facet: offset 1.5-3.5 mm, slopes up to ±0.2 over 5 mm.
+    const double offset = 1.5 + 0.01 * next(200), sa = 0.002 * next(200) - 0.2,
+                 sb = 0.002 * next(200) - 0.2;
+    corners.push_back({offset, offset + sa, offset + sa + sb, offset + sb});
+  }
+  const Mesh slab = faceted_slab_mesh(s, nx, ny, corners);
+  double expected = 0;
+  for (const auto& h : corners)
+    expected += 12.5 * ((h[0] + h[1] + h[2]) / 3 + (h[0] + h[2] + h[3]) / 3);
+  EXPECT_NEAR(slab.signed_volume(), expected, 1e-9);
+
+  // Corners where the two higher facets are diagonal: the solid pinches there.
+  int pinched = 0;
+  for (int j = 1; j < ny; ++j)
+    for (int i = 1; i < nx; ++i) {
+      const double sw = corners[static_cast<size_t>(i - 1 + nx * (j - 1))][2],
+                   se = corners[static_cast<size_t>(i + nx * (j - 1))][3],
+                   nw = corners[static_cast<size_t>(i - 1 + nx * j)][1],
+                   ne = corners[static_cast<size_t>(i + nx * j)][0];
+      if (std::min(sw, ne) > std::max(se, nw) || std::min(se, nw) > std::max(sw, ne)) ++pinched;
+    }
+  const std::filesystem::path file = std::filesystem::temp_directory_path() /
+                                     ("spec2fab_facets_" + std::to_string(getpid()) + ".stl");
+  save_mesh(slab, file);
+  const Mesh read = load_mesh(file);
+  std::filesystem::remove(file);
+  const MeshDefects defects = find_mesh_defects(read);
+  EXPECT_EQ(defects.boundary_edges, 0);
+  EXPECT_EQ(defects.inconsistent_edges, 0);
+  EXPECT_EQ(defects.degenerate_triangles, 0);
+  EXPECT_LE(defects.non_manifold_edges, 2 * pinched);
+  EXPECT_GT(std::abs(read.signed_volume()), 0.999 * expected);
 }
 
 double mass(const std::vector<double>& image, const ReceiverRaster& r) {
@@ -149,8 +214,10 @@ TEST(GaussianKernels, KernelsFollowTheLightInProportionToItsFlux) {
   std::vector<double> image(80 * 80, 0.0);
   for (int row = 20; row < 60; ++row)
     for (int col = 0; col < 80; ++col)
-      if (col >= 8 && col < 28) image[static_cast<size_t>(row * 80 + col)] = 3;
-      else if (col >= 52 && col < 72) image[static_cast<size_t>(row * 80 + col)] = 1;
+      if (col >= 8 && col < 28)
+        image[static_cast<size_t>(row * 80 + col)] = 3;
+      else if (col >= 52 && col < 72)
+        image[static_cast<size_t>(row * 80 + col)] = 1;
   const auto kernels = fit_equal_mass_kernels(image, r, 4, 4, 10);
   int left = 0;
   for (const GaussianKernel& k : kernels) {
