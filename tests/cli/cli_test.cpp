@@ -561,7 +561,8 @@ TEST_F(Cli, SimulateRunsTheCausticSimulator) {
 // A coarse printer with clear material only, for the caustic translators.
 static void write_clear_printer(const fs::path& file) {
   std::ofstream(file) << R"({"name": "coarse-clear", "technology": "polyjet", "resolution_dpi": [63.5, 63.5],
-      "layer_mm": 0.4, "build_volume_mm": [200, 200, 200], "model_materials": ["VeroClear"], "source": "test"})";
+      "layer_mm": 0.4, "build_volume_mm": [200, 200, 200], "model_materials": ["VeroClear", "Agilus30Clear"],
+      "source": "test"})";
 }
 
 // A PNG's width and height, from its IHDR chunk (bytes 16–23, big-endian).
@@ -585,6 +586,7 @@ TEST_F(Cli, SmoothCausticsTunesTheSurfaceAndReportsImageErrors) {
       R"({"name": "lens", "translator": "smooth_caustics",
           "geometry": {"mesh": ")" + (kDatasets / "meshes/board_60x60x8.stl").string() + R"(", "uv": "planar"},
           "goal": {"image": ")" + (kDatasets / "images/caustic_ring_120.png").string() + R"(",
+                   "material": "Agilus30Clear",
                    "control": [6, 6], "image_size": [48, 48], "rays": [96, 96], "distance_mm": 60},
           "optimizer": {"type": "nlopt", "algorithm": "LD_LBFGS", "max_evaluations": 15},
           "compare_optimizers": [{"type": "spsa", "iterations": 5, "c": 0.01, "seed": 3}],
@@ -604,6 +606,8 @@ TEST_F(Cli, SmoothCausticsTunesTheSurfaceAndReportsImageErrors) {
   // and the picture looks more like the goal.
   EXPECT_LT(caustics["rmse"].get<double>(), 0.95 * caustics["initial_rmse"].get<double>());
   EXPECT_GT(caustics["ssim"].get<double>(), caustics["initial_ssim"].get<double>());
+  // No refractive_index given: the material's, from the library (Agilus30Clear: 1.48).
+  EXPECT_EQ(caustics["refractive_index"].get<double>(), 1.48);
   EXPECT_EQ(result["tuning"]["tuner_runs"][0]["optimizer"], "nlopt");
   // SPSA ran first from the same start, for the comparison, and ended
   // higher than L-BFGS on the tracer's derivative.

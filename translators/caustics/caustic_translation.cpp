@@ -1,7 +1,5 @@
 #include "caustic_translation.h"
 
-#include <numeric>
-
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -25,7 +23,8 @@ namespace spec2fab {
 
 CausticGoalSettings CausticGoalSettings::read(const Properties& goal, const Experiment& experiment) {
   CausticGoalSettings s = read_options<CausticGoalSettings>(goal);
-  experiment.palette().id(s.material, goal.where("material"));
+  const MaterialId id = experiment.palette().id(s.material, goal.where("material"));
+  if (std::isnan(s.refractive_index)) s.refractive_index = experiment.palette().material(id).refractive_index.value;
   s.slab = experiment.solid().bounds();
   if (std::isnan(s.receiver_mm[0])) s.receiver_mm = {s.slab.size().x(), s.slab.size().y()};
   if (s.rays[0] == 0) s.rays = {2 * s.image[0], 2 * s.image[1]};
@@ -62,6 +61,7 @@ nlohmann::json CausticGoalSettings::image_report(std::span<const double> achieve
   report["initial_ssim"] = at_start["ssim"];
   report["initial_psnr_db"] = at_start["psnr_db"];
   report["image_size"] = image;
+  report["refractive_index"] = refractive_index;
   report["receiver_mm"] = receiver_mm;
   report["distance_mm"] = distance_mm;
   return report;

@@ -29,14 +29,14 @@ struct CausticSlabConfig;
 struct GridField;
 
 /// The goal keys both read: image, material, distance, receiver, image size,
-/// rays, refractive index. The slab is the solid's bounding box; the
+/// rays, refractive index (by default the material's, from the library). The slab is the solid's bounding box; the
 /// receiver is centred below it.
 struct CausticGoalSettings {
   std::filesystem::path image_file;
   std::string material = "VeroClear";
   std::array<int, 2> image{240, 240}, rays{0, 0};
   std::array<double, 2> receiver_mm{kUnset, kUnset};
-  double distance_mm = 200, refractive_index = 1.5;
+  double distance_mm = 200, refractive_index = kUnset;
   Bounds slab;
 
   template <class Declare, class Self>
@@ -47,7 +47,8 @@ struct CausticGoalSettings {
     d.number(o.receiver_mm, "receiver_mm", Range::above(0), "receiver extent [x, y]", Default{"the footprint"});
     d.number(o.image, "image_size", Range::at_least(1), "simulated image [width, height]");
     d.number(o.rays, "rays", Range::at_least(1), "stratified rays [nx, ny]", Default{"2 × image_size"});
-    d.number(o.refractive_index, "refractive_index", Range::closed(1, 4), "of the slab's material");
+    d.number(o.refractive_index, "refractive_index", Range::closed(1, 4), "of the slab's material",
+             Default{"the material's, from the material library"});
   }
   static CausticGoalSettings read(const Properties& goal, const Experiment& experiment);
   /// The rows as goal keys, for a translator's TypeDoc.
