@@ -81,6 +81,7 @@ CausticSlabConfig CausticSlabConfig::read(const Properties& properties) {
   s.rays_y = rays_given ? o.rays[1] : 2 * o.image[1];
   s.jitter = o.jitter;
   s.fresnel = o.fresnel;
+  s.disc_aperture = o.aperture == "disc";
   s.seed = static_cast<unsigned>(o.seed);
   return config;
 }

@@ -50,6 +50,7 @@ struct CausticSlabConfig {
     std::array<int, 2> image{240, 240};
     std::array<int, 2> rays{0, 0};  ///< 0: twice the image
     bool jitter = true, fresnel = false;
+    std::string aperture = "rectangle";
     double seed = 1;
 
     template <class Declare, class Self>
@@ -67,6 +68,8 @@ struct CausticSlabConfig {
       d.number(o.rays, "rays", Range::at_least(1), "stratified samples (nx, ny) over the footprint", Default{"2 × image"});
       d.value(o.jitter, "jitter", "jitter samples within their strata (hashed, deterministic)");
       d.value(o.fresnel, "fresnel", "weight transmissions by unpolarised Fresnel");
+      d.choice(o.aperture, "aperture", {"rectangle", "disc"},
+               "where light comes through: the whole footprint, or the disc (ellipse) inscribed in it");
       d.number(o.seed, "seed", Range::closed(0, 4294967295.0), "jitter pattern (an integer)");
     }
   };

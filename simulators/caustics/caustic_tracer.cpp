@@ -242,14 +242,21 @@ void CausticTracer::trace_block(int begin, int end) {
 
   for (int first = begin; first < end; first += kBlock) {
     const int count = std::min(kBlock, end - first);
+    int in_flight = 0;
     for (int k = 0; k < count; ++k) {
       const int ray = first + k;
       origin[k] = ray_origin(ray);
       direction[k] = s.light_direction;
       results_[static_cast<size_t>(ray)] = RayResult{.power = power, .fate = kLost};
-      active[k] = k;
+      if (s.disc_aperture) {
+        const double u = origin[k].x() / (0.5 * s.width_mm), v = origin[k].y() / (0.5 * s.depth_mm);
+        if (u * u + v * v > 1) {
+          results_[static_cast<size_t>(ray)].power = 0;  // stopped above the slab: carries nothing
+          continue;
+        }
+      }
+      active[in_flight++] = k;
     }
-    int in_flight = count;
     for (int segment = 0; segment < s.max_segments && in_flight > 0; ++segment) {
       for (int n = 0; n < in_flight; ++n) {
         const int k = active[n];

@@ -36,6 +36,9 @@ struct CausticSetup {
   bool jitter = true;              ///< jitter each sample within its stratum
   unsigned seed = 1;
   bool fresnel = false;            ///< weight transmissions by unpolarised Fresnel
+  /// Light only through the disc (an ellipse on a rectangular footprint)
+  /// inscribed in the footprint, as behind a round stop; false: all of it.
+  bool disc_aperture = false;
   int max_segments = 16;           ///< segments traced per ray before it counts as lost
   /// A filter printed on the flat bottom face (a texture): light leaving the
   /// slab there keeps this fraction of its power, per cell of an

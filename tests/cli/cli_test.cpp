@@ -608,6 +608,7 @@ TEST_F(Cli, SmoothCausticsTunesTheSurfaceAndReportsImageErrors) {
   EXPECT_GT(caustics["ssim"].get<double>(), caustics["initial_ssim"].get<double>());
   // No refractive_index given: the material's, from the library (Agilus30Clear: 1.48).
   EXPECT_EQ(caustics["refractive_index"].get<double>(), 1.48);
+  EXPECT_EQ(caustics["aperture"], "rectangle");
   EXPECT_EQ(result["tuning"]["tuner_runs"][0]["optimizer"], "nlopt");
   // SPSA ran first from the same start, for the comparison, and ended
   // higher than L-BFGS on the tracer's derivative.
@@ -629,6 +630,21 @@ TEST_F(Cli, SmoothCausticsTunesTheSurfaceAndReportsImageErrors) {
   const auto tree = nlohmann::json::parse(read(dir_ / "run" / "tree.json"));
   EXPECT_EQ(tree["type"], "bspline");
   EXPECT_EQ(tree["heights_mm"].size(), 36u);
+}
+
+TEST_F(Cli, FacetCausticsRefuseADiscApertureInOneLine) {
+  // Every facet takes an equal share of the light: a round stop would starve the corners.
+  const std::string body =
+      R"({"name": "facets", "translator": "facet_caustics",
+          "geometry": {"mesh": ")" + (kDatasets / "meshes/board_60x60x8.stl").string() + R"(", "uv": "planar"},
+          "goal": {"image": ")" + (kDatasets / "images/caustic_ring_120.png").string() + R"(",
+                   "facets": [12, 12], "aperture": "disc"},
+          "materials": ")" + (kDatasets / "materials/polyjet.json").string() + R"(",
+          "printer": ")" + (dir_ / "clear_printer.json").string() + R"("})";
+  write_clear_printer(dir_ / "clear_printer.json");
+  const Result r = run_spec2fab("validate " + experiment("facets", body).string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_THAT(single_line(r.out), HasSubstr("/goal/aperture: facet caustics give every facet an equal share"));
 }
 
 TEST_F(Cli, FacetCausticsAimsEveryFacetAtItsKernelAndReportsImageErrors) {

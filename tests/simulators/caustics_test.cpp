@@ -123,6 +123,33 @@ TEST(CausticTracer, FlatSlabGivesUniformImageAtAnyIncidence) {
   }
 }
 
+TEST(CausticTracer, DiscApertureLetsThroughTheInscribedDiscOnly) {
+  // A flat slab under vertical light with a round stop: the flux is the
+  // disc's area (up to the strata the rim cuts), and the image is the disc
+  // itself: lit inside, dark outside.
+  CausticSetup s = flat_setup();
+  s.receiver_width_mm = s.receiver_depth_mm = 24;  // the whole 20 mm footprint and a margin
+  s.disc_aperture = true;
+  CausticTracer tracer(s);
+  tracer.set_heights(std::vector<double>(tracer.heights().size(), 3.0));
+  std::vector<double> image(static_cast<size_t>(s.image_width * s.image_height));
+  const CausticFlux flux = tracer.render(image);
+  EXPECT_NEAR(flux.emitted, M_PI * 10 * 10, 0.002 * M_PI * 100);
+  EXPECT_NEAR(accounted(flux), flux.emitted, 1e-9 * flux.emitted);
+  EXPECT_NEAR(total(image, s), flux.received, 1e-9 * flux.received);
+  const double pixel = 24.0 / 48;
+  for (int row = 0; row < s.image_height; ++row)
+    for (int col = 0; col < s.image_width; ++col) {
+      const double r = std::hypot(-12 + (col + 0.5) * pixel, 12 - (row + 0.5) * pixel);
+      const double e = image[static_cast<size_t>(row * s.image_width + col)];
+      if (r < 10 - 2 * pixel) {
+        EXPECT_NEAR(e, 1.0, 0.15) << row << ", " << col;
+      } else if (r > 10 + 2 * pixel) {
+        EXPECT_EQ(e, 0.0) << row << ", " << col;
+      }
+    }
+}
+
 TEST(CausticTracer, FresnelTransmissionAtNormalIncidence) {
   CausticSetup s = flat_setup();
   s.fresnel = true;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <numeric>
 
 #include <fmt/format.h>
@@ -42,7 +43,13 @@ nlohmann::json CausticGoalSettings::simulator(std::array<int, 2> vertices) const
           {"distance_mm", distance_mm},
           {"receiver_mm", receiver_mm},
           {"image", image},
-          {"rays", rays}};
+          {"rays", rays},
+          {"aperture", aperture}};
+}
+
+double CausticGoalSettings::flux_mm2() const {
+  const double area = slab.size().x() * slab.size().y();
+  return aperture == "disc" ? std::numbers::pi / 4 * area : area;
 }
 
 nlohmann::json CausticGoalSettings::image_goal() const {
@@ -50,7 +57,7 @@ nlohmann::json CausticGoalSettings::image_goal() const {
           {"image", image_file.string()},
           {"size", image},
           {"receiver_mm", receiver_mm},
-          {"flux_mm2", slab.size().x() * slab.size().y()}};
+          {"flux_mm2", flux_mm2()}};
 }
 
 nlohmann::json CausticGoalSettings::image_report(std::span<const double> achieved, std::span<const double> initial,
@@ -62,6 +69,7 @@ nlohmann::json CausticGoalSettings::image_report(std::span<const double> achieve
   report["initial_psnr_db"] = at_start["psnr_db"];
   report["image_size"] = image;
   report["refractive_index"] = refractive_index;
+  report["aperture"] = aperture;
   report["receiver_mm"] = receiver_mm;
   report["distance_mm"] = distance_mm;
   return report;

@@ -37,6 +37,7 @@ struct CausticGoalSettings {
   std::array<int, 2> image{240, 240}, rays{0, 0};
   std::array<double, 2> receiver_mm{kUnset, kUnset};
   double distance_mm = 200, refractive_index = kUnset;
+  std::string aperture = "rectangle";
   Bounds slab;
 
   template <class Declare, class Self>
@@ -49,6 +50,9 @@ struct CausticGoalSettings {
     d.number(o.rays, "rays", Range::at_least(1), "stratified rays [nx, ny]", Default{"2 × image_size"});
     d.number(o.refractive_index, "refractive_index", Range::closed(1, 4), "of the slab's material",
              Default{"the material's, from the material library"});
+    d.choice(o.aperture, "aperture", {"rectangle", "disc"},
+             "where the light comes through: the slab's whole footprint, or the disc (ellipse) inscribed in it, "
+             "as behind a round stop");
   }
   static CausticGoalSettings read(const Properties& goal, const Experiment& experiment);
   /// The rows as goal keys, for a translator's TypeDoc.
@@ -56,8 +60,10 @@ struct CausticGoalSettings {
   /// The "caustics" simulator's properties for this slab, its top meshed
   /// with `vertices`.
   nlohmann::json simulator(std::array<int, 2> vertices) const;
+  /// The light the aperture lets through, in units of incident irradiance × mm².
+  double flux_mm2() const;
   /// The "caustic_image" goal: the picture carrying the light the slab's
-  /// footprint lets through.
+  /// aperture lets through.
   nlohmann::json image_goal() const;
   /// result.json "caustics": caustic_image_errors of the achieved image,
   /// initial_rmse / initial_ssim of the start's, and the receiver's setup.

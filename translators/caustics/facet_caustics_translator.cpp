@@ -76,6 +76,10 @@ class FacetCausticsTranslator final : public TuningTranslator {
     const Properties goal = experiment.goal();
     const MaterialPalette& palette = experiment.palette();
     settings_ = CausticGoalSettings::read(goal, experiment);
+    // Each facet takes one equal-flux kernel: that needs equal light on every facet.
+    if (settings_.aperture != "rectangle")
+      goal.fail("aperture", "facet caustics give every facet an equal share of the light, so the light must cover "
+                            "the whole footprint ('rectangle'); a disc aperture suits smooth_caustics");
     const Options options = read_options<Options>(goal);
     const Vec3 size = settings_.slab.size();
     facets_ = options.facets;
