@@ -81,21 +81,8 @@ class RecordingProblem final : public Problem {
 /// What a problem lacks that an optimizer needs, as the report says it.
 std::string missing_capability(const Optimizer& optimizer, const BenchmarkFacts& facts) {
   for (Capability needed : optimizer.requirements()) {
-    if (std::find(facts.capabilities.begin(), facts.capabilities.end(), needed) !=
-        facts.capabilities.end())
-      continue;
-    switch (needed) {
-      case Capability::gradient:
-        return "gradient";
-      case Capability::residuals:
-        return "residuals";
-      case Capability::lower_bound:
-        return "bound";
-      case Capability::discrete_only:
-        return "discrete domain";
-      case Capability::neighbour_moves:
-        return "neighbour moves";
-    }
+    if (std::find(facts.capabilities.begin(), facts.capabilities.end(), needed) == facts.capabilities.end())
+      return capability_name(needed);
   }
   return {};
 }
@@ -221,6 +208,22 @@ std::optional<double> expected_running_time(const std::vector<const BenchRun*>& 
   }
   if (hits == 0) return std::nullopt;
   return spent / hits;
+}
+
+std::string capability_name(Capability capability) {
+  switch (capability) {
+    case Capability::gradient:
+      return "gradient";
+    case Capability::residuals:
+      return "residuals";
+    case Capability::lower_bound:
+      return "bound";
+    case Capability::discrete_only:
+      return "discrete domain";
+    case Capability::neighbour_moves:
+      return "neighbour moves";
+  }
+  return "?";
 }
 
 BenchResult run_bench(const BenchOptions& options, const BenchmarkContext& context) {

@@ -113,6 +113,10 @@ struct BenchResult {
   int threads = 0;
 };
 
+/// A capability as the report names it: "gradient", "residuals", "bound",
+/// "discrete domain", "neighbour moves".
+std::string capability_name(Capability capability);
+
 /// Builds the problems, decides the pairs and runs them.
 BenchResult run_bench(const BenchOptions& options, const BenchmarkContext& context);
 

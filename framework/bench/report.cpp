@@ -305,25 +305,7 @@ std::string ert_text(const std::vector<const BenchRun*>& runs, double target) {
 
 std::string capabilities_text(const BenchmarkFacts& facts) {
   std::vector<std::string> names;
-  for (Capability c : facts.capabilities) {
-    switch (c) {
-      case Capability::gradient:
-        names.push_back("gradient");
-        break;
-      case Capability::residuals:
-        names.push_back("residuals");
-        break;
-      case Capability::lower_bound:
-        names.push_back("bound");
-        break;
-      case Capability::discrete_only:
-        names.push_back("discrete");
-        break;
-      case Capability::neighbour_moves:
-        names.push_back("neighbour moves");
-        break;
-    }
-  }
+  for (Capability c : facts.capabilities) names.push_back(capability_name(c));
   if (std::find(facts.capabilities.begin(), facts.capabilities.end(), Capability::discrete_only) ==
       facts.capabilities.end())
     names.push_back("continuous");
