@@ -5,11 +5,15 @@
 // heights (a different smooth bump field), refits and renders — what every
 // optimizer step costs.
 //
+// The second argument picks the estimator: 0 rays, 1 facets, 2 smooth
+// (CausticSetup::Estimator).
+//
 //   build/benchmarks/bench_caustics --benchmark_min_time=2
 
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 #include <tbb/global_control.h>
@@ -19,8 +23,9 @@
 namespace spec2fab {
 namespace {
 
-CausticSetup smooth_setup() {
+CausticSetup smooth_setup(int64_t estimator = 0) {
   CausticSetup s;
+  s.estimator = static_cast<CausticSetup::Estimator>(estimator);
   s.width_mm = s.depth_mm = 50;
   s.vertices_x = s.vertices_y = 181;
   s.receiver_distance_mm = 200;
@@ -44,7 +49,7 @@ void bump_field(const CausticTracer& tracer, double phase, std::vector<double>& 
 void BM_CausticEvaluation(benchmark::State& state) {
   tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
                               static_cast<size_t>(state.range(0)));
-  CausticTracer tracer(smooth_setup());
+  CausticTracer tracer(smooth_setup(state.range(1)));
   std::vector<double> heights(tracer.heights().size());
   std::vector<double> image(240 * 240);
   int step = 0;
@@ -57,7 +62,7 @@ void BM_CausticEvaluation(benchmark::State& state) {
   state.counters["evaluations/s"] = benchmark::Counter(static_cast<double>(state.iterations()),
                                                        benchmark::Counter::kIsRate);
 }
-BENCHMARK(BM_CausticEvaluation)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_CausticEvaluation)->ArgsProduct({{1, 2}, {0, 1, 2}})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // An evaluation with its derivative, as a gradient-based optimizer pays for
 // it: render, then carry ∂E/∂pixel of an image MSE (against a uniform goal)
@@ -65,7 +70,7 @@ BENCHMARK(BM_CausticEvaluation)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->
 void BM_CausticEvaluationWithGradient(benchmark::State& state) {
   tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
                               static_cast<size_t>(state.range(0)));
-  CausticTracer tracer(smooth_setup());
+  CausticTracer tracer(smooth_setup(state.range(1)));
   std::vector<double> heights(tracer.heights().size()), d_heights(heights.size());
   std::vector<double> image(240 * 240), d_image(image.size());
   int step = 0;
@@ -80,7 +85,7 @@ void BM_CausticEvaluationWithGradient(benchmark::State& state) {
   state.counters["evaluations/s"] = benchmark::Counter(static_cast<double>(state.iterations()),
                                                        benchmark::Counter::kIsRate);
 }
-BENCHMARK(BM_CausticEvaluationWithGradient)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_CausticEvaluationWithGradient)->ArgsProduct({{1, 2}, {0, 1, 2}})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // The refit alone (heights moved, normals recomputed, BVH refitted): the part
 // of an evaluation that is not tracing.

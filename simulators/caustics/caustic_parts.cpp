@@ -82,6 +82,9 @@ CausticSlabConfig CausticSlabConfig::read(const Properties& properties) {
   s.jitter = o.jitter;
   s.fresnel = o.fresnel;
   s.disc_aperture = o.aperture == "disc";
+  s.estimator = o.estimator == "facets"   ? CausticSetup::Estimator::facets
+                : o.estimator == "smooth" ? CausticSetup::Estimator::smooth
+                                          : CausticSetup::Estimator::rays;
   s.seed = static_cast<unsigned>(o.seed);
   return config;
 }

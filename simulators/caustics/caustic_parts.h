@@ -51,6 +51,7 @@ struct CausticSlabConfig {
     std::array<int, 2> rays{0, 0};  ///< 0: twice the image
     bool jitter = true, fresnel = false;
     std::string aperture = "rectangle";
+    std::string estimator = "rays";
     double seed = 1;
 
     template <class Declare, class Self>
@@ -70,6 +71,10 @@ struct CausticSlabConfig {
       d.value(o.fresnel, "fresnel", "weight transmissions by unpolarised Fresnel");
       d.choice(o.aperture, "aperture", {"rectangle", "disc"},
                "where light comes through: the whole footprint, or the disc (ellipse) inscribed in it");
+      d.choice(o.estimator, "estimator", {"rays", "facets", "smooth"},
+               "rays: stratified rays traced with Embree and splatted (walls, total internal reflection, an exit "
+               "filter); facets: each flat top triangle's beam spread exactly over the area it lights (no noise); "
+               "smooth: the caustic of the smooth surface through the vertices (vertex normals; no noise)");
       d.number(o.seed, "seed", Range::closed(0, 4294967295.0), "jitter pattern (an integer)");
     }
   };

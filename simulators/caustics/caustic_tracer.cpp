@@ -13,33 +13,12 @@
 #include "core/build_options.h"
 #include "core/error.h"
 
-// Forward-mode derivatives of a landing point in a triangle's three heights:
-// Ceres' Jet where the Ceres module is built (what the shipped results were
-// made with), Eigen's AutoDiffScalar where it is not. The same formulas; the
-// last bits may differ.
-#if SPEC2FAB_WITH_CERES
-#include <ceres/jet.h>
-namespace spec2fab {
-namespace {
-using HeightJet = ceres::Jet<double, 3>;
-HeightJet height_variable(double value, int k) { return HeightJet(value, k); }
-Eigen::Vector3d height_derivatives(const HeightJet& x) { return x.v; }
-}  // namespace
-}  // namespace spec2fab
-#else
-#include <unsupported/Eigen/AutoDiff>
-namespace spec2fab {
-namespace {
-using HeightJet = Eigen::AutoDiffScalar<Eigen::Vector3d>;
-HeightJet height_variable(double value, int k) { return HeightJet(value, 3, k); }
-Eigen::Vector3d height_derivatives(const HeightJet& x) { return x.derivatives(); }
-}  // namespace
-}  // namespace spec2fab
-#endif
+#include "caustics/height_jet.h"
 
 namespace spec2fab {
 namespace {
 
+using namespace caustic_detail;
 using Vec3 = Eigen::Vector3d;
 
 enum Fate : int { kReceived, kReturned, kLost };
@@ -86,6 +65,8 @@ void CausticSetup::validate() const {
       fail("the exit transmittance needs one value per cell of its grid");
     for (double t : exit_transmittance)
       if (!(t >= 0 && t <= 1)) fail("exit transmittances must lie in [0, 1]");
+    if (estimator != Estimator::rays)
+      fail("only the ray estimator models a filter on the exit face (estimator \"rays\")");
   }
 }
 
@@ -145,8 +126,10 @@ CausticTracer::CausticTracer(const CausticSetup& setup) : setup_(setup) {
 
 CausticTracer::CausticTracer(const CausticSetup& setup, std::vector<Eigen::Vector3d> vertices,
                              std::vector<Eigen::Vector3i> triangles)
-    : setup_(setup), vertices_(std::move(vertices)), triangles_(std::move(triangles)) {
+    : setup_(setup), vertices_(std::move(vertices)), triangles_(std::move(triangles)), height_field_(false) {
   setup_.validate();
+  if (setup_.estimator != CausticSetup::Estimator::rays)
+    throw InputError("caustics: a given mesh is traced with rays only (the other estimators need the height field)");
   setup_.light_direction.normalize();
   for (const Eigen::Vector3i& t : triangles_)
     if ((t.array() < 0).any() || (t.array() >= static_cast<int>(vertices_.size())).any())
@@ -380,6 +363,18 @@ bool CausticTracer::for_each_splat_corner(const Eigen::Vector2d& uv, Visit&& vis
 }
 
 CausticFlux CausticTracer::render(std::span<double> irradiance) {
+  return setup_.estimator == CausticSetup::Estimator::rays ? render_rays(irradiance) : render_triangles(irradiance);
+}
+
+void CausticTracer::pull_back(std::span<const double> d_irradiance, std::span<double> d_heights) {
+  switch (setup_.estimator) {
+    case CausticSetup::Estimator::rays: return pull_back_rays(d_irradiance, d_heights);
+    case CausticSetup::Estimator::facets: return pull_back_triangles(d_irradiance, d_heights);
+    case CausticSetup::Estimator::smooth: return pull_back_smooth(d_irradiance, d_heights);
+  }
+}
+
+CausticFlux CausticTracer::render_rays(std::span<double> irradiance) {
   const CausticSetup& s = setup_;
   const size_t pixels = static_cast<size_t>(s.image_width) * static_cast<size_t>(s.image_height);
   if (irradiance.size() != pixels)
@@ -434,7 +429,7 @@ Eigen::Vector2d CausticTracer::pixel_coordinates(const RayResult& ray) const {
           (top - ray.y) * s.image_height / s.receiver_depth_mm - 0.5};
 }
 
-void CausticTracer::pull_back(std::span<const double> d_irradiance, std::span<double> d_heights) {
+void CausticTracer::pull_back_rays(std::span<const double> d_irradiance, std::span<double> d_heights) {
   const CausticSetup& s = setup_;
   if (d_irradiance.size() != static_cast<size_t>(s.image_width) * static_cast<size_t>(s.image_height) ||
       d_heights.size() != heights_.size())

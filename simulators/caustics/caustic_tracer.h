@@ -40,6 +40,20 @@ struct CausticSetup {
   /// inscribed in the footprint, as behind a round stop; false: all of it.
   bool disc_aperture = false;
   int max_segments = 16;           ///< segments traced per ray before it counts as lost
+  /// How render() forms the image (caustic_triangles.cpp for the last two):
+  /// - `rays` traces the stratified rays with Embree and splats them (any
+  ///   surface, walls, total internal reflection, the exit filter);
+  /// - `facets` sends each flat top triangle's beam through the flat bottom
+  ///   as one parallel pencil and spreads its flux over the exact area it
+  ///   lights: no sampling noise, exact for the piecewise-linear top (each
+  ///   facet casts a copy of itself; concentration comes from overlaps);
+  /// - `smooth` refracts at every vertex with the surface's normal there
+  ///   (central differences of the heights) and spreads each triangle's
+  ///   flux over the triangle its corners land on: the caustic of the smooth
+  ///   surface the vertices sample, continuous in the heights, no noise.
+  /// The two leave out side walls, shadowing and an exit filter.
+  enum class Estimator { rays, facets, smooth };
+  Estimator estimator = Estimator::rays;
   /// A filter printed on the flat bottom face (a texture): light leaving the
   /// slab there keeps this fraction of its power, per cell of an
   /// exit_cells[0] × exit_cells[1] grid over the footprint (row by row from
@@ -119,13 +133,14 @@ class CausticTracer {
   void set_heights(std::span<const double> heights_mm);
   std::span<const double> heights() const { return heights_; }
 
-  /// Traces every ray through the current surface into `irradiance`
-  /// (image_width × image_height, row 0 at +y); does not allocate.
+  /// The image the current surface casts, into `irradiance` (image_width ×
+  /// image_height, row 0 at +y), by the setup's estimator.
   CausticFlux render(std::span<double> irradiance);
 
   /// Reverse mode: given ∂E/∂pixel for the image the last render made,
   /// writes ∂E/∂height of every top vertex into `d_heights` (heights()
-  /// order). Exact for that render's rays as traced: a ray's receiver point
+  /// order). With the triangle estimator: exact, every pixel's share of
+  /// every triangle differentiated through the clipping. With rays: exact for that render's rays as traced: a ray's receiver point
   /// moves with the heights of the top triangle it entered (its plane and
   /// normal), bilinear splat weights move with the point. Rays that did more
   /// than enter the top and leave by the flat bottom (side walls, total
@@ -149,6 +164,17 @@ class CausticTracer {
   /// Traces rays [begin, end) together: each segment of all rays still in
   /// flight is one coherent Embree stream query.
   void trace_block(int begin, int end);
+  CausticFlux render_rays(std::span<double> irradiance);
+  void pull_back_rays(std::span<const double> d_irradiance, std::span<double> d_heights);
+  CausticFlux render_triangles(std::span<double> irradiance);
+  void pull_back_triangles(std::span<const double> d_irradiance, std::span<double> d_heights);
+  /// Smooth estimator: where each top vertex's light lands (pixel
+  /// coordinates; NaN when it cannot leave by the bottom).
+  void land_vertices();
+  void pull_back_smooth(std::span<const double> d_irradiance, std::span<double> d_heights);
+  /// The vertex grid neighbours the smooth estimator's normal at `vertex`
+  /// reads: itself, then along x (low, high), then along y (low, high).
+  std::array<int, 5> normal_stencil(int vertex) const;
   void build_scene();
   void update_vertex_buffer();
   /// Receiver point (u, v) in pixels of a received ray (the splat's frame).
@@ -169,6 +195,16 @@ class CausticTracer {
   std::vector<Eigen::Vector3d> normals_;  ///< outward unit normal per triangle
   std::vector<RayResult> results_;
   std::vector<Eigen::Vector3d> ray_gradients_;  ///< ∂E/∂h of each ray's entry triangle's vertices
+  /// The triangle estimator's deposits (pixel, irradiance), one list per
+  /// fixed block of triangles, merged in block order (thread-independent sums).
+  std::vector<std::vector<std::pair<unsigned, double>>> triangle_deposits_;
+  std::vector<CausticFlux> triangle_fluxes_;
+  std::vector<Eigen::Vector3d> triangle_gradients_;
+  std::vector<Eigen::Vector2d> landing_;                    ///< smooth: each top vertex's landing point
+  std::vector<Eigen::Matrix<double, 6, 1>> corner_gradients_;  ///< smooth: ∂E/∂ each triangle's landing points
+  std::vector<Eigen::Vector2d> landing_gradients_;          ///< smooth: ∂E/∂ each vertex's landing point
+  std::vector<Eigen::Matrix<double, 5, 1>> vertex_gradients_;  ///< smooth: ∂E/∂ each vertex's stencil heights
+  bool height_field_ = true;  ///< false when tracing a given mesh
   int top_triangles_ = 0;
   std::unique_ptr<Scene> scene_;
   double top_z_ = 0;
