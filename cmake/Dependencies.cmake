@@ -7,6 +7,8 @@ find_package(CLI11 CONFIG REQUIRED)
 find_package(spdlog REQUIRED)
 find_package(embree 3 REQUIRED)
 find_package(assimp REQUIRED)
+# CGAL (header-only): regular triangulations for the caustics' optimal transport.
+find_package(CGAL 5.5 REQUIRED)
 if(SPEC2FAB_WITH_CERES)
   find_package(Ceres REQUIRED)
 endif()

@@ -1,19 +1,22 @@
-// downscale_image IN OUT WIDTH HEIGHT: area-averaged resampling to a PNG
-// (OpenCV INTER_AREA), for making the small goal images in datasets/images/.
+// downscale_image IN OUT WIDTH HEIGHT [grey]: area-averaged resampling to a
+// PNG (OpenCV INTER_AREA), for making the small goal images in
+// datasets/images/; `grey` writes one channel (OpenCV's luma).
 
 #include <cstdio>
 #include <cstdlib>
+#include <string>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 int main(int argc, char** argv) {
-  if (argc != 5) {
-    std::fprintf(stderr, "usage: downscale_image IN OUT WIDTH HEIGHT\n");
+  const bool grey = argc == 6 && std::string(argv[5]) == "grey";
+  if (argc != 5 && !grey) {
+    std::fprintf(stderr, "usage: downscale_image IN OUT WIDTH HEIGHT [grey]\n");
     return 2;
   }
-  const cv::Mat in = cv::imread(argv[1], cv::IMREAD_COLOR);
+  const cv::Mat in = cv::imread(argv[1], grey ? cv::IMREAD_GRAYSCALE : cv::IMREAD_COLOR);
   if (in.empty()) {
     std::fprintf(stderr, "error: cannot read %s\n", argv[1]);
     return 2;

@@ -8,8 +8,10 @@
 #include <limits>
 #include <numeric>
 #include <optional>
+#include <unordered_map>
 #include <stdexcept>
 
+#include <Eigen/SparseCholesky>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -17,6 +19,7 @@
 #include "core/colour.h"
 #include "core/distance.h"
 #include "core/error.h"
+#include "core/parameter.h"
 #include "core/properties.h"
 #include "tuning/parts.h"
 
@@ -89,13 +92,61 @@ CausticSlabConfig CausticSlabConfig::read(const Properties& properties) {
   return config;
 }
 
+Eigen::SparseMatrix<double, Eigen::RowMajor> slab_height_jacobian(const CausticSetup& setup,
+                                                                  const Eigen::Vector3d& origin_mm,
+                                                                  const HeightSurface& surface,
+                                                                  const SearchSpace& space) {
+  std::unordered_map<const Parameter*, int> column;
+  for (const SearchSpace::Entry& e : space.entries()) column.emplace(e.parameter, static_cast<int>(column.size()));
+  std::vector<Eigen::Triplet<double>> triplets;
+  for_each_slab_vertex(setup, origin_mm, [&](size_t k, double a, double b) {
+    surface.visit_height_derivatives(a, b, [&](const Parameter& p, double weight) {
+      const auto found = column.find(&p);
+      if (found != column.end()) triplets.emplace_back(static_cast<int>(k), found->second, weight);
+    });
+  });
+  Eigen::SparseMatrix<double, Eigen::RowMajor> jacobian(
+      static_cast<Eigen::Index>(setup.vertices_x) * setup.vertices_y, static_cast<Eigen::Index>(space.dimension()));
+  jacobian.setFromTriplets(triplets.begin(), triplets.end());
+  return jacobian;
+}
+
+std::vector<double> fit_slab_surface(const CausticSetup& setup, const Eigen::Vector3d& origin_mm,
+                                     const HeightSurface& surface, const SearchSpace& space,
+                                     std::span<const double> heights_mm, int* clamped) {
+  const Eigen::SparseMatrix<double> jacobian = slab_height_jacobian(setup, origin_mm, surface, space);
+  if (heights_mm.size() != static_cast<size_t>(jacobian.rows()))
+    throw std::invalid_argument("fit_slab_surface: one height per top vertex expected");
+  // Heights are linear in the parameters with no offset (a B-spline's
+  // weights sum to one): h + origin_z = J p. A whisper of Tikhonov keeps
+  // parameters no vertex sees at their current values.
+  const Eigen::VectorXd current = Eigen::Map<const Eigen::VectorXd>(space.values().data(), static_cast<Eigen::Index>(space.dimension()));
+  Eigen::VectorXd target(jacobian.rows());
+  for (Eigen::Index k = 0; k < target.size(); ++k) target[k] = heights_mm[static_cast<size_t>(k)] + origin_mm.z();
+  const double ridge = 1e-9 * jacobian.squaredNorm() / static_cast<double>(std::max<Eigen::Index>(1, jacobian.cols()));
+  Eigen::SparseMatrix<double> normal = jacobian.transpose() * jacobian;
+  for (Eigen::Index k = 0; k < normal.cols(); ++k) normal.coeffRef(k, k) += ridge;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(normal);
+  if (solver.info() != Eigen::Success) throw std::runtime_error("fit_slab_surface: the fit is singular");
+  const Eigen::VectorXd fitted = solver.solve(jacobian.transpose() * target + ridge * current);
+  std::vector<double> values(fitted.begin(), fitted.end());
+  int at_bound = 0;
+  for (size_t k = 0; k < values.size(); ++k) {
+    const Parameter& p = space.parameter(k);
+    if (values[k] < p.lower() || values[k] > p.upper()) ++at_bound;
+    values[k] = p.nearest_admissible(values[k]);
+  }
+  if (clamped) *clamped = at_bound;
+  return values;
+}
+
 Mesh caustic_slab_mesh(const CausticSetup& setup, const HeightSurface& surface,
                        const Eigen::Vector3d& origin_mm) {
   if (surface.height_axis() != 2)
     throw InputError("caustics: the slab's surface must give heights along w");
   CausticTracer tracer(setup);
   std::vector<double> heights(tracer.heights().size());
-  for_each_slab_vertex(tracer, origin_mm, [&](size_t k, double a, double b) {
+  for_each_slab_vertex(setup, origin_mm, [&](size_t k, double a, double b) {
     heights[k] = surface.surface_height(a, b) - origin_mm.z();
   });
   tracer.set_heights(heights);

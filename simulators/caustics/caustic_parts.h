@@ -8,9 +8,11 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
 
 #include "caustics/caustic_tracer.h"
 #include "core/options.h"
+#include "core/search_space.h"
 #include "geometry/mesh.h"
 #include "reducer/height_surface.h"
 
@@ -88,20 +90,35 @@ inline Eigen::Vector3d slab_offset(const CausticSetup& setup, const Eigen::Vecto
   return origin_mm + Eigen::Vector3d(0.5 * setup.width_mm, 0.5 * setup.depth_mm, 0);
 }
 
-/// Calls visit(k, a, b) for every top vertex k of `tracer`'s grid, (a, b)
+/// Calls visit(k, a, b) for every top vertex k of the setup's grid, (a, b)
 /// its position in the subtree's coordinates: where the slab's heights are
 /// read, their derivatives taken and its mesh written.
 template <class Visit>
-void for_each_slab_vertex(const CausticTracer& tracer, const Eigen::Vector3d& origin_mm, Visit&& visit) {
-  const CausticSetup& s = tracer.setup();
+void for_each_slab_vertex(const CausticSetup& s, const Eigen::Vector3d& origin_mm, Visit&& visit) {
   const Eigen::Vector2d offset = slab_offset(s, origin_mm).head<2>();
   size_t k = 0;
   for (int j = 0; j < s.vertices_y; ++j)
     for (int i = 0; i < s.vertices_x; ++i, ++k) {
-      const Eigen::Vector2d ab = tracer.vertex_xy(i, j) + offset;
+      const Eigen::Vector2d ab = slab_vertex_xy(s, i, j) + offset;
       visit(k, ab.x(), ab.y());
     }
 }
+
+/// ∂(top vertex height)/∂(free parameter), vertices × the search space's
+/// entries, for a height surface (axis w) whose heights are linear in its
+/// parameters (Plane, B-spline).
+Eigen::SparseMatrix<double, Eigen::RowMajor> slab_height_jacobian(const CausticSetup& setup,
+                                                                  const Eigen::Vector3d& origin_mm,
+                                                                  const HeightSurface& surface,
+                                                                  const SearchSpace& space);
+
+/// The parameter values (the search space's order) whose surface passes
+/// closest, in least squares, through the given top vertex heights (above
+/// the slab's bottom), snapped to what each parameter admits; `clamped`
+/// counts those that met a bound.
+std::vector<double> fit_slab_surface(const CausticSetup& setup, const Eigen::Vector3d& origin_mm,
+                                     const HeightSurface& surface, const SearchSpace& space,
+                                     std::span<const double> heights_mm, int* clamped = nullptr);
 
 /// The closed slab a height surface (axis w) describes, meshed exactly as
 /// the caustics simulator meshes it (setup's footprint and vertex grid), in

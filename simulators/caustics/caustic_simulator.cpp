@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
-#include <unordered_map>
 
 #include <Eigen/SparseCore>
 
@@ -100,14 +99,13 @@ class CausticSimulator final : public SimulatorFor<ImageObservation> {
   void read_heights(const ReducerNode& subtree) {
     const auto* surface = dynamic_cast<const HeightSurface*>(&subtree);
     const bool direct = surface != nullptr && surface->height_axis() == 2;
-    for_each_slab_vertex(*tracer_, origin_, [&](size_t k, double a, double b) {
+    for_each_slab_vertex(tracer_->setup(), origin_, [&](size_t k, double a, double b) {
       heights_[k] = (direct ? surface->surface_height(a, b) : search_height(subtree, a, b)) - origin_.z();
     });
   }
 
-  // ∂(vertex height)/∂(free parameter), vertices × parameters; the heights
-  // are linear in the surface's parameters, so it is built once per subtree
-  // and search space.
+  // ∂(vertex height)/∂(free parameter): the heights are linear in the
+  // surface's parameters, so it is built once per subtree and search space.
   const Eigen::SparseMatrix<double, Eigen::RowMajor>& height_jacobian(const ReducerNode& subtree,
                                                                       const SearchSpace& space) {
     const auto& entries = space.entries();
@@ -116,21 +114,8 @@ class CausticSimulator final : public SimulatorFor<ImageObservation> {
                                    [](const SearchSpace::Entry& e, const Parameter* p) { return e.parameter == p; });
     if (cached) return jacobian_;
     jacobian_parameters_.clear();
-    std::unordered_map<const Parameter*, int> column;
-    for (const SearchSpace::Entry& e : entries) {
-      column.emplace(e.parameter, static_cast<int>(jacobian_parameters_.size()));
-      jacobian_parameters_.push_back(e.parameter);
-    }
-    const auto& surface = dynamic_cast<const HeightSurface&>(subtree);
-    std::vector<Eigen::Triplet<double>> triplets;
-    for_each_slab_vertex(*tracer_, origin_, [&](size_t k, double a, double b) {
-      surface.visit_height_derivatives(a, b, [&](const Parameter& p, double weight) {
-        const auto found = column.find(&p);
-        if (found != column.end()) triplets.emplace_back(static_cast<int>(k), found->second, weight);
-      });
-    });
-    jacobian_.resize(static_cast<Eigen::Index>(heights_.size()), static_cast<Eigen::Index>(entries.size()));
-    jacobian_.setFromTriplets(triplets.begin(), triplets.end());
+    for (const SearchSpace::Entry& e : entries) jacobian_parameters_.push_back(e.parameter);
+    jacobian_ = slab_height_jacobian(tracer_->setup(), origin_, dynamic_cast<const HeightSurface&>(subtree), space);
     jacobian_subtree_ = &subtree;
     return jacobian_;
   }

@@ -167,11 +167,6 @@ void CausticTracer::build_scene() {
 
 CausticTracer::~CausticTracer() = default;
 
-Eigen::Vector2d CausticTracer::vertex_xy(int i, int j) const {
-  return {setup_.width_mm * (static_cast<double>(i) / (setup_.vertices_x - 1) - 0.5),
-          setup_.depth_mm * (static_cast<double>(j) / (setup_.vertices_y - 1) - 0.5)};
-}
-
 void CausticTracer::set_heights(std::span<const double> heights_mm) {
   if (heights_mm.size() != heights_.size())
     throw std::invalid_argument("CausticTracer::set_heights: expected " +

@@ -65,6 +65,13 @@ struct CausticSetup {
   void validate() const;
 };
 
+/// Lateral position of top vertex (i, j) of the setup's grid (i along x),
+/// the footprint centred on the origin.
+inline Eigen::Vector2d slab_vertex_xy(const CausticSetup& s, int i, int j) {
+  return {s.width_mm * (static_cast<double>(i) / (s.vertices_x - 1) - 0.5),
+          s.depth_mm * (static_cast<double>(j) / (s.vertices_y - 1) - 0.5)};
+}
+
 /// Where the emitted light went, in units of incident irradiance × mm².
 struct CausticFlux {
   double emitted = 0;
@@ -123,7 +130,7 @@ class CausticTracer {
 
   const CausticSetup& setup() const { return setup_; }
   /// Lateral position of top vertex (i, j), i along x.
-  Eigen::Vector2d vertex_xy(int i, int j) const;
+  Eigen::Vector2d vertex_xy(int i, int j) const { return slab_vertex_xy(setup_, i, j); }
 
   /// Replaces the exit filter (CausticSetup::exit_transmittance); validated
   /// as the setup is.

@@ -618,8 +618,16 @@ TEST_F(Cli, SmoothCausticsTunesTheSurfaceAndReportsImageErrors) {
   EXPECT_EQ(caustics["optimizers"][0]["final_error"], result["tuning"]["phases"][0]["sum_final_error"]);
   EXPECT_LT(caustics["optimizers"][0]["final_error"].get<double>(),
             caustics["optimizers"][1]["final_error"].get<double>());
-  // The smooth slab STL, traced back, casts the simulated image.
-  EXPECT_LT(caustics["surface_stl"]["traced_relative_rmse_vs_simulated"].get<double>(), 1e-3);
+  // The smooth slab STL holds the tuned surface (meshed finer than the
+  // simulator's mesh) and, traced back with rays, casts about the image
+  // the smooth estimator simulated.
+  EXPECT_LT(caustics["surface_stl"]["largest_height_error_mm"].get<double>(), 1e-4);
+  EXPECT_LT(caustics["surface_stl"]["traced_relative_rmse_vs_simulated"].get<double>(), 0.25);
+  // 6 × 6 control points, 3 mesh vertices per span simulated, 6 printed:
+  // a 31 × 31 top grid, two wall triangles and one bottom fan triangle per
+  // rim edge.
+  EXPECT_EQ(caustics["surface_stl"]["triangles"], 2 * 30 * 30 + 3 * 4 * 30);
+  EXPECT_EQ(caustics["start"]["method"], "optimal transport");
   EXPECT_EQ(fs::file_size(dir_ / "run/print/surface.stl"),
             binary_stl_size(caustics["surface_stl"]["triangles"].get<std::uintmax_t>()));
   // Goal | simulated, 48 px each with an 8 px gap; the 6 x 6 heights at 40 px each.
@@ -744,7 +752,9 @@ TEST_F(Cli, CausticsTextureTunesTheTextureThenTheBottomFaceThroughItsShadow) {
   EXPECT_NEAR(stl["z_range_mm"][1].get<double>(), 8.0, 1e-9);
   EXPECT_GE(stl["z_range_mm"][0].get<double>(), -1e-9);
   EXPECT_LE(stl["z_range_mm"][0].get<double>(), 6.0 + 1e-9);
-  EXPECT_LT(stl["traced_relative_rmse_vs_simulated"].get<double>(), 1e-3);
+  EXPECT_LT(stl["largest_height_error_mm"].get<double>(), 1e-4);
+  // The simulation's 2 rays per pixel pitch are noisy; the check traces 8.
+  EXPECT_LT(stl["traced_relative_rmse_vs_simulated"].get<double>(), 0.6);
   EXPECT_EQ(fs::file_size(dir_ / "window/print/surface.stl"), binary_stl_size(stl["triangles"].get<std::uintmax_t>()));
   // Texture: goal | printed | transmittance, 8 columns at 32 px each.
   EXPECT_EQ(png_size(dir_ / "window/preview/texture.png"), (std::array<int, 2>{3 * 256 + 2 * 8, 256}));

@@ -79,6 +79,11 @@ std::array<int, 2> CausticSurfaceSettings::vertices() const {
   return {vertices_per_span * (control[0] - 1) + 1, vertices_per_span * (control[1] - 1) + 1};
 }
 
+std::array<int, 2> CausticSurfaceSettings::print_vertices() const {
+  const int per_span = print_vertices_per_span > 0 ? print_vertices_per_span : 2 * vertices_per_span;
+  return {per_span * (control[0] - 1) + 1, per_span * (control[1] - 1) + 1};
+}
+
 nlohmann::json CausticSurfaceSettings::node(const std::string& axis, const std::array<double, 3>& heights_mm,
                                             const Bounds& footprint, const std::string& material) const {
   return {{"type", "bspline"},
@@ -90,18 +95,30 @@ nlohmann::json CausticSurfaceSettings::node(const std::string& axis, const std::
           {"above", {{"type", "layered"}, {"material", "void"}}}};
 }
 
-SurfaceStl write_caustic_surface_stl(const CausticSlabConfig& slab, const HeightSurface& surface,
-                                     std::span<const double> simulated, const std::function<void(Mesh&)>& to_print,
+SurfaceStl write_caustic_surface_stl(const CausticSlabConfig& slab, std::array<int, 2> print_vertices,
+                                     const HeightSurface& surface, std::span<const double> simulated,
+                                     const ImageObservation& goal, const std::function<void(Mesh&)>& to_print,
                                      const GridField* exit_filter, RunFolder& folder) {
-  Mesh mesh = caustic_slab_mesh(slab.setup, surface, slab.origin_mm);
+  CausticSetup setup = slab.setup;
+  setup.vertices_x = print_vertices[0];
+  setup.vertices_y = print_vertices[1];
+  setup.estimator = CausticSetup::Estimator::rays;  // the file as it is: facets, walls and all
+  setup.rays_x = std::max(setup.rays_x, 8 * setup.image_width);
+  setup.rays_y = std::max(setup.rays_y, 8 * setup.image_height);
+  Mesh mesh = caustic_slab_mesh(setup, surface, slab.origin_mm);
   if (to_print) to_print(mesh);
   const std::filesystem::path file = folder.path("print/surface.stl");
   write_stl(mesh, file);
   Mesh loaded = load_mesh(file);
   if (to_print) to_print(loaded);  // back to the subtree's frame
   const Eigen::Vector3d offset = slab_offset(slab.setup, slab.origin_mm);
+  // The file holds the surface: every vertex above the bottom lies on it
+  // (to the STL's single precision).
+  double height_error = 0;
+  for (const Vec3& v : loaded.vertices)
+    if (v.z() > slab.origin_mm.z() + 1e-6)
+      height_error = std::max(height_error, std::abs(v.z() - surface.surface_height(v.x(), v.y())));
   for (Vec3& v : loaded.vertices) v -= offset;
-  CausticSetup setup = slab.setup;
   if (exit_filter) {
     setup.exit_cells = exit_filter->cells;
     setup.exit_transmittance = exit_filter->values;
@@ -111,7 +128,9 @@ SurfaceStl write_caustic_surface_stl(const CausticSlabConfig& slab, const Height
   tracer.render(traced);
   return {{{"file", "print/surface.stl"},
            {"triangles", mesh.triangles.size()},
-           {"traced_relative_rmse_vs_simulated", rms_difference(traced, simulated) / root_mean_square(simulated)}},
+           {"largest_height_error_mm", height_error},
+           {"traced_relative_rmse_vs_simulated", rms_difference(traced, simulated) / root_mean_square(simulated)},
+           {"traced", caustic_image_errors(traced, goal)}},
           mesh.bounds()};
 }
 

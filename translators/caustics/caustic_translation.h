@@ -76,11 +76,16 @@ struct CausticGoalSettings {
 struct CausticSurfaceSettings {
   std::array<int, 2> control{60, 60};
   int vertices_per_span = 3;
+  int print_vertices_per_span = 0;  ///< 0: twice vertices_per_span
 
   template <class Declare, class Self>
   static void declare(Declare& d, Self& o) {
     d.number(o.control, "control", Range::at_least(2), "B-spline control points of the shaped face");
     d.number(o.vertices_per_span, "vertices_per_span", Range::closed(1, 16), "mesh vertices per control span");
+    d.number(o.print_vertices_per_span, "print_vertices_per_span", Range::closed(1, 32),
+             "print/surface.stl's vertices per control span: each flat facet casts a copy of itself, so the "
+             "file's facets should be well below a pixel of the image",
+             Default{"2 × vertices_per_span"});
   }
   bool check(std::string* why) const {
     if (static_cast<long long>(control[0]) * control[1] <= 1'000'000) return true;
@@ -91,6 +96,8 @@ struct CausticSurfaceSettings {
   static std::vector<PropertyDoc> docs() { return prefixed(option_docs<CausticSurfaceSettings>(), "goal."); }
   /// Mesh vertices of the simulated surface along each axis.
   std::array<int, 2> vertices() const;
+  /// Mesh vertices of print/surface.stl along each axis.
+  std::array<int, 2> print_vertices() const;
   /// The B-spline node: along `axis` ("z", or "w" under a cut), heights
   /// {value, min, max} in mm, `material` below and void above.
   nlohmann::json node(const std::string& axis, const std::array<double, 3>& heights_mm, const Bounds& footprint,
@@ -98,19 +105,24 @@ struct CausticSurfaceSettings {
 };
 
 /// print/surface.stl: the tuned slab as one smooth closed mesh — the
-/// simulator's own triangles — for printers that take a surface (the
+/// surface meshed on `print_vertices` — for printers that take a surface (the
 /// per-material STLs come from print voxels, whose 27 µm terraces would
 /// scatter the light). `to_print` (an involution, or empty for none) maps
-/// the subtree's frame to the print's. Read back and traced — through
-/// `exit_filter` when given, the texture over the exit face — it must cast
-/// what the simulator cast (`simulated`); the difference is reported.
+/// the subtree's frame to the print's. Read back and traced with rays (8
+/// per pixel pitch along each axis at least) — through `exit_filter` when
+/// given, the texture over the exit face — it must cast what the simulator
+/// cast (`simulated`) up to their meshes and sampling; the difference, the
+/// traced image's errors against `goal` ("traced"), and how far the file's
+/// vertices lie from the surface are reported.
 struct SurfaceStl {
-  nlohmann::json report;  ///< file, triangles, traced_relative_rmse_vs_simulated
+  nlohmann::json report;  ///< file, triangles, largest_height_error_mm, traced_relative_rmse_vs_simulated, traced
   Bounds bounds;          ///< of the mesh written, in the print's coordinates
 };
-SurfaceStl write_caustic_surface_stl(const CausticSlabConfig& slab, const HeightSurface& surface,
-                                     std::span<const double> simulated, const std::function<void(Mesh&)>& to_print,
-                                     const GridField* exit_filter, RunFolder& folder);
+SurfaceStl write_caustic_surface_stl(const CausticSlabConfig& slab, std::array<int, 2> print_vertices,
+                                     const HeightSurface& surface, std::span<const double> simulated,
+                                     const ImageObservation& goal,
+                                     const std::function<void(Mesh&)>& to_print, const GridField* exit_filter,
+                                     RunFolder& folder);
 
 /// "nlopt LD_LBFGS", "ceres numeric", "spsa": an optimizer's type and, for the
 /// adapters, what tells two of its runs apart (algorithm, derivatives).

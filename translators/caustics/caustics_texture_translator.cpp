@@ -233,7 +233,8 @@ class CausticsTextureTranslator final : public TuningTranslator {
       for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
     };
     const SurfaceStl stl = write_caustic_surface_stl(
-        slab_, dynamic_cast<const HeightSurface&>(tree_->node("below")), cast.pixels, mirror, &shadow, context.folder);
+        slab_, surface_.print_vertices(), dynamic_cast<const HeightSurface&>(tree_->node("below")), cast.pixels, target, mirror, &shadow,
+        context.folder);
     context.result["caustics"]["surface_stl"] = stl.report;
     context.result["caustics"]["surface_stl"]["z_range_mm"] = {stl.bounds.lower.z(), stl.bounds.upper.z()};
     context.result["files"]["surface"] = "print/surface.stl";

@@ -17,6 +17,7 @@
 
 #include "caustic_translation.h"
 #include "caustics/caustic_parts.h"
+#include "caustics/caustic_start.h"
 #include "reducer/reducer_tree.h"
 #include "spec/tuning_translator.h"
 #include "tuning/convergence_plot.h"
@@ -29,12 +30,17 @@ class SmoothCausticsTranslator final : public TuningTranslator {
   /// Its own goal keys; the caustic piece declares the rest.
   struct Options {
     double min_height_mm = kUnset, start_height_mm = kUnset;
+    std::string start = "transport", estimator = "smooth";
     template <class Declare, class Self>
     static void declare(Declare& d, Self& o) {
       d.number(o.min_height_mm, "min_height_mm", Range::above(0), "lowest the top may go",
                Default{"1/4 of the solid's height"});
-      d.number(o.start_height_mm, "start_height_mm", Range::above(0), "the flat start",
+      d.number(o.start_height_mm, "start_height_mm", Range::above(0), "the start's mean height",
                Default{"3/4 of the solid's height"});
+      d.choice(o.start, "start", {"transport", "flat"},
+               "where the optimizer starts: the surface optimal transport gives (caustics/caustic_start.h), or flat");
+      d.choice(o.estimator, "estimator", {"smooth", "facets", "rays"},
+               "the caustics simulator's image while tuning (print/surface.stl is traced with rays either way)");
     }
   };
 
@@ -45,6 +51,7 @@ class SmoothCausticsTranslator final : public TuningTranslator {
     surface_ = CausticSurfaceSettings::read(goal);
     settings_ = CausticGoalSettings::read(goal, experiment);
     const Options options = read_options<Options>(goal);
+    transport_start_ = options.start == "transport";
     const double low = std::isnan(options.min_height_mm) ? 0.25 * size.z() : options.min_height_mm;
     require_in(goal, "min_height_mm", low, Range::closed(1e-3, size.z()));
     const double start = std::isnan(options.start_height_mm) ? 0.75 * size.z() : options.start_height_mm;
@@ -53,7 +60,8 @@ class SmoothCausticsTranslator final : public TuningTranslator {
                            settings_.material),
              "smooth caustics tree", goal, experiment);
 
-    const nlohmann::json simulator = settings_.simulator(surface_.vertices());
+    nlohmann::json simulator = settings_.simulator(surface_.vertices());
+    simulator["estimator"] = options.estimator;
     slab_ = CausticSlabConfig::read(Properties::wrap(simulator, experiment.file().string() + " (simulator)"));
     const nlohmann::json optimizer =
         experiment.optimizer_or({{"type", "nlopt"}, {"algorithm", "LD_LBFGS"}, {"max_evaluations", 1000}});
@@ -114,6 +122,7 @@ class SmoothCausticsTranslator final : public TuningTranslator {
   /// The start, and the other optimizers' runs from it.
   void prepare(RunContext& context) override {
     Tuner& tuner = network_.tuner(0);
+    if (transport_start_) start_from_transport(tuner);
     tuner.error();
     initial_ = static_cast<const ImageObservation&>(tuner.simulated()).pixels;
     const std::vector<double> start = tuner.search_space().values();
@@ -128,6 +137,32 @@ class SmoothCausticsTranslator final : public TuningTranslator {
     }
   }
 
+  /// Moves the surface to the optimal-transport start (fitted to the
+  /// B-spline's control points) and keeps its figures for the report.
+  void start_from_transport(Tuner& tuner) {
+    const auto& goal = static_cast<const ImageObservation&>(tuner.goal().target());
+    const double mean_height = tuner.search_space().values().front() - slab_.origin_mm.z();  // the flat start's
+    spdlog::info("start: optimal transport from the aperture to the goal's {} x {} pixels", goal.width, goal.height);
+    const TransportStart start = transport_start(slab_.setup, goal.pixels, mean_height);
+    int clamped = 0;
+    const auto& surface = dynamic_cast<const HeightSurface&>(tree_->root());
+    tuner.set_values(fit_slab_surface(slab_.setup, slab_.origin_mm, surface, tuner.search_space(), start.heights, &clamped));
+    start_report_ = {{"method", "optimal transport"},
+                     {"lit_pixels", start.sites},
+                     {"newton_steps", start.newton_steps},
+                     {"worst_cell_mass_error", start.worst_mass_error},
+                     {"transport_seconds", start.transport_seconds},
+                     {"integration_seconds", start.integration_seconds},
+                     {"relief_mm", start.relief_mm},
+                     {"largest_slope", start.largest_slope},
+                     {"integration_rms_slope_error", start.integration_rms_slope_error},
+                     {"controls_at_bounds", clamped}};
+    spdlog::info("  {} Newton steps, {:.1f} s; relief {:.2f} mm, largest slope {:.3f}{}", start.newton_steps,
+                 start.transport_seconds + start.integration_seconds, start.relief_mm, start.largest_slope,
+                 clamped ? fmt::format("; {} control points held at their bounds (min_height_mm, the solid's top)", clamped)
+                         : std::string());
+  }
+
   void report(const RunRecord& record, RunContext& context) override {
     Tuner& tuner = network_.tuner(0);
     const auto& target = static_cast<const ImageObservation&>(tuner.goal().target());
@@ -135,6 +170,7 @@ class SmoothCausticsTranslator final : public TuningTranslator {
     const auto& achieved = static_cast<const ImageObservation&>(tuner.simulated());
     nlohmann::json report = settings_.image_report(achieved.pixels, initial_, target);
     report["control"] = surface_.control;
+    if (transport_start_) report["start"] = start_report_;
     context.result["caustics"] = report;
     if (!compared_runs_.empty()) report_comparison(record.runs.front().summary, compared_runs_, context);
     write_caustic_panels({target.pixels, achieved.pixels}, target.width, target.height,
@@ -145,8 +181,8 @@ class SmoothCausticsTranslator final : public TuningTranslator {
         {"previews", {"preview/convergence.png", "preview/goal_vs_simulated.png", "preview/height_map.png"}}};
     if (!compared_runs_.empty()) context.result["files"]["previews"].push_back("preview/optimizer_comparison.png");
     context.result["caustics"]["surface_stl"] =
-        write_caustic_surface_stl(slab_, dynamic_cast<const HeightSurface&>(tree_->root()), achieved.pixels, {},
-                                  nullptr, context.folder)
+        write_caustic_surface_stl(slab_, surface_.print_vertices(), dynamic_cast<const HeightSurface&>(tree_->root()), achieved.pixels, target,
+                                  {}, nullptr, context.folder)
             .report;
     context.result["files"]["surface"] = "print/surface.stl";
   }
@@ -186,6 +222,8 @@ class SmoothCausticsTranslator final : public TuningTranslator {
   CausticSlabConfig slab_;
   std::vector<std::pair<std::string, std::unique_ptr<Optimizer>>> compared_;
   std::vector<double> initial_;       ///< the image at the start
+  bool transport_start_ = true;
+  nlohmann::json start_report_;
   std::vector<Summary> compared_runs_;
 };
 

@@ -1,0 +1,200 @@
+#include "caustics/caustic_start.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numbers>
+#include <numeric>
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+
+#include "caustics/optimal_transport.h"
+#include "core/error.h"
+
+namespace spec2fab {
+namespace {
+
+using Vec2 = Eigen::Vector2d;
+using Vec3 = Eigen::Vector3d;
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+/// The slope ∇h that sends light entering the top at (xy, h) to `target`
+/// on the receiver: the direction in the slab that leaves the flat bottom
+/// towards the target (its exit point found by fixed-point iteration), then
+/// the normal that refracts the incident light into it (n ∝ l - η d).
+constexpr double kTransportFloor = 0.02;  ///< least mass of a pixel, in units of the goal's mean
+
+Vec2 slope_towards(const CausticSetup& s, const Vec2& xy, double h, const Vec2& target) {
+  const double eta = s.refractive_index;
+  Vec3 inside(0, 0, -1);
+  for (int round = 0; round < 4; ++round) {
+    const Vec2 exit = xy + h * inside.head<2>() / -inside.z();
+    const Vec3 out = Vec3(target.x() - exit.x(), target.y() - exit.y(), -s.receiver_distance_mm).normalized();
+    const Vec2 tangential = out.head<2>() / eta;
+    inside = Vec3(tangential.x(), tangential.y(), -std::sqrt(std::max(0.0, 1 - tangential.squaredNorm())));
+  }
+  const Vec3 normal = s.light_direction.normalized() - eta * inside;  // points up for η > 1
+  return -normal.head<2>() / normal.z();
+}
+
+/// Pixel centres of a width × height image in [-1, 1]² (row 0 at +y).
+std::vector<Vec2> pixel_sites(int width, int height) {
+  std::vector<Vec2> sites;
+  sites.reserve(static_cast<size_t>(width) * static_cast<size_t>(height));
+  for (int row = 0; row < height; ++row)
+    for (int col = 0; col < width; ++col) sites.emplace_back(2 * (col + 0.5) / width - 1, 1 - 2 * (row + 0.5) / height);
+  return sites;
+}
+
+/// The transport to a width × height image's pixels (`sites` gets their
+/// centres), started from the solution for the image halved — 2 × 2 blocks
+/// summed — while both sides are even and at least 64: each level's Newton
+/// then needs a few steps, where the full image from scratch needs tens.
+SemiDiscreteTransport solve_multiscale(std::span<const Vec2> source, const std::vector<double>& masses, int width,
+                                       int height, std::vector<Vec2>& sites) {
+  sites = pixel_sites(width, height);
+  std::vector<double> guess;
+  if (width % 2 == 0 && height % 2 == 0 && width >= 64 && height >= 64) {
+    const int w = width / 2, h = height / 2;
+    std::vector<double> coarse(static_cast<size_t>(w) * static_cast<size_t>(h), 0.0);
+    for (int row = 0; row < height; ++row)
+      for (int col = 0; col < width; ++col)
+        coarse[static_cast<size_t>(row / 2) * static_cast<size_t>(w) + static_cast<size_t>(col / 2)] +=
+            masses[static_cast<size_t>(row) * static_cast<size_t>(width) + static_cast<size_t>(col)];
+    std::vector<Vec2> coarse_sites;
+    const SemiDiscreteTransport solved = solve_multiscale(source, coarse, w, h, coarse_sites);
+    // transport_weights_guess wants rows from the lowest y: the image's rows run from +y.
+    std::vector<Vec2> flipped_sites;
+    std::vector<double> flipped_weights;
+    for (int row = h - 1; row >= 0; --row)
+      for (int col = 0; col < w; ++col) {
+        flipped_sites.push_back(coarse_sites[static_cast<size_t>(row) * static_cast<size_t>(w) + static_cast<size_t>(col)]);
+        flipped_weights.push_back(solved.weights[static_cast<size_t>(row) * static_cast<size_t>(w) + static_cast<size_t>(col)]);
+      }
+    guess = transport_weights_guess(flipped_sites, flipped_weights, w, h, sites);
+  }
+  return solve_semi_discrete_transport(source, sites, masses, 1e-2, 60, guess);
+}
+
+}  // namespace
+
+TransportStart transport_start(const CausticSetup& s, std::span<const double> goal, double mean_height_mm) {
+  const int width = s.image_width, height = s.image_height;
+  if (goal.size() != static_cast<size_t>(width) * static_cast<size_t>(height))
+    throw std::invalid_argument("transport_start: the goal has the wrong size");
+  TransportStart start;
+  const auto began = Clock::now();
+
+  // The transport in the footprint's and the receiver's half-size units:
+  // the aperture ([-1, 1]² or the unit disc) to the goal's lit pixels.
+  std::vector<Vec2> source;
+  if (s.disc_aperture) {
+    constexpr int kSides = 256;
+    for (int k = 0; k < kSides; ++k) {
+      const double a = 2 * std::numbers::pi * k / kSides;
+      source.emplace_back(std::cos(a), std::sin(a));
+    }
+  } else {
+    source = {Vec2(-1, -1), Vec2(1, -1), Vec2(1, 1), Vec2(-1, 1)};
+  }
+  const double peak = *std::max_element(goal.begin(), goal.end());
+  if (!(peak > 0) || !std::isfinite(peak)) throw InputError("caustics: the goal image has no light to transport");
+  // Every pixel gets at least a trace of light: where black regions get
+  // none, the transport map jumps across them, which a smooth surface can
+  // only follow with streaks of light through the black; the refinement
+  // then darkens them again as far as the surface allows.
+  const double mean = std::accumulate(goal.begin(), goal.end(), 0.0) / static_cast<double>(goal.size());
+  const double floor = kTransportFloor * mean;
+  std::vector<double> masses(goal.size());
+  for (size_t k = 0; k < goal.size(); ++k) {
+    if (!std::isfinite(goal[k]) || goal[k] < 0) throw InputError("caustics: the goal image has a negative or undefined pixel");
+    masses[k] = std::max(goal[k], floor);
+  }
+  std::vector<Vec2> sites;
+  const SemiDiscreteTransport transport = solve_multiscale(source, masses, width, height, sites);
+  start.sites = static_cast<int>(sites.size());
+  start.newton_steps = transport.newton_steps;
+  start.worst_mass_error = transport.worst_mass_error;
+  const int nx = s.vertices_x, ny = s.vertices_y, squares_x = nx - 1, squares_y = ny - 1;
+  const std::vector<Vec2> targets =
+      mean_transport_targets(transport, sites, squares_x, squares_y, Vec2(-1, -1), Vec2(1, 1));
+  start.transport_seconds = seconds_since(began);
+
+  // Least squares for the heights: each square's two triangles (as the
+  // tracer meshes it) should take its slope; squares the aperture stops
+  // weakly keep flat; h_0 is held.
+  const auto integrated = Clock::now();
+  const double dx = s.width_mm / squares_x, dy = s.depth_mm / squares_y;
+  const auto vertex = [nx](int i, int j) { return j * nx + i; };
+  std::vector<Vec2> slopes(targets.size());
+  std::vector<double> weights(targets.size());
+  start.heights.assign(static_cast<size_t>(nx) * static_cast<size_t>(ny), mean_height_mm);
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver;
+  Eigen::SparseMatrix<double> system;
+  for (int round = 0; round < 3; ++round) {
+    for (int j = 0; j < squares_y; ++j)
+      for (int i = 0; i < squares_x; ++i) {
+        const size_t k = static_cast<size_t>(j) * static_cast<size_t>(squares_x) + static_cast<size_t>(i);
+        const Vec2 centre(-0.5 * s.width_mm + (i + 0.5) * dx, -0.5 * s.depth_mm + (j + 0.5) * dy);
+        if (!targets[k].allFinite()) {
+          slopes[k].setZero();
+          weights[k] = 1e-3;
+          continue;
+        }
+        const Vec2 target = s.receiver_centre_mm + Vec2(0.5 * s.receiver_width_mm * targets[k].x(),
+                                                         0.5 * s.receiver_depth_mm * targets[k].y());
+        const double h = 0.25 * (start.heights[static_cast<size_t>(vertex(i, j))] + start.heights[static_cast<size_t>(vertex(i + 1, j))] +
+                                 start.heights[static_cast<size_t>(vertex(i, j + 1))] + start.heights[static_cast<size_t>(vertex(i + 1, j + 1))]);
+        slopes[k] = slope_towards(s, centre, h, target);
+        weights[k] = 1;
+      }
+    std::vector<Eigen::Triplet<double>> rows;
+    Eigen::VectorXd rhs(4 * static_cast<Eigen::Index>(slopes.size()) + 1);
+    int row = 0;
+    const auto equation = [&](int a, int b, double step, double slope, double weight) {
+      rows.emplace_back(row, b, weight / step);
+      rows.emplace_back(row, a, -weight / step);
+      rhs[row++] = weight * slope;
+    };
+    for (int j = 0; j < squares_y; ++j)
+      for (int i = 0; i < squares_x; ++i) {
+        const size_t k = static_cast<size_t>(j) * static_cast<size_t>(squares_x) + static_cast<size_t>(i);
+        const double w = weights[k];
+        // Triangle (i, j), (i+1, j), (i+1, j+1) and triangle (i, j), (i+1, j+1), (i, j+1).
+        equation(vertex(i, j), vertex(i + 1, j), dx, slopes[k].x(), w);
+        equation(vertex(i + 1, j), vertex(i + 1, j + 1), dy, slopes[k].y(), w);
+        equation(vertex(i, j + 1), vertex(i + 1, j + 1), dx, slopes[k].x(), w);
+        equation(vertex(i, j), vertex(i, j + 1), dy, slopes[k].y(), w);
+      }
+    rows.emplace_back(row, 0, 1.0);
+    rhs[row++] = 0;
+    Eigen::SparseMatrix<double> a(row, static_cast<Eigen::Index>(start.heights.size()));
+    a.setFromTriplets(rows.begin(), rows.end());
+    system = a.transpose() * a;
+    if (round == 0) solver.analyzePattern(system);
+    solver.factorize(system);
+    if (solver.info() != Eigen::Success) throw std::runtime_error("transport_start: the integration is singular");
+    Eigen::VectorXd h = solver.solve(a.transpose() * rhs);
+    h.array() += mean_height_mm - h.mean();
+    std::copy(h.begin(), h.end(), start.heights.begin());
+    if (round == 2) start.integration_rms_slope_error = std::sqrt((a * h - rhs).squaredNorm() / (rhs.size() - 1));
+  }
+  start.integration_seconds = seconds_since(integrated);
+  const auto [low, high] = std::minmax_element(start.heights.begin(), start.heights.end());
+  start.relief_mm = *high - *low;
+  for (int j = 0; j < squares_y; ++j)
+    for (int i = 0; i < squares_x; ++i) {
+      const auto h = [&](int a, int b) { return start.heights[static_cast<size_t>(vertex(a, b))]; };
+      const Vec2 slope(0.5 * (h(i + 1, j) - h(i, j) + h(i + 1, j + 1) - h(i, j + 1)) / dx,
+                       0.5 * (h(i, j + 1) - h(i, j) + h(i + 1, j + 1) - h(i + 1, j)) / dy);
+      start.largest_slope = std::max(start.largest_slope, slope.norm());
+    }
+  return start;
+}
+
+}  // namespace spec2fab

@@ -1,0 +1,33 @@
+#pragma once
+/// A slab top that casts a goal image, from optimal transport (Schwartzburg
+/// et al. 2014): the uniform light through the aperture is transported to
+/// the goal's irradiance (optimal_transport.h), each square of the top's
+/// vertex grid is tilted by Snell's law so that its light heads for where
+/// the transport sends it (through the top, the slab and the flat bottom),
+/// and the tilts are integrated into heights by least squares.
+
+#include <span>
+#include <vector>
+
+#include "caustics/caustic_tracer.h"
+
+namespace spec2fab {
+
+struct TransportStart {
+  std::vector<double> heights;  ///< the tracer's top vertices (CausticTracer::heights order), mm
+  int sites = 0;                ///< goal pixels the light is transported to
+  int newton_steps = 0;
+  double worst_mass_error = 0;  ///< of the transport, over the mean mass
+  double transport_seconds = 0, integration_seconds = 0;
+  double relief_mm = 0;         ///< highest minus lowest vertex
+  double largest_slope = 0;     ///< |∇h| of the steepest grid square
+  double integration_rms_slope_error = 0;  ///< the tilts the heights could not follow (rms over squares)
+};
+
+/// The start for `setup` (its vertex grid, light, index, aperture, receiver)
+/// and `goal` (the irradiance asked for, image_width × image_height, row 0
+/// at +y; any scale), its heights averaging `mean_height_mm`. Throws
+/// InputError for a goal with no light.
+TransportStart transport_start(const CausticSetup& setup, std::span<const double> goal, double mean_height_mm);
+
+}  // namespace spec2fab

@@ -1,0 +1,395 @@
+// caustic_check: an independent check of a caustic print. It reads the
+// printed slab (a binary or ASCII STL), traces collimated light through it
+// with its own ray tracer — its own STL reader, bounding-volume hierarchy,
+// ray–triangle test, Snell refraction and total internal reflection, and
+// pixel binning; nothing from Spec2Fab's simulators — and compares the image
+// on the receiver with the goal picture, read and scaled here as the
+// experiment format defines it (sRGB decoded, area-resized, carrying all the
+// light through the aperture). Prints one JSON object: SSIM (Wang et al.,
+// L from the goal), PSNR, RMSE, relative RMSE and the light off the receiver.
+//
+//   caustic_check --stl run/print/surface.stl --goal ring.png --distance 200
+//                 [--receiver 60 60] [--image 240 240] [--rays 3840 3840] [--index 1.5]
+//                 [--aperture disc] [--light 0 0 -1] [--write traced.png]
+//
+// The receiver is centred below the slab's footprint (the mesh's x–y
+// bounds), at `distance` below its lowest point; light comes from above.
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <iostream>
+#include <limits>
+#include <numeric>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <tbb/parallel_for.h>
+
+namespace {
+
+struct V3 {
+  double x = 0, y = 0, z = 0;
+  V3 operator+(const V3& o) const { return {x + o.x, y + o.y, z + o.z}; }
+  V3 operator-(const V3& o) const { return {x - o.x, y - o.y, z - o.z}; }
+  V3 operator*(double s) const { return {x * s, y * s, z * s}; }
+  double dot(const V3& o) const { return x * o.x + y * o.y + z * o.z; }
+  V3 cross(const V3& o) const { return {y * o.z - z * o.y, z * o.x - x * o.z, x * o.y - y * o.x}; }
+  double norm() const { return std::sqrt(dot(*this)); }
+  V3 unit() const { return *this * (1 / norm()); }
+  double operator[](int k) const { return k == 0 ? x : k == 1 ? y : z; }
+};
+
+struct Triangle {
+  V3 a, b, c, normal;  ///< normal: (b - a) × (c - a), unit; outward for a consistently wound closed mesh
+};
+
+std::vector<Triangle> read_stl(const std::string& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw std::runtime_error("cannot open " + file);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::vector<Triangle> triangles;
+  const auto add = [&](const V3& a, const V3& b, const V3& c) {
+    const V3 n = (b - a).cross(c - a);
+    if (n.norm() > 0) triangles.push_back({a, b, c, n.unit()});
+  };
+  uint32_t count = 0;
+  if (bytes.size() >= 84) std::memcpy(&count, bytes.data() + 80, 4);
+  if (bytes.size() >= 84 && bytes.size() == 84 + 50ull * count) {
+    for (uint32_t t = 0; t < count; ++t) {
+      float f[12];
+      std::memcpy(f, bytes.data() + 84 + 50ull * t, sizeof f);
+      add({f[3], f[4], f[5]}, {f[6], f[7], f[8]}, {f[9], f[10], f[11]});
+    }
+    return triangles;
+  }
+  std::istringstream text(bytes);
+  std::string word;
+  std::vector<V3> corners;
+  while (text >> word) {
+    if (word != "vertex") continue;
+    V3 v;
+    text >> v.x >> v.y >> v.z;
+    corners.push_back(v);
+    if (corners.size() == 3) {
+      add(corners[0], corners[1], corners[2]);
+      corners.clear();
+    }
+  }
+  if (triangles.empty()) throw std::runtime_error(file + ": no triangles");
+  return triangles;
+}
+
+/// A bounding-volume hierarchy over the triangles, split at the median of
+/// the longest axis.
+class Bvh {
+ public:
+  explicit Bvh(std::vector<Triangle> triangles) : triangles_(std::move(triangles)) {
+    order_.resize(triangles_.size());
+    std::iota(order_.begin(), order_.end(), 0u);
+    nodes_.reserve(2 * triangles_.size() / kLeaf + 2);
+    build(0, static_cast<uint32_t>(order_.size()));
+    std::vector<Triangle> sorted;
+    for (uint32_t t : order_) sorted.push_back(triangles_[t]);
+    triangles_ = std::move(sorted);
+  }
+
+  /// Nearest hit beyond t_min: its distance and triangle, or false.
+  bool intersect(const V3& origin, const V3& direction, double t_min, double& t_hit, uint32_t& hit) const {
+    const V3 inverse{1 / direction.x, 1 / direction.y, 1 / direction.z};
+    t_hit = std::numeric_limits<double>::infinity();
+    uint32_t stack[64];
+    int top = 0;
+    stack[top++] = 0;
+    bool found = false;
+    while (top > 0) {
+      const Node& node = nodes_[stack[--top]];
+      if (!box_hit(node, origin, inverse, t_min, t_hit)) continue;
+      if (node.count > 0) {
+        for (uint32_t k = node.first; k < node.first + node.count; ++k) {
+          double t;
+          if (triangle_hit(triangles_[k], origin, direction, t) && t > t_min && t < t_hit) {
+            t_hit = t;
+            hit = k;
+            found = true;
+          }
+        }
+      } else {
+        stack[top++] = node.first;
+        stack[top++] = node.first + 1;
+      }
+    }
+    return found;
+  }
+  const Triangle& triangle(uint32_t k) const { return triangles_[k]; }
+
+ private:
+  static constexpr uint32_t kLeaf = 4;
+  struct Node {
+    double low[3], high[3];
+    uint32_t first = 0, count = 0;  ///< leaf: triangles [first, first + count); inner: children first, first + 1
+  };
+
+  void build(uint32_t begin, uint32_t end) {
+    nodes_.emplace_back();
+    fill(0, begin, end);
+  }
+
+  /// Fills node `index` with triangles [begin, end) of order_.
+  void fill(uint32_t index, uint32_t begin, uint32_t end) {
+    Node node;
+    for (int k = 0; k < 3; ++k) {
+      node.low[k] = std::numeric_limits<double>::infinity();
+      node.high[k] = -node.low[k];
+    }
+    for (uint32_t i = begin; i < end; ++i)
+      for (const V3* p : {&triangles_[order_[i]].a, &triangles_[order_[i]].b, &triangles_[order_[i]].c})
+        for (int k = 0; k < 3; ++k) {
+          node.low[k] = std::min(node.low[k], (*p)[k]);
+          node.high[k] = std::max(node.high[k], (*p)[k]);
+        }
+    if (end - begin <= kLeaf) {
+      node.first = begin;
+      node.count = end - begin;
+      nodes_[index] = node;
+      return;
+    }
+    int axis = 0;
+    for (int k = 1; k < 3; ++k)
+      if (node.high[k] - node.low[k] > node.high[axis] - node.low[axis]) axis = k;
+    const uint32_t middle = begin + (end - begin) / 2;
+    std::nth_element(order_.begin() + begin, order_.begin() + middle, order_.begin() + end, [&](uint32_t s, uint32_t t) {
+      const Triangle &p = triangles_[s], &q = triangles_[t];
+      return p.a[axis] + p.b[axis] + p.c[axis] < q.a[axis] + q.b[axis] + q.c[axis];
+    });
+    node.first = static_cast<uint32_t>(nodes_.size());  // the two children, side by side
+    node.count = 0;
+    nodes_[index] = node;
+    nodes_.resize(nodes_.size() + 2);
+    fill(node.first, begin, middle);
+    fill(node.first + 1, middle, end);
+  }
+
+  static bool box_hit(const Node& n, const V3& o, const V3& inverse, double t_min, double t_max) {
+    double low = t_min, high = t_max;
+    for (int k = 0; k < 3; ++k) {
+      double t0 = (n.low[k] - o[k]) * inverse[k], t1 = (n.high[k] - o[k]) * inverse[k];
+      if (t0 > t1) std::swap(t0, t1);
+      if (std::isnan(t0) || std::isnan(t1)) continue;  // a ray along the slab of a flat box
+      low = std::max(low, t0);
+      high = std::min(high, t1);
+      if (low > high) return false;
+    }
+    return true;
+  }
+
+  // Möller–Trumbore.
+  static bool triangle_hit(const Triangle& tri, const V3& o, const V3& d, double& t) {
+    const V3 e1 = tri.b - tri.a, e2 = tri.c - tri.a;
+    const V3 p = d.cross(e2);
+    const double det = e1.dot(p);
+    if (std::abs(det) < 1e-14) return false;
+    const double inv = 1 / det;
+    const V3 s = o - tri.a;
+    const double u = s.dot(p) * inv;
+    if (u < 0 || u > 1) return false;
+    const V3 q = s.cross(e1);
+    const double v = d.dot(q) * inv;
+    if (v < 0 || u + v > 1) return false;
+    t = e2.dot(q) * inv;
+    return true;
+  }
+
+  std::vector<Triangle> triangles_;
+  std::vector<uint32_t> order_;
+  std::vector<Node> nodes_;
+};
+
+double srgb_to_linear(double c) { return c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4); }
+
+double ssim(const cv::Mat& x, const cv::Mat& y) {
+  double peak;
+  cv::minMaxLoc(y, nullptr, &peak);
+  const double c1 = std::pow(0.01 * peak, 2), c2 = std::pow(0.03 * peak, 2);
+  const auto blur = [](const cv::Mat& in) {
+    cv::Mat out;
+    cv::GaussianBlur(in, out, cv::Size(11, 11), 1.5, 1.5, cv::BORDER_REFLECT);
+    return out;
+  };
+  const cv::Mat mx = blur(x), my = blur(y);
+  const cv::Mat vx = blur(x.mul(x)) - mx.mul(mx), vy = blur(y.mul(y)) - my.mul(my), cxy = blur(x.mul(y)) - mx.mul(my);
+  cv::Mat map;
+  cv::divide((2 * mx.mul(my) + c1).mul(2 * cxy + c2), (mx.mul(mx) + my.mul(my) + c1).mul(vx + vy + c2), map);
+  return cv::mean(map)[0];
+}
+
+struct Options {
+  std::string stl, goal, write;
+  double distance = 0, index = 1.5;
+  double receiver[2] = {0, 0};
+  int image[2] = {240, 240}, rays[2] = {0, 0};
+  V3 light{0, 0, -1};
+  bool disc = false;
+};
+
+Options parse(int argc, char** argv) {
+  Options o;
+  const auto need = [&](int& i, int n) {
+    if (i + n >= argc) throw std::runtime_error(std::string(argv[i]) + " needs " + std::to_string(n) + " value(s)");
+  };
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--stl") { need(i, 1); o.stl = argv[++i]; }
+    else if (a == "--goal") { need(i, 1); o.goal = argv[++i]; }
+    else if (a == "--write") { need(i, 1); o.write = argv[++i]; }
+    else if (a == "--distance") { need(i, 1); o.distance = std::stod(argv[++i]); }
+    else if (a == "--index") { need(i, 1); o.index = std::stod(argv[++i]); }
+    else if (a == "--receiver") { need(i, 2); o.receiver[0] = std::stod(argv[++i]); o.receiver[1] = std::stod(argv[++i]); }
+    else if (a == "--image") { need(i, 2); o.image[0] = std::stoi(argv[++i]); o.image[1] = std::stoi(argv[++i]); }
+    else if (a == "--rays") { need(i, 2); o.rays[0] = std::stoi(argv[++i]); o.rays[1] = std::stoi(argv[++i]); }
+    else if (a == "--light") { need(i, 3); o.light = {std::stod(argv[i + 1]), std::stod(argv[i + 2]), std::stod(argv[i + 3])}; i += 3; }
+    else if (a == "--aperture") { need(i, 1); o.disc = std::string(argv[++i]) == "disc"; }
+    else if (a == "--help" || a == "-h") {
+      std::cout << "caustic_check --stl FILE --goal PNG --distance MM [--receiver W H] [--image W H] [--rays NX NY]\n"
+                   "              [--index N] [--aperture rectangle|disc] [--light X Y Z] [--write PNG]\n"
+                   "Traces collimated light through the STL slab with its own tracer and prints the image's\n"
+                   "SSIM, PSNR and RMSE against the goal as JSON (see the comment atop tools/caustic_check.cpp).\n";
+      std::exit(0);
+    } else {
+      throw std::runtime_error("unknown option " + a);
+    }
+  }
+  if (o.stl.empty() || o.goal.empty() || !(o.distance > 0)) throw std::runtime_error("--stl, --goal and --distance are required");
+  if (o.rays[0] == 0) { o.rays[0] = 16 * o.image[0]; o.rays[1] = 16 * o.image[1]; }
+  o.light = o.light.unit();
+  return o;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) try {
+  const Options o = parse(argc, argv);
+  const Bvh bvh(read_stl(o.stl));
+  // The footprint and the lowest point, from the mesh.
+  double low[3] = {1e300, 1e300, 1e300}, high[3] = {-1e300, -1e300, -1e300};
+  std::vector<Triangle> all = read_stl(o.stl);
+  for (const Triangle& t : all)
+    for (const V3* p : {&t.a, &t.b, &t.c})
+      for (int k = 0; k < 3; ++k) {
+        low[k] = std::min(low[k], (*p)[k]);
+        high[k] = std::max(high[k], (*p)[k]);
+      }
+  const double width = high[0] - low[0], depth = high[1] - low[1];
+  const double cx = 0.5 * (low[0] + high[0]), cy = 0.5 * (low[1] + high[1]);
+  const double rw = o.receiver[0] > 0 ? o.receiver[0] : width, rd = o.receiver[1] > 0 ? o.receiver[1] : depth;
+  const double receiver_z = low[2] - o.distance;
+  const int nx = o.rays[0], ny = o.rays[1], w = o.image[0], h = o.image[1];
+  // Each ray carries its stratum's share of a beam of unit irradiance.
+  const double power = width / nx * depth / ny * -o.light.z;
+  const double start_z = high[2] + 1;
+
+  struct Landing { int pixel = -1; double power = 0; bool emitted = false; };
+  std::vector<Landing> landings(static_cast<size_t>(nx) * static_cast<size_t>(ny));
+  tbb::parallel_for(tbb::blocked_range<int>(0, nx * ny, 4096), [&](const tbb::blocked_range<int>& range) {
+    for (int r = range.begin(); r != range.end(); ++r) {
+      // Stratified, jittered by a hash of the ray index (reproducible).
+      uint64_t key = static_cast<uint64_t>(r) * 0x9E3779B97F4A7C15ull + 12345;
+      const auto next = [&key] {
+        key ^= key >> 33; key *= 0xff51afd7ed558ccdull; key ^= key >> 33; key *= 0xc4ceb9fe1a85ec53ull; key ^= key >> 33;
+        return static_cast<double>(key >> 11) * 0x1.0p-53;
+      };
+      const double sx = low[0] + (r % nx + next()) * width / nx, sy = low[1] + (r / nx + next()) * depth / ny;
+      Landing& landing = landings[static_cast<size_t>(r)];
+      if (o.disc) {
+        const double u = (sx - cx) / (0.5 * width), v = (sy - cy) / (0.5 * depth);
+        if (u * u + v * v > 1) continue;
+      }
+      landing.emitted = true;
+      V3 origin{sx, sy, start_z};  // the beam's cross-section above the slab is the footprint
+      V3 direction = o.light;
+      double t;
+      uint32_t hit;
+      bool done = false;
+      for (int segment = 0; segment < 32 && !done; ++segment) {
+        if (!bvh.intersect(origin, direction, segment == 0 ? 0 : 1e-7, t, hit)) {
+          if (direction.z < 0) {
+            const double s = (receiver_z - origin.z) / direction.z;
+            const double px = origin.x + s * direction.x, py = origin.y + s * direction.y;
+            const int col = static_cast<int>(std::floor((px - (cx - 0.5 * rw)) / rw * w));
+            const int row = static_cast<int>(std::floor(((cy + 0.5 * rd) - py) / rd * h));
+            if (col >= 0 && row >= 0 && col < w && row < h) landing.pixel = row * w + col;
+            landing.power = power;
+          }
+          done = true;
+          break;
+        }
+        origin = origin + direction * t;
+        const V3 n = bvh.triangle(hit).normal;
+        const double cos_n = direction.dot(n);
+        const bool entering = cos_n < 0;
+        const V3 facing = entering ? n : n * -1;
+        const double eta = entering ? 1 / o.index : o.index;
+        const double cos_i = std::abs(cos_n);
+        const double k = 1 - eta * eta * (1 - cos_i * cos_i);
+        direction = k < 0 ? direction + facing * (2 * cos_i)  // total internal reflection
+                          : direction * eta + facing * (eta * cos_i - std::sqrt(k));
+        direction = direction.unit();
+      }
+    }
+  });
+
+  cv::Mat traced(h, w, CV_64F, cv::Scalar(0));
+  double emitted = 0, received = 0;
+  const double pixel_area = rw / w * rd / h;
+  for (const Landing& l : landings) {
+    if (!l.emitted) continue;
+    emitted += power;
+    if (l.pixel >= 0) {
+      traced.at<double>(l.pixel / w, l.pixel % w) += l.power / pixel_area;
+      received += l.power;
+    }
+  }
+
+  // The goal: grey levels decoded from sRGB, area-resized, scaled so that
+  // it carries all the light the aperture lets through.
+  cv::Mat picture = cv::imread(o.goal, cv::IMREAD_GRAYSCALE | cv::IMREAD_ANYDEPTH);
+  if (picture.empty()) throw std::runtime_error("cannot read " + o.goal);
+  cv::Mat linear(picture.rows, picture.cols, CV_64F);
+  const double full = picture.depth() == CV_16U ? 65535.0 : 255.0;
+  for (int r = 0; r < picture.rows; ++r)
+    for (int c = 0; c < picture.cols; ++c)
+      linear.at<double>(r, c) = srgb_to_linear((picture.depth() == CV_16U ? picture.at<uint16_t>(r, c) : picture.at<uint8_t>(r, c)) / full);
+  cv::Mat goal;
+  cv::resize(linear, goal, cv::Size(w, h), 0, 0, cv::INTER_AREA);
+  goal *= emitted / (cv::sum(goal)[0] * pixel_area);
+
+  const double rmse = std::sqrt(cv::norm(traced - goal, cv::NORM_L2SQR) / (w * h));
+  const double rms_goal = std::sqrt(cv::norm(goal, cv::NORM_L2SQR) / (w * h));
+  double peak;
+  cv::minMaxLoc(goal, nullptr, &peak);
+  if (!o.write.empty()) {
+    cv::Mat grey;
+    cv::Mat scaled = traced / peak;
+    cv::min(scaled, 1.0, scaled);
+    scaled.forEach<double>([](double& v, const int*) { v = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055; });
+    scaled.convertTo(grey, CV_8U, 255);
+    cv::imwrite(o.write, grey);
+  }
+  std::printf("{\"ssim\": %.6f, \"psnr_db\": %.4f, \"rmse\": %.6f, \"relative_rmse\": %.6f, \"light_off_receiver\": %.6f, "
+              "\"rays\": %d, \"triangles\": %zu}\n",
+              ssim(traced, goal), 20 * std::log10(peak / rmse), rmse, rmse / rms_goal, 1 - received / emitted, nx * ny,
+              all.size());
+  return 0;
+} catch (const std::exception& e) {
+  std::fprintf(stderr, "caustic_check: %s\n", e.what());
+  return 2;
+}
