@@ -384,10 +384,11 @@ int main(int argc, char** argv) try {
     scaled.convertTo(grey, CV_8U, 255);
     cv::imwrite(o.write, grey);
   }
-  std::printf("{\"ssim\": %.6f, \"psnr_db\": %.4f, \"rmse\": %.6f, \"relative_rmse\": %.6f, \"light_off_receiver\": %.6f, "
+  const double psnr = 20 * std::log10(peak / rmse);
+  std::printf("{\"ssim\": %.9g, \"psnr_db\": %s, \"rmse\": %.9g, \"relative_rmse\": %.9g, \"light_off_receiver\": %.9g, "
               "\"rays\": %d, \"triangles\": %zu}\n",
-              ssim(traced, goal), 20 * std::log10(peak / rmse), rmse, rmse / rms_goal, 1 - received / emitted, nx * ny,
-              all.size());
+              ssim(traced, goal), std::isfinite(psnr) ? std::to_string(psnr).c_str() : "\"inf\"", rmse, rmse / rms_goal,
+              1 - received / emitted, nx * ny, all.size());
   return 0;
 } catch (const std::exception& e) {
   std::fprintf(stderr, "caustic_check: %s\n", e.what());

@@ -25,14 +25,19 @@ struct Result {
   std::string out;  // stdout and stderr
 };
 
-inline Result run_spec2fab(const std::string& arguments) {
-  const std::string command = std::string(SPEC2FAB_CLI_PATH) + " " + arguments + " 2>&1";
+/// Runs a shell command line, stderr with stdout.
+inline Result run_command(const std::string& line) {
+  const std::string command = line + " 2>&1";
   FILE* pipe = popen(command.c_str(), "r");
   std::string out;
   std::array<char, 4096> buffer;
   while (size_t n = fread(buffer.data(), 1, buffer.size(), pipe)) out.append(buffer.data(), n);
   const int status = pclose(pipe);
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+inline Result run_spec2fab(const std::string& arguments) {
+  return run_command(std::string(SPEC2FAB_CLI_PATH) + " " + arguments);
 }
 
 const fs::path kDatasets = SPEC2FAB_DATASETS_DIR;

@@ -580,6 +580,35 @@ static std::array<int, 2> png_size(const fs::path& file) {
 // A binary STL holds an 84-byte header and count, then 50 bytes a triangle.
 static std::uintmax_t binary_stl_size(std::uintmax_t triangles) { return 84 + 50 * triangles; }
 
+// ADMesh (Debian's admesh) finds every edge of the file shared by a facet
+// on each side, one part, and nothing to fix: closed, consistently
+// oriented, no degenerate facets.
+static void expect_admesh_clean(const fs::path& stl) {
+  const Result r = run_command("admesh " + stl.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto original = [&](const std::string& label) {
+    const size_t at = r.out.find(label);
+    if (at == std::string::npos) return std::string("missing");
+    std::istringstream line(r.out.substr(r.out.find(':', at) + 1));
+    std::string value;
+    line >> value;
+    return value;
+  };
+  EXPECT_EQ(original("Total disconnected facets"), "0") << r.out;
+  EXPECT_EQ(original("Number of parts"), "1") << r.out;
+  for (const char* label : {"Degenerate facets", "Edges fixed", "Facets removed", "Facets added", "Facets reversed",
+                            "Backwards edges", "Normals fixed"})
+    EXPECT_EQ(original(label), "0") << label << "\n" << r.out;
+}
+
+// caustic_check (tools/caustic_check.cpp, its own tracer) on an STL, as JSON.
+static nlohmann::json caustic_check(const fs::path& stl, const fs::path& goal, const std::string& options) {
+  const Result r = run_command(std::string(SPEC2FAB_CAUSTIC_CHECK_PATH) + " --stl " + stl.string() + " --goal " +
+                               goal.string() + " " + options);
+  EXPECT_EQ(r.code, 0) << r.out;
+  return r.code == 0 ? nlohmann::json::parse(r.out) : nlohmann::json::object();
+}
+
 TEST_F(Cli, SmoothCausticsTunesTheSurfaceAndReportsImageErrors) {
   SPEC2FAB_SKIP_UNLESS(SPEC2FAB_WITH_NLOPT);
   const std::string body =
@@ -628,6 +657,16 @@ TEST_F(Cli, SmoothCausticsTunesTheSurfaceAndReportsImageErrors) {
   // rim edge.
   EXPECT_EQ(caustics["surface_stl"]["triangles"], 2 * 30 * 30 + 3 * 4 * 30);
   EXPECT_EQ(caustics["start"]["method"], "optimal transport");
+  expect_admesh_clean(dir_ / "run/print/surface.stl");
+  // An independent tracer (tools/caustic_check) sees the print cast the
+  // goal better than a flat board of the same size does.
+  const std::string setup = "--distance 60 --image 48 48 --index 1.48";
+  const fs::path goal = kDatasets / "images/caustic_ring_120.png";
+  const auto printed = caustic_check(dir_ / "run/print/surface.stl", goal, setup);
+  const auto flat = caustic_check(kDatasets / "meshes/board_60x60x8.stl", goal, setup);
+  EXPECT_GT(printed["ssim"].get<double>(), flat["ssim"].get<double>() + 0.1);
+  EXPECT_LT(printed["relative_rmse"].get<double>(), 0.9 * flat["relative_rmse"].get<double>());
+  EXPECT_EQ(flat["light_off_receiver"].get<double>(), 0.0);
   EXPECT_EQ(fs::file_size(dir_ / "run/print/surface.stl"),
             binary_stl_size(caustics["surface_stl"]["triangles"].get<std::uintmax_t>()));
   // Goal | simulated, 48 px each with an 8 px gap; the 6 x 6 heights at 40 px each.
@@ -638,6 +677,39 @@ TEST_F(Cli, SmoothCausticsTunesTheSurfaceAndReportsImageErrors) {
   const auto tree = nlohmann::json::parse(read(dir_ / "run" / "tree.json"));
   EXPECT_EQ(tree["type"], "bspline");
   EXPECT_EQ(tree["heights_mm"].size(), 36u);
+}
+
+TEST_F(Cli, CausticCheckSeesAFlatBoardPassTheBeamUnchanged) {
+  // The checker's own optics: a flat slab under vertical light lights the
+  // receiver below it uniformly (16 × 16 rays per pixel, the pixels'
+  // strata aligned with the board), all of its light; a disc stop passes
+  // π/4 of it, on the disc. A uniform goal, written here as a PGM.
+  const fs::path uniform = dir_ / "uniform.pgm";
+  {
+    std::ofstream out(uniform, std::ios::binary);
+    out << "P5 4 4 255\n" << std::string(16, static_cast<char>(255));
+  }
+  const fs::path board = kDatasets / "meshes/board_60x60x8.stl";
+  const auto plain = caustic_check(board, uniform, "--distance 100 --image 24 24 --index 1.5");
+  EXPECT_NEAR(plain["ssim"].get<double>(), 1.0, 1e-9);
+  EXPECT_LT(plain["relative_rmse"].get<double>(), 1e-9);
+  EXPECT_EQ(plain["light_off_receiver"].get<double>(), 0.0);
+  EXPECT_EQ(plain["triangles"], 48);
+  // Light sloping 0.2 along x lands 21.25 mm further on (0.2 mm above the
+  // board, 1.055 mm refracted through its 8 mm, 20 mm below): off the
+  // receiver but for the light within 1.055 mm of the far side, which meets
+  // that wall from inside beyond the critical angle and is turned back.
+  const auto oblique = caustic_check(board, uniform, "--distance 100 --image 24 24 --light 0.2 0 -1");
+  const double refracted = 8 * std::tan(std::asin(0.2 / std::sqrt(1.04) / 1.5));
+  EXPECT_NEAR(oblique["light_off_receiver"].get<double>(), (0.2 + refracted + 20 - refracted) / 60, 0.002);
+  const auto disc = caustic_check(board, uniform, "--distance 100 --image 24 24 --aperture disc");
+  EXPECT_EQ(disc["light_off_receiver"].get<double>(), 0.0);
+  EXPECT_LT(disc["ssim"].get<double>(), 0.9);  // the corners stay dark
+  // Bad input: one line, exit 2.
+  const Result missing = run_command(std::string(SPEC2FAB_CAUSTIC_CHECK_PATH) + " --stl " + (dir_ / "none.stl").string() +
+                                     " --goal " + uniform.string() + " --distance 10");
+  EXPECT_EQ(missing.code, 2);
+  EXPECT_THAT(single_line(missing.out), HasSubstr("cannot open"));
 }
 
 TEST_F(Cli, FacetCausticsRefuseADiscApertureInOneLine) {
@@ -694,6 +766,7 @@ TEST_F(Cli, FacetCausticsAimsEveryFacetAtItsKernelAndReportsImageErrors) {
   EXPECT_EQ(png_size(dir_ / "run/preview/goal_vs_simulated.png"), (std::array<int, 2>{3 * 48 + 2 * 8, 48}));
   EXPECT_EQ(png_size(dir_ / "run/preview/height_map.png"), (std::array<int, 2>{240, 240}));
   EXPECT_GT(fs::file_size(dir_ / "run/print/surface.stl"), binary_stl_size(2 * 144));  // facets and walls
+  expect_admesh_clean(dir_ / "run/print/surface.stl");
   const auto tree = nlohmann::json::parse(read(dir_ / "run" / "tree.json"));
   EXPECT_EQ(tree["type"], "column");
 }
