@@ -674,6 +674,7 @@ TEST_F(Cli, SmoothCausticsTunesTheSurfaceAndReportsImageErrors) {
   EXPECT_EQ(png_size(dir_ / "run/preview/height_map.png"), (std::array<int, 2>{240, 240}));
   EXPECT_EQ(png_size(dir_ / "run/preview/convergence.png"), (std::array<int, 2>{800, 500}));
   EXPECT_EQ(png_size(dir_ / "run/preview/optimizer_comparison.png"), (std::array<int, 2>{800, 500}));
+  EXPECT_EQ(png_size(dir_ / "run/preview/surface_stl_traced.png"), (std::array<int, 2>{2 * 48 + 8, 48}));
   const auto tree = nlohmann::json::parse(read(dir_ / "run" / "tree.json"));
   EXPECT_EQ(tree["type"], "bspline");
   EXPECT_EQ(tree["heights_mm"].size(), 36u);

@@ -126,7 +126,9 @@ SurfaceStl write_caustic_surface_stl(const CausticSlabConfig& slab, std::array<i
   CausticTracer tracer(setup, std::move(loaded.vertices), std::move(loaded.triangles));
   std::vector<double> traced(simulated.size());
   tracer.render(traced);
+  write_caustic_panels({goal.pixels, traced}, goal.width, goal.height, folder.path("preview/surface_stl_traced.png"));
   return {{{"file", "print/surface.stl"},
+           {"preview", "preview/surface_stl_traced.png"},
            {"triangles", mesh.triangles.size()},
            {"largest_height_error_mm", height_error},
            {"traced_relative_rmse_vs_simulated", rms_difference(traced, simulated) / root_mean_square(simulated)},

@@ -113,9 +113,10 @@ struct CausticSurfaceSettings {
 /// given, the texture over the exit face — it must cast what the simulator
 /// cast (`simulated`) up to their meshes and sampling; the difference, the
 /// traced image's errors against `goal` ("traced"), and how far the file's
-/// vertices lie from the surface are reported.
+/// vertices lie from the surface are reported; goal | traced goes to
+/// preview/surface_stl_traced.png.
 struct SurfaceStl {
-  nlohmann::json report;  ///< file, triangles, largest_height_error_mm, traced_relative_rmse_vs_simulated, traced
+  nlohmann::json report;  ///< file, preview, triangles, largest_height_error_mm, traced_relative_rmse_vs_simulated, traced
   Bounds bounds;          ///< of the mesh written, in the print's coordinates
 };
 SurfaceStl write_caustic_surface_stl(const CausticSlabConfig& slab, std::array<int, 2> print_vertices,

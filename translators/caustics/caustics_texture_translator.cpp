@@ -238,6 +238,7 @@ class CausticsTextureTranslator final : public TuningTranslator {
     context.result["caustics"]["surface_stl"] = stl.report;
     context.result["caustics"]["surface_stl"]["z_range_mm"] = {stl.bounds.lower.z(), stl.bounds.upper.z()};
     context.result["files"]["surface"] = "print/surface.stl";
+    context.result["files"]["previews"].push_back("preview/surface_stl_traced.png");
   }
 
   CausticGoalSettings settings_;

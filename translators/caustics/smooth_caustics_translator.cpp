@@ -185,6 +185,7 @@ class SmoothCausticsTranslator final : public TuningTranslator {
                                   {}, nullptr, context.folder)
             .report;
     context.result["files"]["surface"] = "print/surface.stl";
+    context.result["files"]["previews"].push_back("preview/surface_stl_traced.png");
   }
 
   /// result.json "optimizers" (errors, evaluations), timing.json the wall
