@@ -168,7 +168,7 @@ Fate triangle_image(const CausticSetup& s, const Eigen::Vector2d xy[3], const T 
       origin[k] = Point<T>((p[k].x() - back * light.x()) / (0.5 * s.width_mm),
                            (p[k].y() - back * light.y()) / (0.5 * s.depth_mm));
     }
-    T passing;
+    T passing(1.0);  // set by clip_to_disc when it clips
     clipped = clip_to_disc(origin, landing, scratch, passing);
     if (clipped && scratch.image.empty()) return Fate::blocked;
     if (clipped) flux *= passing;
@@ -285,7 +285,7 @@ Fate smooth_triangle_image(const CausticSetup& s, const Eigen::Vector2d xy[3], c
     Point<T> origin[3];
     for (int k = 0; k < 3; ++k)
       origin[k] = Point<T>(T(xy[k].x() / (0.5 * s.width_mm)), T(xy[k].y() / (0.5 * s.depth_mm)));
-    T passing;
+    T passing(1.0);  // set by clip_to_disc when it clips
     clipped = clip_to_disc(origin, landing, scratch, passing);
     if (clipped && scratch.image.empty()) {
       entering = 0;

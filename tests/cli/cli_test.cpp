@@ -830,6 +830,7 @@ TEST_F(Cli, CausticsTextureTunesTheTextureThenTheBottomFaceThroughItsShadow) {
   // The simulation's 2 rays per pixel pitch are noisy; the check traces 8.
   EXPECT_LT(stl["traced_relative_rmse_vs_simulated"].get<double>(), 0.6);
   EXPECT_EQ(fs::file_size(dir_ / "window/print/surface.stl"), binary_stl_size(stl["triangles"].get<std::uintmax_t>()));
+  expect_admesh_clean(dir_ / "window/print/surface.stl");
   // Texture: goal | printed | transmittance, 8 columns at 32 px each.
   EXPECT_EQ(png_size(dir_ / "window/preview/texture.png"), (std::array<int, 2>{3 * 256 + 2 * 8, 256}));
   EXPECT_EQ(png_size(dir_ / "window/preview/goal_vs_simulated.png"), (std::array<int, 2>{2 * 48 + 8, 48}));

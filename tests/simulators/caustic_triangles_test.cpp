@@ -14,6 +14,7 @@
 
 #include <tbb/global_control.h>
 
+#include "caustic_support.h"
 #include "caustics/caustic_tracer.h"
 #include "core/error.h"
 
@@ -31,17 +32,6 @@ CausticSetup triangle_setup(Estimator estimator = Estimator::facets) {
   s.image_width = s.image_height = 48;
   s.estimator = estimator;
   return s;
-}
-
-std::vector<double> heights_of(const CausticTracer& tracer, const auto& height) {
-  const CausticSetup& s = tracer.setup();
-  std::vector<double> h;
-  for (int j = 0; j < s.vertices_y; ++j)
-    for (int i = 0; i < s.vertices_x; ++i) {
-      const Eigen::Vector2d p = tracer.vertex_xy(i, j);
-      h.push_back(height(p.x(), p.y()));
-    }
-  return h;
 }
 
 std::vector<double> render(CausticTracer& tracer, CausticFlux* flux = nullptr) {

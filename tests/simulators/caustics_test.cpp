@@ -20,6 +20,7 @@
 
 #include "build_gates.h"
 #include "caustics/caustic_parts.h"
+#include "caustic_support.h"
 #include "caustics/caustic_tracer.h"
 #include "core/distance.h"
 #include "core/error.h"
@@ -30,17 +31,6 @@
 
 namespace spec2fab {
 namespace {
-
-std::vector<double> heights_of(const CausticTracer& tracer, const auto& height) {
-  const CausticSetup& s = tracer.setup();
-  std::vector<double> h;
-  for (int j = 0; j < s.vertices_y; ++j)
-    for (int i = 0; i < s.vertices_x; ++i) {
-      const Eigen::Vector2d p = tracer.vertex_xy(i, j);
-      h.push_back(height(p.x(), p.y()));
-    }
-  return h;
-}
 
 double total(const std::vector<double>& image, const CausticSetup& s) {
   const double pixel_area = s.receiver_width_mm / s.image_width * s.receiver_depth_mm / s.image_height;

@@ -1,12 +1,14 @@
 // The smooth-caustics translator (paper §7.3, Fig. 9 right, after Finckh et
-// al. 2010): a clear slab whose top is a B-spline height surface, tuned so
+// al. 2010): a clear slab whose top is a B-spline height surface, shaped so
 // that collimated light through it casts a goal image on a receiver below.
 // The tree is one B-spline node over the solid's footprint (clear below,
 // void above); one tuner — the caustic simulator, image MSE against the
-// goal picture — tunes every control height: by default with L-BFGS on the
-// tracer's derivative, which beats the paper's SPSA by two orders of
-// magnitude in time (benchmarks/RESULTS.md); SPSA can run alongside for
-// comparison ("compare_optimizers").
+// goal picture — tunes every control height. The surface starts where
+// optimal transport puts it (caustics/caustic_start.h; goal.start "flat"
+// for the paper's flat start) and is refined by L-BFGS on the derivative
+// of the noise-free smooth estimator (goal.estimator); SPSA, as the paper
+// tuned it, can run alongside for comparison ("compare_optimizers").
+// benchmarks/RESULTS.md has what each piece contributes.
 
 #include <algorithm>
 #include <cmath>
