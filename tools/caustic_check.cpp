@@ -278,16 +278,17 @@ Options parse(int argc, char** argv) {
 
 int main(int argc, char** argv) try {
   const Options o = parse(argc, argv);
-  const Bvh bvh(read_stl(o.stl));
+  std::vector<Triangle> all = read_stl(o.stl);
   // The footprint and the lowest point, from the mesh.
   double low[3] = {1e300, 1e300, 1e300}, high[3] = {-1e300, -1e300, -1e300};
-  std::vector<Triangle> all = read_stl(o.stl);
   for (const Triangle& t : all)
     for (const V3* p : {&t.a, &t.b, &t.c})
       for (int k = 0; k < 3; ++k) {
         low[k] = std::min(low[k], (*p)[k]);
         high[k] = std::max(high[k], (*p)[k]);
       }
+  const size_t triangle_count = all.size();
+  const Bvh bvh(std::move(all));
   const double width = high[0] - low[0], depth = high[1] - low[1];
   const double cx = 0.5 * (low[0] + high[0]), cy = 0.5 * (low[1] + high[1]);
   const double rw = o.receiver[0] > 0 ? o.receiver[0] : width, rd = o.receiver[1] > 0 ? o.receiver[1] : depth;
@@ -388,7 +389,7 @@ int main(int argc, char** argv) try {
   std::printf("{\"ssim\": %.9g, \"psnr_db\": %s, \"rmse\": %.9g, \"relative_rmse\": %.9g, \"light_off_receiver\": %.9g, "
               "\"rays\": %d, \"triangles\": %zu}\n",
               ssim(traced, goal), std::isfinite(psnr) ? std::to_string(psnr).c_str() : "\"inf\"", rmse, rmse / rms_goal,
-              1 - received / emitted, nx * ny, all.size());
+              1 - received / emitted, nx * ny, triangle_count);
   return 0;
 } catch (const std::exception& e) {
   std::fprintf(stderr, "caustic_check: %s\n", e.what());

@@ -127,63 +127,65 @@ TransportStart transport_start(const CausticSetup& s, std::span<const double> go
 
   // Least squares for the heights: each square's two triangles (as the
   // tracer meshes it) should take its slope; squares the aperture stops
-  // weakly keep flat; h_0 is held.
+  // weakly keep flat; h_0 is held. The equations stay; their right-hand
+  // sides change with the heights (the slab's lateral shift), three rounds.
   const auto integrated = Clock::now();
   const double dx = s.width_mm / squares_x, dy = s.depth_mm / squares_y;
   const auto vertex = [nx](int i, int j) { return j * nx + i; };
-  std::vector<Vec2> slopes(targets.size());
-  std::vector<double> weights(targets.size());
-  start.heights.assign(static_cast<size_t>(nx) * static_cast<size_t>(ny), mean_height_mm);
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver;
-  Eigen::SparseMatrix<double> system;
-  for (int round = 0; round < 3; ++round) {
-    for (int j = 0; j < squares_y; ++j)
-      for (int i = 0; i < squares_x; ++i) {
-        const size_t k = static_cast<size_t>(j) * static_cast<size_t>(squares_x) + static_cast<size_t>(i);
-        const Vec2 centre(-0.5 * s.width_mm + (i + 0.5) * dx, -0.5 * s.depth_mm + (j + 0.5) * dy);
-        if (!targets[k].allFinite()) {
-          slopes[k].setZero();
-          weights[k] = 1e-3;
-          continue;
-        }
-        const Vec2 target = s.receiver_centre_mm + Vec2(0.5 * s.receiver_width_mm * targets[k].x(),
-                                                         0.5 * s.receiver_depth_mm * targets[k].y());
-        const double h = 0.25 * (start.heights[static_cast<size_t>(vertex(i, j))] + start.heights[static_cast<size_t>(vertex(i + 1, j))] +
-                                 start.heights[static_cast<size_t>(vertex(i, j + 1))] + start.heights[static_cast<size_t>(vertex(i + 1, j + 1))]);
-        slopes[k] = slope_towards(s, centre, h, target);
-        weights[k] = 1;
-      }
-    std::vector<Eigen::Triplet<double>> rows;
-    Eigen::VectorXd rhs(4 * static_cast<Eigen::Index>(slopes.size()) + 1);
+  const auto square = [squares_x](int i, int j) {
+    return static_cast<size_t>(j) * static_cast<size_t>(squares_x) + static_cast<size_t>(i);
+  };
+  const auto weight = [&](size_t k) { return targets[k].allFinite() ? 1.0 : 1e-3; };
+  const Eigen::Index rows = 4 * static_cast<Eigen::Index>(targets.size());
+  std::vector<Eigen::Triplet<double>> entries;
+  entries.reserve(2 * static_cast<size_t>(rows) + 1);
+  {
     int row = 0;
-    const auto equation = [&](int a, int b, double step, double slope, double weight) {
-      rows.emplace_back(row, b, weight / step);
-      rows.emplace_back(row, a, -weight / step);
-      rhs[row++] = weight * slope;
+    const auto difference = [&](int a, int b, double step, double w) {
+      entries.emplace_back(row, b, w / step);
+      entries.emplace_back(row++, a, -w / step);
     };
     for (int j = 0; j < squares_y; ++j)
       for (int i = 0; i < squares_x; ++i) {
-        const size_t k = static_cast<size_t>(j) * static_cast<size_t>(squares_x) + static_cast<size_t>(i);
-        const double w = weights[k];
-        // Triangle (i, j), (i+1, j), (i+1, j+1) and triangle (i, j), (i+1, j+1), (i, j+1).
-        equation(vertex(i, j), vertex(i + 1, j), dx, slopes[k].x(), w);
-        equation(vertex(i + 1, j), vertex(i + 1, j + 1), dy, slopes[k].y(), w);
-        equation(vertex(i, j + 1), vertex(i + 1, j + 1), dx, slopes[k].x(), w);
-        equation(vertex(i, j), vertex(i, j + 1), dy, slopes[k].y(), w);
+        const double w = weight(square(i, j));
+        // Triangle (i, j), (i+1, j), (i+1, j+1): x then y; triangle (i, j), (i+1, j+1), (i, j+1): x then y.
+        difference(vertex(i, j), vertex(i + 1, j), dx, w);
+        difference(vertex(i + 1, j), vertex(i + 1, j + 1), dy, w);
+        difference(vertex(i, j + 1), vertex(i + 1, j + 1), dx, w);
+        difference(vertex(i, j), vertex(i, j + 1), dy, w);
       }
-    rows.emplace_back(row, 0, 1.0);
-    rhs[row++] = 0;
-    Eigen::SparseMatrix<double> a(row, static_cast<Eigen::Index>(start.heights.size()));
-    a.setFromTriplets(rows.begin(), rows.end());
-    system = a.transpose() * a;
-    if (round == 0) solver.analyzePattern(system);
-    solver.factorize(system);
-    if (solver.info() != Eigen::Success) throw std::runtime_error("transport_start: the integration is singular");
-    Eigen::VectorXd h = solver.solve(a.transpose() * rhs);
-    h.array() += mean_height_mm - h.mean();
-    std::copy(h.begin(), h.end(), start.heights.begin());
-    if (round == 2) start.integration_rms_slope_error = std::sqrt((a * h - rhs).squaredNorm() / (rhs.size() - 1));
+    entries.emplace_back(row, 0, 1.0);  // h_0 = 0
   }
+  Eigen::SparseMatrix<double> a(rows + 1, static_cast<Eigen::Index>(nx) * ny);
+  a.setFromTriplets(entries.begin(), entries.end());
+  const Eigen::SparseMatrix<double> at = a.transpose();
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(at * a);
+  if (solver.info() != Eigen::Success) throw std::runtime_error("transport_start: the integration is singular");
+  start.heights.assign(static_cast<size_t>(nx) * static_cast<size_t>(ny), mean_height_mm);
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(rows + 1), h;
+  for (int round = 0; round < 3; ++round) {
+    for (int j = 0; j < squares_y; ++j)
+      for (int i = 0; i < squares_x; ++i) {
+        const size_t k = square(i, j);
+        Vec2 slope = Vec2::Zero();
+        if (targets[k].allFinite()) {
+          const Vec2 centre(-0.5 * s.width_mm + (i + 0.5) * dx, -0.5 * s.depth_mm + (j + 0.5) * dy);
+          const Vec2 target = s.receiver_centre_mm + Vec2(0.5 * s.receiver_width_mm * targets[k].x(),
+                                                           0.5 * s.receiver_depth_mm * targets[k].y());
+          const auto at_vertex = [&](int a_i, int a_j) { return start.heights[static_cast<size_t>(vertex(a_i, a_j))]; };
+          const double here = 0.25 * (at_vertex(i, j) + at_vertex(i + 1, j) + at_vertex(i, j + 1) + at_vertex(i + 1, j + 1));
+          slope = slope_towards(s, centre, here, target);
+        }
+        const double w = weight(k);
+        const Eigen::Index row = 4 * static_cast<Eigen::Index>(k);
+        rhs.segment<4>(row) << w * slope.x(), w * slope.y(), w * slope.x(), w * slope.y();
+      }
+    h = solver.solve(at * rhs);
+    const Eigen::VectorXd shifted = h.array() + (mean_height_mm - h.mean());
+    std::copy(shifted.begin(), shifted.end(), start.heights.begin());
+  }
+  // What the heights could not follow, over the slope equations (not the pin).
+  start.integration_rms_slope_error = std::sqrt((a * h - rhs).head(rows).squaredNorm() / static_cast<double>(rows));
   start.integration_seconds = seconds_since(integrated);
   const auto [low, high] = std::minmax_element(start.heights.begin(), start.heights.end());
   start.relief_mm = *high - *low;

@@ -33,13 +33,6 @@ inline double hash_uniform(unsigned long long key) {
   return static_cast<double>(key >> 11) * 0x1.0p-53;
 }
 
-// Unpolarised Fresnel reflectance for cosines of incidence and transmission.
-inline double fresnel_reflectance(double eta_i, double eta_t, double cos_i, double cos_t) {
-  const double rs = (eta_i * cos_i - eta_t * cos_t) / (eta_i * cos_i + eta_t * cos_t);
-  const double rp = (eta_t * cos_i - eta_i * cos_t) / (eta_t * cos_i + eta_i * cos_t);
-  return 0.5 * (rs * rs + rp * rp);
-}
-
 }  // namespace
 
 void CausticSetup::validate() const {
@@ -126,7 +119,7 @@ CausticTracer::CausticTracer(const CausticSetup& setup) : setup_(setup) {
 
 CausticTracer::CausticTracer(const CausticSetup& setup, std::vector<Eigen::Vector3d> vertices,
                              std::vector<Eigen::Vector3i> triangles)
-    : setup_(setup), vertices_(std::move(vertices)), triangles_(std::move(triangles)), height_field_(false) {
+    : setup_(setup), vertices_(std::move(vertices)), triangles_(std::move(triangles)) {
   setup_.validate();
   if (setup_.estimator != CausticSetup::Estimator::rays)
     throw InputError("caustics: a given mesh is traced with rays only (the other estimators need the height field)");
@@ -451,11 +444,11 @@ void CausticTracer::pull_back_rays(std::span<const double> d_irradiance, std::sp
       for (int k = 0; k < 3; ++k) {
         const Vec3& v = vertices_[static_cast<size_t>(f[k])];
         xy[k] = v.head<2>();
-        h[k] = height_variable(v.z(), k);
+        h[k] = variable<3>(v.z(), k);
       }
       const Eigen::Matrix<HeightJet, 2, 1> point = slab_receiver_point(ray_origin(static_cast<int>(i)), s.light_direction, xy, h,
                                                             s.refractive_index, -s.receiver_distance_mm);
-      ray_gradients_[i] = d_u * du_dx * height_derivatives(point.x()) + d_v * dv_dy * height_derivatives(point.y());
+      ray_gradients_[i] = d_u * du_dx * derivatives<3>(point.x()) + d_v * dv_dy * derivatives<3>(point.y());
     }
   });
   // Summed in ray order: the same gradient for any thread count.

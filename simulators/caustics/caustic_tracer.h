@@ -15,6 +15,7 @@
 /// bit, for any thread count (rays are traced in parallel, splatted in order).
 
 #include <array>
+#include <limits>
 #include <memory>
 #include <span>
 #include <vector>
@@ -83,12 +84,58 @@ struct CausticFlux {
   double lost = 0;         ///< still bouncing after max_segments
 };
 
-/// Where a ray from `origin` along `direction` lands on the receiver plane
-/// z = receiver_z after entering the top triangle with lateral corners `xy`
-/// (counter-clockwise seen from above) and heights `h`, and leaving through
-/// the flat bottom z = 0: the refractions the tracer performs, for any scalar
-/// so that a forward-mode derivative type carries ∂/∂h through them. NaN when the ray cannot
-/// refract (total internal reflection).
+/// Unpolarised Fresnel reflectance for the cosines of incidence and
+/// transmission going from index eta_i to eta_t.
+inline double fresnel_reflectance(double eta_i, double eta_t, double cos_i, double cos_t) {
+  const double rs = (eta_i * cos_i - eta_t * cos_t) / (eta_i * cos_i + eta_t * cos_t);
+  const double rp = (eta_t * cos_i - eta_i * cos_t) / (eta_t * cos_i + eta_i * cos_t);
+  return 0.5 * (rs * rs + rp * rp);
+}
+
+/// Collimated light along `light` (unit) through a top facet of outward
+/// unit normal `normal`, into the slab and out of its flat bottom: the
+/// directions inside and out, and the cosines Fresnel's law needs. The
+/// refractions the tracer performs, for any scalar, so that a forward-mode
+/// derivative type carries derivatives through them.
+template <class T>
+struct SlabPassage {
+  Eigen::Matrix<T, 3, 1> inside, out;
+  T cos_i, cos_t, cos_b, cos_out;  ///< top: incidence, transmission; bottom: incidence, transmission
+};
+
+/// The passage, or false when the light cannot make it (it would leave
+/// the top upwards, or is totally reflected at the bottom).
+template <class T>
+bool pass_through_slab(const Eigen::Vector3d& light, const Eigen::Matrix<T, 3, 1>& normal, double eta,
+                       SlabPassage<T>& pass) {
+  using std::sqrt;
+  pass.cos_i = -(light.x() * normal.x() + light.y() * normal.y() + light.z() * normal.z());
+  const T ratio(1.0 / eta);
+  pass.cos_t = sqrt(T(1.0) - ratio * ratio * (T(1.0) - pass.cos_i * pass.cos_i));
+  pass.inside = ratio * light.cast<T>() + (ratio * pass.cos_i - pass.cos_t) * normal;
+  if (!(pass.inside.z() < T(0.0))) return false;
+  // Out through the bottom, whose normal facing the light is +z.
+  pass.cos_b = -pass.inside.z();
+  const T sin2_out = T(eta * eta) * (T(1.0) - pass.cos_b * pass.cos_b);
+  if (!(sin2_out < T(1.0))) return false;
+  pass.cos_out = sqrt(T(1.0) - sin2_out);
+  pass.out = T(eta) * pass.inside;
+  pass.out.z() += T(eta) * pass.cos_b - pass.cos_out;
+  return true;
+}
+
+/// Where light that entered the top at `p` and passed as `pass` lands on
+/// the receiver plane z = receiver_z.
+template <class T>
+Eigen::Matrix<T, 2, 1> slab_landing(const Eigen::Matrix<T, 3, 1>& p, const SlabPassage<T>& pass, double receiver_z) {
+  const Eigen::Matrix<T, 3, 1> bottom = p - (p.z() / pass.inside.z()) * pass.inside;
+  return (bottom + ((T(receiver_z) - bottom.z()) / pass.out.z()) * pass.out).template head<2>();
+}
+
+/// Where a ray from `origin` along `direction` (unit) lands on the receiver
+/// plane z = receiver_z after entering the top triangle with lateral corners
+/// `xy` (counter-clockwise seen from above) and heights `h`, and leaving
+/// through the flat bottom z = 0. NaN when it cannot (pass_through_slab).
 template <class T>
 Eigen::Matrix<T, 2, 1> slab_receiver_point(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
                                            const Eigen::Vector2d xy[3], const T h[3], double eta,
@@ -101,18 +148,19 @@ Eigen::Matrix<T, 2, 1> slab_receiver_point(const Eigen::Vector3d& origin, const 
   n /= sqrt(n.dot(n));
   const V o = origin.cast<T>(), d = direction.cast<T>();
   const V hit = o + (n.dot(p0 - o) / n.dot(d)) * d;
-  // Into the slab: the outward normal n faces the incoming ray.
-  const T ratio(1.0 / eta);
-  const T cos_i = -d.dot(n);
-  const T cos_t = sqrt(T(1.0) - ratio * ratio * (T(1.0) - cos_i * cos_i));
-  const V inside = ratio * d + (ratio * cos_i - cos_t) * n;
-  // Out through the bottom, whose normal facing the ray is +z.
-  const V bottom = hit - (hit.z() / inside.z()) * inside;
-  const T cos_b = -inside.z();
-  const T cos_out = sqrt(T(1.0) - T(eta * eta) * (T(1.0) - cos_b * cos_b));
-  V out = T(eta) * inside;
-  out.z() += T(eta) * cos_b - cos_out;
-  return (bottom + ((T(receiver_z) - bottom.z()) / out.z()) * out).template head<2>();
+  SlabPassage<T> pass;
+  if (!pass_through_slab(direction, n, eta, pass))
+    return Eigen::Matrix<T, 2, 1>::Constant(T(std::numeric_limits<double>::quiet_NaN()));
+  return slab_landing(hit, pass, receiver_z);
+}
+
+/// Pixel coordinates (u right, v down from the image's top edge; pixel
+/// (c, r) covers [c, c+1] × [r, r+1]) of receiver point `xy`.
+template <class T>
+Eigen::Matrix<T, 2, 1> receiver_pixel(const CausticSetup& s, const Eigen::Matrix<T, 2, 1>& xy) {
+  const double left = s.receiver_centre_mm.x() - 0.5 * s.receiver_width_mm;
+  const double top = s.receiver_centre_mm.y() + 0.5 * s.receiver_depth_mm;
+  return {(xy.x() - left) * (s.image_width / s.receiver_width_mm), (top - xy.y()) * (s.image_height / s.receiver_depth_mm)};
 }
 
 
@@ -211,7 +259,6 @@ class CausticTracer {
   std::vector<Eigen::Matrix<double, 6, 1>> corner_gradients_;  ///< smooth: ∂E/∂ each triangle's landing points
   std::vector<Eigen::Vector2d> landing_gradients_;          ///< smooth: ∂E/∂ each vertex's landing point
   std::vector<Eigen::Matrix<double, 5, 1>> vertex_gradients_;  ///< smooth: ∂E/∂ each vertex's stencil heights
-  bool height_field_ = true;  ///< false when tracing a given mesh
   int top_triangles_ = 0;
   std::unique_ptr<Scene> scene_;
   double top_z_ = 0;

@@ -73,12 +73,6 @@ void clip(const Polygon<T>& in, const Eigen::Vector2d& normal, double offset, Po
   if (out.size() < 3) out.clear();
 }
 
-inline double fresnel_reflectance(double eta_i, double eta_t, double cos_i, double cos_t) {
-  const double rs = (eta_i * cos_i - eta_t * cos_t) / (eta_i * cos_i + eta_t * cos_t);
-  const double rp = (eta_t * cos_i - eta_i * cos_t) / (eta_t * cos_i + eta_i * cos_t);
-  return 0.5 * (rs * rs + rp * rp);
-}
-
 /// Per-thread scratch polygons.
 template <class T>
 struct Scratch {
@@ -137,28 +131,10 @@ Fate triangle_image(const CausticSetup& s, const Eigen::Vector2d xy[3], const T 
   if (!(value_of(flux) > 0)) return Fate::blocked;  // the beam grazes or meets the back
 
   const double eta = s.refractive_index;
-  const V normal = area / sqrt(area.dot(area));
-  const T cos_i = -(light.x() * normal.x() + light.y() * normal.y() + light.z() * normal.z());
-  const T ratio(1.0 / eta);
-  const T cos_t = sqrt(T(1.0) - ratio * ratio * (T(1.0) - cos_i * cos_i));
-  const V inside = ratio * light.cast<T>() + (ratio * cos_i - cos_t) * normal;
-  if (!(value_of(inside.z()) < 0)) return Fate::returned;
-  const T cos_b = -inside.z();
-  const T sin2_out = T(eta * eta) * (T(1.0) - cos_b * cos_b);
-  if (!(value_of(sin2_out) < 1)) return Fate::returned;  // total internal reflection at the bottom
-  const T cos_out = sqrt(T(1.0) - sin2_out);
-  V out = T(eta) * inside;
-  out.z() += T(eta) * cos_b - cos_out;
-
-  const double left = s.receiver_centre_mm.x() - 0.5 * s.receiver_width_mm;
-  const double top = s.receiver_centre_mm.y() + 0.5 * s.receiver_depth_mm;
-  const double px = s.image_width / s.receiver_width_mm, py = s.image_height / s.receiver_depth_mm;
+  SlabPassage<T> pass;
+  if (!pass_through_slab(light, V(area / sqrt(area.dot(area))), eta, pass)) return Fate::returned;
   Point<T> landing[3];
-  for (int k = 0; k < 3; ++k) {
-    const V bottom = p[k] - (p[k].z() / inside.z()) * inside;
-    const V receiver = bottom + ((T(-s.receiver_distance_mm) - bottom.z()) / out.z()) * out;
-    landing[k] = Point<T>((receiver.x() - left) * px, (top - receiver.y()) * py);
-  }
+  for (int k = 0; k < 3; ++k) landing[k] = receiver_pixel(s, slab_landing(p[k], pass, -s.receiver_distance_mm));
 
   bool clipped = false;
   if (s.disc_aperture) {
@@ -176,8 +152,8 @@ Fate triangle_image(const CausticSetup& s, const Eigen::Vector2d xy[3], const T 
   if (!clipped) scratch.image.assign(landing, landing + 3);
   entering = value_of(flux);
   if (s.fresnel) {
-    const double kept = (1 - fresnel_reflectance(1, eta, value_of(cos_i), value_of(cos_t))) *
-                        (1 - fresnel_reflectance(eta, 1, value_of(cos_b), value_of(cos_out)));
+    const double kept = (1 - fresnel_reflectance(1, eta, value_of(pass.cos_i), value_of(pass.cos_t))) *
+                        (1 - fresnel_reflectance(eta, 1, value_of(pass.cos_b), value_of(pass.cos_out)));
     flux *= kept;  // held fixed in the derivative, as the ray estimator holds it
   }
   return Fate::received;
@@ -249,26 +225,10 @@ bool vertex_landing(const CausticSetup& s, const Eigen::Vector2d& xy, const T h[
   using V = Eigen::Matrix<T, 3, 1>;
   V normal(-(h[2] - h[1]) / dx, -(h[4] - h[3]) / dy, T(1.0));
   normal /= sqrt(normal.dot(normal));
-  const Eigen::Vector3d& light = s.light_direction;
-  const double eta = s.refractive_index;
-  const T cos_i = -(light.x() * normal.x() + light.y() * normal.y() + light.z() * normal.z());
-  if (!(value_of(cos_i) > 0)) return false;
-  const T ratio(1.0 / eta);
-  const T cos_t = sqrt(T(1.0) - ratio * ratio * (T(1.0) - cos_i * cos_i));
-  const V inside = ratio * light.cast<T>() + (ratio * cos_i - cos_t) * normal;
-  if (!(value_of(inside.z()) < 0)) return false;
-  const T cos_b = -inside.z();
-  const T sin2_out = T(eta * eta) * (T(1.0) - cos_b * cos_b);
-  if (!(value_of(sin2_out) < 1)) return false;
-  V out = T(eta) * inside;
-  out.z() += T(eta) * cos_b - sqrt(T(1.0) - sin2_out);
-  const V p(T(xy.x()), T(xy.y()), h[0]);
-  const V bottom = p - (p.z() / inside.z()) * inside;
-  const V receiver = bottom + ((T(-s.receiver_distance_mm) - bottom.z()) / out.z()) * out;
-  const double left = s.receiver_centre_mm.x() - 0.5 * s.receiver_width_mm;
-  const double top = s.receiver_centre_mm.y() + 0.5 * s.receiver_depth_mm;
-  landing = Point<T>((receiver.x() - left) * (s.image_width / s.receiver_width_mm),
-                     (top - receiver.y()) * (s.image_height / s.receiver_depth_mm));
+  SlabPassage<T> pass;
+  if (!pass_through_slab(s.light_direction, normal, s.refractive_index, pass) || !(value_of(pass.cos_i) > 0))
+    return false;
+  landing = receiver_pixel(s, slab_landing(V(T(xy.x()), T(xy.y()), h[0]), pass, -s.receiver_distance_mm));
   return true;
 }
 
@@ -470,7 +430,7 @@ void CausticTracer::pull_back_triangles(std::span<const double> d_irradiance, st
       HeightJet h[3];
       for (int k = 0; k < 3; ++k) {
         xy[k] = vertices_[static_cast<size_t>(f[k])].head<2>();
-        h[k] = height_variable(vertices_[static_cast<size_t>(f[k])].z(), k);
+        h[k] = variable<3>(vertices_[static_cast<size_t>(f[k])].z(), k);
       }
       HeightJet carried;
       double entering = 0;
@@ -479,7 +439,7 @@ void CausticTracer::pull_back_triangles(std::span<const double> d_irradiance, st
         HeightJet sum(0.0);
         rasterize(scratch.image, s.image_width, s.image_height, scratch,
                   [&](size_t pixel, const HeightJet& share) { sum += d_irradiance[pixel] * share; });
-        gradient = height_derivatives(sum * carried) * per_area;
+        gradient = derivatives<3>(sum * carried) * per_area;
       }
       triangle_gradients_[t] = gradient;
     }

@@ -21,8 +21,6 @@ Eigen::Matrix<double, N, 1> derivatives(const Jet<N>& x) { return x.v; }
 template <int N>
 double value_of(const Jet<N>& x) { return x.a; }
 using HeightJet = Jet<3>;
-inline HeightJet height_variable(double value, int k) { return HeightJet(value, k); }
-inline Eigen::Vector3d height_derivatives(const HeightJet& x) { return x.v; }
 }  // namespace spec2fab::caustic_detail
 #else
 #include <unsupported/Eigen/AutoDiff>
@@ -36,8 +34,6 @@ Eigen::Matrix<double, N, 1> derivatives(const Jet<N>& x) { return x.derivatives(
 template <int N>
 double value_of(const Jet<N>& x) { return x.value(); }
 using HeightJet = Jet<3>;
-inline HeightJet height_variable(double value, int k) { return HeightJet(value, 3, k); }
-inline Eigen::Vector3d height_derivatives(const HeightJet& x) { return x.derivatives(); }
 }  // namespace spec2fab::caustic_detail
 #endif
 
