@@ -244,11 +244,48 @@ class CornerLines {
 
 }  // namespace
 
+namespace {
+
+/// Where four facets meet at a grid corner and the two higher ones are
+/// diagonal, the solid narrows to a vertical segment that four walls share:
+/// not a 2-manifold. Raising the higher of the two lower corners to the lower
+/// of the two higher ones leaves three facets over the segment instead, at
+/// the cost of tilting one triangle of that facet. Returns how many corners
+/// it raised.
+int fill_pinched_corners(int nx, int ny, std::vector<std::array<double, 4>>& heights) {
+  int filled = 0;
+  const auto cell = [&](int i, int j) -> std::array<double, 4>& {
+    return heights[static_cast<size_t>(i) + static_cast<size_t>(nx) * static_cast<size_t>(j)];
+  };
+  for (int j = 1; j < ny; ++j)
+    for (int i = 1; i < nx; ++i) {
+      // Around the corner, counter-clockwise from south-west.
+      double* around[4] = {&cell(i - 1, j - 1)[2], &cell(i, j - 1)[3], &cell(i, j)[0], &cell(i - 1, j)[1]};
+      for (int first = 0; first < 2; ++first) {
+        const double high = std::min(*around[first], *around[first + 2]);
+        double* low_a = around[first + 1];
+        double* low_b = around[(first + 3) % 4];
+        double* raised = *low_a >= *low_b ? low_a : low_b;
+        if (high > *raised) {
+          *raised = high;
+          ++filled;
+          break;
+        }
+      }
+    }
+  return filled;
+}
+
+}  // namespace
+
 Mesh faceted_slab_mesh(const CausticSetup& setup, int nx, int ny,
-                       std::span<const std::array<double, 4>> corner_heights) {
+                       std::span<const std::array<double, 4>> corner_heights_in, int* pinches_filled) {
   if (nx < 1 || ny < 1 ||
-      corner_heights.size() != static_cast<size_t>(nx) * static_cast<size_t>(ny))
+      corner_heights_in.size() != static_cast<size_t>(nx) * static_cast<size_t>(ny))
     throw std::invalid_argument("faceted_slab_mesh: expected nx · ny facets");
+  std::vector<std::array<double, 4>> corner_heights(corner_heights_in.begin(), corner_heights_in.end());
+  const int filled = fill_pinched_corners(nx, ny, corner_heights);
+  if (pinches_filled != nullptr) *pinches_filled = filled;
   const auto x = [&](int i) { return setup.width_mm * (static_cast<double>(i) / nx - 0.5); };
   const auto y = [&](int j) { return setup.depth_mm * (static_cast<double>(j) / ny - 0.5); };
   const auto corner = [&](int i, int j) { return Vec2(x(i), y(j)); };
@@ -330,8 +367,6 @@ Mesh faceted_slab_mesh(const CausticSetup& setup, int nx, int ny,
       second.push_back(c01);
       if (i > 0) edge_point(east, static_cast<size_t>(i - 1 + nx * j), second);
       soup.polygon(second, up);
-      soup.add(at(corner(i, j), 0), at(corner(i + 1, j), 0), at(corner(i + 1, j + 1), 0), down);
-      soup.add(at(corner(i, j), 0), at(corner(i + 1, j + 1), 0), at(corner(i, j + 1), 0), down);
       // East and north: against the next facet, or the slab's side (height 0 beyond).
       if (i + 1 < nx) {
         const auto& e = facet(i + 1, j);
@@ -349,6 +384,13 @@ Mesh faceted_slab_mesh(const CausticSetup& setup, int nx, int ny,
       if (j == 0) wall(i, j, i + 1, j, h[0], h[1], 0, 0, std::nullopt, -to_north);
     }
   }
+  // The flat bottom as one polygon through the side walls' lowest points.
+  std::vector<Vec3> bottom;
+  for (int i = 0; i < nx; ++i) bottom.push_back(at(corner(i, 0), 0));
+  for (int j = 0; j < ny; ++j) bottom.push_back(at(corner(nx, j), 0));
+  for (int i = nx; i > 0; --i) bottom.push_back(at(corner(i, ny), 0));
+  for (int j = ny; j > 0; --j) bottom.push_back(at(corner(0, j), 0));
+  soup.polygon(bottom, down);
   return std::move(soup.mesh);
 }
 

@@ -132,7 +132,11 @@ Mesh caustic_slab_mesh(const CausticSetup& setup, const HeightSurface& surface, 
 /// `corner_heights[i + nx·j]` are facet (i, j)'s heights (> 0) at its
 /// corners (x0, y0), (x1, y0), (x1, y1), (x0, y1); facet (0, 0) has the
 /// lowest x and y. Triangles face outwards; vertices are not shared.
+/// Where the two higher of four facets meeting at a corner are diagonal, the
+/// higher of the other two is raised there to the lower of them, so that the
+/// solid does not pinch to an edge four walls share (a 2-manifold file);
+/// `pinches_filled` receives how many corners that raised.
 Mesh faceted_slab_mesh(const CausticSetup& setup, int nx, int ny,
-                       std::span<const std::array<double, 4>> corner_heights);
+                       std::span<const std::array<double, 4>> corner_heights, int* pinches_filled = nullptr);
 
 }  // namespace spec2fab

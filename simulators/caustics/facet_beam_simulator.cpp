@@ -1,14 +1,20 @@
-// "facet_beam": where one planar facet of a clear slab sends collimated
-// light — the micro-lens of facet caustics (paper §7.3, after Papas et al.
-// 2011). A plane refracts a collimated beam into another collimated beam, so
-// the ray through the facet's centre says where the facet's whole patch of
-// light lands; it is traced with the caustic tracer's own refraction
-// (slab_receiver_point: into the facet, out through the flat bottom, onto
-// the receiver). Walls between facets and neighbours' shadows are left to
-// the full tracer, which the facet translator runs on the finished surface.
+// "facet_beam": where one facet of a clear slab sends collimated light —
+// the micro-lens of facet caustics (paper §7.3, after Papas et al. 2011).
+// A plane refracts a collimated beam into another collimated beam, so the
+// ray through the facet's centre says where the facet's whole patch of
+// light lands. A curved facet (a paraboloid) spreads its patch: then a grid
+// of rays over the facet, each refracted at the surface's tangent plane,
+// gives the spot's centroid and spread (the symmetric square root of its
+// covariance), which a tuner matches to its Gaussian kernel's. Rays use the
+// caustic tracer's own refraction (slab_receiver_point: into the facet, out
+// through the flat bottom, onto the receiver). Walls between facets and
+// neighbours' shadows are left to the full tracer, which the facet
+// translator runs on the finished surface.
 
 #include <array>
 #include <cmath>
+
+#include <Eigen/Eigenvalues>
 
 #include "caustics/caustic_tracer.h"
 #include "core/error.h"
@@ -27,6 +33,8 @@ class FacetBeamSimulator final : public SimulatorFor<VectorObservation> {
     std::array<double, 2> facet_origin_mm{0, 0};
     double bottom_mm = 0, refractive_index = 1.5, distance_mm = 100;
     std::array<double, 3> light{0, 0, -1};
+    bool spread = false;
+    int rays = 8;
 
     template <class Declare, class Self>
     static void declare(Declare& d, Self& o) {
@@ -37,6 +45,10 @@ class FacetBeamSimulator final : public SimulatorFor<VectorObservation> {
       d.number(o.refractive_index, "refractive_index", Range::closed(1, 4), "of the slab's material");
       d.number(o.light, "light", Range::any(), "direction (x, y, z) the light travels, z < 0");
       d.number(o.distance_mm, "distance_mm", Range::closed(1e-3, 1e6), "receiver plane below the slab's bottom");
+      d.value(o.spread, "spread",
+               "also the spot's spread: observe [x, y, S_xx, S_xy, S_yx, S_yy], S the square root of the "
+               "landing points' covariance (mm), from rays × rays rays over the facet");
+      d.number(o.rays, "rays", Range::closed(2, 64), "rays along each side of the facet, with spread");
     }
     bool check(std::string* why) const {
       if (light[2] < 0) return true;
@@ -53,13 +65,15 @@ class FacetBeamSimulator final : public SimulatorFor<VectorObservation> {
     eta_ = options.refractive_index;
     distance_ = options.distance_mm;
     light_ = Eigen::Vector3d(options.light[0], options.light[1], options.light[2]).normalized();
+    spread_ = options.spread;
+    rays_ = options.rays;
   }
 
   std::string name() const override { return "facet_beam"; }
 
   std::unique_ptr<Observation> make_observation() const override {
     auto out = std::make_unique<VectorObservation>();
-    out->data.assign(2, 0.0);
+    out->data.assign(spread_ ? 6 : 2, 0.0);
     return out;
   }
 
@@ -68,35 +82,64 @@ class FacetBeamSimulator final : public SimulatorFor<VectorObservation> {
   using SimulatorFor::simulate;
   void simulate(const ReducerNode& subtree, VectorObservation& out) override {
     const HeightSurface& surface = surface_of(subtree);
-    // The facet's plane through three points around its centre, in the
-    // column's frame (a, b from its corner); world xy for the tracer.
-    const Eigen::Vector2d centre = 0.5 * size_;
-    const Eigen::Vector2d local[3] = {centre, centre + Eigen::Vector2d(0.25 * size_.x(), 0),
-                                      centre + Eigen::Vector2d(0, 0.25 * size_.y())};
-    Eigen::Vector2d xy[3];
-    double h[3];
-    for (int k = 0; k < 3; ++k) {
-      xy[k] = local[k] + origin_;
-      h[k] = surface.surface_height(local[k].x(), local[k].y()) - bottom_;
+    if (!spread_) {
+      const Eigen::Vector2d landing = land(surface, 0.5 * size_);
+      out.data.assign({landing.x(), landing.y()});
+      return;
     }
-    // A point one unit up the beam from the centre's surface point.
-    const Eigen::Vector3d start = Eigen::Vector3d(xy[0].x(), xy[0].y(), h[0]) + light_ / light_.z();
-    const Eigen::Vector2d landing = slab_receiver_point(start, light_, xy, h, eta_, -distance_);
-    out.data.resize(2);
-    out.data[0] = landing.x();
-    out.data[1] = landing.y();
+    // The patch's light is uniform: rays at the centres of rays_ × rays_
+    // equal cells weigh the same.
+    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+    Eigen::Matrix2d second = Eigen::Matrix2d::Zero();
+    for (int j = 0; j < rays_; ++j)
+      for (int i = 0; i < rays_; ++i) {
+        const Eigen::Vector2d local((i + 0.5) / rays_ * size_.x(), (j + 0.5) / rays_ * size_.y());
+        const Eigen::Vector2d p = land(surface, local);
+        mean += p;
+        second += p * p.transpose();
+      }
+    const double n = static_cast<double>(rays_) * rays_;
+    mean /= n;
+    // A grid of r midpoints has (1 − 1/r²) of the patch's variance along each
+    // side; the correction is exact where the lens maps the patch affinely.
+    const double grid = static_cast<double>(rays_) * rays_ / (static_cast<double>(rays_) * rays_ - 1);
+    const Eigen::Matrix2d covariance = grid * (second / n - mean * mean.transpose());
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(covariance);
+    const Eigen::Matrix2d root = eigen.eigenvectors() *
+                                 eigen.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal() *
+                                 eigen.eigenvectors().transpose();
+    out.data.assign({mean.x(), mean.y(), root(0, 0), root(0, 1), root(1, 0), root(1, 1)});
   }
 
   static TypeDoc doc() {
-    return {"Where a planar facet (a Plane node cutting along w, clear below) sends collimated "
-            "light: the receiver point, in world x and y (mm), of the ray through the facet's "
-            "centre, refracted into the facet and out through the slab's flat bottom — the "
-            "whole facet's beam lands around it, translated. For facet caustics.",
+    return {"Where a facet (a Plane or Paraboloid node cutting along w, clear below) sends "
+            "collimated light: the receiver point, in world x and y (mm), of the ray through the "
+            "facet's centre, refracted into the facet and out through the slab's flat bottom — a "
+            "plane's whole beam lands around it, translated. With spread, a grid of rays gives "
+            "the spot's centroid and the square root of its covariance, the shape a curved facet "
+            "(a micro-lens) gives its light. For facet caustics.",
             option_docs<Options>(),
             R"({"type": "facet_beam", "facet_mm": [1.33, 1.33], "facet_origin_mm": [0, 0], "distance_mm": 200})"};
   }
 
  private:
+  /// Where the ray through the facet point `local` (from its corner) lands,
+  /// refracted at the surface's tangent plane there.
+  Eigen::Vector2d land(const HeightSurface& surface, const Eigen::Vector2d& local) const {
+    // Central differences: exact slopes for a plane or a paraboloid.
+    const double step = 1e-3 * size_.minCoeff();
+    const auto h = [&](double a, double b) { return surface.surface_height(a, b) - bottom_; };
+    const double centre = h(local.x(), local.y());
+    const double slope_a = (h(local.x() + step, local.y()) - h(local.x() - step, local.y())) / (2 * step);
+    const double slope_b = (h(local.x(), local.y() + step) - h(local.x(), local.y() - step)) / (2 * step);
+    const Eigen::Vector2d at = local + origin_;
+    const Eigen::Vector2d xy[3] = {at, at + Eigen::Vector2d(step, 0), at + Eigen::Vector2d(0, step)};
+    const double heights[3] = {centre, centre + step * slope_a, centre + step * slope_b};
+    // A point one unit up the beam from the surface point.
+    const Eigen::Vector3d start = Eigen::Vector3d(at.x(), at.y(), centre) + light_ / light_.z();
+    return slab_receiver_point(start, light_, xy, heights, eta_, -distance_);
+  }
+
   // The subtree as a height surface; the cast is remembered, since the swap
   // phase simulates millions of times.
   const HeightSurface& surface_of(const ReducerNode& subtree) {
@@ -115,6 +158,8 @@ class FacetBeamSimulator final : public SimulatorFor<VectorObservation> {
   Eigen::Vector2d size_, origin_;
   double bottom_ = 0, eta_ = 1.5, distance_ = 100;
   Eigen::Vector3d light_{0, 0, -1};
+  bool spread_ = false;
+  int rays_ = 8;
 };
 
 }  // namespace

@@ -5,10 +5,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 #include <random>
 
 #include "geometry/primitives.h"
 #include "geometry/solid.h"
+#include "reducer/height_surface.h"
 #include "reducer_test_support.h"
 
 namespace spec2fab {
@@ -48,6 +50,50 @@ TEST_F(NodesInBox, TiltedPlaneSplitsAndMeasuresDepthAlongAxis) {
     const std::string expected = depth < 0 ? "C" : depth < 1 ? "A" : "B";
     ASSERT_EQ(at(*tree, p), expected) << p.transpose();
   }
+}
+
+// A paraboloid: height 1 + 0.5·x − 0.25·y + ½(0.1·x² + 2·0.04·x·y − 0.06·y²)
+// about the domain centre (0, 0); below A, above C.
+TEST_F(NodesInBox, ParaboloidSplitsAlongItsCurvedHeight) {
+  auto tree = bound(R"({"type": "paraboloid", "offset_mm": 1, "slope_a": 0.5, "slope_b": -0.25,
+      "curvature_aa": 0.1, "curvature_ab": 0.04, "curvature_bb": -0.06,
+      "below": {"type": "layered", "material": "A"}, "above": {"type": "layered", "material": "C"}})");
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> coord(-9.5, 9.5);
+  int below = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const Vec3 p(coord(rng), coord(rng), coord(rng));
+    const double height = 1 + 0.5 * p.x() - 0.25 * p.y() +
+                          0.5 * (0.1 * p.x() * p.x() + 0.08 * p.x() * p.y() - 0.06 * p.y() * p.y());
+    if (std::abs(height - p.z()) < 1e-6) continue;
+    below += p.z() < height;
+    ASSERT_EQ(at(*tree, p), p.z() < height ? "A" : "C") << p.transpose();
+  }
+  EXPECT_GT(below, 200);
+  EXPECT_LT(below, 1800);
+}
+
+// The paraboloid's height is linear in its six parameters: the derivatives
+// it reports are the change of height a step in each parameter makes.
+TEST_F(NodesInBox, ParaboloidHeightDerivativesMatchSteps) {
+  auto tree = bound(R"({"type": "paraboloid", "offset_mm": 1, "slope_a": 0.5, "slope_b": -0.25,
+      "curvature_aa": 0.1, "curvature_ab": 0.04, "curvature_bb": -0.06,
+      "below": {"type": "layered", "material": "A"}, "above": {"type": "layered", "material": "C"}})");
+  auto& surface = dynamic_cast<HeightSurface&>(tree->root());
+  const double a = 3.5, b = -2;
+  std::map<const Parameter*, double> reported;
+  surface.visit_height_derivatives(a, b, [&](const Parameter& p, double d) { reported[&p] += d; });
+  int checked = 0;
+  tree->root().visit_parameters([&](const std::string& name, Parameter& p) {
+    const double before = surface.surface_height(a, b), value = p.value();
+    p.set(value + 0.5);
+    tree->root().evaluate();
+    EXPECT_NEAR((surface.surface_height(a, b) - before) / 0.5, reported[&p], 1e-12) << name;
+    p.set(value);
+    tree->root().evaluate();
+    ++checked;
+  });
+  EXPECT_EQ(checked, 6);
 }
 
 TEST_F(NodesInBox, PlaneAlongXAxis) {

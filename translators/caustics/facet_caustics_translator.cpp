@@ -1,16 +1,21 @@
 // The facet-caustics translator (paper §7.3, Fig. 9 left, after Papas et
-// al. 2011): a clear slab whose top is a grid of planar facets, each a
-// micro-lens sending its patch of collimated light to one Gaussian kernel of
-// the goal image.
+// al. 2011): a clear slab whose top is a grid of facets, each a micro-lens
+// sending its patch of collimated light to one Gaussian kernel of the goal
+// image.
 //
-//   tree     Column (facets[0] × facets[1]) → Plane per column (clear below,
-//            void above); the planes' slopes are the free parameters.
+//   tree     Column (facets[0] × facets[1]) → per column a Paraboloid
+//            ("facet": "lens", the default) or a Plane ("plane", as the
+//            paper's tree has it), clear below, void above; slopes (and
+//            curvatures) are the free parameters.
 //   kernels  the goal decomposed into as many equal-flux Gaussians as there
 //            are facets (simulators/caustics/gaussian_kernels.h); kernel
 //            (i, j) starts on facet (i, j).
 //   tuners   one per facet: facet_beam (where its plane sends the light) +
 //            squared_distance to its kernel (the effective target) + the
-//            aiming optimizer; a 4-neighbour network.
+//            aiming optimizer; a 4-neighbour network. A plane casts a sharp
+//            copy of itself, so it can only aim; a lens also spreads its
+//            light, and its tuner matches the spot's centroid and the square
+//            root of its covariance to the kernel's (facet_beam "spread").
 //   schedule "assign": annealing on the network, each tuner deciding at
 //            random whether to swap kernels with a neighbour, judged by the
 //            roughness of the surface the assignment asks for (below);
@@ -23,8 +28,9 @@
 // Roughness: a facet deflecting light by d needs a slope roughly
 // proportional to d, so Σ over neighbouring facets of |d_a − d_b|² measures
 // how much neighbouring slopes differ — the steps and creases of the print.
-// The finished surface is meshed exactly (facets and the walls between
-// them), traced by the caustic tracer, written as print/surface.stl.
+// The finished surface is meshed (planes exactly, lenses on a grid of
+// lens_subdivisions² cells each, with the walls between them), traced by the
+// caustic tracer, written as print/surface.stl.
 
 #include <algorithm>
 #include <cmath>
@@ -51,11 +57,19 @@ class FacetCausticsTranslator final : public TuningTranslator {
   /// Its own goal keys; the caustic piece declares the rest.
   struct Options {
     std::array<int, 2> facets{45, 45};
+    std::string facet = "lens";
+    int lens_subdivisions = 16, lens_rays = 4;
     double min_height_mm = kUnset, start_height_mm = kUnset, max_slope = 1;
     int kernel_iterations = 20, assignment_sweeps = 200;
     template <class Declare, class Self>
     static void declare(Declare& d, Self& o) {
       d.number(o.facets, "facets", Range::at_least(1), "facets (and kernels) [nx, ny]");
+      d.choice(o.facet, "facet", {"lens", "plane"},
+               "each facet's shape: a paraboloid that aims and spreads its light like its kernel, or a "
+               "plane that only aims it (casting a sharp copy of itself)");
+      d.number(o.lens_subdivisions, "lens_subdivisions", Range::closed(1, 64),
+               "cells along each side of a lens in the traced and printed mesh");
+      d.number(o.lens_rays, "lens_rays", Range::closed(2, 64), "rays along each side of a lens while tuning it");
       d.number(o.min_height_mm, "min_height_mm", Range::above(0), "lowest a facet may go",
                Default{"1/4 of the solid's height"});
       d.number(o.start_height_mm, "start_height_mm", Range::above(0), "facets' mean height",
@@ -66,8 +80,11 @@ class FacetCausticsTranslator final : public TuningTranslator {
                "serial sweeps of the swap phase (0: no swaps)");
     }
     bool check(std::string* why) const {
-      if (static_cast<long long>(facets[0]) * facets[1] <= 250'000) return true;
-      *why = "facets: more than 250,000 facets";
+      const long long cells = static_cast<long long>(facets[0]) * facets[1] *
+                              (facet == "lens" ? static_cast<long long>(lens_subdivisions) * lens_subdivisions : 1);
+      if (static_cast<long long>(facets[0]) * facets[1] > 250'000) *why = "facets: more than 250,000 facets";
+      else if (cells > 4'000'000) *why = "lens_subdivisions: more than 4 million cells in the mesh";
+      else return true;
       return false;
     }
   };
@@ -83,6 +100,8 @@ class FacetCausticsTranslator final : public TuningTranslator {
     const Options options = read_options<Options>(goal);
     const Vec3 size = settings_.slab.size();
     facets_ = options.facets;
+    lens_ = options.facet == "lens";
+    subdivisions_ = lens_ ? options.lens_subdivisions : 1;
     low_mm_ = std::isnan(options.min_height_mm) ? 0.25 * size.z() : options.min_height_mm;
     require_in(goal, "min_height_mm", low_mm_, Range::closed(1e-3, size.z()));
     start_mm_ = std::isnan(options.start_height_mm) ? 0.75 * size.z() : options.start_height_mm;
@@ -113,18 +132,24 @@ class FacetCausticsTranslator final : public TuningTranslator {
     kernels_ = fit_equal_mass_kernels(target().pixels, raster_, facets_[0], facets_[1], kernel_iterations);
 
     const nlohmann::json slope = {{"value", 0.0}, {"min", -max_slope_}, {"max", max_slope_}};
+    nlohmann::json facet = {{"type", lens_ ? "paraboloid" : "plane"},
+                            {"axis", "z"},
+                            {"offset_mm", slab().lower.z() + start_mm_},
+                            {"slope_a", slope},
+                            {"slope_b", slope},
+                            {"below", {{"type", "layered"}, {"material", settings_.material}}},
+                            {"above", {{"type", "layered"}, {"material", "void"}}}};
+    if (lens_) {
+      // Bent no further than the steepest slope over half a facet.
+      const double most = 2 * max_slope_ / std::min(facet_mm_[0], facet_mm_[1]);
+      const nlohmann::json curvature = {{"value", 0.0}, {"min", -most}, {"max", most}};
+      facet["curvature_aa"] = facet["curvature_ab"] = facet["curvature_bb"] = curvature;
+    }
     const nlohmann::json tree = {
         {"type", "column"},
         {"count", facets_},
         {"domain", {slab().lower.x(), slab().lower.y(), slab().upper.x(), slab().upper.y()}},
-        {"child",
-         {{"type", "plane"},
-          {"axis", "z"},
-          {"offset_mm", slab().lower.z() + start_mm_},
-          {"slope_a", slope},
-          {"slope_b", slope},
-          {"below", {{"type", "layered"}, {"material", settings_.material}}},
-          {"above", {{"type", "layered"}, {"material", "void"}}}}}};
+        {"child", facet}};
     set_tree(tree, "facet caustics tree", goal, experiment);
 
     const nlohmann::json aim = experiment.optimizer_or(
@@ -143,6 +168,12 @@ class FacetCausticsTranslator final : public TuningTranslator {
       for (int i = 0; i < facets_[0]; ++i) {
         const size_t k = facet_index(i, j);
         centres_.push_back(facet_centre(i, j));
+        // A lens matches its spot's centroid and spread (the square root of
+        // its covariance) to the kernel's; a plane its centroid alone.
+        const double sigma = kernels_[k].sigma_mm;
+        const nlohmann::json target =
+            lens_ ? nlohmann::json{kernels_[k].centre_mm.x(), kernels_[k].centre_mm.y(), sigma, 0.0, 0.0, sigma}
+                  : nlohmann::json{kernels_[k].centre_mm.x(), kernels_[k].centre_mm.y()};
         const nlohmann::json parts = {
             {"simulator",
              {{"type", "facet_beam"},
@@ -150,9 +181,11 @@ class FacetCausticsTranslator final : public TuningTranslator {
               {"facet_origin_mm", {slab().lower.x() + i * facet_mm_[0], slab().lower.y() + j * facet_mm_[1]}},
               {"bottom_mm", slab().lower.z()},
               {"refractive_index", settings_.refractive_index},
-              {"distance_mm", settings_.distance_mm}}},
+              {"distance_mm", settings_.distance_mm},
+              {"spread", lens_},
+              {"rays", options.lens_rays}}},
             {"metric", {{"type", "squared_distance"}}},
-            {"goal", {{"type", "values"}, {"values", {kernels_[k].centre_mm.x(), kernels_[k].centre_mm.y()}}}},
+            {"goal", {{"type", "values"}, {"values", target}}},
             {"optimizer", aim}};
         auto tuner = build_tuner(Properties::wrap(parts, experiment.file().string() + " (facet tuner)"),
                                  fmt::format("facet_{}_{}", i, j), PartContext{palette, &experiment.cache()});
@@ -181,12 +214,13 @@ class FacetCausticsTranslator final : public TuningTranslator {
 
   std::string summary() const override {
     return fmt::format(
-        "facet caustics: a {} slab, top {} x {} planar facets ({:.3g} x {:.3g} mm); the goal as {} "
+        "facet caustics: a {} slab, top {} x {} {} ({:.3g} x {:.3g} mm); the goal as {} "
         "equal-flux Gaussian kernels; annealing swaps kernels between neighbouring facets for a "
         "smooth surface ({} sweeps), then each facet's tuner (facet_beam, squared_distance, {}) "
-        "aims its plane; light cast {} mm below on a {:g} x {:g} mm receiver ({} x {} px)",
-        settings_.material, facets_[0], facets_[1], facet_mm_[0], facet_mm_[1], kernels_.size(), sweeps_,
-        aim_label_, settings_.distance_mm, settings_.receiver_mm[0], settings_.receiver_mm[1], settings_.image[0],
+        "{}; light cast {} mm below on a {:g} x {:g} mm receiver ({} x {} px)",
+        settings_.material, facets_[0], facets_[1], lens_ ? "micro-lenses (paraboloids)" : "planar facets",
+        facet_mm_[0], facet_mm_[1], kernels_.size(), sweeps_, aim_label_,
+        lens_ ? "aims its lens and bends it to spread the light like its kernel" : "aims its plane", settings_.distance_mm, settings_.receiver_mm[0], settings_.receiver_mm[1], settings_.image[0],
         settings_.image[1]);
   }
 
@@ -233,11 +267,13 @@ class FacetCausticsTranslator final : public TuningTranslator {
   static TypeDoc doc() {
     TypeDoc doc{
         "Facet caustics (paper Fig. 9 left, after Papas et al. 2011): a clear slab over the solid's "
-        "footprint whose top is a grid of planar facets (Column -> Plane), each a micro-lens sending "
-        "its light to one of as many equal-flux Gaussian kernels of the goal image. Annealing swaps "
-        "kernels between neighbouring facets' tuners for a smoother surface (phase \"assign\"), then "
-        "every facet's tuner aims its plane (facet_beam simulator, squared_distance, phase \"aim\"); "
-        "offsets are stitched by least squares. Writes the faceted slab, walls included, as "
+        "footprint whose top is a grid of facets (Column -> Paraboloid, or -> Plane with facet: "
+        "plane), each a micro-lens sending its light to one of as many equal-flux Gaussian kernels "
+        "of the goal image. Annealing swaps kernels between neighbouring facets' tuners for a "
+        "smoother surface (phase \"assign\"), then every facet's tuner aims its lens and curves it "
+        "so that its spot has the kernel's centroid and spread (a plane only aims; facet_beam "
+        "simulator, squared_distance, phase \"aim\"); offsets are stitched by least squares. "
+        "Writes the faceted slab, walls included, as "
         "print/surface.stl besides the voxel outputs; result.json reports RMSE and SSIM of the "
         "traced surface, of the kernels themselves, and the roughness the swaps removed.",
         prefixed(option_docs<Options>(), "goal."),
@@ -389,14 +425,28 @@ class FacetCausticsTranslator final : public TuningTranslator {
   /// The faceted slab as it stands, traced; `mesh` (when given) receives it
   /// in world coordinates.
   std::vector<double> trace_surface(Mesh* mesh) const {
-    std::vector<std::array<double, 4>> heights(network_.size());
-    for (size_t k = 0; k < heights.size(); ++k) {
-      heights[k] = corner_heights(k);
-      for (double& h : heights[k]) h -= slab().lower.z();
-    }
-    Mesh faceted = faceted_slab_mesh(setup_, facets_[0], facets_[1], heights);
+    // Each facet as m × m cells (m = 1 for planes: exact), their corners on
+    // the facet's surface: neighbouring cells of one lens meet without a step.
+    const int m = subdivisions_, nx = facets_[0] * m, ny = facets_[1] * m;
+    std::vector<std::array<double, 4>> heights(static_cast<size_t>(nx) * static_cast<size_t>(ny));
+    const double a = facet_mm_[0] / m, b = facet_mm_[1] / m;
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        const HeightSurface& p = plane(facet_index(i / m, j / m));
+        const double a0 = (i % m) * a, b0 = (j % m) * b;
+        auto& h = heights[static_cast<size_t>(i) + static_cast<size_t>(nx) * static_cast<size_t>(j)];
+        h = {p.surface_height(a0, b0), p.surface_height(a0 + a, b0), p.surface_height(a0 + a, b0 + b),
+             p.surface_height(a0, b0 + b)};
+        for (double& z : h) z -= slab().lower.z();
+      }
+    Mesh faceted = faceted_slab_mesh(setup_, nx, ny, heights);
     std::vector<double> image(static_cast<size_t>(setup_.image_width) * static_cast<size_t>(setup_.image_height));
-    CausticTracer tracer(setup_, faceted.vertices, faceted.triangles);
+    // As many rays as the print's own check uses (8 per pixel pitch): each
+    // facet's spot is a sharp shape that fewer rays would speckle.
+    CausticSetup traced = setup_;
+    traced.rays_x = std::max(traced.rays_x, 8 * traced.image_width);
+    traced.rays_y = std::max(traced.rays_y, 8 * traced.image_height);
+    CausticTracer tracer(traced, faceted.vertices, faceted.triangles);
     tracer.render(image);
     if (mesh != nullptr) {
       const Eigen::Vector3d offset = slab_offset(setup_, slab().lower);
@@ -419,6 +469,8 @@ class FacetCausticsTranslator final : public TuningTranslator {
   }
 
   std::array<int, 2> facets_{45, 45};
+  bool lens_ = true;
+  int subdivisions_ = 1;
   std::array<double, 2> facet_mm_{1, 1};
   double low_mm_ = 2, start_mm_ = 6, max_slope_ = 1;
   int sweeps_ = 200;
