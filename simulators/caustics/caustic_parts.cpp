@@ -79,6 +79,7 @@ CausticSlabConfig CausticSlabConfig::read(const Properties& properties) {
   s.receiver_centre_mm = Eigen::Vector2d(o.receiver_centre_mm[0], o.receiver_centre_mm[1]);
   s.image_width = o.image[0];
   s.image_height = o.image[1];
+  s.image_from_behind = o.image_from_behind;
   const bool rays_given = o.rays[0] > 0;
   s.rays_x = rays_given ? o.rays[0] : 2 * o.image[0];
   s.rays_y = rays_given ? o.rays[1] : 2 * o.image[1];

@@ -51,7 +51,7 @@ struct CausticSlabConfig {
     std::array<double, 2> receiver_centre_mm{0, 0};
     std::array<int, 2> image{240, 240};
     std::array<int, 2> rays{0, 0};  ///< 0: twice the image
-    bool jitter = true, fresnel = false;
+    bool jitter = true, fresnel = false, image_from_behind = false;
     std::string aperture = "rectangle";
     std::string estimator = "rays";
     double seed = 1;
@@ -71,6 +71,8 @@ struct CausticSlabConfig {
       d.number(o.rays, "rays", Range::at_least(1), "stratified samples (nx, ny) over the footprint", Default{"2 × image"});
       d.value(o.jitter, "jitter", "jitter samples within their strata (hashed, deterministic)");
       d.value(o.fresnel, "fresnel", "weight transmissions by unpolarised Fresnel");
+      d.value(o.image_from_behind, "image_from_behind",
+              "the image as seen from the receiver's far side, looking back at the slab: columns run towards -x");
       d.choice(o.aperture, "aperture", {"rectangle", "disc"},
                "where light comes through: the whole footprint, or the disc (ellipse) inscribed in it");
       d.choice(o.estimator, "estimator", {"rays", "facets", "smooth"},

@@ -110,10 +110,14 @@ TransportStart transport_start(const CausticSetup& s, std::span<const double> go
   // then darkens them again as far as the surface allows.
   const double mean = std::accumulate(goal.begin(), goal.end(), 0.0) / static_cast<double>(goal.size());
   const double floor = kTransportFloor * mean;
+  // The transport works on the receiver as it lies (columns towards +x):
+  // an image seen from behind is mirrored back first.
   std::vector<double> masses(goal.size());
   for (size_t k = 0; k < goal.size(); ++k) {
     if (!std::isfinite(goal[k]) || goal[k] < 0) throw InputError("caustics: the goal image has a negative or undefined pixel");
-    masses[k] = std::max(goal[k], floor);
+    const size_t row = k / static_cast<size_t>(width), col = k % static_cast<size_t>(width);
+    const size_t at = s.image_from_behind ? row * static_cast<size_t>(width) + static_cast<size_t>(width) - 1 - col : k;
+    masses[at] = std::max(goal[k], floor);
   }
   std::vector<Vec2> sites;
   const SemiDiscreteTransport transport = solve_multiscale(source, masses, width, height, sites);

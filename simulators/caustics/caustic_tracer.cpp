@@ -410,11 +410,7 @@ Eigen::Vector3d CausticTracer::ray_origin(int ray) const {
 }
 
 Eigen::Vector2d CausticTracer::pixel_coordinates(const RayResult& ray) const {
-  const CausticSetup& s = setup_;
-  const double left = s.receiver_centre_mm.x() - 0.5 * s.receiver_width_mm;
-  const double top = s.receiver_centre_mm.y() + 0.5 * s.receiver_depth_mm;
-  return {(ray.x - left) * s.image_width / s.receiver_width_mm - 0.5,
-          (top - ray.y) * s.image_height / s.receiver_depth_mm - 0.5};
+  return receiver_pixel(setup_, Eigen::Vector2d(ray.x, ray.y)) - Eigen::Vector2d(0.5, 0.5);
 }
 
 void CausticTracer::pull_back_rays(std::span<const double> d_irradiance, std::span<double> d_heights) {
@@ -423,7 +419,8 @@ void CausticTracer::pull_back_rays(std::span<const double> d_irradiance, std::sp
       d_heights.size() != heights_.size())
     throw std::invalid_argument("CausticTracer::pull_back: wrong sizes");
   const double per_area = pixels_per_mm2();
-  const double du_dx = s.image_width / s.receiver_width_mm, dv_dy = -s.image_height / s.receiver_depth_mm;
+  const double du_dx = (s.image_from_behind ? -1 : 1) * s.image_width / s.receiver_width_mm,
+               dv_dy = -s.image_height / s.receiver_depth_mm;
   ray_gradients_.resize(results_.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, results_.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i != r.end(); ++i) {

@@ -33,6 +33,11 @@ struct CausticSetup {
   double receiver_width_mm = 50, receiver_depth_mm = 50;
   Eigen::Vector2d receiver_centre_mm{0, 0};
   int image_width = 240, image_height = 240;
+  /// The image as seen from the receiver's far side, looking back at the
+  /// slab: its columns run towards −x (rows still from +y). Where the
+  /// tracer's frame is the print's mirrored (caustics + texture: z = cut − w),
+  /// this is the caustic as a viewer facing the wall sees it.
+  bool image_from_behind = false;
   int rays_x = 480, rays_y = 480;  ///< source samples over the footprint
   bool jitter = true;              ///< jitter each sample within its stratum
   unsigned seed = 1;
@@ -158,9 +163,10 @@ Eigen::Matrix<T, 2, 1> slab_receiver_point(const Eigen::Vector3d& origin, const 
 /// (c, r) covers [c, c+1] × [r, r+1]) of receiver point `xy`.
 template <class T>
 Eigen::Matrix<T, 2, 1> receiver_pixel(const CausticSetup& s, const Eigen::Matrix<T, 2, 1>& xy) {
-  const double left = s.receiver_centre_mm.x() - 0.5 * s.receiver_width_mm;
-  const double top = s.receiver_centre_mm.y() + 0.5 * s.receiver_depth_mm;
-  return {(xy.x() - left) * (s.image_width / s.receiver_width_mm), (top - xy.y()) * (s.image_height / s.receiver_depth_mm)};
+  const double half = 0.5 * s.receiver_width_mm, top = s.receiver_centre_mm.y() + 0.5 * s.receiver_depth_mm;
+  const T across = s.image_from_behind ? T(s.receiver_centre_mm.x() + half) - xy.x()
+                                       : xy.x() - T(s.receiver_centre_mm.x() - half);
+  return {across * (s.image_width / s.receiver_width_mm), (top - xy.y()) * (s.image_height / s.receiver_depth_mm)};
 }
 
 

@@ -862,6 +862,19 @@ TEST_F(Cli, CausticsTextureTunesTheTextureThenTheBottomFaceThroughItsShadow) {
   EXPECT_EQ(tree["type"], "plane");
   EXPECT_EQ(tree["above"]["type"], "column");
   EXPECT_EQ(tree["below"]["type"], "bspline");
+  // Seen from the room (above the top face) the picture reads right: its
+  // lower half, blue waves, lies at low y, so the columns there carry the
+  // cyan; its upper half (dark ground, pale letters) at high y carries little.
+  double cyan_low_y = 0, cyan_high_y = 0;
+  const auto& columns = tree["above"]["children"];
+  ASSERT_EQ(columns.size(), 64u);
+  for (size_t k = 0; k < 64; ++k) {
+    const auto& layer = columns[k]["below"]["layers"][0];
+    ASSERT_EQ(layer["material"], "VeroCyan");
+    const auto& thickness = layer["thickness_mm"];
+    (k / 8 < 4 ? cyan_low_y : cyan_high_y) += thickness.is_object() ? thickness["value"].get<double>() : thickness.get<double>();
+  }
+  EXPECT_GT(cyan_low_y, 2 * cyan_high_y + 0.1) << cyan_low_y << " " << cyan_high_y;
 }
 
 TEST_F(Cli, SubsurfaceChessboardTunesEveryColumnAndReportsProfileErrors) {

@@ -247,7 +247,7 @@ std::string build_error(const std::string& json, const MaterialPalette& palette)
 TEST_F(NodesInBox, UnknownNodeTypeListsKnownOnes) {
   EXPECT_THAT(build_error(R"({"type": "stratun", "shell": {}, "core": {}})", *palette_),
               HasSubstr("tree.json: /type: unknown node 'stratun'; did you mean 'stratum'? (known: "
-                        "bspline, column, layered, plane, stratum, voxel)"));
+                        "bspline, column, layered, paraboloid, plane, stratum, voxel)"));
 }
 
 TEST_F(NodesInBox, UnknownKeyInNestedNode) {

@@ -229,6 +229,54 @@ TEST(CausticTriangles, DerivativeMatchesFiniteDifferences) {
   }
 }
 
+// Seen from behind the receiver, every estimator's image is the image seen
+// from the slab mirrored left to right, and its derivative is the
+// derivative of the mirrored weights (an asymmetric surface, oblique light).
+TEST(CausticTriangles, ImageFromBehindIsTheMirrorImageWithTheMirroredDerivative) {
+  for (Estimator estimator : {Estimator::rays, Estimator::facets, Estimator::smooth}) {
+    SCOPED_TRACE(estimator == Estimator::rays ? "rays" : name(estimator));
+    CausticSetup s = triangle_setup(estimator);
+    s.vertices_x = s.vertices_y = 15;
+    s.image_width = 30;
+    s.image_height = 24;
+    s.light_direction = Eigen::Vector3d(0.15, 0.05, -1);
+    CausticSetup behind = s;
+    behind.image_from_behind = true;
+    CausticTracer front_tracer(s), behind_tracer(behind);
+    const auto height = [](double x, double y) { return 3 + 0.05 * x + 0.3 * std::sin(0.5 * x + 0.2) * std::cos(0.4 * y); };
+    front_tracer.set_heights(heights_of(front_tracer, height));
+    behind_tracer.set_heights(heights_of(behind_tracer, height));
+    const std::vector<double> front = render(front_tracer), back = render(behind_tracer);
+    const auto mirrored = [&](const std::vector<double>& image) {
+      std::vector<double> out(image.size());
+      for (int row = 0; row < s.image_height; ++row)
+        for (int col = 0; col < s.image_width; ++col)
+          out[static_cast<size_t>(row * s.image_width + col)] = image[static_cast<size_t>(row * s.image_width + s.image_width - 1 - col)];
+      return out;
+    };
+    const double peak = *std::max_element(front.begin(), front.end());
+    ASSERT_GT(peak, 0.0);
+    const std::vector<double> expected = mirrored(front);
+    double worst = 0;
+    for (size_t k = 0; k < back.size(); ++k) worst = std::max(worst, std::abs(back[k] - expected[k]));
+    EXPECT_LT(worst, 1e-9 * peak);
+    EXPECT_NE(front, expected);  // the image is not symmetric: the test can tell
+
+    std::vector<double> weights(front.size());
+    for (size_t k = 0; k < weights.size(); ++k) weights[k] = std::sin(0.37 * static_cast<double>(k)) + 0.5;
+    std::vector<double> g_front(front_tracer.heights().size()), g_back(g_front.size());
+    front_tracer.pull_back(mirrored(weights), g_front);
+    behind_tracer.pull_back(weights, g_back);
+    double scale = 0, difference = 0;
+    for (size_t k = 0; k < g_front.size(); ++k) {
+      scale = std::max(scale, std::abs(g_front[k]));
+      difference = std::max(difference, std::abs(g_front[k] - g_back[k]));
+    }
+    EXPECT_GT(scale, 0.0);
+    EXPECT_LT(difference, 1e-9 * scale);
+  }
+}
+
 TEST(CausticTriangles, SameImageAndGradientForAnyThreadCount) {
   for (Estimator estimator : {Estimator::facets, Estimator::smooth}) {
   CausticSetup s = triangle_setup(estimator);

@@ -146,5 +146,30 @@ TEST(CausticStart, TransportStartCastsTheGoal) {
   EXPECT_GT(start.relief_mm, 0.1);
 }
 
+// A goal seen from behind the receiver is the mirror image of the goal on
+// the receiver as it lies: the start for it is the start for the mirrored
+// goal, surface for surface (a lopsided goal, so that mirroring matters).
+TEST(CausticStart, GoalSeenFromBehindStartsAsItsMirrorImage) {
+  CausticSetup s;
+  s.width_mm = s.depth_mm = 30;
+  s.vertices_x = s.vertices_y = 41;
+  s.receiver_distance_mm = 100;
+  s.receiver_width_mm = s.receiver_depth_mm = 30;
+  s.image_width = 24;
+  s.image_height = 20;
+  std::vector<double> goal(24 * 20), mirrored(goal.size());
+  for (int row = 0; row < 20; ++row)
+    for (int col = 0; col < 24; ++col)
+      goal[static_cast<size_t>(row * 24 + col)] = 0.2 + std::exp(-std::pow((col - 6.0) / 3, 2) - std::pow((row - 12.0) / 4, 2));
+  for (int row = 0; row < 20; ++row)
+    for (int col = 0; col < 24; ++col)
+      mirrored[static_cast<size_t>(row * 24 + col)] = goal[static_cast<size_t>(row * 24 + 23 - col)];
+  CausticSetup behind = s;
+  behind.image_from_behind = true;
+  const TransportStart from_behind = transport_start(behind, goal, 5.0), as_lying = transport_start(s, mirrored, 5.0);
+  EXPECT_EQ(from_behind.heights, as_lying.heights);
+  EXPECT_NE(as_lying.heights, transport_start(s, goal, 5.0).heights);
+}
+
 }  // namespace
 }  // namespace spec2fab

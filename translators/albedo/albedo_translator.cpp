@@ -72,8 +72,8 @@ class AlbedoTranslator final : public TuningTranslator {
     report["delta_e00_nearest_only"] = baseline["delta_e00"];
     report["low_pass_delta_e00_nearest_only"] = baseline["low_pass_delta_e00"];
     context.result["albedo"] = report;
-    write_colour_panels({&texture_.image().pixels, &achieved, &nearest}, texture_.columns()[0],
-                        texture_.columns()[1], context.folder.path("preview/goal_vs_achieved.png"));
+    texture_.write_preview({&texture_.image().pixels, &achieved, &nearest},
+                           context.folder.path("preview/goal_vs_achieved.png"));
     context.result["files"] = {{"previews", {"preview/convergence.png", "preview/goal_vs_achieved.png"}}};
   }
 

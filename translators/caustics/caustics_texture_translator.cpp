@@ -24,6 +24,13 @@
 // phase then compensates the texture's shadow; "compensate_texture": false
 // tunes as if the texture were not there (the paper's independent phases),
 // for comparison — both report the caustic the print really casts.
+//
+// The design serves a viewer in the room: the picture reads right on the
+// window's room face (the top, seen from above), and the caustic reads right
+// on the wall the viewer faces. The tree's frame for the bottom face is the
+// print's mirrored (z = cut − w), so the tracer's image is taken from behind
+// the receiver (image_from_behind: columns towards −x), which un-mirrors it;
+// the texture's top row goes to the highest y.
 
 #include <algorithm>
 #include <numeric>
@@ -42,8 +49,10 @@ namespace {
 
 // The texture's keys: "image" is the caustic's.
 TextureOptions texture_options() {
-  return {{"texture", "texture_columns", "texture_metric", "texture_optimizer"},
-          {"VeroCyan", "VeroMagenta", "VeroYellow", "VeroWhitePlus"}};
+  TextureOptions options{{"texture", "texture_columns", "texture_metric", "texture_optimizer"},
+                         {"VeroCyan", "VeroMagenta", "VeroYellow", "VeroWhitePlus"}};
+  options.top_row_at_highest_v = true;  // read from the room, above the top face
+  return options;
 }
 
 class CausticsTextureTranslator final : public TuningTranslator {
@@ -121,6 +130,7 @@ class CausticsTextureTranslator final : public TuningTranslator {
     nlohmann::json simulator = settings_.simulator(surface_.vertices());
     simulator["origin_mm"] = {bounds.lower.x(), bounds.lower.y(), -texture_mm_};
     simulator["thickness_mm"] = size.z();
+    simulator["image_from_behind"] = true;  // the wall as the room sees it (see the top)
     slab_ = CausticSlabConfig::read(Properties::wrap(simulator, experiment.file().string() + " (simulator)"));
     const nlohmann::json optimizer =
         experiment.optimizer_or({{"type", "nlopt"}, {"algorithm", "LD_LBFGS"}, {"max_evaluations", 1000}});
@@ -161,8 +171,10 @@ class CausticsTextureTranslator final : public TuningTranslator {
         "image_mse, L-BFGS; phase \"caustic\"). Light enters through the shaped face and leaves "
         "through the textured top face, towards a receiver distance_mm beyond it; the caustic "
         "phase sees the fixed texture's collimated transmittance (exp(-(sigma_a + sigma_s') d), "
-        "luminance-weighted) as a filter on the exit face. Writes the clear slab's outline as "
-        "print/surface.stl besides the voxel outputs (which carry the inks).",
+        "luminance-weighted) as a filter on the exit face. The design serves a viewer on that "
+        "side (a window and the room's wall): the texture reads right seen from above the top "
+        "face, the caustic seen on the receiver from the slab's side. Writes the clear slab's "
+        "outline as print/surface.stl besides the voxel outputs (which carry the inks).",
         prefixed(option_docs<Options>(), "goal."),
         R"({"translator": "caustics_texture", "goal": {"image": "ring.png", "texture": "logo.png"}})"};
     doc.properties.push_back(
@@ -222,8 +234,7 @@ class CausticsTextureTranslator final : public TuningTranslator {
                      context.folder.path("preview/height_map.png"));
     std::vector<Rgb> grey;
     for (double t : transmittance) grey.push_back({t, t, t});
-    write_colour_panels({&texture_.image().pixels, &achieved, &grey}, texture_.columns()[0], texture_.columns()[1],
-                        context.folder.path("preview/texture.png"));
+    texture_.write_preview({&texture_.image().pixels, &achieved, &grey}, context.folder.path("preview/texture.png"));
     context.result["files"] = {{"previews",
                                 {"preview/convergence.png", "preview/goal_vs_simulated.png", "preview/height_map.png",
                                  "preview/texture.png"}}};

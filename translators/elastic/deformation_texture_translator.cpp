@@ -163,8 +163,8 @@ class DeformationTextureTranslator final : public TuningTranslator {
   void report(const RunRecord& record, RunContext& context) override {
     const std::vector<Rgb> achieved = texture_.achieved(network_);
     context.result["texture"] = texture_.report(achieved);
-    write_colour_panels({&texture_.image().pixels, &achieved}, texture_.columns()[0], texture_.columns()[1],
-                        context.folder.path("preview/texture_goal_vs_achieved.png"));
+    texture_.write_preview({&texture_.image().pixels, &achieved},
+                           context.folder.path("preview/texture_goal_vs_achieved.png"));
     // The cells' tuner ran last: its run is the record's last.
     nlohmann::json elastic = elastic_.report(network_, *tree_, record.runs.back().summary, context);
     if (options_.compare_without_shell) elastic["shell_left_out_of_the_fem"] = compare_without_shell(elastic, context);

@@ -152,7 +152,7 @@ Rgb gamut_map(const std::vector<Rgb>& gamut, const Rgb& pixel) {
 }
 
 void write_colour_panels(const std::vector<const std::vector<Rgb>*>& panels, int width, int height,
-                         const std::filesystem::path& file) {
+                         const std::filesystem::path& file, bool highest_v_on_top) {
   const int scale = std::max(1, 256 / std::max(width, height));
   const int w = width * scale, h = height * scale, gap = 8;
   const int count = static_cast<int>(panels.size());
@@ -160,7 +160,8 @@ void write_colour_panels(const std::vector<const std::vector<Rgb>*>& panels, int
   for (int p = 0; p < count; ++p) {
     for (int y = 0; y < h; ++y) {
       for (int x = 0; x < w; ++x) {
-        const Rgb& c = (*panels[static_cast<size_t>(p)])[static_cast<size_t>((y / scale) * width + x / scale)];
+        const int row = highest_v_on_top ? height - 1 - y / scale : y / scale;
+        const Rgb& c = (*panels[static_cast<size_t>(p)])[static_cast<size_t>(row * width + x / scale)];
         image.at<cv::Vec3b>(y, p * (w + gap) + x) =
             cv::Vec3b(linear_to_srgb8(c[2]), linear_to_srgb8(c[1]), linear_to_srgb8(c[0]));
       }
@@ -182,6 +183,14 @@ TexturePiece::TexturePiece(const Properties& goal, const Experiment& experiment,
   const PrinterProfile& printer = experiment.printer();
   columns_ = o.columns;
   image_ = load_goal_image(goal, o.keys.image, columns_);
+  top_row_at_highest_v_ = o.top_row_at_highest_v;
+  if (top_row_at_highest_v_) {
+    std::vector<Rgb> rows_from_bottom;
+    for (int row = columns_[1] - 1; row >= 0; --row)
+      rows_from_bottom.insert(rows_from_bottom.end(), image_.pixels.begin() + static_cast<std::ptrdiff_t>(row) * columns_[0],
+                              image_.pixels.begin() + static_cast<std::ptrdiff_t>(row + 1) * columns_[0]);
+    image_.pixels = std::move(rows_from_bottom);
+  }
   if (o.inks) {
     inks_ = *o.inks;
     for (const std::string& ink : inks_) palette.id(ink, goal.where("inks"));

@@ -54,9 +54,10 @@ std::vector<Rgb> printable_colours(Tuner& tuner);
 Rgb gamut_map(const std::vector<Rgb>& gamut, const Rgb& pixel);
 
 /// Column images side by side (each width × height linear RGB, row 0 at
-/// v = 0 drawn on top), scaled up to about 256 px: goal | achieved | ….
+/// v = 0 drawn on top, or at the bottom with `highest_v_on_top`), scaled up
+/// to about 256 px: goal | achieved | ….
 void write_colour_panels(const std::vector<const std::vector<Rgb>*>& panels, int width, int height,
-                         const std::filesystem::path& file);
+                         const std::filesystem::path& file, bool highest_v_on_top = false);
 
 /// Where a translator's goal keeps the texture's keys that differ between
 /// translators: albedo's picture is "image", caustics_texture's "texture"
@@ -99,6 +100,10 @@ struct TextureOptions {
   bool error_diffusion = true;
   std::optional<bool> gamut_map;
   double low_pass_sigma_px = 1.5;
+  /// Set by a translator, not read: the picture's top row goes to the
+  /// highest v, so that it reads right seen from +w looking down on (u, v)
+  /// (row 0 at v = 0 reads right from −w, through the part).
+  bool top_row_at_highest_v = false;
 
   TextureOptions() = default;
   TextureOptions(TextureKeys renamed, std::vector<std::string> inks_by_default);
@@ -144,7 +149,12 @@ class TexturePiece {
   int column_count() const { return columns_[0] * columns_[1]; }
   const std::vector<std::string>& inks() const { return inks_; }
   const std::string& metric() const { return metric_; }
+  /// The goal, in column order (column row 0 at v = 0).
   const GoalImage& image() const { return image_; }
+  /// Column images (goal, achieved, …) side by side, drawn as the picture reads.
+  void write_preview(const std::vector<const std::vector<Rgb>*>& panels, const std::filesystem::path& file) const {
+    write_colour_panels(panels, columns_[0], columns_[1], file, top_row_at_highest_v_);
+  }
   bool diffusion() const { return diffusion_; }
   double step_mm() const { return step_mm_; }
   /// The thickest stack: every ink at its thickest.
@@ -175,6 +185,7 @@ class TexturePiece {
  private:
   std::array<int, 2> columns_{0, 0};
   GoalImage image_;
+  bool top_row_at_highest_v_ = false;
   std::vector<std::string> inks_;
   std::vector<double> max_ink_mm_;
   double step_mm_ = 0.027, ink_mm_ = 0, low_pass_sigma_ = 1.5;
