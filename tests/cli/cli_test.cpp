@@ -834,6 +834,9 @@ TEST_F(Cli, CausticsTextureTunesTheTextureThenTheBottomFaceThroughItsShadow) {
   const double final_mse = result["tuning"]["phases"][1]["sum_final_error"].get<double>();
   EXPECT_NEAR(std::pow(caustics["rmse"].get<double>(), 2), final_mse, 1e-9 * final_mse);
   EXPECT_LT(caustics["rmse"].get<double>(), 0.95 * caustics["initial_rmse"].get<double>());
+  // It started from optimal transport to the goal (goal.start's default).
+  EXPECT_EQ(caustics["start"]["method"], "optimal transport");
+  EXPECT_GT(caustics["start"]["relief_mm"].get<double>(), 0.0);
   // Ignoring the texture, the tuner's error is not that of the cast image.
   const auto ignoring = run("ignoring", false);
   ASSERT_TRUE(ignoring.contains("caustics"));

@@ -6,11 +6,13 @@
 #include <numeric>
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "caustics/caustic_parts.h"
+#include "caustics/caustic_start.h"
 #include "core/colour.h"
 #include "core/distance.h"
 #include "core/properties.h"
@@ -19,6 +21,7 @@
 #include "spec/experiment.h"
 #include "spec/run_folder.h"
 #include "tuning/parts.h"
+#include "tuning/tuner.h"
 
 namespace spec2fab {
 
@@ -134,6 +137,30 @@ SurfaceStl write_caustic_surface_stl(const CausticSlabConfig& slab, std::array<i
            {"traced_relative_rmse_vs_simulated", rms_difference(traced, simulated) / root_mean_square(simulated)},
            {"traced", caustic_image_errors(traced, goal)}},
           mesh.bounds()};
+}
+
+nlohmann::json start_caustic_from_transport(Tuner& tuner, const CausticSlabConfig& slab, const HeightSurface& surface) {
+  const auto& goal = static_cast<const ImageObservation&>(tuner.goal().target());
+  const std::vector<double> values = tuner.search_space().values();
+  const double mean_height =
+      std::accumulate(values.begin(), values.end(), 0.0) / static_cast<double>(values.size()) - slab.origin_mm.z();
+  spdlog::info("start: optimal transport from the aperture to the goal's {} x {} pixels", goal.width, goal.height);
+  const TransportStart start = transport_start(slab.setup, goal.pixels, mean_height);
+  int clamped = 0;
+  tuner.set_values(fit_slab_surface(slab.setup, slab.origin_mm, surface, tuner.search_space(), start.heights, &clamped));
+  spdlog::info("  {} Newton steps, {:.1f} s; relief {:.2f} mm, largest slope {:.3f}{}", start.newton_steps,
+               start.transport_seconds + start.integration_seconds, start.relief_mm, start.largest_slope,
+               clamped ? fmt::format("; {} control points held at their bounds", clamped) : std::string());
+  return {{"method", "optimal transport"},
+          {"lit_pixels", start.sites},
+          {"newton_steps", start.newton_steps},
+          {"worst_cell_mass_error", start.worst_mass_error},
+          {"transport_seconds", start.transport_seconds},
+          {"integration_seconds", start.integration_seconds},
+          {"relief_mm", start.relief_mm},
+          {"largest_slope", start.largest_slope},
+          {"integration_rms_slope_error", start.integration_rms_slope_error},
+          {"controls_at_bounds", clamped}};
 }
 
 std::string optimizer_label(const nlohmann::json& optimizer) {

@@ -23,6 +23,7 @@ namespace spec2fab {
 
 class Experiment;
 class HeightSurface;
+class Tuner;
 class Properties;
 class RunFolder;
 struct CausticSlabConfig;
@@ -124,6 +125,14 @@ SurfaceStl write_caustic_surface_stl(const CausticSlabConfig& slab, std::array<i
                                      const ImageObservation& goal,
                                      const std::function<void(Mesh&)>& to_print, const GridField* exit_filter,
                                      RunFolder& folder);
+
+/// Moves `tuner` — the caustics simulator of `slab` on `surface`, its goal
+/// the image to cast — to the surface optimal transport gives
+/// (caustics/caustic_start.h) around the tuner's current mean height, fitted
+/// to the surface's parameters; returns the figures the report keeps
+/// ("start": Newton steps, seconds, relief, largest slope, controls held at
+/// their bounds).
+nlohmann::json start_caustic_from_transport(Tuner& tuner, const CausticSlabConfig& slab, const HeightSurface& surface);
 
 /// "nlopt LD_LBFGS", "ceres numeric", "spsa": an optimizer's type and, for the
 /// adapters, what tells two of its runs apart (algorithm, derivatives).

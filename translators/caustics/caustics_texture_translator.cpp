@@ -61,14 +61,18 @@ class CausticsTextureTranslator final : public TuningTranslator {
   struct Options {
     bool compensate_texture = true;
     double min_thickness_mm = kUnset, start_thickness_mm = kUnset;
+    std::string start = "transport";
     template <class Declare, class Self>
     static void declare(Declare& d, Self& o) {
       d.value(o.compensate_texture, "compensate_texture",
               "the caustic phase sees the texture's shadow; false tunes as if it were clear");
       d.number(o.min_thickness_mm, "min_thickness_mm", Range::above(0), "thinnest the slab may get",
                Default{"t + 1/4 of the rest"});
-      d.number(o.start_thickness_mm, "start_thickness_mm", Range::above(0), "the flat start",
+      d.number(o.start_thickness_mm, "start_thickness_mm", Range::above(0), "the start's mean thickness",
                Default{"t + 3/4 of the rest"});
+      d.choice(o.start, "start", {"transport", "flat"},
+               "where the bottom face's optimizer starts: the surface optimal transport gives for the goal "
+               "(caustics/caustic_start.h; the texture's shadow left to the optimizer), or flat");
     }
   };
 
@@ -81,6 +85,7 @@ class CausticsTextureTranslator final : public TuningTranslator {
     const Vec3 size = bounds.size();
     texture_mm_ = texture_.ink_mm();
     compensate_ = options.compensate_texture;
+    transport_start_ = options.start == "transport";
 
     // The shaped face: thicknesses of the clear slab, measured from the top face.
     surface_ = CausticSurfaceSettings::read(goal);
@@ -197,7 +202,12 @@ class CausticsTextureTranslator final : public TuningTranslator {
  private:
   ReducerNode& texture_stack(int column) { return tree_->node("above/" + std::to_string(column) + "/below"); }
 
-  void prepare(RunContext& /*context*/) override { start_ = network_.tuner(caustic_tuner_).search_space().values(); }
+  void prepare(RunContext& /*context*/) override {
+    Tuner& caustic = network_.tuner(caustic_tuner_);
+    if (transport_start_)
+      start_report_ = start_caustic_from_transport(caustic, slab_, dynamic_cast<const HeightSurface&>(tree_->node("below")));
+    start_ = caustic.search_space().values();
+  }
 
   void report(const RunRecord& /*record*/, RunContext& context) override {
     // The texture as printed.
@@ -225,6 +235,7 @@ class CausticsTextureTranslator final : public TuningTranslator {
     const auto& cast = static_cast<const ImageObservation&>(caustic.simulated());
     nlohmann::json report = settings_.image_report(cast.pixels, initial, target);
     report["compensate_texture"] = compensate_;
+    if (transport_start_) report["start"] = start_report_;
     report["control"] = surface_.control;
     context.result["caustics"] = report;
 
@@ -258,10 +269,11 @@ class CausticsTextureTranslator final : public TuningTranslator {
   std::shared_ptr<TextureShadow> shadow_;
   std::string optimizer_label_;
   double texture_mm_ = 0, cut_z_ = 0;
-  bool compensate_ = true;
+  bool compensate_ = true, transport_start_ = true;
+  nlohmann::json start_report_;
   CausticSlabConfig slab_;
   size_t caustic_tuner_ = 0;
-  std::vector<double> start_;  ///< the caustic tuner's flat start
+  std::vector<double> start_;  ///< the caustic tuner's start
 };
 
 }  // namespace

@@ -19,7 +19,6 @@
 
 #include "caustic_translation.h"
 #include "caustics/caustic_parts.h"
-#include "caustics/caustic_start.h"
 #include "reducer/reducer_tree.h"
 #include "spec/tuning_translator.h"
 #include "tuning/convergence_plot.h"
@@ -124,7 +123,8 @@ class SmoothCausticsTranslator final : public TuningTranslator {
   /// The start, and the other optimizers' runs from it.
   void prepare(RunContext& context) override {
     Tuner& tuner = network_.tuner(0);
-    if (transport_start_) start_from_transport(tuner);
+    if (transport_start_)
+      start_report_ = start_caustic_from_transport(tuner, slab_, dynamic_cast<const HeightSurface&>(tree_->root()));
     tuner.error();
     initial_ = static_cast<const ImageObservation&>(tuner.simulated()).pixels;
     const std::vector<double> start = tuner.search_space().values();
@@ -137,32 +137,6 @@ class SmoothCausticsTranslator final : public TuningTranslator {
       spdlog::info("  {}", compared_runs_.back().brief_report());
       tuner.error_at(start);
     }
-  }
-
-  /// Moves the surface to the optimal-transport start (fitted to the
-  /// B-spline's control points) and keeps its figures for the report.
-  void start_from_transport(Tuner& tuner) {
-    const auto& goal = static_cast<const ImageObservation&>(tuner.goal().target());
-    const double mean_height = tuner.search_space().values().front() - slab_.origin_mm.z();  // the flat start's
-    spdlog::info("start: optimal transport from the aperture to the goal's {} x {} pixels", goal.width, goal.height);
-    const TransportStart start = transport_start(slab_.setup, goal.pixels, mean_height);
-    int clamped = 0;
-    const auto& surface = dynamic_cast<const HeightSurface&>(tree_->root());
-    tuner.set_values(fit_slab_surface(slab_.setup, slab_.origin_mm, surface, tuner.search_space(), start.heights, &clamped));
-    start_report_ = {{"method", "optimal transport"},
-                     {"lit_pixels", start.sites},
-                     {"newton_steps", start.newton_steps},
-                     {"worst_cell_mass_error", start.worst_mass_error},
-                     {"transport_seconds", start.transport_seconds},
-                     {"integration_seconds", start.integration_seconds},
-                     {"relief_mm", start.relief_mm},
-                     {"largest_slope", start.largest_slope},
-                     {"integration_rms_slope_error", start.integration_rms_slope_error},
-                     {"controls_at_bounds", clamped}};
-    spdlog::info("  {} Newton steps, {:.1f} s; relief {:.2f} mm, largest slope {:.3f}{}", start.newton_steps,
-                 start.transport_seconds + start.integration_seconds, start.relief_mm, start.largest_slope,
-                 clamped ? fmt::format("; {} control points held at their bounds (min_height_mm, the solid's top)", clamped)
-                         : std::string());
   }
 
   void report(const RunRecord& record, RunContext& context) override {
