@@ -43,6 +43,8 @@ void CausticSetup::validate() const {
   if (!(refractive_index >= 1) || !(refractive_index < 10)) fail("refractive index must be in [1, 10)");
   if (!light_direction.allFinite() || !(light_direction.z() < -1e-6 * light_direction.norm()))
     fail("the light must travel downwards (light_direction z < 0), towards the receiver");
+  if (point_light && (!light_position_mm.allFinite() || !(light_position_mm.z() > 0)))
+    fail("the point light must lie above the slab's bottom (light position z > 0)");
   if (!(receiver_distance_mm > 0)) fail("receiver distance must be positive (below the slab)");
   if (!(receiver_width_mm > 0) || !(receiver_depth_mm > 0)) fail("receiver size must be positive");
   if (!receiver_centre_mm.allFinite()) fail("receiver centre must be finite");
@@ -194,8 +196,8 @@ void CausticTracer::update_vertex_buffer() {
 void CausticTracer::trace_block(int begin, int end) {
   constexpr int kBlock = 256;
   const CausticSetup& s = setup_;
-  // Power through a cell's horizontal area of a beam of unit irradiance.
-  const double power = s.width_mm / s.rays_x * s.depth_mm / s.rays_y * -s.light_direction.z();
+  // Power through a cell's horizontal area of the light.
+  const Vec3 cell_area(0, 0, s.width_mm / s.rays_x * s.depth_mm / s.rays_y);
   const double epsilon = 1e-5 * (s.width_mm + s.depth_mm + top_z_);
   const double eta = s.refractive_index;
   // A ray enters the top, leaves by the bottom and nothing else: the path
@@ -217,8 +219,8 @@ void CausticTracer::trace_block(int begin, int end) {
     for (int k = 0; k < count; ++k) {
       const int ray = first + k;
       origin[k] = ray_origin(ray);
-      direction[k] = s.light_direction;
-      results_[static_cast<size_t>(ray)] = RayResult{.power = power, .fate = kLost};
+      direction[k] = light_towards(s, origin[k]);
+      results_[static_cast<size_t>(ray)] = RayResult{.power = light_through(s, origin[k], cell_area), .fate = kLost};
       if (s.disc_aperture) {
         const double u = origin[k].x() / (0.5 * s.width_mm), v = origin[k].y() / (0.5 * s.depth_mm);
         if (u * u + v * v > 1) {
@@ -351,6 +353,10 @@ bool CausticTracer::for_each_splat_corner(const Eigen::Vector2d& uv, Visit&& vis
 }
 
 CausticFlux CausticTracer::render(std::span<double> irradiance) {
+  // The point light shines on the top from outside the slab.
+  if (setup_.point_light && !(setup_.light_position_mm.z() > top_z_ + 1e-3 * (setup_.width_mm + setup_.depth_mm) + 1e-3))
+    throw InputError("caustics: the point light must lie above the slab's top (light at " +
+                     std::to_string(setup_.light_position_mm.z()) + " mm, top at " + std::to_string(top_z_) + " mm)");
   return setup_.estimator == CausticSetup::Estimator::rays ? render_rays(irradiance) : render_triangles(irradiance);
 }
 
@@ -443,7 +449,8 @@ void CausticTracer::pull_back_rays(std::span<const double> d_irradiance, std::sp
         xy[k] = v.head<2>();
         h[k] = variable<3>(v.z(), k);
       }
-      const Eigen::Matrix<HeightJet, 2, 1> point = slab_receiver_point(ray_origin(static_cast<int>(i)), s.light_direction, xy, h,
+      const Vec3 origin = ray_origin(static_cast<int>(i));
+      const Eigen::Matrix<HeightJet, 2, 1> point = slab_receiver_point(origin, light_towards(s, origin), xy, h,
                                                             s.refractive_index, -s.receiver_distance_mm);
       ray_gradients_[i] = d_u * du_dx * derivatives<3>(point.x()) + d_v * dv_dy * derivatives<3>(point.y());
     }

@@ -29,6 +29,12 @@ struct CausticSetup {
   int vertices_x = 61, vertices_y = 61; ///< top height-field grid (corners included)
   double refractive_index = 1.5;
   Eigen::Vector3d light_direction{0, 0, -1};  ///< direction the light travels (normalised on use)
+  /// A point light (a bare LED) at light_position_mm instead — x, y from the
+  /// footprint's centre, z above the bottom, above the top — radiating
+  /// evenly in all directions with the intensity that gives unit irradiance
+  /// across the beam at the distance z (under it, at the bottom's plane).
+  bool point_light = false;
+  Eigen::Vector3d light_position_mm{0, 0, 1000};
   double receiver_distance_mm = 100;          ///< receiver plane z = -distance
   double receiver_width_mm = 50, receiver_depth_mm = 50;
   Eigen::Vector2d receiver_centre_mm{0, 0};
@@ -97,6 +103,29 @@ inline double fresnel_reflectance(double eta_i, double eta_t, double cos_i, doub
   return 0.5 * (rs * rs + rp * rp);
 }
 
+/// The direction (unit) light travels at point p: the collimated beam's, or
+/// away from the point light.
+template <class T>
+Eigen::Matrix<T, 3, 1> light_towards(const CausticSetup& s, const Eigen::Matrix<T, 3, 1>& p) {
+  using std::sqrt;
+  if (!s.point_light) return s.light_direction.normalized().cast<T>();
+  const Eigen::Matrix<T, 3, 1> away = p - s.light_position_mm.cast<T>();
+  return away / sqrt(away.dot(away));
+}
+
+/// The light crossing a small flat patch at c whose area vector (normal ×
+/// area) faces the light: the beam's unit irradiance times the projected
+/// area, or for the point light its intensity times the solid angle the
+/// patch subtends (to second order in its size over its distance).
+template <class T>
+T light_through(const CausticSetup& s, const Eigen::Matrix<T, 3, 1>& c, const Eigen::Matrix<T, 3, 1>& area) {
+  using std::sqrt;
+  if (!s.point_light) return -area.dot(s.light_direction.normalized().cast<T>());
+  const Eigen::Matrix<T, 3, 1> to_light = s.light_position_mm.cast<T>() - c;
+  const T r2 = to_light.dot(to_light);
+  return T(s.light_position_mm.z() * s.light_position_mm.z()) * area.dot(to_light) / (r2 * sqrt(r2));
+}
+
 /// Collimated light along `light` (unit) through a top facet of outward
 /// unit normal `normal`, into the slab and out of its flat bottom: the
 /// directions inside and out, and the cosines Fresnel's law needs. The
@@ -110,14 +139,14 @@ struct SlabPassage {
 
 /// The passage, or false when the light cannot make it (it would leave
 /// the top upwards, or is totally reflected at the bottom).
-template <class T>
-bool pass_through_slab(const Eigen::Vector3d& light, const Eigen::Matrix<T, 3, 1>& normal, double eta,
+template <class T, class Light>
+bool pass_through_slab(const Light& light, const Eigen::Matrix<T, 3, 1>& normal, double eta,
                        SlabPassage<T>& pass) {
   using std::sqrt;
   pass.cos_i = -(light.x() * normal.x() + light.y() * normal.y() + light.z() * normal.z());
   const T ratio(1.0 / eta);
   pass.cos_t = sqrt(T(1.0) - ratio * ratio * (T(1.0) - pass.cos_i * pass.cos_i));
-  pass.inside = ratio * light.cast<T>() + (ratio * pass.cos_i - pass.cos_t) * normal;
+  pass.inside = ratio * light.template cast<T>() + (ratio * pass.cos_i - pass.cos_t) * normal;
   if (!(pass.inside.z() < T(0.0))) return false;
   // Out through the bottom, whose normal facing the light is +z.
   pass.cos_b = -pass.inside.z();
@@ -263,6 +292,7 @@ class CausticTracer {
   std::vector<Eigen::Vector3d> triangle_gradients_;
   std::vector<Eigen::Vector2d> landing_;                    ///< smooth: each top vertex's landing point
   std::vector<Eigen::Matrix<double, 6, 1>> corner_gradients_;  ///< smooth: ∂E/∂ each triangle's landing points
+  std::vector<Eigen::Vector3d> light_gradients_;  ///< smooth, point light: ∂E/∂ each triangle's heights through its share of the light
   std::vector<Eigen::Vector2d> landing_gradients_;          ///< smooth: ∂E/∂ each vertex's landing point
   std::vector<Eigen::Matrix<double, 5, 1>> vertex_gradients_;  ///< smooth: ∂E/∂ each vertex's stencil heights
   int top_triangles_ = 0;

@@ -124,25 +124,34 @@ Fate triangle_image(const CausticSetup& s, const Eigen::Vector2d xy[3], const T 
   using V = Eigen::Matrix<T, 3, 1>;
   const V p[3] = {V(T(xy[0].x()), T(xy[0].y()), h[0]), V(T(xy[1].x()), T(xy[1].y()), h[1]),
                   V(T(xy[2].x()), T(xy[2].y()), h[2])};
-  const Eigen::Vector3d& light = s.light_direction;
   const V area = 0.5 * (p[1] - p[0]).cross(p[2] - p[0]);  // outward: the top faces up
-  flux = -(light.x() * area.x() + light.y() * area.y() + light.z() * area.z());
+  const V centre = (p[0] + p[1] + p[2]) / T(3.0);
+  flux = light_through(s, centre, area);
   entering = 0;
   if (!(value_of(flux) > 0)) return Fate::blocked;  // the beam grazes or meets the back
 
+  // Collimated light crosses the facet as one pencil; a point light's rays
+  // through the corners each refract by their own direction.
   const double eta = s.refractive_index;
+  const V normal = area / sqrt(area.dot(area));
   SlabPassage<T> pass;
-  if (!pass_through_slab(light, V(area / sqrt(area.dot(area))), eta, pass)) return Fate::returned;
+  if (!pass_through_slab(light_towards(s, centre), normal, eta, pass)) return Fate::returned;
   Point<T> landing[3];
-  for (int k = 0; k < 3; ++k) landing[k] = receiver_pixel(s, slab_landing(p[k], pass, -s.receiver_distance_mm));
+  V light[3];
+  for (int k = 0; k < 3; ++k) {
+    light[k] = light_towards(s, p[k]);
+    SlabPassage<T> corner;
+    if (s.point_light && !pass_through_slab(light[k], normal, eta, corner)) return Fate::returned;
+    landing[k] = receiver_pixel(s, slab_landing(p[k], s.point_light ? corner : pass, -s.receiver_distance_mm));
+  }
 
   bool clipped = false;
   if (s.disc_aperture) {
     Point<T> origin[3];
     for (int k = 0; k < 3; ++k) {
-      const T back = (p[k].z() - T(start_z)) / light.z();
-      origin[k] = Point<T>((p[k].x() - back * light.x()) / (0.5 * s.width_mm),
-                           (p[k].y() - back * light.y()) / (0.5 * s.depth_mm));
+      const T back = (p[k].z() - T(start_z)) / light[k].z();
+      origin[k] = Point<T>((p[k].x() - back * light[k].x()) / (0.5 * s.width_mm),
+                           (p[k].y() - back * light[k].y()) / (0.5 * s.depth_mm));
     }
     T passing(1.0);  // set by clip_to_disc when it clips
     clipped = clip_to_disc(origin, landing, scratch, passing);
@@ -225,21 +234,37 @@ bool vertex_landing(const CausticSetup& s, const Eigen::Vector2d& xy, const T h[
   using V = Eigen::Matrix<T, 3, 1>;
   V normal(-(h[2] - h[1]) / dx, -(h[4] - h[3]) / dy, T(1.0));
   normal /= sqrt(normal.dot(normal));
+  const V at(T(xy.x()), T(xy.y()), h[0]);
   SlabPassage<T> pass;
-  if (!pass_through_slab(s.light_direction, normal, s.refractive_index, pass) || !(value_of(pass.cos_i) > 0))
+  if (!pass_through_slab(light_towards(s, at), normal, s.refractive_index, pass) || !(value_of(pass.cos_i) > 0))
     return false;
-  landing = receiver_pixel(s, slab_landing(V(T(xy.x()), T(xy.y()), h[0]), pass, -s.receiver_distance_mm));
+  landing = receiver_pixel(s, slab_landing(at, pass, -s.receiver_distance_mm));
   return true;
 }
 
-/// The smooth estimator's triangle: its beam (the light through its
-/// footprint, -light.z per mm², less what the disc stops) spread over the
-/// triangle its corners land on.
+/// The light the smooth estimator gives a triangle of the top (corners at
+/// xy, heights h): a collimated beam's through its footprint (-light.z per
+/// mm²), or what a point light sends through the triangle itself.
 template <class T>
-Fate smooth_triangle_image(const CausticSetup& s, const Eigen::Vector2d xy[3], const Point<T> landing[3],
-                           Scratch<T>& scratch, T& flux, double& entering) {
-  const double footprint = 0.5 * std::abs((xy[1] - xy[0]).x() * (xy[2] - xy[0]).y() - (xy[1] - xy[0]).y() * (xy[2] - xy[0]).x());
-  flux = T(footprint * -s.light_direction.z());
+T smooth_triangle_light(const CausticSetup& s, const Eigen::Vector2d xy[3], const T h[3]) {
+  using V = Eigen::Matrix<T, 3, 1>;
+  if (!s.point_light) {
+    const double footprint = 0.5 * std::abs((xy[1] - xy[0]).x() * (xy[2] - xy[0]).y() - (xy[1] - xy[0]).y() * (xy[2] - xy[0]).x());
+    return T(footprint * -s.light_direction.normalized().z());
+  }
+  const V p[3] = {V(T(xy[0].x()), T(xy[0].y()), h[0]), V(T(xy[1].x()), T(xy[1].y()), h[1]),
+                  V(T(xy[2].x()), T(xy[2].y()), h[2])};
+  V area = T(0.5) * (p[1] - p[0]).cross(p[2] - p[0]);
+  if (value_of(area.z()) < 0) area = -area;  // facing the light, whichever the corners' order
+  return light_through(s, V((p[0] + p[1] + p[2]) / T(3.0)), area);
+}
+
+/// The smooth estimator's triangle: its light (smooth_triangle_light, less
+/// what the disc stops) spread over the triangle its corners land on.
+template <class T>
+Fate smooth_triangle_image(const CausticSetup& s, const Eigen::Vector2d xy[3], const double h[3],
+                           const Point<T> landing[3], Scratch<T>& scratch, T& flux, double& entering) {
+  flux = T(smooth_triangle_light(s, xy, h));
   bool clipped = false;
   if (s.disc_aperture) {
     Point<T> origin[3];
@@ -296,6 +321,7 @@ void CausticTracer::pull_back_smooth(std::span<const double> d_irradiance, std::
   using VertexJet = Jet<5>;
   const size_t triangles = static_cast<size_t>(top_triangles_);
   corner_gradients_.resize(triangles);
+  light_gradients_.resize(triangles);
   const double per_area = pixels_per_mm2();
   // ∂E/∂(landing points) of each triangle…
   tbb::parallel_for(tbb::blocked_range<size_t>(0, triangles, 256), [&](const tbb::blocked_range<size_t>& range) {
@@ -309,18 +335,31 @@ void CausticTracer::pull_back_smooth(std::span<const double> d_irradiance, std::
         xy[k] = vertices_[v].head<2>();
         landing[k] = Point<CornerJet>(variable<6>(landing_[v].x(), 2 * k), variable<6>(landing_[v].y(), 2 * k + 1));
       }
+      double h[3];
+      for (int k = 0; k < 3; ++k) h[k] = heights_[static_cast<size_t>(f[k])];
       CornerJet carried;
       double entering = 0;
       corner_gradients_[t].setZero();
-      if (smooth_triangle_image(s, xy, landing, scratch, carried, entering) != Fate::received) continue;
+      light_gradients_[t].setZero();
+      if (smooth_triangle_image(s, xy, h, landing, scratch, carried, entering) != Fate::received) continue;
       CornerJet sum(0.0);
       rasterize(scratch.image, s.image_width, s.image_height, scratch,
                 [&](size_t pixel, const CornerJet& share) { sum += d_irradiance[pixel] * share; });
       corner_gradients_[t] = derivatives<6>(sum * carried) * per_area;
+      // A point light's share also moves with the triangle's heights.
+      if (s.point_light) {
+        const HeightJet jets[3] = {variable<3>(h[0], 0), variable<3>(h[1], 1), variable<3>(h[2], 2)};
+        const double passing = value_of(carried) / smooth_triangle_light(s, xy, h);  // what the disc let through
+        light_gradients_[t] = value_of(sum) * passing * per_area * derivatives<3>(smooth_triangle_light(s, xy, jets));
+      }
     }
   });
   // …gathered per vertex in triangle order…
   landing_gradients_.assign(heights_.size(), Eigen::Vector2d::Zero());
+  std::fill(d_heights.begin(), d_heights.end(), 0.0);
+  if (s.point_light)
+    for (size_t t = 0; t < triangles; ++t)
+      for (int k = 0; k < 3; ++k) d_heights[static_cast<size_t>(triangles_[t][k])] += light_gradients_[t][k];
   for (size_t t = 0; t < triangles; ++t)
     for (int k = 0; k < 3; ++k)
       landing_gradients_[static_cast<size_t>(triangles_[t][k])] += corner_gradients_[t].segment<2>(2 * k);
@@ -342,7 +381,6 @@ void CausticTracer::pull_back_smooth(std::span<const double> d_irradiance, std::
                              landing_gradients_[v].y() * derivatives<5>(landing.y());
     }
   });
-  std::fill(d_heights.begin(), d_heights.end(), 0.0);
   for (size_t v = 0; v < heights_.size(); ++v) {
     const std::array<int, 5> stencil = normal_stencil(static_cast<int>(v));
     for (int k = 0; k < 5; ++k) d_heights[static_cast<size_t>(stencil[static_cast<size_t>(k)])] += stencil_gradients[v][k];
@@ -381,7 +419,7 @@ CausticFlux CausticTracer::render_triangles(std::span<double> irradiance) {
         if (smooth) {
           const Point<double> landing[3] = {landing_[static_cast<size_t>(f[0])], landing_[static_cast<size_t>(f[1])],
                                             landing_[static_cast<size_t>(f[2])]};
-          fate = smooth_triangle_image(s, xy, landing, scratch, carried, entering);
+          fate = smooth_triangle_image(s, xy, h, landing, scratch, carried, entering);
         } else {
           fate = triangle_image(s, xy, h, start_z_, scratch, carried, entering);
         }
