@@ -10,10 +10,13 @@
 //
 //   caustic_check --stl run/print/surface.stl --goal ring.png --distance 200
 //                 [--receiver 60 60] [--image 240 240] [--rays 3840 3840] [--index 1.5]
-//                 [--aperture disc] [--light 0 0 -1] [--write traced.png]
+//                 [--aperture disc] [--light 0 0 -1 | --point X Y Z] [--write traced.png]
 //
 // The receiver is centred below the slab's footprint (the mesh's x–y
-// bounds), at `distance` below its lowest point; light comes from above.
+// bounds), at `distance` below its lowest point; light comes from above:
+// collimated along --light, or from a point light at --point (the STL's
+// coordinates) radiating evenly, the light through the footprint just
+// above the slab being what the goal is scaled to.
 
 #include <algorithm>
 #include <array>
@@ -238,7 +241,8 @@ struct Options {
   double receiver[2] = {0, 0};
   int image[2] = {240, 240}, rays[2] = {0, 0};
   V3 light{0, 0, -1};
-  bool disc = false;
+  bool disc = false, point = false;
+  V3 point_at{0, 0, 0};
 };
 
 Options parse(int argc, char** argv) {
@@ -257,10 +261,11 @@ Options parse(int argc, char** argv) {
     else if (a == "--image") { need(i, 2); o.image[0] = std::stoi(argv[++i]); o.image[1] = std::stoi(argv[++i]); }
     else if (a == "--rays") { need(i, 2); o.rays[0] = std::stoi(argv[++i]); o.rays[1] = std::stoi(argv[++i]); }
     else if (a == "--light") { need(i, 3); o.light = {std::stod(argv[i + 1]), std::stod(argv[i + 2]), std::stod(argv[i + 3])}; i += 3; }
+    else if (a == "--point") { need(i, 3); o.point = true; o.point_at = {std::stod(argv[i + 1]), std::stod(argv[i + 2]), std::stod(argv[i + 3])}; i += 3; }
     else if (a == "--aperture") { need(i, 1); o.disc = std::string(argv[++i]) == "disc"; }
     else if (a == "--help" || a == "-h") {
       std::cout << "caustic_check --stl FILE --goal PNG --distance MM [--receiver W H] [--image W H] [--rays NX NY]\n"
-                   "              [--index N] [--aperture rectangle|disc] [--light X Y Z] [--write PNG]\n"
+                   "              [--index N] [--aperture rectangle|disc] [--light X Y Z | --point X Y Z] [--write PNG]\n"
                    "Traces collimated light through the STL slab with its own tracer and prints the image's\n"
                    "SSIM, PSNR and RMSE against the goal as JSON (see the comment atop tools/caustic_check.cpp).\n";
       std::exit(0);
@@ -294,11 +299,14 @@ int main(int argc, char** argv) try {
   const double rw = o.receiver[0] > 0 ? o.receiver[0] : width, rd = o.receiver[1] > 0 ? o.receiver[1] : depth;
   const double receiver_z = low[2] - o.distance;
   const int nx = o.rays[0], ny = o.rays[1], w = o.image[0], h = o.image[1];
-  // Each ray carries its stratum's share of a beam of unit irradiance.
-  const double power = width / nx * depth / ny * -o.light.z;
+  // Each ray carries its stratum's share of a beam of unit irradiance, or of
+  // the point light's: I cos(angle) / r² on the plane above the slab.
+  const double cell = width / nx * depth / ny;
   const double start_z = high[2] + 1;
+  if (o.point && !(o.point_at.z > start_z)) throw std::runtime_error("--point: the light must lie above the slab");
+  const double intensity = (o.point_at.z - low[2]) * (o.point_at.z - low[2]);
 
-  struct Landing { int pixel = -1; double power = 0; bool emitted = false; };
+  struct Landing { int pixel = -1; double power = 0, emitted_power = 0; bool emitted = false; };
   std::vector<Landing> landings(static_cast<size_t>(nx) * static_cast<size_t>(ny));
   tbb::parallel_for(tbb::blocked_range<int>(0, nx * ny, 4096), [&](const tbb::blocked_range<int>& range) {
     for (int r = range.begin(); r != range.end(); ++r) {
@@ -317,6 +325,14 @@ int main(int argc, char** argv) try {
       landing.emitted = true;
       V3 origin{sx, sy, start_z};  // the beam's cross-section above the slab is the footprint
       V3 direction = o.light;
+      double power = cell * -o.light.z;
+      if (o.point) {
+        const V3 away = origin - o.point_at;
+        const double r = std::sqrt(away.dot(away));
+        direction = away * (1 / r);
+        power = cell * intensity * (o.point_at.z - start_z) / (r * r * r);
+      }
+      landing.emitted_power = power;
       double t;
       uint32_t hit;
       bool done = false;
@@ -353,7 +369,7 @@ int main(int argc, char** argv) try {
   const double pixel_area = rw / w * rd / h;
   for (const Landing& l : landings) {
     if (!l.emitted) continue;
-    emitted += power;
+    emitted += l.emitted_power;
     if (l.pixel >= 0) {
       traced.at<double>(l.pixel / w, l.pixel % w) += l.power / pixel_area;
       received += l.power;

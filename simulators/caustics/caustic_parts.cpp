@@ -72,6 +72,8 @@ CausticSlabConfig CausticSlabConfig::read(const Properties& properties) {
   s.vertices_y = o.vertices[1];
   s.refractive_index = o.refractive_index;
   s.light_direction = Eigen::Vector3d(o.light[0], o.light[1], o.light[2]);
+  s.point_light = !std::isnan(o.light_position_mm[0]);
+  if (s.point_light) s.light_position_mm = Eigen::Vector3d(o.light_position_mm[0], o.light_position_mm[1], o.light_position_mm[2]);
   s.receiver_distance_mm = o.distance_mm;
   const bool receiver_given = o.receiver_mm[0] > 0;
   s.receiver_width_mm = receiver_given ? o.receiver_mm[0] : o.size_mm[0];

@@ -46,6 +46,7 @@ struct CausticSlabConfig {
     std::array<int, 2> vertices{121, 121};
     double refractive_index = 1.5;
     std::array<double, 3> light{0, 0, -1};
+    std::array<double, 3> light_position_mm{kUnset, kUnset, kUnset};
     double distance_mm = 100;
     std::array<double, 2> receiver_mm{0, 0};  ///< 0: size_mm
     std::array<double, 2> receiver_centre_mm{0, 0};
@@ -64,6 +65,10 @@ struct CausticSlabConfig {
       d.number(o.vertices, "vertices", Range::at_least(2), "top-surface mesh vertices (nx, ny), corners included");
       d.number(o.refractive_index, "refractive_index", Range::closed(1, 4), "of the slab's material");
       d.number(o.light, "light", Range::any(), "direction (x, y, z) the light travels, z < 0");
+      d.number(o.light_position_mm, "light_position_mm", Range::any(),
+               "a point light instead, at (x, y) from the footprint's centre and z above the bottom, above the top; "
+               "its intensity gives unit irradiance across the beam at distance z",
+               Default{"none: collimated light along `light`"});
       d.number(o.distance_mm, "distance_mm", Range::closed(1e-3, 1e6), "receiver plane below the slab's bottom");
       d.number(o.receiver_mm, "receiver_mm", Range::above(0), "receiver extent (x, y) imaged", Default{"size_mm"});
       d.number(o.receiver_centre_mm, "receiver_centre_mm", Range::any(), "receiver centre below the slab's centre");

@@ -38,7 +38,7 @@ Vec2 slope_towards(const CausticSetup& s, const Vec2& xy, double h, const Vec2& 
     const Vec2 tangential = out.head<2>() / eta;
     inside = Vec3(tangential.x(), tangential.y(), -std::sqrt(std::max(0.0, 1 - tangential.squaredNorm())));
   }
-  const Vec3 normal = s.light_direction.normalized() - eta * inside;  // points up for η > 1
+  const Vec3 normal = light_towards(s, Vec3(xy.x(), xy.y(), h)) - eta * inside;  // points up for η > 1
   return -normal.head<2>() / normal.z();
 }
 

@@ -4,7 +4,10 @@
 /// the goal's irradiance (optimal_transport.h), each square of the top's
 /// vertex grid is tilted by Snell's law so that its light heads for where
 /// the transport sends it (through the top, the slab and the flat bottom),
-/// and the tilts are integrated into heights by least squares.
+/// and the tilts are integrated into heights by least squares. A point
+/// light's rays are tilted from their own directions, but the transport
+/// takes the light through the aperture as even: its falloff towards the
+/// edges (cos³ of the angle off its axis) is left to the refinement.
 
 #include <span>
 #include <vector>

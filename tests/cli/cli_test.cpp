@@ -680,6 +680,41 @@ TEST_F(Cli, SmoothCausticsTunesTheSurfaceAndReportsImageErrors) {
   EXPECT_EQ(tree["heights_mm"].size(), 36u);
 }
 
+// Under a point light 300 mm above the board (goal.light_distance_mm), the
+// smooth slab still casts the ring: caustic_check, its light from the same
+// point, sees the print beat a flat board; facet caustics refuse the light.
+TEST_F(Cli, SmoothCausticsUnderAPointLight) {
+  SPEC2FAB_SKIP_UNLESS(SPEC2FAB_WITH_NLOPT);
+  write_clear_printer(dir_ / "clear_printer.json");
+  const auto body = [&](const std::string& translator, const std::string& extra) {
+    return R"({"name": "led", "translator": ")" + translator + R"(",
+          "geometry": {"mesh": ")" + (kDatasets / "meshes/board_60x60x8.stl").string() + R"(", "uv": "planar"},
+          "goal": {"image": ")" + (kDatasets / "images/caustic_ring_120.png").string() + R"(",
+                   "image_size": [48, 48], "distance_mm": 60, "light_distance_mm": 300)" + extra + R"(},
+          "optimizer": {"type": "nlopt", "algorithm": "LD_LBFGS", "max_evaluations": 15},
+          "output": {"slices": false, "stl": false, "3mf": false, "render": false},
+          "materials": ")" + (kDatasets / "materials/polyjet.json").string() + R"(",
+          "printer": ")" + (dir_ / "clear_printer.json").string() + R"("})";
+  };
+  const Result r = run_spec2fab("run -q " + experiment("led", body("smooth_caustics", R"(, "control": [12, 12])")).string() +
+                                " --out " + (dir_ / "run").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto result = nlohmann::json::parse(read(dir_ / "run" / "result.json"));
+  EXPECT_EQ(result["caustics"]["start"]["method"], "optimal transport");
+  EXPECT_LT(result["caustics"]["rmse"].get<double>(), result["caustics"]["initial_rmse"].get<double>());
+  const std::string setup = "--distance 60 --image 48 48 --point 30 30 308";
+  const fs::path goal = kDatasets / "images/caustic_ring_120.png";
+  const auto printed = caustic_check(dir_ / "run/print/surface.stl", goal, setup);
+  const auto flat = caustic_check(kDatasets / "meshes/board_60x60x8.stl", goal, setup);
+  EXPECT_GT(printed["ssim"].get<double>(), flat["ssim"].get<double>() + 0.1) << printed << flat;
+  EXPECT_LT(printed["relative_rmse"].get<double>(), 0.7 * flat["relative_rmse"].get<double>()) << printed << flat;
+  EXPECT_LT(printed["light_off_receiver"].get<double>(), 0.5 * flat["light_off_receiver"].get<double>());
+
+  const Result facets = run_spec2fab("validate " + experiment("facets", body("facet_caustics", "")).string());
+  EXPECT_EQ(facets.code, 2);
+  EXPECT_THAT(single_line(facets.out), HasSubstr("/goal/light_distance_mm: facet caustics give every facet"));
+}
+
 TEST_F(Cli, CausticCheckSeesAFlatBoardPassTheBeamUnchanged) {
   // The checker's own optics: a flat slab under vertical light lights the
   // receiver below it uniformly (16 × 16 rays per pixel, the pixels'
@@ -706,6 +741,26 @@ TEST_F(Cli, CausticCheckSeesAFlatBoardPassTheBeamUnchanged) {
   const auto disc = caustic_check(board, uniform, "--distance 100 --image 24 24 --aperture disc");
   EXPECT_EQ(disc["light_off_receiver"].get<double>(), 0.0);
   EXPECT_LT(disc["ssim"].get<double>(), 0.9);  // the corners stay dark
+  // A point light 100 mm above the board's top, over its corner (0, 0),
+  // through a board of index 1: of the light crossing the footprint 1 mm
+  // above the board (z = 9), the 60 mm receiver 100 mm under it (z = -100)
+  // catches what the inverse-square law puts there. Both integrals of
+  // I cos / r² by midpoint sums.
+  const auto point = caustic_check(board, uniform, "--distance 100 --image 24 24 --index 1 --point 0 0 108");
+  const auto light_on = [](double z, double low, double high) {
+    constexpr int kSteps = 600;
+    double sum = 0;
+    for (int j = 0; j < kSteps; ++j)
+      for (int i = 0; i < kSteps; ++i) {
+        const double x = low + (i + 0.5) * (high - low) / kSteps, y = low + (j + 0.5) * (high - low) / kSteps;
+        const double r2 = x * x + y * y + (108 - z) * (108 - z);
+        sum += (108 - z) / (r2 * std::sqrt(r2));
+      }
+    return sum * (high - low) * (high - low) / (kSteps * kSteps);
+  };
+  const double caught = light_on(-100, 0, 60) / light_on(9, 0, 60);
+  EXPECT_NEAR(point["light_off_receiver"].get<double>(), 1 - caught, 2e-3) << point;
+  EXPECT_GT(1 - caught, 0.3);  // the light spreads: most of it falls beside the receiver
   // Bad input: one line, exit 2.
   const Result missing = run_command(std::string(SPEC2FAB_CAUSTIC_CHECK_PATH) + " --stl " + (dir_ / "none.stl").string() +
                                      " --goal " + uniform.string() + " --distance 10");

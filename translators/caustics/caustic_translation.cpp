@@ -37,7 +37,7 @@ CausticGoalSettings CausticGoalSettings::read(const Properties& goal, const Expe
 
 nlohmann::json CausticGoalSettings::simulator(std::array<int, 2> vertices) const {
   const Vec3 size = slab.size();
-  return {{"type", "caustics"},
+  nlohmann::json out = {{"type", "caustics"},
           {"size_mm", {size.x(), size.y()}},
           {"origin_mm", {slab.lower.x(), slab.lower.y(), slab.lower.z()}},
           {"thickness_mm", size.z()},
@@ -48,11 +48,28 @@ nlohmann::json CausticGoalSettings::simulator(std::array<int, 2> vertices) const
           {"image", image},
           {"rays", rays},
           {"aperture", aperture}};
+  if (point_light()) out["light_position_mm"] = {0.0, 0.0, size.z() + light_distance_mm};
+  return out;
 }
 
 double CausticGoalSettings::flux_mm2() const {
-  const double area = slab.size().x() * slab.size().y();
-  return aperture == "disc" ? std::numbers::pi / 4 * area : area;
+  const Vec3 size = slab.size();
+  const double area = size.x() * size.y();
+  if (!point_light()) return aperture == "disc" ? std::numbers::pi / 4 * area : area;
+  // What the point light sends through the aperture at the slab's top:
+  // its intensity (unit irradiance across the beam at its height above the
+  // bottom) times the solid angle, summed over a fine midpoint grid.
+  const double height = size.z() + light_distance_mm, intensity = height * height;
+  constexpr int kSteps = 1024;
+  double sum = 0;
+  for (int j = 0; j < kSteps; ++j)
+    for (int i = 0; i < kSteps; ++i) {
+      const double u = 2 * (i + 0.5) / kSteps - 1, v = 2 * (j + 0.5) / kSteps - 1;
+      if (aperture == "disc" && u * u + v * v > 1) continue;
+      const double x = 0.5 * size.x() * u, y = 0.5 * size.y() * v, r2 = x * x + y * y + light_distance_mm * light_distance_mm;
+      sum += intensity * light_distance_mm / (r2 * std::sqrt(r2));
+    }
+  return sum * area / (static_cast<double>(kSteps) * kSteps);
 }
 
 nlohmann::json CausticGoalSettings::image_goal() const {

@@ -6,6 +6,7 @@
 /// and the pictures and figures they report.
 
 #include <array>
+#include <cmath>
 #include <filesystem>
 #include <functional>
 #include <string>
@@ -37,7 +38,7 @@ struct CausticGoalSettings {
   std::string material = "VeroClear";
   std::array<int, 2> image{240, 240}, rays{0, 0};
   std::array<double, 2> receiver_mm{kUnset, kUnset};
-  double distance_mm = 200, refractive_index = kUnset;
+  double distance_mm = 200, refractive_index = kUnset, light_distance_mm = kUnset;
   std::string aperture = "rectangle";
   Bounds slab;
 
@@ -51,6 +52,9 @@ struct CausticGoalSettings {
     d.number(o.rays, "rays", Range::at_least(1), "stratified rays [nx, ny]", Default{"2 × image_size"});
     d.number(o.refractive_index, "refractive_index", Range::closed(1, 4), "of the slab's material",
              Default{"the material's, from the material library"});
+    d.number(o.light_distance_mm, "light_distance_mm", Range::closed(1, 1e6),
+             "a point light (a bare LED) this far above the centre of the face the light enters",
+             Default{"none: collimated light, straight down"});
     d.choice(o.aperture, "aperture", {"rectangle", "disc"},
              "where the light comes through: the slab's whole footprint, or the disc (ellipse) inscribed in it, "
              "as behind a round stop");
@@ -63,6 +67,7 @@ struct CausticGoalSettings {
   nlohmann::json simulator(std::array<int, 2> vertices) const;
   /// The light the aperture lets through, in units of incident irradiance × mm².
   double flux_mm2() const;
+  bool point_light() const { return !std::isnan(light_distance_mm); }
   /// The "caustic_image" goal: the picture carrying the light the slab's
   /// aperture lets through.
   nlohmann::json image_goal() const;

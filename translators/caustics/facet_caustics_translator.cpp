@@ -97,6 +97,9 @@ class FacetCausticsTranslator final : public TuningTranslator {
     if (settings_.aperture != "rectangle")
       goal.fail("aperture", "facet caustics give every facet an equal share of the light, so the light must cover "
                             "the whole footprint ('rectangle'); a disc aperture suits smooth_caustics");
+    if (settings_.point_light())
+      goal.fail("light_distance_mm", "facet caustics give every facet an equal share of the light, which only "
+                                     "collimated light does; a point light suits smooth_caustics");
     const Options options = read_options<Options>(goal);
     const Vec3 size = settings_.slab.size();
     facets_ = options.facets;
