@@ -6,11 +6,16 @@
 
 #include <sys/wait.h>
 
+#include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -713,6 +718,48 @@ TEST_F(Cli, SmoothCausticsUnderAPointLight) {
   const Result facets = run_spec2fab("validate " + experiment("facets", body("facet_caustics", "")).string());
   EXPECT_EQ(facets.code, 2);
   EXPECT_THAT(single_line(facets.out), HasSubstr("/goal/light_distance_mm: facet caustics give every facet"));
+}
+
+// goal.max_slope holds the shaped face: the transport start asks for more
+// than 0.02 here, and the print's top triangles all stay within it.
+TEST_F(Cli, SmoothCausticsHoldTheSurfaceToMaxSlope) {
+  SPEC2FAB_SKIP_UNLESS(SPEC2FAB_WITH_NLOPT);
+  write_clear_printer(dir_ / "clear_printer.json");
+  const std::string body =
+      R"({"name": "gentle", "translator": "smooth_caustics",
+          "geometry": {"mesh": ")" + (kDatasets / "meshes/board_60x60x8.stl").string() + R"(", "uv": "planar"},
+          "goal": {"image": ")" + (kDatasets / "images/caustic_ring_120.png").string() + R"(",
+                   "control": [12, 12], "image_size": [48, 48], "distance_mm": 200, "max_slope": 0.02},
+          "optimizer": {"type": "nlopt", "algorithm": "LD_LBFGS", "max_evaluations": 15},
+          "output": {"slices": false, "stl": false, "3mf": false, "render": false},
+          "materials": ")" + (kDatasets / "materials/polyjet.json").string() + R"(",
+          "printer": ")" + (dir_ / "clear_printer.json").string() + R"("})";
+  const Result r = run_spec2fab("run -q " + experiment("gentle", body).string() + " --out " + (dir_ / "run").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto limit = nlohmann::json::parse(read(dir_ / "run" / "result.json"))["caustics"]["slope_limit"];
+  EXPECT_GT(limit["start"]["steepest_control_slope_before"].get<double>(), 0.02);
+  EXPECT_GT(limit["start"]["controls_moved"].get<int>(), 0);
+  EXPECT_LE(limit["final"]["steepest_control_slope"].get<double>(), 0.02 + 1e-9);
+  // The file's top triangles (normals facing up), read back as written.
+  const std::string stl = read(dir_ / "run/print/surface.stl");
+  ASSERT_GT(stl.size(), 84u);
+  uint32_t count = 0;
+  std::memcpy(&count, stl.data() + 80, 4);
+  ASSERT_EQ(stl.size(), 84 + 50 * static_cast<size_t>(count));
+  int tops = 0;
+  double steepest = 0;
+  for (uint32_t t = 0; t < count; ++t) {
+    float v[9];
+    std::memcpy(v, stl.data() + 84 + 50 * static_cast<size_t>(t) + 12, sizeof v);
+    const Eigen::Vector3d a(v[0], v[1], v[2]), b(v[3], v[4], v[5]), c(v[6], v[7], v[8]);
+    const Eigen::Vector3d n = (b - a).cross(c - a);
+    if (n.z() < 0.5 * n.norm()) continue;  // walls and the bottom
+    ++tops;
+    steepest = std::max({steepest, std::abs(n.x() / n.z()), std::abs(n.y() / n.z())});
+  }
+  EXPECT_GT(tops, 1000);
+  EXPECT_LE(steepest, 0.02 + 1e-4);
+  EXPECT_GT(steepest, 0.005);  // the surface is shaped, not flat
 }
 
 TEST_F(Cli, CausticCheckSeesAFlatBoardPassTheBeamUnchanged) {

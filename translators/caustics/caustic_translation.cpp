@@ -16,6 +16,7 @@
 #include "core/colour.h"
 #include "core/distance.h"
 #include "core/properties.h"
+#include "core/search_space.h"
 #include "fabrication/material_surfaces.h"
 #include "geometry/mesh_io.h"
 #include "spec/experiment.h"
@@ -93,6 +94,66 @@ nlohmann::json CausticGoalSettings::image_report(std::span<const double> achieve
   report["receiver_mm"] = receiver_mm;
   report["distance_mm"] = distance_mm;
   return report;
+}
+
+nlohmann::json CausticSurfaceSettings::limit_slopes(Tuner& tuner, const Bounds& footprint) const {
+  std::vector<double> c = tuner.search_space().values();
+  const int nx = control[0], ny = control[1];
+  if (c.size() != static_cast<size_t>(nx) * static_cast<size_t>(ny))
+    throw std::logic_error("limit_slopes: the tuner's parameters are not the surface's control heights");
+  const std::vector<double> before = c;
+  std::vector<double> low, high;
+  for (const SearchSpace::Entry& e : tuner.search_space().entries()) {
+    low.push_back(e.parameter->lower());
+    high.push_back(e.parameter->upper());
+  }
+  // The limits on neighbouring differences along x and y.
+  const double step_x = max_slope * footprint.size().x() / (nx - 1), step_y = max_slope * footprint.size().y() / (ny - 1);
+  const auto at = [nx](int i, int j) { return static_cast<size_t>(j) * static_cast<size_t>(nx) + static_cast<size_t>(i); };
+  const auto steepest = [&](const std::vector<double>& h) {
+    double worst = 0;
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        if (i + 1 < nx) worst = std::max(worst, std::abs(h[at(i + 1, j)] - h[at(i, j)]) / step_x * max_slope);
+        if (j + 1 < ny) worst = std::max(worst, std::abs(h[at(i, j + 1)] - h[at(i, j)]) / step_y * max_slope);
+      }
+    return worst;
+  };
+  // Projecting onto one pair's limit moves both ends halfway; onto the
+  // bounds, clamps. Cycling through them converges into their intersection
+  // (a constant surface lies in it).
+  const auto pair = [&](size_t a, size_t b, double limit) {
+    const double excess = std::abs(c[b] - c[a]) - limit;
+    if (excess <= 0) return 0.0;
+    const double shift = 0.5 * excess * (c[b] > c[a] ? 1 : -1);
+    c[a] += shift;
+    c[b] -= shift;
+    return excess;
+  };
+  int sweeps = 0;
+  for (; sweeps < 100000; ++sweeps) {
+    double worst = 0;
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        if (i + 1 < nx) worst = std::max(worst, pair(at(i, j), at(i + 1, j), step_x));
+        if (j + 1 < ny) worst = std::max(worst, pair(at(i, j), at(i, j + 1), step_y));
+      }
+    for (size_t k = 0; k < c.size(); ++k) c[k] = std::clamp(c[k], low[k], high[k]);
+    if (worst <= 1e-9) break;
+  }
+  int moved = 0;
+  double largest = 0;
+  for (size_t k = 0; k < c.size(); ++k) {
+    moved += c[k] != before[k];
+    largest = std::max(largest, std::abs(c[k] - before[k]));
+  }
+  if (moved > 0) tuner.set_values(c);
+  return {{"max_slope", max_slope},
+          {"steepest_control_slope_before", steepest(before)},
+          {"steepest_control_slope", steepest(c)},
+          {"controls_moved", moved},
+          {"largest_move_mm", largest},
+          {"sweeps", sweeps}};
 }
 
 std::array<int, 2> CausticSurfaceSettings::vertices() const {

@@ -83,10 +83,15 @@ struct CausticSurfaceSettings {
   std::array<int, 2> control{60, 60};
   int vertices_per_span = 3;
   int print_vertices_per_span = 0;  ///< 0: twice vertices_per_span
+  double max_slope = 1;
 
   template <class Declare, class Self>
   static void declare(Declare& d, Self& o) {
     d.number(o.control, "control", Range::at_least(2), "B-spline control points of the shaped face");
+    d.number(o.max_slope, "max_slope", Range::closed(1e-3, 10),
+             "steepest the shaped face may get along x and along y: neighbouring control points differ by at "
+             "most this times their spacing, which bounds the surface's slopes everywhere; held at the start "
+             "and after tuning");
     d.number(o.vertices_per_span, "vertices_per_span", Range::closed(1, 16), "mesh vertices per control span");
     d.number(o.print_vertices_per_span, "print_vertices_per_span", Range::closed(1, 32),
              "print/surface.stl's vertices per control span: each flat facet casts a copy of itself, so the "
@@ -100,6 +105,12 @@ struct CausticSurfaceSettings {
   }
   static CausticSurfaceSettings read(const Properties& goal) { return read_options<CausticSurfaceSettings>(goal); }
   static std::vector<PropertyDoc> docs() { return prefixed(option_docs<CausticSurfaceSettings>(), "goal."); }
+  /// Holds the B-spline tuned by `tuner` (its search space: the control
+  /// heights, row by row, over `footprint`) to max_slope: cyclic projections
+  /// onto each neighbouring pair's limit and the heights' bounds until no
+  /// pair exceeds its limit by 1e-9 mm. Returns what it changed: the
+  /// steepest control slope before, the controls moved, the largest move.
+  nlohmann::json limit_slopes(Tuner& tuner, const Bounds& footprint) const;
   /// Mesh vertices of the simulated surface along each axis.
   std::array<int, 2> vertices() const;
   /// Mesh vertices of print/surface.stl along each axis.

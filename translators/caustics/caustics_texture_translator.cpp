@@ -206,6 +206,7 @@ class CausticsTextureTranslator final : public TuningTranslator {
     Tuner& caustic = network_.tuner(caustic_tuner_);
     if (transport_start_)
       start_report_ = start_caustic_from_transport(caustic, slab_, dynamic_cast<const HeightSurface&>(tree_->node("below")));
+    slope_limit_["start"] = surface_.limit_slopes(caustic, settings_.slab);
     start_ = caustic.search_space().values();
   }
 
@@ -225,6 +226,7 @@ class CausticsTextureTranslator final : public TuningTranslator {
     // The caustic the print casts: through the texture, against the goal
     // carrying the light the texture lets through.
     Tuner& caustic = network_.tuner(caustic_tuner_);
+    slope_limit_["final"] = surface_.limit_slopes(caustic, settings_.slab);
     caustic.set_simulator_input(TextureShadow::kInput, shadow);
     const std::vector<double> tuned = caustic.search_space().values();
     ImageObservation target = static_cast<const ImageObservation&>(caustic.goal().target());
@@ -236,6 +238,7 @@ class CausticsTextureTranslator final : public TuningTranslator {
     nlohmann::json report = settings_.image_report(cast.pixels, initial, target);
     report["compensate_texture"] = compensate_;
     if (transport_start_) report["start"] = start_report_;
+    report["slope_limit"] = slope_limit_;
     report["control"] = surface_.control;
     context.result["caustics"] = report;
 
@@ -270,7 +273,7 @@ class CausticsTextureTranslator final : public TuningTranslator {
   std::string optimizer_label_;
   double texture_mm_ = 0, cut_z_ = 0;
   bool compensate_ = true, transport_start_ = true;
-  nlohmann::json start_report_;
+  nlohmann::json start_report_, slope_limit_;
   CausticSlabConfig slab_;
   size_t caustic_tuner_ = 0;
   std::vector<double> start_;  ///< the caustic tuner's start

@@ -125,6 +125,7 @@ class SmoothCausticsTranslator final : public TuningTranslator {
     Tuner& tuner = network_.tuner(0);
     if (transport_start_)
       start_report_ = start_caustic_from_transport(tuner, slab_, dynamic_cast<const HeightSurface&>(tree_->root()));
+    slope_limit_["start"] = surface_.limit_slopes(tuner, settings_.slab);
     tuner.error();
     initial_ = static_cast<const ImageObservation&>(tuner.simulated()).pixels;
     const std::vector<double> start = tuner.search_space().values();
@@ -141,12 +142,14 @@ class SmoothCausticsTranslator final : public TuningTranslator {
 
   void report(const RunRecord& record, RunContext& context) override {
     Tuner& tuner = network_.tuner(0);
+    slope_limit_["final"] = surface_.limit_slopes(tuner, settings_.slab);
     const auto& target = static_cast<const ImageObservation&>(tuner.goal().target());
     tuner.error();
     const auto& achieved = static_cast<const ImageObservation&>(tuner.simulated());
     nlohmann::json report = settings_.image_report(achieved.pixels, initial_, target);
     report["control"] = surface_.control;
     if (transport_start_) report["start"] = start_report_;
+    report["slope_limit"] = slope_limit_;
     context.result["caustics"] = report;
     if (!compared_runs_.empty()) report_comparison(record.runs.front().summary, compared_runs_, context);
     write_caustic_panels({target.pixels, achieved.pixels}, target.width, target.height,
@@ -200,7 +203,7 @@ class SmoothCausticsTranslator final : public TuningTranslator {
   std::vector<std::pair<std::string, std::unique_ptr<Optimizer>>> compared_;
   std::vector<double> initial_;       ///< the image at the start
   bool transport_start_ = true;
-  nlohmann::json start_report_;
+  nlohmann::json start_report_, slope_limit_;
   std::vector<Summary> compared_runs_;
 };
 
