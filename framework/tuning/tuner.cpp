@@ -169,15 +169,17 @@ void Tuner::set_values(std::span<const double> x) {
 
 double Tuner::error_at(std::span<const double> x) {
   set_values(x);
-  return error();
+  return error() + (penalty_ ? penalty_(x, {}) : 0.0);
 }
 
 double Tuner::error_and_gradient_at(std::span<const double> x, std::span<double> gradient) {
-  const double e = error_at(x);
+  set_values(x);
+  double e = error();
   sensitivity_.resize(simulated_->values().size());
   metric_->error_gradient(*simulated_, *effective_target_, sensitivity_);
   std::fill(gradient.begin(), gradient.end(), 0.0);
   simulator_->pull_back(*node_, sensitivity_, space_, gradient);
+  if (penalty_) e += penalty_(x, gradient);
   return e;
 }
 

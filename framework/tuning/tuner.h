@@ -65,6 +65,14 @@ class Tuner {
       std::function<double(std::span<const double> x, int assigned, const Observation& target)>;
   void set_lower_bound(LowerBound bound) { lower_bound_ = std::move(bound); }
 
+  /// A term added to the error optimizers see at x (error_at,
+  /// error_and_gradient_at; not error(), which compares the simulation
+  /// alone): a translator's soft limit on the parameters, such as a surface's
+  /// slope. It returns its value and adds its gradient into `gradient`
+  /// when that is not empty.
+  using Penalty = std::function<double(std::span<const double> x, std::span<double> gradient)>;
+  void set_penalty(Penalty penalty) { penalty_ = std::move(penalty); }
+
   /// Exchanges of state with network neighbours (paper §7.3, facet caustics:
   /// tuners swap their micro-lenses' kernels): with moves set, problem() has
   /// Capability::neighbour_moves. A NeighbourSwaps coupling (schedule.h)
@@ -123,6 +131,7 @@ class Tuner {
   std::vector<double> published_;
   std::vector<double> sensitivity_;  ///< ∂error/∂(simulated values), reused
   LowerBound lower_bound_;
+  Penalty penalty_;
   std::optional<NeighbourMoves> moves_;
 };
 

@@ -156,6 +156,31 @@ nlohmann::json CausticSurfaceSettings::limit_slopes(Tuner& tuner, const Bounds& 
           {"sweeps", sweeps}};
 }
 
+std::function<double(std::span<const double>, std::span<double>)> CausticSurfaceSettings::slope_penalty(
+    const Bounds& footprint, double weight) const {
+  const int nx = control[0], ny = control[1];
+  const double limit_x = max_slope * footprint.size().x() / (nx - 1), limit_y = max_slope * footprint.size().y() / (ny - 1);
+  return [=](std::span<const double> c, std::span<double> gradient) {
+    double sum = 0;
+    const auto pair = [&](size_t a, size_t b, double limit) {
+      const double difference = c[b] - c[a], excess = std::abs(difference) - limit;
+      if (excess <= 0) return;
+      sum += weight * (excess / limit) * (excess / limit);
+      if (gradient.empty()) return;
+      const double d = 2 * weight * excess / (limit * limit) * (difference > 0 ? 1 : -1);
+      gradient[b] += d;
+      gradient[a] -= d;
+    };
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        const size_t k = static_cast<size_t>(j) * static_cast<size_t>(nx) + static_cast<size_t>(i);
+        if (i + 1 < nx) pair(k, k + 1, limit_x);
+        if (j + 1 < ny) pair(k, k + static_cast<size_t>(nx), limit_y);
+      }
+    return sum;
+  };
+}
+
 std::array<int, 2> CausticSurfaceSettings::vertices() const {
   return {vertices_per_span * (control[0] - 1) + 1, vertices_per_span * (control[1] - 1) + 1};
 }

@@ -111,6 +111,11 @@ struct CausticSurfaceSettings {
   /// pair exceeds its limit by 1e-9 mm. Returns what it changed: the
   /// steepest control slope before, the controls moved, the largest move.
   nlohmann::json limit_slopes(Tuner& tuner, const Bounds& footprint) const;
+  /// The same limit as a penalty on the tuner's error, so that its optimizer
+  /// keeps near it: `weight` × Σ (excess / limit)² over neighbouring pairs
+  /// (one pair at twice its limit costs `weight`).
+  std::function<double(std::span<const double>, std::span<double>)> slope_penalty(const Bounds& footprint,
+                                                                                  double weight) const;
   /// Mesh vertices of the simulated surface along each axis.
   std::array<int, 2> vertices() const;
   /// Mesh vertices of print/surface.stl along each axis.

@@ -207,6 +207,7 @@ class CausticsTextureTranslator final : public TuningTranslator {
     if (transport_start_)
       start_report_ = start_caustic_from_transport(caustic, slab_, dynamic_cast<const HeightSurface&>(tree_->node("below")));
     slope_limit_["start"] = surface_.limit_slopes(caustic, settings_.slab);
+    caustic.set_penalty(surface_.slope_penalty(settings_.slab, caustic.error()));
     start_ = caustic.search_space().values();
   }
 

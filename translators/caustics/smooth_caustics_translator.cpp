@@ -126,6 +126,9 @@ class SmoothCausticsTranslator final : public TuningTranslator {
     if (transport_start_)
       start_report_ = start_caustic_from_transport(tuner, slab_, dynamic_cast<const HeightSurface&>(tree_->root()));
     slope_limit_["start"] = surface_.limit_slopes(tuner, settings_.slab);
+    // The optimizer keeps near the limit (a penalty in units of the start's
+    // error); the end is held to it exactly.
+    tuner.set_penalty(surface_.slope_penalty(settings_.slab, tuner.error()));
     tuner.error();
     initial_ = static_cast<const ImageObservation&>(tuner.simulated()).pixels;
     const std::vector<double> start = tuner.search_space().values();
