@@ -185,6 +185,9 @@ void CausticTracer::update_vertex_buffer() {
     top_z_ = std::max(top_z_, vertices_[v].z());
     for (int k = 0; k < 3; ++k) scene_->vertex_buffer[3 * v + static_cast<size_t>(k)] = static_cast<float>(vertices_[v][k]);
   }
+  // Rays start just above the highest point: the beam's cross-section at the
+  // slab is the footprint.
+  start_z_ = top_z_ + 1e-3 * (setup_.width_mm + setup_.depth_mm) + 1e-3;
   for (size_t t = 0; t < triangles_.size(); ++t) {
     const Eigen::Vector3i& f = triangles_[t];
     const Vec3 n = (vertices_[static_cast<size_t>(f[1])] - vertices_[static_cast<size_t>(f[0])])
@@ -354,7 +357,7 @@ bool CausticTracer::for_each_splat_corner(const Eigen::Vector2d& uv, Visit&& vis
 
 CausticFlux CausticTracer::render(std::span<double> irradiance) {
   // The point light shines on the top from outside the slab.
-  if (setup_.point_light && !(setup_.light_position_mm.z() > top_z_ + 1e-3 * (setup_.width_mm + setup_.depth_mm) + 1e-3))
+  if (setup_.point_light && !(setup_.light_position_mm.z() > start_z_))
     throw InputError("caustics: the point light must lie above the slab's top (light at " +
                      std::to_string(setup_.light_position_mm.z()) + " mm, top at " + std::to_string(top_z_) + " mm)");
   return setup_.estimator == CausticSetup::Estimator::rays ? render_rays(irradiance) : render_triangles(irradiance);
@@ -374,9 +377,6 @@ CausticFlux CausticTracer::render_rays(std::span<double> irradiance) {
   if (irradiance.size() != pixels)
     throw std::invalid_argument("CausticTracer::render: image has the wrong size");
   const int rays = s.rays_x * s.rays_y;
-  // Rays start just above the highest point: the beam's cross-section at the
-  // slab is the footprint.
-  start_z_ = top_z_ + 1e-3 * (s.width_mm + s.depth_mm) + 1e-3;
   tbb::parallel_for(tbb::blocked_range<int>(0, rays, 1024),
                     [&](const tbb::blocked_range<int>& r) { trace_block(r.begin(), r.end()); });
 
@@ -425,8 +425,6 @@ void CausticTracer::pull_back_rays(std::span<const double> d_irradiance, std::sp
       d_heights.size() != heights_.size())
     throw std::invalid_argument("CausticTracer::pull_back: wrong sizes");
   const double per_area = pixels_per_mm2();
-  const double du_dx = (s.image_from_behind ? -1 : 1) * s.image_width / s.receiver_width_mm,
-               dv_dy = -s.image_height / s.receiver_depth_mm;
   ray_gradients_.resize(results_.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, results_.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i != r.end(); ++i) {
@@ -450,9 +448,9 @@ void CausticTracer::pull_back_rays(std::span<const double> d_irradiance, std::sp
         h[k] = variable<3>(v.z(), k);
       }
       const Vec3 origin = ray_origin(static_cast<int>(i));
-      const Eigen::Matrix<HeightJet, 2, 1> point = slab_receiver_point(origin, light_towards(s, origin), xy, h,
-                                                            s.refractive_index, -s.receiver_distance_mm);
-      ray_gradients_[i] = d_u * du_dx * derivatives<3>(point.x()) + d_v * dv_dy * derivatives<3>(point.y());
+      const Eigen::Matrix<HeightJet, 2, 1> uv = receiver_pixel(
+          s, slab_receiver_point(origin, light_towards(s, origin), xy, h, s.refractive_index, -s.receiver_distance_mm));
+      ray_gradients_[i] = d_u * derivatives<3>(uv.x()) + d_v * derivatives<3>(uv.y());
     }
   });
   // Summed in ray order: the same gradient for any thread count.

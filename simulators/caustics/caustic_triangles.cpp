@@ -349,8 +349,9 @@ void CausticTracer::pull_back_smooth(std::span<const double> d_irradiance, std::
       // A point light's share also moves with the triangle's heights.
       if (s.point_light) {
         const HeightJet jets[3] = {variable<3>(h[0], 0), variable<3>(h[1], 1), variable<3>(h[2], 2)};
-        const double passing = value_of(carried) / smooth_triangle_light(s, xy, h);  // what the disc let through
-        light_gradients_[t] = value_of(sum) * passing * per_area * derivatives<3>(smooth_triangle_light(s, xy, jets));
+        const HeightJet light = smooth_triangle_light(s, xy, jets);
+        const double passing = value_of(carried) / value_of(light);  // what the disc let through
+        light_gradients_[t] = value_of(sum) * passing * per_area * derivatives<3>(light);
       }
     }
   });
@@ -391,7 +392,6 @@ CausticFlux CausticTracer::render_triangles(std::span<double> irradiance) {
   const CausticSetup& s = setup_;
   const size_t pixels = static_cast<size_t>(s.image_width) * static_cast<size_t>(s.image_height);
   if (irradiance.size() != pixels) throw std::invalid_argument("CausticTracer::render: image has the wrong size");
-  start_z_ = top_z_ + 1e-3 * (s.width_mm + s.depth_mm) + 1e-3;
   const size_t triangles = static_cast<size_t>(top_triangles_);
   const size_t blocks = (triangles + kTrianglesPerBlock - 1) / kTrianglesPerBlock;
   triangle_deposits_.resize(blocks);

@@ -96,10 +96,28 @@ nlohmann::json CausticGoalSettings::image_report(std::span<const double> achieve
   return report;
 }
 
+namespace {
+
+/// visit(a, b, limit) for every pair of neighbouring control points (indices
+/// row by row, a fastest) with the most their heights may differ:
+/// max_slope times their spacing over `footprint`.
+template <class Visit>
+void for_each_control_pair(const std::array<int, 2>& control, const Bounds& footprint, double max_slope, Visit&& visit) {
+  const int nx = control[0], ny = control[1];
+  const double limit_x = max_slope * footprint.size().x() / (nx - 1), limit_y = max_slope * footprint.size().y() / (ny - 1);
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      const size_t k = static_cast<size_t>(j) * static_cast<size_t>(nx) + static_cast<size_t>(i);
+      if (i + 1 < nx) visit(k, k + 1, limit_x);
+      if (j + 1 < ny) visit(k, k + static_cast<size_t>(nx), limit_y);
+    }
+}
+
+}  // namespace
+
 nlohmann::json CausticSurfaceSettings::limit_slopes(Tuner& tuner, const Bounds& footprint) const {
   std::vector<double> c = tuner.search_space().values();
-  const int nx = control[0], ny = control[1];
-  if (c.size() != static_cast<size_t>(nx) * static_cast<size_t>(ny))
+  if (c.size() != static_cast<size_t>(control[0]) * static_cast<size_t>(control[1]))
     throw std::logic_error("limit_slopes: the tuner's parameters are not the surface's control heights");
   const std::vector<double> before = c;
   std::vector<double> low, high;
@@ -107,37 +125,27 @@ nlohmann::json CausticSurfaceSettings::limit_slopes(Tuner& tuner, const Bounds& 
     low.push_back(e.parameter->lower());
     high.push_back(e.parameter->upper());
   }
-  // The limits on neighbouring differences along x and y.
-  const double step_x = max_slope * footprint.size().x() / (nx - 1), step_y = max_slope * footprint.size().y() / (ny - 1);
-  const auto at = [nx](int i, int j) { return static_cast<size_t>(j) * static_cast<size_t>(nx) + static_cast<size_t>(i); };
   const auto steepest = [&](const std::vector<double>& h) {
     double worst = 0;
-    for (int j = 0; j < ny; ++j)
-      for (int i = 0; i < nx; ++i) {
-        if (i + 1 < nx) worst = std::max(worst, std::abs(h[at(i + 1, j)] - h[at(i, j)]) / step_x * max_slope);
-        if (j + 1 < ny) worst = std::max(worst, std::abs(h[at(i, j + 1)] - h[at(i, j)]) / step_y * max_slope);
-      }
+    for_each_control_pair(control, footprint, max_slope, [&](size_t a, size_t b, double limit) {
+      worst = std::max(worst, std::abs(h[b] - h[a]) / limit * max_slope);
+    });
     return worst;
   };
   // Projecting onto one pair's limit moves both ends halfway; onto the
   // bounds, clamps. Cycling through them converges into their intersection
   // (a constant surface lies in it).
-  const auto pair = [&](size_t a, size_t b, double limit) {
-    const double excess = std::abs(c[b] - c[a]) - limit;
-    if (excess <= 0) return 0.0;
-    const double shift = 0.5 * excess * (c[b] > c[a] ? 1 : -1);
-    c[a] += shift;
-    c[b] -= shift;
-    return excess;
-  };
   int sweeps = 0;
   for (; sweeps < 100000; ++sweeps) {
     double worst = 0;
-    for (int j = 0; j < ny; ++j)
-      for (int i = 0; i < nx; ++i) {
-        if (i + 1 < nx) worst = std::max(worst, pair(at(i, j), at(i + 1, j), step_x));
-        if (j + 1 < ny) worst = std::max(worst, pair(at(i, j), at(i, j + 1), step_y));
-      }
+    for_each_control_pair(control, footprint, max_slope, [&](size_t a, size_t b, double limit) {
+      const double excess = std::abs(c[b] - c[a]) - limit;
+      if (excess <= 0) return;
+      const double shift = 0.5 * excess * (c[b] > c[a] ? 1 : -1);
+      c[a] += shift;
+      c[b] -= shift;
+      worst = std::max(worst, excess);
+    });
     for (size_t k = 0; k < c.size(); ++k) c[k] = std::clamp(c[k], low[k], high[k]);
     if (worst <= 1e-9) break;
   }
@@ -158,11 +166,10 @@ nlohmann::json CausticSurfaceSettings::limit_slopes(Tuner& tuner, const Bounds& 
 
 std::function<double(std::span<const double>, std::span<double>)> CausticSurfaceSettings::slope_penalty(
     const Bounds& footprint, double weight) const {
-  const int nx = control[0], ny = control[1];
-  const double limit_x = max_slope * footprint.size().x() / (nx - 1), limit_y = max_slope * footprint.size().y() / (ny - 1);
-  return [=](std::span<const double> c, std::span<double> gradient) {
+  return [control = control, footprint, weight, max_slope = max_slope](std::span<const double> c,
+                                                                       std::span<double> gradient) {
     double sum = 0;
-    const auto pair = [&](size_t a, size_t b, double limit) {
+    for_each_control_pair(control, footprint, max_slope, [&](size_t a, size_t b, double limit) {
       const double difference = c[b] - c[a], excess = std::abs(difference) - limit;
       if (excess <= 0) return;
       sum += weight * (excess / limit) * (excess / limit);
@@ -170,13 +177,7 @@ std::function<double(std::span<const double>, std::span<double>)> CausticSurface
       const double d = 2 * weight * excess / (limit * limit) * (difference > 0 ? 1 : -1);
       gradient[b] += d;
       gradient[a] -= d;
-    };
-    for (int j = 0; j < ny; ++j)
-      for (int i = 0; i < nx; ++i) {
-        const size_t k = static_cast<size_t>(j) * static_cast<size_t>(nx) + static_cast<size_t>(i);
-        if (i + 1 < nx) pair(k, k + 1, limit_x);
-        if (j + 1 < ny) pair(k, k + static_cast<size_t>(nx), limit_y);
-      }
+    });
     return sum;
   };
 }
