@@ -628,8 +628,14 @@ TEST_F(Cli, SmoothCausticsTunesTheSurfaceAndReportsImageErrors) {
           "materials": ")" + (kDatasets / "materials/polyjet.json").string() + R"(",
           "printer": ")" + (dir_ / "clear_printer.json").string() + R"("})";
   write_clear_printer(dir_ / "clear_printer.json");
-  const Result r = run_spec2fab("run -q " + experiment("lens", body).string() + " --out " + (dir_ / "run").string());
+  const fs::path file = experiment("lens", body);
+  const Result r = run_spec2fab("run -q " + file.string() + " --threads 2 --out " + (dir_ / "run").string());
   ASSERT_EQ(r.code, 0) << r.out;
+  // The same files for one thread; the start's wall times are in timing.json.
+  ASSERT_EQ(run_spec2fab("run -q " + file.string() + " --threads 1 --out " + (dir_ / "t1").string()).code, 0);
+  for (const char* name : {"result.json", "tree.json", "print/surface.stl", "preview/surface_stl_traced.png"})
+    EXPECT_EQ(read(dir_ / "run" / name), read(dir_ / "t1" / name)) << name;
+  EXPECT_GT(nlohmann::json::parse(read(dir_ / "t1" / "timing.json"))["start_seconds"]["transport"].get<double>(), 0.0);
   const auto result = nlohmann::json::parse(read(dir_ / "run" / "result.json"));
   const auto& caustics = result["caustics"];
   // The reported image is the one the tuner ended at: its RMSE squared is

@@ -243,7 +243,8 @@ SurfaceStl write_caustic_surface_stl(const CausticSlabConfig& slab, std::array<i
           mesh.bounds()};
 }
 
-nlohmann::json start_caustic_from_transport(Tuner& tuner, const CausticSlabConfig& slab, const HeightSurface& surface) {
+nlohmann::json start_caustic_from_transport(Tuner& tuner, const CausticSlabConfig& slab, const HeightSurface& surface,
+                                            nlohmann::json* timing) {
   const auto& goal = static_cast<const ImageObservation&>(tuner.goal().target());
   const std::vector<double> values = tuner.search_space().values();
   const double mean_height =
@@ -255,12 +256,12 @@ nlohmann::json start_caustic_from_transport(Tuner& tuner, const CausticSlabConfi
   spdlog::info("  {} Newton steps, {:.1f} s; relief {:.2f} mm, largest slope {:.3f}{}", start.newton_steps,
                start.transport_seconds + start.integration_seconds, start.relief_mm, start.largest_slope,
                clamped ? fmt::format("; {} control points held at their bounds", clamped) : std::string());
+  if (timing)
+    (*timing)["start_seconds"] = {{"transport", start.transport_seconds}, {"integration", start.integration_seconds}};
   return {{"method", "optimal transport"},
           {"lit_pixels", start.sites},
           {"newton_steps", start.newton_steps},
           {"worst_cell_mass_error", start.worst_mass_error},
-          {"transport_seconds", start.transport_seconds},
-          {"integration_seconds", start.integration_seconds},
           {"relief_mm", start.relief_mm},
           {"largest_slope", start.largest_slope},
           {"integration_rms_slope_error", start.integration_rms_slope_error},

@@ -151,9 +151,11 @@ SurfaceStl write_caustic_surface_stl(const CausticSlabConfig& slab, std::array<i
 /// the image to cast — to the surface optimal transport gives
 /// (caustics/caustic_start.h) around the tuner's current mean height, fitted
 /// to the surface's parameters; returns the figures the report keeps
-/// ("start": Newton steps, seconds, relief, largest slope, controls held at
-/// their bounds).
-nlohmann::json start_caustic_from_transport(Tuner& tuner, const CausticSlabConfig& slab, const HeightSurface& surface);
+/// ("start": Newton steps, relief, largest slope, controls held at their
+/// bounds). Its wall times go to `timing` (timing.json), where they do not
+/// break result.json's byte-identity across thread counts.
+nlohmann::json start_caustic_from_transport(Tuner& tuner, const CausticSlabConfig& slab, const HeightSurface& surface,
+                                            nlohmann::json* timing);
 
 /// "nlopt LD_LBFGS", "ceres numeric", "spsa": an optimizer's type and, for the
 /// adapters, what tells two of its runs apart (algorithm, derivatives).

@@ -202,10 +202,11 @@ class CausticsTextureTranslator final : public TuningTranslator {
  private:
   ReducerNode& texture_stack(int column) { return tree_->node("above/" + std::to_string(column) + "/below"); }
 
-  void prepare(RunContext& /*context*/) override {
+  void prepare(RunContext& context) override {
     Tuner& caustic = network_.tuner(caustic_tuner_);
     if (transport_start_)
-      start_report_ = start_caustic_from_transport(caustic, slab_, dynamic_cast<const HeightSurface&>(tree_->node("below")));
+      start_report_ = start_caustic_from_transport(caustic, slab_, dynamic_cast<const HeightSurface&>(tree_->node("below")),
+                                                   context.timing);
     slope_limit_["start"] = surface_.limit_slopes(caustic, settings_.slab);
     caustic.set_penalty(surface_.slope_penalty(settings_.slab, caustic.error()));
     start_ = caustic.search_space().values();

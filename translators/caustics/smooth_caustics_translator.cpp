@@ -124,7 +124,8 @@ class SmoothCausticsTranslator final : public TuningTranslator {
   void prepare(RunContext& context) override {
     Tuner& tuner = network_.tuner(0);
     if (transport_start_)
-      start_report_ = start_caustic_from_transport(tuner, slab_, dynamic_cast<const HeightSurface&>(tree_->root()));
+      start_report_ = start_caustic_from_transport(tuner, slab_, dynamic_cast<const HeightSurface&>(tree_->root()),
+                                                   context.timing);
     slope_limit_["start"] = surface_.limit_slopes(tuner, settings_.slab);
     // The optimizer keeps near the limit (a penalty in units of the start's
     // error); the end is held to it exactly.
