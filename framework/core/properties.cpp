@@ -127,6 +127,7 @@ std::string expectation() {
   if constexpr (std::is_same_v<T, std::vector<double>>) return "an array of numbers";
   else if constexpr (std::is_same_v<T, std::vector<int>>) return "an array of integers";
   else if constexpr (std::is_same_v<T, std::vector<std::string>>) return "an array of strings";
+  else if constexpr (std::is_same_v<T, std::vector<std::vector<double>>>) return "an array of arrays of numbers";
   else if constexpr (ArrayLength<T>::value > 0) {
     const bool integers = std::is_same_v<typename T::value_type, int>;
     return "an array of " + std::to_string(ArrayLength<T>::value) +
@@ -228,6 +229,7 @@ template std::string Properties::get<std::string>(std::string_view) const;
 template std::vector<double> Properties::get<std::vector<double>>(std::string_view) const;
 template std::vector<int> Properties::get<std::vector<int>>(std::string_view) const;
 template std::vector<std::string> Properties::get<std::vector<std::string>>(std::string_view) const;
+template std::vector<std::vector<double>> Properties::get<std::vector<std::vector<double>>>(std::string_view) const;
 template std::array<double, 2> Properties::get<std::array<double, 2>>(std::string_view) const;
 template std::array<double, 3> Properties::get<std::array<double, 3>>(std::string_view) const;
 template std::array<double, 4> Properties::get<std::array<double, 4>>(std::string_view) const;

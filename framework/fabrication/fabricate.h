@@ -69,6 +69,9 @@ struct FabricationOptions {
   int render_pixels = 512;
   int png_compression = 1;           ///< zlib level of the slice PNGs (0–9)
   std::vector<Rgb> appearance_srgb;  ///< optional per-material colours for the render
+  /// Where the material render goes: preview/materials.png when the
+  /// translator writes its predicted look as render.png.
+  std::string render_file = "preview/render.png";
   bool progress = true;              ///< progress line on a terminal
 
   bool writes(std::string_view writer) const {

@@ -6,6 +6,7 @@
 /// a translator supplies one per material.
 
 #include <filesystem>
+#include <functional>
 #include <vector>
 
 #include "geometry/mesh.h"
@@ -24,5 +25,14 @@ struct RenderOptions {
 /// temporary name. Deterministic (one ray per sample, fixed sample pattern).
 void render_preview(const std::vector<Mesh>& meshes, const MaterialPalette& palette,
                     const RenderOptions& options, const std::filesystem::path& file);
+
+/// The linear-RGB colour of a surface point (its triangle, its position).
+using SurfaceColouring = std::function<Rgb(int triangle, const Vec3& point)>;
+
+/// `mesh` (the experiment's surface) rendered from the same camera and with
+/// the same shading as render_preview, once per colouring, side by side —
+/// the predicted look of a print beside its goal mapped on the shape.
+void render_surface_colours(const Mesh& mesh, const std::vector<SurfaceColouring>& colourings, int pixels,
+                            const std::filesystem::path& file);
 
 }  // namespace spec2fab

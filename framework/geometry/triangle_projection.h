@@ -1,5 +1,5 @@
 #pragma once
-/// Private to the geometry module. Closest point on one triangle (Ericson,
+/// The geometry module's, and the printable gamut's (simulators/albedo). Closest point on one triangle (Ericson,
 /// Real-Time Collision Detection §5.1.5) together with the feature it lies on,
 /// and the angle-weighted pseudo-normals (Bærentzen & Aanæs 2005) that give
 /// the sign of the distance from that feature.

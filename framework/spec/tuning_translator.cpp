@@ -20,11 +20,14 @@ void TuningTranslator::set_tree(const nlohmann::json& tree, const std::string& w
 }
 
 void TuningTranslator::run(RunContext& context) {
-  if (network_.size() > 0) {
+  if (tunes()) {
     prepare(context);
-    const RunRecord record = schedule_.run(network_, context.seed);
-    tree_->evaluate();
-    write_tuning_outputs(record, network_, context);
+    RunRecord record;
+    if (network_.size() > 0) {
+      record = schedule_.run(network_, context.seed);
+      tree_->evaluate();
+      write_tuning_outputs(record, network_, context);
+    }
     report(record, context);
   }
   write_tree_outputs(*tree_, outputs_, context);

@@ -7,7 +7,8 @@
 /// A translator derived from it builds the tree (`set_tree`), adds tuners to
 /// `network_` and phases to `schedule_` in its constructor — from pieces such
 /// as the texture (translators/pieces) — and writes only what is its own in
-/// `report`. A translator with no tuners writes the tree outputs alone.
+/// `report`. A translator with no tuners writes the tree outputs alone
+/// unless it overrides tunes().
 
 #include <memory>
 
@@ -32,6 +33,9 @@ class TuningTranslator : public Translator {
 
   /// Before the schedule runs: what the report compares with (the start).
   virtual void prepare(RunContext& /*context*/) {}
+  /// Whether prepare and report run: with tuners, or for a translator that
+  /// chooses its parameters without them (the albedo lookup) and says so.
+  virtual bool tunes() const { return network_.size() > 0; }
   /// After the schedule ran, the tree was evaluated and the tuning record
   /// written: the translator's figures, previews and files.
   virtual void report(const RunRecord& record, RunContext& context) = 0;

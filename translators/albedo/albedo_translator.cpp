@@ -7,10 +7,23 @@
 // 4-neighbour network and, in a serial raster schedule, pass their colour
 // residual on with Floyd–Steinberg weights (error diffusion), as the paper
 // did. The albedo simulator tabulates every stacking once.
+//
+// At photograph scale (goal.method "lookup", the default) there are no
+// tuners: the columns — by default one per printer voxel of the surface —
+// are one stack_grid node, and each column's stack comes from the printable
+// stacks' precomputed colours (texture piece: k-d tree in CIELAB, error
+// diffusion there). preview/render.png shows the predicted look beside the
+// goal on the shape; the material render is preview/materials.png.
+
+#include <chrono>
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include "../pieces/texture.h"
+#include "fabrication/preview_renderer.h"
+#include "geometry/solid.h"
+#include "reducer/nodes/stack_grid.h"
 #include "reducer/reducer_tree.h"
 #include "spec/surface_columns.h"
 #include "spec/tuning_translator.h"
@@ -31,12 +44,25 @@ class AlbedoTranslator final : public TuningTranslator {
 
   AlbedoTranslator(const Properties& /*root*/, const Experiment& experiment)
       : backing_(read_options<Options>(experiment.goal()).backing),
-        texture_(experiment.goal(), experiment, TextureOptions{}, backing_, "backing") {
+        texture_(experiment.goal(), experiment, texture_options(), backing_, "backing"),
+        mesh_(experiment.solid().mesh()),
+        solid_(experiment.solid()) {
     const Properties goal = experiment.goal();
     // The shell holds the thickest stack and one step of backing under it.
     const double shell = texture_.ink_mm() + texture_.step_mm();
+    // render.png is the predicted look (report); the material render goes beside it.
+    if (texture_.lookup()) {
+      set_tree(nlohmann::json{{"type", "stratum"},
+                              {"depth_mm", shell},
+                              {"shell", texture_.stack_grid(backing_)},
+                              {"core", {{"type", "layered"}, {"material", backing_}}}},
+               "albedo tree", goal, experiment);
+      outputs_.fabrication.render_file = "preview/materials.png";
+      return;
+    }
     set_tree(surface_column_tree(shell, texture_.columns(), texture_.ink_layers(), backing_), "albedo tree", goal,
              experiment);
+    outputs_.fabrication.render_file = "preview/materials.png";
     schedule_.add(texture_.add_tuners(
         network_, *tree_, [this](int k) -> ReducerNode& { return tree_->node("shell/" + std::to_string(k)); },
         experiment));
@@ -45,17 +71,23 @@ class AlbedoTranslator final : public TuningTranslator {
   std::string summary() const override {
     return fmt::format(
         "albedo: {} x {} columns over the surface, each {} ink layer(s) ({}) over the backing; "
-        "one tuner per column ({}), {}",
+        "{} ({}), {}",
         texture_.columns()[0], texture_.columns()[1], texture_.inks().size(), fmt::join(texture_.inks(), ", "),
-        texture_.metric(), texture_.diffusion() ? "errors diffused in raster order" : "nearest stack per column");
+        texture_.lookup() ? "each column's stack looked up among the printable stacks" : "one tuner per column",
+        texture_.metric(),
+        texture_.diffusion() ? (texture_.lookup() ? "errors diffused (serpentine)" : "errors diffused in raster order")
+                             : "nearest stack per column");
   }
 
   static TypeDoc doc() {
     TypeDoc doc{
-        "Spatially varying albedo (paper Fig. 7): a goal image over the surface's (u, v); "
-        "Stratum -> Column (one per pixel) -> Layered (one layer per ink over the backing), one "
-        "tuner per column with error diffusion over a 4-neighbour network.",
-        TexturePiece::docs(TextureOptions{}),
+        "Spatially varying albedo (paper Fig. 7): a goal image over the surface's (u, v). By default "
+        "(method lookup) Stratum -> stack_grid, one column per printer voxel of the surface, each "
+        "column's ink stack looked up among the printable stacks' simulated colours with error "
+        "diffusion in CIELAB; method tuners builds the paper's Stratum -> Column -> Layered tree with "
+        "one tuner per column on a 4-neighbour network. preview/render.png: the predicted look beside "
+        "the goal on the shape.",
+        TexturePiece::docs(texture_options()),
         R"({"translator": "albedo", "goal": {"image": "../images/earth_96x48.png"}})"};
     doc.properties.insert(doc.properties.begin() + 3, prefixed(option_docs<Options>(), "goal.").front());
     append(doc.properties, TreeOutputOptions::docs());
@@ -63,22 +95,76 @@ class AlbedoTranslator final : public TuningTranslator {
   }
 
  private:
+  static TextureOptions texture_options() {
+    TextureOptions o;
+    o.offers_lookup = true;
+    return o;
+  }
+
+  bool tunes() const override { return true; }
+
+  void prepare(RunContext& context) override {
+    if (!texture_.lookup()) return;
+    const nlohmann::json estimate = texture_.lookup_estimate();
+    spdlog::info("texture: {} x {} columns ({:.3g}) over {} printable stacks: ~{:.1f} s, ~{:.0f} MB",
+                 texture_.columns()[0], texture_.columns()[1], estimate["columns"].get<double>(),
+                 estimate["printable_stacks"].get<size_t>(), estimate["seconds"].get<double>(),
+                 estimate["megabytes"].get<double>());
+    const auto began = std::chrono::steady_clock::now();
+    stacks_ = texture_.choose_stacks(texture_.diffusion());
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
+    spdlog::info("  looked up in {:.1f} s", seconds);
+    if (context.timing) (*context.timing)["texture_lookup_seconds"] = seconds;
+    dynamic_cast<StackGridNode&>(tree_->node("shell")).set_cells(stacks_);
+    tree_->evaluate();
+  }
+
   void report(const RunRecord& /*record*/, RunContext& context) override {
-    const std::vector<Rgb> achieved = texture_.achieved(network_);
-    const std::vector<Rgb> nearest = texture_.diffusion() ? texture_.nearest_only(network_) : achieved;
-    tree_->evaluate();  // nearest_only moved the parameters and set them back
+    std::vector<Rgb> achieved, nearest;
+    if (texture_.lookup()) {
+      achieved = texture_.colours_of(stacks_);
+      nearest = texture_.diffusion() ? texture_.colours_of(texture_.choose_stacks(false)) : achieved;
+    } else {
+      achieved = texture_.achieved(network_);
+      nearest = texture_.diffusion() ? texture_.nearest_only(network_) : achieved;
+      tree_->evaluate();  // nearest_only moved the parameters and set them back
+    }
     nlohmann::json report = texture_.report(achieved);
     const nlohmann::json baseline = texture_.report(nearest);
     report["delta_e00_nearest_only"] = baseline["delta_e00"];
     report["low_pass_delta_e00_nearest_only"] = baseline["low_pass_delta_e00"];
+    if (texture_.lookup()) report["lookup"] = texture_.lookup_estimate();
     context.result["albedo"] = report;
     texture_.write_preview({&texture_.image().pixels, &achieved, &nearest},
                            context.folder.path("preview/goal_vs_achieved.png"));
-    context.result["files"] = {{"previews", {"preview/convergence.png", "preview/goal_vs_achieved.png"}}};
+    context.result["files"] = {{"previews", {"preview/goal_vs_achieved.png"}}};
+    if (!texture_.lookup()) context.result["files"]["previews"].push_back("preview/convergence.png");
+    write_predicted_look(achieved, context.folder.path("preview/render.png"));
+    context.result["files"]["previews"].push_back("preview/render.png");
+  }
+
+  /// The surface in each point's predicted colour (the simulated albedo of
+  /// the column beneath it) beside the goal mapped on the same shape.
+  void write_predicted_look(const std::vector<Rgb>& achieved, const std::filesystem::path& file) const {
+    const std::array<int, 2> columns = texture_.columns();
+    auto column_at = [this, columns](int triangle, const Vec3& point) {
+      const Vec2 uv = solid_.closest_point_on_triangle(triangle, point).uv;
+      const int i = std::clamp(static_cast<int>(std::floor(uv.x() * columns[0])), 0, columns[0] - 1);
+      const int j = std::clamp(static_cast<int>(std::floor(uv.y() * columns[1])), 0, columns[1] - 1);
+      return static_cast<size_t>(i) + static_cast<size_t>(columns[0]) * static_cast<size_t>(j);
+    };
+    const std::vector<Rgb>& goal = texture_.image().pixels;
+    render_surface_colours(mesh_,
+                           {[&](int t, const Vec3& p) { return achieved[column_at(t, p)]; },
+                            [&](int t, const Vec3& p) { return goal[column_at(t, p)]; }},
+                           outputs_.fabrication.render_pixels, file);
   }
 
   std::string backing_;
   TexturePiece texture_;
+  const Mesh& mesh_;
+  const Solid& solid_;
+  std::vector<std::uint32_t> stacks_;  ///< each column's stack (lookup)
 };
 
 }  // namespace

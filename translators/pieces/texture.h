@@ -9,7 +9,9 @@
 
 #include <array>
 #include <filesystem>
+#include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -24,7 +26,11 @@
 namespace spec2fab {
 
 class Experiment;
+class PrinterProfile;
 class Properties;
+class Solid;
+class AlbedoLookup;
+class PrintableGamut;
 class ReducerNode;
 class ReducerTree;
 class Tuner;
@@ -35,23 +41,33 @@ struct GoalImage {
   std::vector<Rgb> pixels;  ///< row-major, row 0 at v = 0
 };
 
-/// Reads the goal image file under `key`; `columns` {0, 0} takes the image's own size.
+/// Reads the goal image file under `key`, decodes sRGB to linear and then
+/// resamples it to `columns` (by area when shrinking, bilinearly when
+/// enlarging); `columns` {0, 0} takes the image's own size.
 GoalImage load_goal_image(const Properties& goal, const std::string& key, std::array<int, 2>& columns);
+
+/// Columns over the surface's (u, v) ∈ [0, 1]² about one printer voxel wide
+/// (the coarser lateral axis): the mean length of the surface per unit u
+/// and per unit v, weighted by area, over the voxel.
+std::array<int, 2> printer_resolution_columns(const Solid& solid, const PrinterProfile& printer);
 
 /// Mean ΔE00 between two images after a Gaussian low-pass in linear RGB (what
 /// the eye sees from a distance: the measure error diffusion improves).
 double low_pass_delta_e(const GoalImage& goal, const std::vector<Rgb>& achieved, double sigma);
 
-/// {"mean", "p95", "max"} ΔE00 between goal and achieved colours.
-nlohmann::json delta_e_statistics(const std::vector<Rgb>& goal, const std::vector<Rgb>& achieved);
+/// {"pixels", "mean", "p95", "max"} ΔE00 between goal and achieved colours,
+/// over the pixels `where` marks (all when empty); {"pixels": 0} for none.
+nlohmann::json delta_e_statistics(const std::vector<Rgb>& goal, const std::vector<Rgb>& achieved,
+                                  const std::vector<bool>& where = {});
 
-/// Every stack a column can be printed with, simulated: the tuner's (discrete)
-/// search space enumerated. Leaves the tuner at its last stack.
-std::vector<Rgb> printable_colours(Tuner& tuner);
-
-/// A goal colour error diffusion can reproduce on average, given the
-/// printable colours `gamut` (see the definition).
-Rgb gamut_map(const std::vector<Rgb>& gamut, const Rgb& pixel);
+/// Every stack a column can be printed with: the values of the tuner's
+/// (discrete) search space, first axis fastest, and each one's simulated
+/// colour. Leaves the tuner at its last stack.
+struct PrintableStacks {
+  std::vector<std::vector<double>> values;
+  std::vector<Rgb> colours;
+};
+PrintableStacks printable_stacks(Tuner& tuner);
 
 /// Column images side by side (each width × height linear RGB, row 0 at
 /// v = 0 drawn on top, or at the bottom with `highest_v_on_top`), scaled up
@@ -100,6 +116,10 @@ struct TextureOptions {
   bool error_diffusion = true;
   std::optional<bool> gamut_map;
   double low_pass_sigma_px = 1.5;
+  /// Offered by a translator whose tree can hold a stack grid (albedo).
+  bool offers_lookup = false;
+  std::string method = "lookup";
+  double max_columns = 16e6;
   /// Set by a translator, not read: the picture's top row goes to the
   /// highest v, so that it reads right seen from +w looking down on (u, v)
   /// (row 0 at v = 0 reads right from −w, through the part).
@@ -111,8 +131,20 @@ struct TextureOptions {
   template <class Declare, class Self>
   static void declare(Declare& d, Self& o) {
     d.file(o.image, o.keys.image.c_str(), "the picture (sRGB PNG/JPEG), row 0 at v = 0");
-    d.number(o.columns, o.keys.columns.c_str(), Range::at_least(1),
-             "columns over (u, v); the image is resampled by area", Default{"the image's size"});
+    if (o.offers_lookup) {
+      d.choice(o.method, "method", {"lookup", "tuners"},
+               "lookup: every column's stack from the printable stacks' precomputed colours (k-d tree, error "
+               "diffusion in CIELAB), at photograph scale; tuners: one albedo tuner per column on the paper's "
+               "network (any optimizer; exhaustive search is the reference)");
+      d.number(o.columns, o.keys.columns.c_str(), Range::at_least(1),
+               "columns over (u, v); the image is resampled onto them",
+               Default{"lookup: one per printer voxel of the surface; tuners: the image's size"});
+      d.number(o.max_columns, "max_columns", Range::at_least(1),
+               "refuse a lookup over more columns (the estimate of time and memory is printed first)");
+    } else {
+      d.number(o.columns, o.keys.columns.c_str(), Range::at_least(1),
+               "columns over (u, v); the image is resampled onto them", Default{"the image's size"});
+    }
     d.value(o.inks, "inks", "one layer each, in this order from the surface down",
             Default{o.default_inks_text.c_str()});
     d.number(o.layer_step_mm, "layer_step_mm", Range::closed(1e-3, 10), "thickness step of each ink layer",
@@ -128,9 +160,11 @@ struct TextureOptions {
     d.number(o.low_pass_sigma_px, "low_pass_sigma_px", Range::closed(0.1, 100),
              "blur (in columns) of the low-pass error in result.json");
   }
+  bool lookup() const { return offers_lookup && method == "lookup"; }
   bool check(std::string* why) const {
-    if (static_cast<long long>(columns[0]) * columns[1] <= 1'000'000) return true;
-    *why = keys.columns + ": more than a million columns";
+    // A tuner per column costs kilobytes: a million of them is gigabytes.
+    if (lookup() || static_cast<long long>(columns[0]) * columns[1] <= 1'000'000) return true;
+    *why = keys.columns + ": more than a million columns" + (offers_lookup ? " for tuners (method lookup takes more)" : "");
     return false;
   }
 };
@@ -173,16 +207,36 @@ class TexturePiece {
                    const Experiment& experiment);
   /// The tuners add_tuners added, in column order.
   std::vector<size_t> tuners() const;
+
+  /// Method "lookup": no tuners; the stack grid node (reducer/nodes/stack_grid.h)
+  /// holds every column, `ground` below the inks.
+  bool lookup() const { return lookup_; }
+  nlohmann::json stack_grid(const std::string& ground) const;
+  /// Every column's stack from the lookup: error diffusion in the lookup's
+  /// space (serpentine Floyd–Steinberg) over gamut-mapped goals when
+  /// `diffuse`, else each column's nearest stack to its own pixel.
+  std::vector<std::uint32_t> choose_stacks(bool diffuse) const;
+  /// The simulated colour of each column's stack.
+  std::vector<Rgb> colours_of(const std::vector<std::uint32_t>& stacks) const;
+  /// What the lookup will cost, as the log line printed before it and the
+  /// figures result.json keeps.
+  nlohmann::json lookup_estimate() const;
   /// Simulated albedo of every column at its current stack.
   std::vector<Rgb> achieved(TunerNetwork& network) const;
   /// The baseline diffusion is measured against: each column's nearest stack
   /// to its own pixel. Leaves every column at the stack it had.
   std::vector<Rgb> nearest_only(TunerNetwork& network) const;
   /// result.json: columns, inks, metric, error_diffusion, gamut_map,
-  /// printable_stacks, delta_e00, low_pass_sigma_px, low_pass_delta_e00.
+  /// printable_stacks, gamut (the goal's share outside it), delta_e00 (all,
+  /// in_gamut, out_of_gamut), low_pass_sigma_px, low_pass_delta_e00.
   nlohmann::json report(const std::vector<Rgb>& achieved) const;
+  /// The printable stacks' simulated colours (stack k as in stack_grid).
+  const std::vector<Rgb>& printable_colours() const { return stacks_.colours; }
 
  private:
+  /// A column's albedo tuner, its goal `target`, not yet bound to a node.
+  std::unique_ptr<Tuner> column_tuner(const Experiment& experiment, const std::string& name, const Rgb& target) const;
+
   std::array<int, 2> columns_{0, 0};
   GoalImage image_;
   bool top_row_at_highest_v_ = false;
@@ -190,9 +244,13 @@ class TexturePiece {
   std::vector<double> max_ink_mm_;
   double step_mm_ = 0.027, ink_mm_ = 0, low_pass_sigma_ = 1.5;
   std::string metric_;
-  bool diffusion_ = true, gamut_map_ = true;
+  bool diffusion_ = true, gamut_map_ = true, lookup_ = false;
   nlohmann::json optimizer_;
-  std::vector<Rgb> gamut_;  ///< albedo of every printable stack
+  PrintableStacks stacks_;  ///< every printable stack and its albedo
+  std::shared_ptr<const AlbedoLookup> lookup_table_;
+  std::shared_ptr<const PrintableGamut> gamut_;
+  std::vector<Rgb> mapped_;     ///< each column's goal moved into the gamut
+  std::vector<bool> outside_;   ///< whether the column's goal lies outside it
   size_t first_tuner_ = 0;
 };
 
