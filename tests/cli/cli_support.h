@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 
 namespace spec2fab_cli_test {
@@ -41,6 +42,13 @@ inline Result run_spec2fab(const std::string& arguments) {
 }
 
 const fs::path kDatasets = SPEC2FAB_DATASETS_DIR;
+
+inline std::string read(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
 
 class Cli : public ::testing::Test {
  protected:

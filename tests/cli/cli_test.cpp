@@ -177,13 +177,6 @@ TEST_F(Cli, OpenMeshIsRejectedWithItsDefect) {
   EXPECT_THAT(single_line(r.out), HasSubstr("open.obj: not closed: 3 boundary edges"));
 }
 
-std::string read(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 // docs/parts.md is what the registries declare, regenerated, byte for byte.
 TEST_F(Cli, PartsReferenceInDocsIsCurrent) {
   // docs/parts.md documents the full build.
@@ -508,7 +501,7 @@ TEST_F(Cli, ErrorDiffusionLowersTheLowPassColourErrorOfAnAlbedoPrint) {
   std::ofstream(dir_ / "gradient.ppm", std::ios::binary) << ppm;
   std::string body = valid_body(kTree, R"(, "output": {"slices": false, "stl": false, "3mf": false, "render": false})", "albedo");
   const std::string goal = R"({"image": ")" + (dir_ / "gradient.ppm").string() +
-                           R"(", "inks": ["VeroCyan"], "layer_step_mm": 0.027, "max_ink_mm": 0.135})";
+                           R"(", "columns": [48, 6], "inks": ["VeroCyan"], "layer_step_mm": 0.027, "max_ink_mm": 0.135})";
   body.replace(body.find(R"({"tree": )"), std::string(R"({"tree": )").size() + std::string(kTree).size() + 1,
                goal);
   const Result r = run_spec2fab("run -q " + experiment("gradient", body).string() + " --out " +

@@ -244,10 +244,55 @@ std::string build_error(const std::string& json, const MaterialPalette& palette)
   return "no error";
 }
 
+// A stack grid assigns what a Column node with one Layered child per cell
+// assigns, at any point of the shell and the core.
+TEST_F(NodesInBox, StackGridAssignsWhatColumnsOfLayersDo) {
+  auto grid = bound(R"({"type": "stratum", "depth_mm": 3,
+      "shell": {"type": "stack_grid", "count": [3, 2], "inks": ["A", "B"],
+                "stacks": [[0, 0], [1, 0], [0.5, 1.5], [2, 0.25]], "fill": "C", "cells": [0, 1, 2, 3, 2, 1]},
+      "core": {"type": "layered", "material": "D"}})");
+  auto stack = [](double a, double b) {
+    return R"({"type": "layered", "layers": [{"material": "A", "thickness_mm": )" + std::to_string(a) +
+           R"(}, {"material": "B", "thickness_mm": )" + std::to_string(b) + R"(}], "fill": "C"})";
+  };
+  auto columns = bound(R"({"type": "stratum", "depth_mm": 3,
+      "shell": {"type": "column", "count": [3, 2], "children": [)" +
+                       stack(0, 0) + "," + stack(1, 0) + "," + stack(0.5, 1.5) + "," + stack(2, 0.25) + "," +
+                       stack(0.5, 1.5) + "," + stack(1, 0) + R"(]},
+      "core": {"type": "layered", "material": "D"}})");
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<double> coord(-9.9, 9.9);
+  std::map<std::string, int> seen;
+  for (int i = 0; i < 4000; ++i) {
+    const Vec3 p(coord(rng), coord(rng), coord(rng));
+    const std::string expected = at(*columns, p);
+    ASSERT_EQ(at(*grid, p), expected) << p.transpose();
+    ++seen[expected];
+  }
+  EXPECT_EQ(seen.size(), 4u);  // both inks, the fill and the core were reached
+  // Written back, it reads the same.
+  const nlohmann::json written = grid->root().child(0).to_json(*palette_);
+  EXPECT_EQ(written["cells"], nlohmann::json({0, 1, 2, 3, 2, 1}));
+  EXPECT_EQ(written["stacks"][2], nlohmann::json({0.5, 1.5}));
+  EXPECT_EQ(written["inks"], nlohmann::json({"A", "B"}));
+}
+
+TEST_F(NodesInBox, StackGridRefusesCellsThatNameNoStack) {
+  EXPECT_EQ(build_error(R"({"type": "stack_grid", "count": [2, 1], "inks": ["A"], "stacks": [[0], [1]],
+      "fill": "B", "cells": [0, 2]})", *palette_),
+            "tree.json: /cells: no stack 2 (there are 2)");
+  EXPECT_EQ(build_error(R"({"type": "stack_grid", "count": [2, 1], "inks": ["A"], "stacks": [[0, 1]],
+      "fill": "B"})", *palette_),
+            "tree.json: /stacks/0: 2 thicknesses for 1 inks");
+  EXPECT_THAT(build_error(R"({"type": "stack_grid", "count": [2, 1], "inks": ["A"], "stacks": [[0]],
+      "fill": "B", "cells": [0]})", *palette_),
+              HasSubstr("cells: 1 given for 2 x 1 columns"));
+}
+
 TEST_F(NodesInBox, UnknownNodeTypeListsKnownOnes) {
   EXPECT_THAT(build_error(R"({"type": "stratun", "shell": {}, "core": {}})", *palette_),
               HasSubstr("tree.json: /type: unknown node 'stratun'; did you mean 'stratum'? (known: "
-                        "bspline, column, layered, paraboloid, plane, stratum, voxel)"));
+                        "bspline, column, layered, paraboloid, plane, stack_grid, stratum, voxel)"));
 }
 
 TEST_F(NodesInBox, UnknownKeyInNestedNode) {

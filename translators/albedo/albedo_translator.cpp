@@ -134,6 +134,10 @@ class AlbedoTranslator final : public TuningTranslator {
     report["delta_e00_nearest_only"] = baseline["delta_e00"];
     report["low_pass_delta_e00_nearest_only"] = baseline["low_pass_delta_e00"];
     if (texture_.lookup()) report["lookup"] = texture_.lookup_estimate();
+    Rgb mean{0, 0, 0};
+    for (const Rgb& c : achieved)
+      for (int k = 0; k < 3; ++k) mean[k] += c[k] / static_cast<double>(achieved.size());
+    report["achieved_mean_linear_rgb"] = mean;
     context.result["albedo"] = report;
     texture_.write_preview({&texture_.image().pixels, &achieved, &nearest},
                            context.folder.path("preview/goal_vs_achieved.png"));

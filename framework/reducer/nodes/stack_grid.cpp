@@ -48,12 +48,12 @@ StackGridNode::StackGridNode(const Properties& properties, const NodeContext& co
   fill_ = context.palette.id(o.fill, properties.where("fill"));
   for (size_t s = 0; s < o.stacks.size(); ++s) {
     const std::vector<double>& stack = o.stacks[s];
-    const std::string where = "stacks/" + std::to_string(s);
+    const std::string where = properties.where("stacks") + "/" + std::to_string(s) + ": ";
     if (stack.size() != inks_.size())
-      properties.fail(where, fmt::format("{} thicknesses for {} inks", stack.size(), inks_.size()));
+      throw InputError(where + fmt::format("{} thicknesses for {} inks", stack.size(), inks_.size()));
     double depth = 0;
     for (double t : stack) {
-      if (!(t >= 0 && t <= 1e4)) properties.fail(where, "thicknesses must lie in [0, 1e4] mm");
+      if (!(t >= 0 && t <= 1e4)) throw InputError(where + "thicknesses must lie in [0, 1e4] mm");
       thickness_mm_.push_back(t);
       bottom_mm_.push_back(depth += t);
     }
