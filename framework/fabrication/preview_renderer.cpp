@@ -14,6 +14,7 @@
 
 #include <tbb/parallel_for.h>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "core/colour.h"
 
@@ -169,8 +170,8 @@ void render_preview(const std::vector<Mesh>& meshes, const MaterialPalette& pale
                    file);
 }
 
-void render_surface_colours(const Mesh& mesh, const std::vector<SurfaceColouring>& colourings, int pixels,
-                            const fs::path& file) {
+void render_surface_colours(const Mesh& mesh, const std::vector<SurfaceColouring>& colourings,
+                            const std::vector<std::string>& labels, int pixels, const fs::path& file) {
   Scene s;
   open_scene(s);
   Bounds bounds;
@@ -188,6 +189,9 @@ void render_surface_colours(const Mesh& mesh, const std::vector<SurfaceColouring
       return Vec3(c[0], c[1], c[2]);
     });
     panel.copyTo(image(cv::Rect(k * (n + gap), 0, n, n)));
+    if (static_cast<size_t>(k) < labels.size())
+      cv::putText(image, labels[static_cast<size_t>(k)], cv::Point(k * (n + gap) + n / 32, n / 16),
+                  cv::FONT_HERSHEY_SIMPLEX, n / 640.0, cv::Scalar(60, 60, 60), std::max(1, n / 512), cv::LINE_AA);
   }
   write_atomically(image, file);
 }

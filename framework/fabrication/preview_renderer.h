@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <string>
 #include <vector>
 
 #include "geometry/mesh.h"
@@ -31,8 +32,9 @@ using SurfaceColouring = std::function<Rgb(int triangle, const Vec3& point)>;
 
 /// `mesh` (the experiment's surface) rendered from the same camera and with
 /// the same shading as render_preview, once per colouring, side by side —
-/// the predicted look of a print beside its goal mapped on the shape.
-void render_surface_colours(const Mesh& mesh, const std::vector<SurfaceColouring>& colourings, int pixels,
-                            const std::filesystem::path& file);
+/// the predicted look of a print beside its goal mapped on the shape —
+/// each panel captioned with its label.
+void render_surface_colours(const Mesh& mesh, const std::vector<SurfaceColouring>& colourings,
+                            const std::vector<std::string>& labels, int pixels, const std::filesystem::path& file);
 
 }  // namespace spec2fab

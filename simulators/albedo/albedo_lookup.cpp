@@ -24,7 +24,7 @@ using Point = Kernel::Point_3;
 /// How many of the nearest stacks by Euclidean distance in CIELAB (ΔE76) are
 /// re-ranked by ΔE00. Measured against the exhaustive search on the shipped
 /// Earth's 1,296 stacks and a 512 × 512 photograph: see benchmarks/RESULTS.md.
-constexpr unsigned kCandidates = 16;
+constexpr unsigned kCandidates = 32;
 
 Point to_point(const std::array<double, 3>& p) { return {p[0], p[1], p[2]}; }
 

@@ -161,7 +161,7 @@ class AlbedoTranslator final : public TuningTranslator {
     render_surface_colours(mesh_,
                            {[&](int t, const Vec3& p) { return achieved[column_at(t, p)]; },
                             [&](int t, const Vec3& p) { return goal[column_at(t, p)]; }},
-                           outputs_.fabrication.render_pixels, file);
+                           {"predicted (simulated albedo)", "goal"}, outputs_.fabrication.render_pixels, file);
   }
 
   std::string backing_;

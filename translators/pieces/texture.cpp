@@ -31,7 +31,7 @@ namespace {
 // What the lookup costs per column, measured on this 2-core machine (Release,
 // 2 threads) over the 512 x 512 photograph runs of benchmarks/RESULTS.md
 // ("Textures at photograph scale"): the estimate printed before it runs.
-constexpr double kLookupMicrosecondsPerColumn = 5.0;
+constexpr double kLookupMicrosecondsPerColumn = 9.0;
 constexpr double kLookupBytesPerColumn = 300.0;
 
 double lookup_seconds(long long columns) { return 1e-6 * kLookupMicrosecondsPerColumn * static_cast<double>(columns); }
@@ -203,6 +203,7 @@ TexturePiece::TexturePiece(const Properties& goal, const Experiment& experiment,
   const PrinterProfile& printer = experiment.printer();
   columns_ = o.columns;
   lookup_ = o.lookup();
+  diffuse_in_lab_ = o.diffusion_space == "lab";
   if (lookup_ && columns_[0] == 0) columns_ = printer_resolution_columns(experiment.solid(), printer);
   if (lookup_ && static_cast<double>(column_count()) > o.max_columns)
     goal.fail(goal.has(o.keys.columns) ? o.keys.columns : "max_columns",
@@ -249,6 +250,8 @@ TexturePiece::TexturePiece(const Properties& goal, const Experiment& experiment,
   optimizer_ = experiment.section_or(o.keys.optimizer, {{"type", "exhaustive"}});
   if (lookup_ && metric_ != "ciede2000" && metric_ != "rgb_mse")
     goal.fail(o.keys.metric, "unknown metric '" + metric_ + "' for the lookup (known: ciede2000, rgb_mse)");
+  if (diffuse_in_lab_ && metric_ != "ciede2000")
+    goal.fail("diffusion_space", "lab needs metric ciede2000 (the lookup searches CIELAB then)");
 
   // Every printable stack simulated once, on a stack of its own: the
   // lookup's table, the gamut, and what a column tuner searches.
@@ -376,15 +379,25 @@ std::vector<std::uint32_t> TexturePiece::choose_stacks(bool diffuse) const {
   }
   // Serpentine Floyd–Steinberg: each column picks the stack perceptually
   // nearest (the lookup's metric: ΔE00 by default) to its gamut-mapped goal
-  // plus the residuals passed to it; residuals are passed on in linear RGB,
-  // where neighbouring columns' light averages as the eye averages it.
-  // (Passed on in CIELAB instead, the shipped Earth's low-pass ΔE00 was 7.36
-  // against 7.33: no better, and not what mixing light does.) Targets are
-  // clamped to [0, 1]: a residual that no stack can absorb would otherwise
-  // grow along the row.
+  // plus the residuals passed to it. Residuals are passed on in linear RGB
+  // by default, where neighbouring columns' light averages as the eye
+  // averages it, or in CIELAB (diffusion_space); benchmarks/RESULTS.md
+  // compares the two. Targets are clamped to the range (linear: [0, 1];
+  // CIELAB: the stacks' extent): a residual that no stack can absorb would
+  // otherwise grow along the row.
   using Point = std::array<double, 3>;
   const int width = columns_[0], height = columns_[1];
   std::vector<Point> row_error(static_cast<size_t>(width) + 2), next_error(static_cast<size_t>(width) + 2);
+  std::array<std::array<double, 2>, 3> range{{{0, 1}, {0, 1}, {0, 1}}};
+  if (diffuse_in_lab_) {
+    const std::vector<Rgb>& colours = stacks_.colours;
+    for (auto& r : range) r = {1e300, -1e300};
+    for (const Rgb& c : colours) {
+      const Lab lab = linear_rgb_to_lab(c);
+      for (int k = 0; k < 3; ++k) range[k] = {std::min(range[k][0], lab[k]), std::max(range[k][1], lab[k])};
+    }
+  }
+  auto to_space = [&](const Rgb& c) { return diffuse_in_lab_ ? linear_rgb_to_lab(c) : c; };
   for (int y = 0; y < height; ++y) {
     std::fill(next_error.begin(), next_error.end(), Point{0, 0, 0});
     const bool forward = y % 2 == 0;
@@ -392,13 +405,15 @@ std::vector<std::uint32_t> TexturePiece::choose_stacks(bool diffuse) const {
     for (int n = 0; n < width; ++n) {
       const int x = forward ? n : width - 1 - n;
       const size_t p = static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x);
-      Rgb target = gamut_map_ ? mapped_[p] : image_.pixels[p];
+      Point target = to_space(gamut_map_ ? mapped_[p] : image_.pixels[p]);
       const Point& carried = row_error[static_cast<size_t>(x) + 1];
-      for (int c = 0; c < 3; ++c) target[c] = std::clamp(target[c] + carried[c], 0.0, 1.0);
-      const size_t s = lookup.nearest(lookup.point(target));
+      for (int c = 0; c < 3; ++c) target[c] = std::clamp(target[c] + carried[c], range[c][0], range[c][1]);
+      // With diffusion in CIELAB the metric is ΔE00, whose lookup space it is.
+      const size_t s = lookup.nearest(diffuse_in_lab_ ? target : lookup.point(target));
       stacks[p] = static_cast<std::uint32_t>(s);
+      const Point chosen = to_space(lookup.colour(s));
       Point residual;
-      for (int c = 0; c < 3; ++c) residual[c] = target[c] - lookup.colour(s)[c];
+      for (int c = 0; c < 3; ++c) residual[c] = target[c] - chosen[c];
       // Weights 7 ahead, 3 behind-below, 5 below, 1 ahead-below, over the neighbours present.
       const bool ahead = x + step >= 0 && x + step < width, behind = x - step >= 0 && x - step < width;
       const bool below = y + 1 < height;

@@ -119,6 +119,7 @@ struct TextureOptions {
   /// Offered by a translator whose tree can hold a stack grid (albedo).
   bool offers_lookup = false;
   std::string method = "lookup";
+  std::string diffusion_space = "linear";
   double max_columns = 16e6;
   /// Set by a translator, not read: the picture's top row goes to the
   /// highest v, so that it reads right seen from +w looking down on (u, v)
@@ -139,6 +140,8 @@ struct TextureOptions {
       d.number(o.columns, o.keys.columns.c_str(), Range::at_least(1),
                "columns over (u, v); the image is resampled onto them",
                Default{"lookup: one per printer voxel of the surface; tuners: the image's size"});
+      d.choice(o.diffusion_space, "diffusion_space", {"linear", "lab"},
+               "lookup: where residuals are passed on — linear RGB (light, as the eye averages it) or CIELAB");
       d.number(o.max_columns, "max_columns", Range::at_least(1),
                "refuse a lookup over more columns (the estimate of time and memory is printed first)");
     } else {
@@ -244,7 +247,7 @@ class TexturePiece {
   std::vector<double> max_ink_mm_;
   double step_mm_ = 0.027, ink_mm_ = 0, low_pass_sigma_ = 1.5;
   std::string metric_;
-  bool diffusion_ = true, gamut_map_ = true, lookup_ = false;
+  bool diffusion_ = true, gamut_map_ = true, lookup_ = false, diffuse_in_lab_ = false;
   nlohmann::json optimizer_;
   PrintableStacks stacks_;  ///< every printable stack and its albedo
   std::shared_ptr<const AlbedoLookup> lookup_table_;
