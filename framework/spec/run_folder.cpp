@@ -1,15 +1,42 @@
 #include "spec/run_folder.h"
 
+#include <signal.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <fstream>
 #include <stdexcept>
 
+#include <spdlog/spdlog.h>
+
 #include "core/error.h"
+#include "core/interrupt.h"
 
 namespace spec2fab {
 
 namespace fs = std::filesystem;
+
+namespace {
+
+/// Removes the staging folders (".NAME.partial-PID") in `parent` of runs
+/// that no longer exist: what a killed run (SIGKILL, a power cut) left.
+void remove_stale_partials(const fs::path& parent) {
+  std::error_code error;
+  for (const fs::directory_entry& entry : fs::directory_iterator(parent, error)) {
+    const std::string name = entry.path().filename().string();
+    const size_t mark = name.rfind(".partial-");
+    if (name.empty() || name[0] != '.' || mark == std::string::npos || !entry.is_directory(error)) continue;
+    const std::string digits = name.substr(mark + 9);
+    if (digits.empty() || digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) continue;
+    const pid_t pid = static_cast<pid_t>(std::stol(digits));
+    if (pid == getpid() || kill(pid, 0) == 0 || errno != ESRCH) continue;  // alive, or not ours to judge
+    std::error_code ignored;
+    if (fs::remove_all(entry.path(), ignored) > 0 && !ignored)
+      spdlog::info("removed {}, left by a run that was killed (process {})", entry.path().string(), pid);
+  }
+}
+
+}  // namespace
 
 RunFolder::RunFolder(fs::path destination) : destination_(std::move(destination)) {
   if (destination_.filename().empty()) destination_ = destination_.parent_path();
@@ -22,9 +49,14 @@ RunFolder::RunFolder(fs::path destination) : destination_(std::move(destination)
   staging_name += destination_.filename().string();
   staging_name += ".partial-" + std::to_string(getpid());
   staging_ = parent / staging_name;
+  remove_stale_partials(parent);
   fs::remove_all(staging_);
+  interrupt::register_partial(staging_);
   fs::create_directories(staging_, error);
-  if (error) throw InputError(staging_.string() + ": cannot create output folder: " + error.message());
+  if (error) {
+    interrupt::release_partial(staging_);
+    throw InputError(staging_.string() + ": cannot create output folder: " + error.message());
+  }
 }
 
 RunFolder::~RunFolder() {
@@ -32,6 +64,7 @@ RunFolder::~RunFolder() {
     std::error_code ignored;
     fs::remove_all(staging_, ignored);
   }
+  interrupt::release_partial(staging_);
 }
 
 fs::path RunFolder::path(const fs::path& relative) const {
@@ -57,6 +90,7 @@ void RunFolder::commit() {
   fs::rename(staging_, destination_, error);
   if (error) throw std::runtime_error("cannot move results to " + destination_.string() + ": " + error.message());
   committed_ = true;
+  interrupt::release_partial(staging_);
 }
 
 }  // namespace spec2fab

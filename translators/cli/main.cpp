@@ -1,5 +1,6 @@
 // spec2fab: run, validate and inspect Spec2Fab experiments.
-// Exit codes: 0 success, 2 bad input (one line saying what and where), 1 internal error.
+// Exit codes: 0 success, 2 bad input (one line saying what and where), 1 internal error,
+// 130 / 143 stopped by SIGINT / SIGTERM (core/interrupt.h).
 
 #include <cstdlib>
 #include <iostream>
@@ -10,6 +11,7 @@
 #include "commands.h"
 #include "core/build_options.h"
 #include "core/error.h"
+#include "core/interrupt.h"
 #include "core/log.h"
 #include "core/strings.h"
 #include "core/version.h"
@@ -25,6 +27,7 @@ std::filesystem::path default_datasets() {
 
 int main(int argc, char** argv) {
   using namespace spec2fab;
+  interrupt::exit_cleanly_on_signals();  // before any thread starts: they inherit the blocked signals
   CLI::App app{
       "spec2fab: turns a functional specification into a multi-material 3D print.\n"
       "An experiment file (JSON) names a translator and its five inputs: geometry, goal,\n"
@@ -50,7 +53,9 @@ int main(int argc, char** argv) {
       "reads it),\ntiming.json (wall time, threads), preview/*.png and print/ (slices/, "
       "<material>.stl, model.3mf).\nThe folder appears only when the run completes. The same "
       "experiment and seed give\n"
-      "byte-identical files for any thread count, except timing.json.");
+      "byte-identical files for any thread count, except timing.json.\n"
+      "Stopped by Ctrl-C or SIGTERM, a run removes its partial folder and exits with 130 or 143;\n"
+      "what a killed run (SIGKILL) left is removed by the next run into the same parent folder.");
 
   cli::ExportArguments export_arguments;
   CLI::App* export_cmd = app.add_subcommand("export",

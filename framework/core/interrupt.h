@@ -1,0 +1,22 @@
+#pragma once
+/// Runs that are stopped leave nothing behind. SIGINT and SIGTERM are
+/// taken by a thread of their own (not a signal handler, so it may touch
+/// the file system): it removes every partial output folder registered
+/// here, says so in one line, and exits with 128 + the signal (130, 143).
+/// A run killed outright (SIGKILL) cannot clean up; RunFolder removes such
+/// leftovers on the next run into the same parent folder.
+
+#include <filesystem>
+
+namespace spec2fab::interrupt {
+
+/// Blocks SIGINT and SIGTERM in the calling thread — and so in every thread
+/// it starts afterwards — and starts the thread that waits for them. Call
+/// first thing in main, before any other thread exists.
+void exit_cleanly_on_signals();
+
+/// A folder to remove if the run is stopped, until released.
+void register_partial(const std::filesystem::path& folder);
+void release_partial(const std::filesystem::path& folder);
+
+}  // namespace spec2fab::interrupt
