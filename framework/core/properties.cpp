@@ -1,7 +1,9 @@
 #include "core/properties.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <fstream>
 #include <map>
 #include <set>
@@ -60,7 +62,17 @@ template <>
 struct Converter<int> {
   static constexpr const char* expected = "an integer";
   static std::optional<int> convert(const json& v) {
-    if (v.is_number_integer()) return v.get<int>();
+    // Read wide and checked: get<int>() would wrap 4294967297 to 1.
+    if (v.is_number_unsigned()) {
+      const auto x = v.get<std::uint64_t>();
+      if (x > static_cast<std::uint64_t>(std::numeric_limits<int>::max())) return std::nullopt;
+      return static_cast<int>(x);
+    }
+    if (v.is_number_integer()) {
+      const auto x = v.get<std::int64_t>();
+      if (x < std::numeric_limits<int>::min() || x > std::numeric_limits<int>::max()) return std::nullopt;
+      return static_cast<int>(x);
+    }
     if (v.is_number_float()) {
       const double x = v.get<double>();
       if (std::isfinite(x) && x == std::floor(x) && std::abs(x) < 2e9) return static_cast<int>(x);
@@ -157,7 +169,7 @@ Properties Properties::parse(std::string_view text, std::string origin,
   json document;
   try {
     document = json::parse(text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // parse errors, and numbers beyond a double (1e999)
     std::string what = e.what();
     // nlohmann prefixes "[json.exception.parse_error.101] "; keep the human part.
     if (const auto bracket = what.find("] "); bracket != std::string::npos) what.erase(0, bracket + 2);
@@ -214,11 +226,39 @@ const json& Properties::lookup(std::string_view key) const {
 void Properties::consume(std::string_view key) const { document_->consumed.insert(child_pointer(key)); }
 
 template <class T>
+struct HoldsInts : std::is_same<T, int> {};
+template <class E>
+struct HoldsInts<std::vector<E>> : HoldsInts<E> {};
+template <class E, size_t N>
+struct HoldsInts<std::array<E, N>> : HoldsInts<E> {};
+
+/// Whether `value` holds an integer that T, made of ints, refused for its size.
+template <class T>
+bool integer_beyond_int(const json& value) {
+  if constexpr (HoldsInts<T>::value) {
+    auto beyond = [](const json& v) {
+      return v.is_number_integer() && !(v.is_number_unsigned() ? v.get<std::uint64_t>() <= 2147483647u
+                                                                 : v.get<std::int64_t>() >= -2147483648LL &&
+                                                                       v.get<std::int64_t>() <= 2147483647LL);
+    };
+    if (value.is_array()) return std::any_of(value.begin(), value.end(), beyond);
+    return beyond(value);
+  }
+  return false;
+}
+
+template <class T>
 T Properties::get(std::string_view key) const {
   const json& value = lookup(key);
   consume(key);
   auto converted = Converter<T>::convert(value);
-  if (!converted) fail(key, "expected " + expectation<T>() + ", got " + type_name(value));
+  if (!converted) {
+    const bool beyond = integer_beyond_int<T>(value);
+    const std::string shown = value.dump();
+    fail(key, "expected " + expectation<T>() + ", got " +
+                  ((value.is_number() || beyond) && shown.size() <= 80 ? shown : type_name(value)) +
+                  (beyond ? " (beyond ±2147483647)" : ""));
+  }
   return *converted;
 }
 

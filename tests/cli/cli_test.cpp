@@ -150,6 +150,9 @@ TEST_F(Cli, BadInputIsOneLineAndExitCodeTwo) {
        "/goal/tree/material: material 'VeroMagenta' is not loaded in printer"},
       {valid_body(kTree, "", "albedoo"),
        "/translator: unknown translator 'albedoo'; did you mean 'albedo'?"},
+      {valid_body(kTree, R"(, "seed": 1e999)"), "malformed JSON: number overflow parsing '1e999'"},
+      {valid_body(R"({"type": "column", "count": [4294967297, 1], "child": {"type": "layered", "material": "VeroCyan"}})"),
+       "/goal/tree/count: expected an array of 2 integers, got [4294967297,1] (beyond ±2147483647)"},
   };
   for (const Case& c : cases) {
     const fs::path file = experiment("bad", c.body);

@@ -11,39 +11,50 @@ namespace {
 
 using ::testing::HasSubstr;
 
-// Starts a long run (the smooth caustics ring: quick to set up, then tens
-// of seconds of transport and tuning), waits for its partial folder, sends
-// `signal`, and returns its exit code and output.
-Result stop_a_run(const fs::path& dir, const std::string& signal) {
+// Starts a long run — a two-material sphere fabricated at the J750's
+// resolution (1.3e9 voxels, tens of seconds; every build has what it
+// needs) — waits for its partial folder, sends `signal`, and returns the
+// run's exit code and output.
+Result stop_a_run(const fs::path& dir, const std::string& body, const std::string& signal) {
+  const fs::path file = dir / "long.json";
+  std::ofstream(file) << body;
   const std::string out = (dir / "run").string();
   const std::string script =
-      std::string(SPEC2FAB_CLI_PATH) + " run -q " + (kDatasets / "experiments/smooth_caustics_ring.json").string() +
-      " --out " + out + " & pid=$!; " +
+      std::string(SPEC2FAB_CLI_PATH) + " run -q " + file.string() + " --out " + out + " & pid=$!; " +
       "for i in $(seq 1 1200); do ls -d " + (dir / ".run.partial-").string() + "* >/dev/null 2>&1 && break; sleep 0.05; done; " +
       "sleep 0.5; kill -" + signal + " $pid; wait $pid";
   return run_command("sh -c '" + script + "'");
 }
 
-size_t entries(const fs::path& dir) {
-  size_t n = 0;
-  for ([[maybe_unused]] const auto& entry : fs::directory_iterator(dir)) ++n;
-  return n;
+/// The run folder and staging folders of the run into `dir`/run.
+std::vector<std::string> leftovers(const fs::path& dir) {
+  std::vector<std::string> out;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    const std::string name = entry.path().filename().string();
+    if (name == "run" || name.rfind(".run.partial-", 0) == 0) out.push_back(name);
+  }
+  return out;
+}
+
+std::string long_run_body(const Cli& /*fixture*/) {
+  return R"({"translator": "tree", "geometry": {"mesh": ")" + (kDatasets / "meshes/sphere_r25.obj").string() +
+         R"(", "uv": "mesh"}, "goal": {"tree": {"type": "stratum", "depth_mm": 1, "shell": {"type": "layered", "material": "VeroCyan"}, "core": {"type": "layered", "material": "VeroWhitePlus"}}},
+         "output": {"stl": false, "3mf": false, "render": false}, "materials": ")" +
+         (kDatasets / "materials/polyjet.json").string() + R"(", "printer": ")" + (kDatasets / "printers/j750.json").string() + R"("})";
 }
 
 TEST_F(Cli, SigtermRemovesThePartialOutputAndExits143) {
-  const size_t before = entries(dir_);
-  const Result r = stop_a_run(dir_, "TERM");
+  const Result r = stop_a_run(dir_, long_run_body(*this), "TERM");
   EXPECT_EQ(r.code, 143) << r.out;
   EXPECT_THAT(single_line(r.out), HasSubstr("stopped by SIGTERM; removed the partial output"));
-  EXPECT_EQ(entries(dir_), before);  // no run folder, no partial folder
+  EXPECT_THAT(leftovers(dir_), ::testing::IsEmpty());  // no run folder, no partial folder
 }
 
 TEST_F(Cli, SigintRemovesThePartialOutputAndExits130) {
-  const size_t before = entries(dir_);
-  const Result r = stop_a_run(dir_, "INT");
+  const Result r = stop_a_run(dir_, long_run_body(*this), "INT");
   EXPECT_EQ(r.code, 130) << r.out;
   EXPECT_THAT(r.out, HasSubstr("stopped by SIGINT"));
-  EXPECT_EQ(entries(dir_), before);
+  EXPECT_THAT(leftovers(dir_), ::testing::IsEmpty());
 }
 
 TEST_F(Cli, TheNextRunRemovesWhatAKilledRunLeft) {

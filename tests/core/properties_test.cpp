@@ -40,6 +40,20 @@ TEST(Properties, WrongTypeNamesKeyAndTypes) {
             "exp.json: /a/depth_mm: expected an array of 2 integers, got a string");
 }
 
+// Numbers beyond what the reader holds are refused, not wrapped or passed
+// on as a library's exception (issue 19).
+TEST(Properties, NumbersBeyondTheirTypeAreRefusedNamingTheValue) {
+  const Properties p = Properties::parse(
+      R"({"count": [4294967297, 1], "n": -3000000000, "m": 2147483647, "x": 1e308})", "exp.json");
+  EXPECT_EQ(error_of([&] { p.get<std::array<int, 2>>("count"); }),
+            "exp.json: /count: expected an array of 2 integers, got [4294967297,1] (beyond ±2147483647)");
+  EXPECT_EQ(error_of([&] { p.get<int>("n"); }), "exp.json: /n: expected an integer, got -3000000000 (beyond ±2147483647)");
+  EXPECT_EQ(p.get<int>("m"), 2147483647);
+  EXPECT_EQ(p.get<double>("x"), 1e308);
+  EXPECT_EQ(error_of([] { Properties::parse(R"({"seed": 1e999})", "exp.json"); }),
+            "exp.json: malformed JSON: number overflow parsing '1e999'");
+}
+
 TEST(Properties, MissingRequiredKey) {
   const Properties p = Properties::parse(R"({"goal": {}})", "exp.json");
   EXPECT_EQ(error_of([&] { p.object("goal").object("tree"); }),
