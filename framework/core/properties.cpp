@@ -236,11 +236,7 @@ struct HoldsInts<std::array<E, N>> : HoldsInts<E> {};
 template <class T>
 bool integer_beyond_int(const json& value) {
   if constexpr (HoldsInts<T>::value) {
-    auto beyond = [](const json& v) {
-      return v.is_number_integer() && !(v.is_number_unsigned() ? v.get<std::uint64_t>() <= 2147483647u
-                                                                 : v.get<std::int64_t>() >= -2147483648LL &&
-                                                                       v.get<std::int64_t>() <= 2147483647LL);
-    };
+    auto beyond = [](const json& v) { return v.is_number_integer() && !Converter<int>::convert(v); };
     if (value.is_array()) return std::any_of(value.begin(), value.end(), beyond);
     return beyond(value);
   }

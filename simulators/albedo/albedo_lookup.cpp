@@ -13,7 +13,6 @@
 #include <CGAL/property_map.h>
 #include <boost/iterator/counting_iterator.hpp>
 
-#include "geometry/triangle_projection.h"
 
 namespace spec2fab {
 namespace {
@@ -127,8 +126,8 @@ PrintableGamut::PrintableGamut(const std::vector<Rgb>& colours) {
         if (n < 3) corner[static_cast<size_t>(n)] = index[v.idx()];
         ++n;
       }
-      triangles_.push_back(corner);
       const Vec3 a(vertices_[corner[0]].data()), b(vertices_[corner[1]].data()), c(vertices_[corner[2]].data());
+      facets_.emplace_back().set_corners(a, b, c);
       const Vec3 normal = (b - a).cross(c - a).normalized();
       planes_.push_back({normal.x(), normal.y(), normal.z(), normal.dot(a)});
     }
@@ -136,10 +135,8 @@ PrintableGamut::PrintableGamut(const std::vector<Rgb>& colours) {
     // A degenerate gamut (one ink: a curve of colours): project onto the
     // triangles of every triple of neighbouring colours, and call nothing inside.
     vertices_ = colours;
-    for (size_t k = 0; k + 2 < colours.size(); ++k)
-      triangles_.push_back({static_cast<int>(k), static_cast<int>(k + 1), static_cast<int>(k + 2)});
-    if (colours.size() == 2) triangles_.push_back({0, 1, 1});
-    if (colours.size() == 1) triangles_.push_back({0, 0, 0});
+    auto corner = [&](size_t k) { return Vec3(colours[std::min(k, colours.size() - 1)].data()); };
+    for (size_t k = 0; k == 0 || k + 2 < colours.size(); ++k) facets_.emplace_back().set_corners(corner(k), corner(k + 1), corner(k + 2));
   }
 }
 
@@ -155,10 +152,8 @@ Rgb PrintableGamut::project(const Rgb& colour) const {
   const Vec3 target(colour[0], colour[1], colour[2]);
   Vec3 best = Vec3(vertices_.front().data());
   double lowest = (best - target).squaredNorm();
-  for (const auto& t : triangles_) {
-    TriangleRecord record;
-    record.set_corners(Vec3(vertices_[t[0]].data()), Vec3(vertices_[t[1]].data()), Vec3(vertices_[t[2]].data()));
-    const TriangleProjection hit = project_onto_triangle(record, target);
+  for (const TriangleRecord& facet : facets_) {
+    const TriangleProjection hit = project_onto_triangle(facet, target);
     const double d = (hit.position - target).squaredNorm();
     if (d < lowest) lowest = d, best = hit.position;
   }

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "core/colour.h"
+#include "geometry/triangle_projection.h"
 #include "materials/material.h"
 
 namespace spec2fab {
@@ -71,7 +72,8 @@ class PrintableGamut {
 
  private:
   std::vector<Rgb> vertices_;
-  std::vector<std::array<int, 3>> triangles_;  ///< the hull's facets
+  /// The hull's facets, laid out once for projection (geometry/triangle_projection.h).
+  std::vector<TriangleRecord> facets_;
   /// Outward facet planes n·x ≤ d.
   std::vector<std::array<double, 4>> planes_;
 };

@@ -12,7 +12,7 @@
 // tuners: the columns — by default one per printer voxel of the surface —
 // are one stack_grid node, and each column's stack comes from the printable
 // stacks' precomputed colours (texture piece: k-d tree in CIELAB, error
-// diffusion there). preview/render.png shows the predicted look beside the
+// diffusion in linear RGB by default). preview/render.png shows the predicted look beside the
 // goal on the shape; the material render is preview/materials.png.
 
 #include <chrono>
@@ -45,27 +45,25 @@ class AlbedoTranslator final : public TuningTranslator {
   AlbedoTranslator(const Properties& /*root*/, const Experiment& experiment)
       : backing_(read_options<Options>(experiment.goal()).backing),
         texture_(experiment.goal(), experiment, texture_options(), backing_, "backing"),
-        mesh_(experiment.solid().mesh()),
         solid_(experiment.solid()) {
     const Properties goal = experiment.goal();
     // The shell holds the thickest stack and one step of backing under it.
     const double shell = texture_.ink_mm() + texture_.step_mm();
-    // render.png is the predicted look (report); the material render goes beside it.
     if (texture_.lookup()) {
       set_tree(nlohmann::json{{"type", "stratum"},
                               {"depth_mm", shell},
                               {"shell", texture_.stack_grid(backing_)},
                               {"core", {{"type", "layered"}, {"material", backing_}}}},
                "albedo tree", goal, experiment);
-      outputs_.fabrication.render_file = "preview/materials.png";
-      return;
+    } else {
+      set_tree(surface_column_tree(shell, texture_.columns(), texture_.ink_layers(), backing_), "albedo tree", goal,
+               experiment);
+      schedule_.add(texture_.add_tuners(
+          network_, *tree_, [this](int k) -> ReducerNode& { return tree_->node("shell/" + std::to_string(k)); },
+          experiment));
     }
-    set_tree(surface_column_tree(shell, texture_.columns(), texture_.ink_layers(), backing_), "albedo tree", goal,
-             experiment);
+    // render.png is the predicted look (report); the material render goes beside it.
     outputs_.fabrication.render_file = "preview/materials.png";
-    schedule_.add(texture_.add_tuners(
-        network_, *tree_, [this](int k) -> ReducerNode& { return tree_->node("shell/" + std::to_string(k)); },
-        experiment));
   }
 
   std::string summary() const override {
@@ -83,8 +81,8 @@ class AlbedoTranslator final : public TuningTranslator {
     TypeDoc doc{
         "Spatially varying albedo (paper Fig. 7): a goal image over the surface's (u, v). By default "
         "(method lookup) Stratum -> stack_grid, one column per printer voxel of the surface, each "
-        "column's ink stack looked up among the printable stacks' simulated colours with error "
-        "diffusion in CIELAB; method tuners builds the paper's Stratum -> Column -> Layered tree with "
+        "column's ink stack looked up among the printable stacks' simulated colours (ΔE00) with error "
+        "diffusion; method tuners builds the paper's Stratum -> Column -> Layered tree with "
         "one tuner per column on a 4-neighbour network. preview/render.png: the predicted look beside "
         "the goal on the shape.",
         TexturePiece::docs(texture_options()),
@@ -158,7 +156,7 @@ class AlbedoTranslator final : public TuningTranslator {
       return static_cast<size_t>(i) + static_cast<size_t>(columns[0]) * static_cast<size_t>(j);
     };
     const std::vector<Rgb>& goal = texture_.image().pixels;
-    render_surface_colours(mesh_,
+    render_surface_colours(solid_.mesh(),
                            {[&](int t, const Vec3& p) { return achieved[column_at(t, p)]; },
                             [&](int t, const Vec3& p) { return goal[column_at(t, p)]; }},
                            {"predicted (simulated albedo)", "goal"}, outputs_.fabrication.render_pixels, file);
@@ -166,7 +164,6 @@ class AlbedoTranslator final : public TuningTranslator {
 
   std::string backing_;
   TexturePiece texture_;
-  const Mesh& mesh_;
   const Solid& solid_;
   std::vector<std::uint32_t> stacks_;  ///< each column's stack (lookup)
 };

@@ -30,7 +30,7 @@ namespace {
 
 // What the lookup costs per column, measured on this 2-core machine (Release,
 // 2 threads) over the 512 x 512 photograph runs of benchmarks/RESULTS.md
-// ("Textures at photograph scale"): the estimate printed before it runs.
+// ("Appearance at photograph scale"): the estimate printed before it runs.
 constexpr double kLookupMicrosecondsPerColumn = 9.0;
 constexpr double kLookupBytesPerColumn = 300.0;
 
@@ -382,22 +382,16 @@ std::vector<std::uint32_t> TexturePiece::choose_stacks(bool diffuse) const {
   // plus the residuals passed to it. Residuals are passed on in linear RGB
   // by default, where neighbouring columns' light averages as the eye
   // averages it, or in CIELAB (diffusion_space); benchmarks/RESULTS.md
-  // compares the two. Targets are clamped to the range (linear: [0, 1];
-  // CIELAB: the stacks' extent): a residual that no stack can absorb would
-  // otherwise grow along the row.
+  // compares the two (CIELAB needs the ΔE00 metric: the lookup's own
+  // space). Targets are clamped to the range (linear: [0, 1]; CIELAB: the
+  // stacks' extent): a residual that no stack can absorb would otherwise
+  // grow along the row.
   using Point = std::array<double, 3>;
   const int width = columns_[0], height = columns_[1];
   std::vector<Point> row_error(static_cast<size_t>(width) + 2), next_error(static_cast<size_t>(width) + 2);
-  std::array<std::array<double, 2>, 3> range{{{0, 1}, {0, 1}, {0, 1}}};
-  if (diffuse_in_lab_) {
-    const std::vector<Rgb>& colours = stacks_.colours;
-    for (auto& r : range) r = {1e300, -1e300};
-    for (const Rgb& c : colours) {
-      const Lab lab = linear_rgb_to_lab(c);
-      for (int k = 0; k < 3; ++k) range[k] = {std::min(range[k][0], lab[k]), std::max(range[k][1], lab[k])};
-    }
-  }
-  auto to_space = [&](const Rgb& c) { return diffuse_in_lab_ ? linear_rgb_to_lab(c) : c; };
+  const std::array<std::array<double, 2>, 3> range =
+      diffuse_in_lab_ ? lookup.extent() : std::array<std::array<double, 2>, 3>{{{0, 1}, {0, 1}, {0, 1}}};
+  auto to_space = [&](const Rgb& c) { return diffuse_in_lab_ ? lookup.point(c) : c; };
   for (int y = 0; y < height; ++y) {
     std::fill(next_error.begin(), next_error.end(), Point{0, 0, 0});
     const bool forward = y % 2 == 0;
@@ -408,10 +402,9 @@ std::vector<std::uint32_t> TexturePiece::choose_stacks(bool diffuse) const {
       Point target = to_space(gamut_map_ ? mapped_[p] : image_.pixels[p]);
       const Point& carried = row_error[static_cast<size_t>(x) + 1];
       for (int c = 0; c < 3; ++c) target[c] = std::clamp(target[c] + carried[c], range[c][0], range[c][1]);
-      // With diffusion in CIELAB the metric is ΔE00, whose lookup space it is.
       const size_t s = lookup.nearest(diffuse_in_lab_ ? target : lookup.point(target));
       stacks[p] = static_cast<std::uint32_t>(s);
-      const Point chosen = to_space(lookup.colour(s));
+      const Point& chosen = diffuse_in_lab_ ? lookup.stack_point(s) : lookup.colour(s);
       Point residual;
       for (int c = 0; c < 3; ++c) residual[c] = target[c] - chosen[c];
       // Weights 7 ahead, 3 behind-below, 5 below, 1 ahead-below, over the neighbours present.
