@@ -29,6 +29,7 @@ FabricationOptions FabricationOptions::from_properties(const std::optional<Prope
   const OutputNumbers numbers = read_options<OutputNumbers>(*output);
   options.max_voxels = static_cast<long long>(numbers.max_voxels);
   options.mesh_voxel_mm = numbers.mesh_voxel_mm;
+  options.mesh_adaptivity = numbers.mesh_adaptivity;
   options.render_pixels = numbers.render_pixels;
   options.png_compression = numbers.png_compression;
   return options;
@@ -63,15 +64,19 @@ void check_fabrication(const ReducerTree& tree, const PrinterProfile& printer,
 
 namespace {
 
-// Whole-voxel strides giving mesh voxels of about `mesh_voxel_mm` (0: at
-// most 512 along the longest side).
+// 128 cells along a 50 mm sphere (0.4 mm) give its Earth print five STLs and
+// a 3MF of 50 MB together; 0.25 mm cells gave 170 MB (benchmarks/RESULTS.md).
+constexpr int kDefaultMeshCells = 128;
+
+// Whole-voxel strides giving mesh cells of about `mesh_voxel_mm` (0: at
+// most kDefaultMeshCells along the longest side).
 std::array<int, 3> mesh_stride(const FabricationGrid& grid, double mesh_voxel_mm) {
   double target = mesh_voxel_mm;
   if (target <= 0) {
     double longest = 0;
     for (int axis = 0; axis < 3; ++axis)
       longest = std::max(longest, grid.size[axis] * grid.voxel_mm[axis]);
-    target = longest / 512;
+    target = longest / kDefaultMeshCells;
   }
   std::array<int, 3> stride{};
   for (int axis = 0; axis < 3; ++axis) {
@@ -113,7 +118,8 @@ FabricationReport fabricate(const ReducerTree& tree, const PrinterProfile& print
   }
   std::optional<MaterialSurfaces> surfaces;
   if (need_surfaces) {
-    surfaces.emplace(mesh_stride(grid, options.mesh_voxel_mm));
+    surfaces.emplace(SurfaceSettings{mesh_stride(grid, options.mesh_voxel_mm), options.mesh_adaptivity,
+                                     options.mesh_volume_tolerance});
     sinks.push_back(&*surfaces);
   }
   spdlog::info("fabricating for {}: {}", printer.name, plan.describe());
@@ -134,6 +140,7 @@ FabricationReport fabricate(const ReducerTree& tree, const PrinterProfile& print
       const Mesh& mesh = surfaces->meshes()[id];
       entry["mesh_volume_mm3"] = mesh.signed_volume();
       entry["triangles"] = mesh.triangles.size();
+      if (!mesh.triangles.empty()) entry["surface_level"] = surfaces->reports()[id].level;
     }
     materials[name] = entry;
   }

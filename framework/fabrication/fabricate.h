@@ -38,6 +38,7 @@ namespace spec2fab {
 struct OutputNumbers {
   double max_voxels = 5e9;
   double mesh_voxel_mm = 0;
+  double mesh_adaptivity = 0.2;
   int render_pixels = 512;
   int png_compression = 1;
   template <class Declare, class Self>
@@ -45,7 +46,11 @@ struct OutputNumbers {
     d.number(o.max_voxels, "max_voxels", Range::closed(1, 1e15),
              "refuse (exit 2, before any work) to fabricate more print voxels than this");
     d.number(o.mesh_voxel_mm, "mesh_voxel_mm", Range::closed(0, 1000),
-             "voxel of the STL/3MF surfaces; 0: print voxels, coarsened to <= 512 along the longest side");
+             "cell of the STL/3MF surfaces, a box of whole print voxels whose materials it counts; 0: <= 128 "
+             "cells along the longest side");
+    d.number(o.mesh_adaptivity, "mesh_adaptivity", Range::closed(0, 1),
+             "OpenVDB's adaptivity of the STL/3MF surfaces: 0 one vertex per crossed cell; higher merges cells "
+             "of nearly one plane");
     d.number(o.render_pixels, "render_pixels", Range::closed(16, 8192), "preview/render.png's width and height");
     d.number(o.png_compression, "png_compression", Range::closed(0, 9), "zlib level of the slice PNGs");
   }
@@ -61,11 +66,13 @@ struct FabricationOptions {
   /// Refuse above this many print voxels (a 50 mm cube at 600 × 600 dpi ×
   /// 30 µm is 2.3e9, about a minute on two cores).
   long long max_voxels = 5'000'000'000LL;
-  /// Voxel size of the STL/3MF surfaces: 0 = the print voxels, coarsened (by
-  /// whole voxels) so that the longest side has at most 512 of them — the
-  /// slice stack carries the full resolution; meshes at 600 dpi would run to
-  /// tens of millions of triangles.
+  /// Cell size of the STL/3MF surfaces: 0 = boxes of whole print voxels, at
+  /// most 128 along the longest side — the slice stack carries the full
+  /// resolution; meshes at 600 dpi would run to tens of millions of
+  /// triangles (material_surfaces.h).
   double mesh_voxel_mm = 0;
+  double mesh_adaptivity = 0.2;          ///< OpenVDB's volumeToMesh adaptivity
+  double mesh_volume_tolerance = 0.005;  ///< each surface's volume vs its census
   int render_pixels = 512;
   int png_compression = 1;           ///< zlib level of the slice PNGs (0–9)
   std::vector<Rgb> appearance_srgb;  ///< optional per-material colours for the render

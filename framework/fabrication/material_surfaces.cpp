@@ -4,9 +4,13 @@
 #include "fabrication/print_writer.h"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
 #include <stdexcept>
 
 #include <openvdb/openvdb.h>
+#include <spdlog/spdlog.h>
 #include <openvdb/tools/SignedFloodFill.h>
 #include <openvdb/tools/VolumeToMesh.h>
 
@@ -18,28 +22,30 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr float kInside = -0.5f, kOutside = 0.5f;
-// Beyond the band: a value past both band values, so signedFloodFill gives
-// the interior −kBackground and the exterior +kBackground.
-constexpr float kBackground = 1.5f;
+// Outside a material's band the field is exactly ½ − fraction: +½ where the
+// material is absent, −½ where a cell is all of it (the signed flood fill's
+// interior value).
+constexpr float kBackground = 0.5f;
+// The level search stays inside (0, 1): at 0 or 1 the iso-surface would run
+// through every empty or full cell.
+constexpr double kLowestLevel = 0.02, kHighestLevel = 0.98;
+constexpr int kMaxExtractions = 12;
 
-// 3 × 3 minimum and maximum of a padded slice (indices clamped at the edge,
+// 3 × 3 minimum and maximum of a padded layer (indices clamped at the edge,
 // where the padding is void anyway).
-void min_max_3x3(const std::vector<MaterialId>& slice, int width, int height,
-                 std::vector<MaterialId>& lo, std::vector<MaterialId>& hi) {
-  std::vector<MaterialId> row_lo(slice.size()), row_hi(slice.size());
+void min_max_3x3(const std::vector<std::uint16_t>& layer, int width, int height,
+                 std::vector<std::uint16_t>& lo, std::vector<std::uint16_t>& hi) {
+  std::vector<std::uint16_t> row_lo(layer.size()), row_hi(layer.size());
   for (int y = 0; y < height; ++y) {
-    const MaterialId* s = slice.data() + static_cast<size_t>(y) * static_cast<size_t>(width);
-    MaterialId* l = row_lo.data() + static_cast<size_t>(y) * static_cast<size_t>(width);
-    MaterialId* h = row_hi.data() + static_cast<size_t>(y) * static_cast<size_t>(width);
+    const std::uint16_t* s = layer.data() + static_cast<size_t>(y) * static_cast<size_t>(width);
+    std::uint16_t* l = row_lo.data() + static_cast<size_t>(y) * static_cast<size_t>(width);
+    std::uint16_t* h = row_hi.data() + static_cast<size_t>(y) * static_cast<size_t>(width);
     for (int x = 0; x < width; ++x) {
-      const MaterialId a = s[std::max(x - 1, 0)], b = s[x], c = s[std::min(x + 1, width - 1)];
+      const std::uint16_t a = s[std::max(x - 1, 0)], b = s[x], c = s[std::min(x + 1, width - 1)];
       l[x] = std::min({a, b, c});
       h[x] = std::max({a, b, c});
     }
   }
-  lo.resize(slice.size());
-  hi.resize(slice.size());
   for (int y = 0; y < height; ++y) {
     const size_t up = static_cast<size_t>(std::max(y - 1, 0)) * static_cast<size_t>(width);
     const size_t at = static_cast<size_t>(y) * static_cast<size_t>(width);
@@ -62,6 +68,7 @@ Mesh to_mesh(const std::vector<openvdb::Vec3s>& points,
   Mesh mesh;
   mesh.vertices.reserve(points.size());
   for (const openvdb::Vec3s& p : points) mesh.vertices.emplace_back(p.x(), p.y(), p.z());
+  mesh.triangles.reserve(triangles.size() + 2 * quads.size());
   auto vertex = [](unsigned i) { return static_cast<int>(i); };
   for (const openvdb::Vec3I& t : triangles)
     mesh.triangles.emplace_back(vertex(t[0]), vertex(t[1]), vertex(t[2]));
@@ -86,10 +93,16 @@ struct MaterialSurfaces::Grids {
   std::vector<openvdb::FloatGrid::Accessor> accessors;
 };
 
-MaterialSurfaces::MaterialSurfaces(std::array<int, 3> stride) : stride_(stride) {
-  for (int s : stride_) {
+MaterialSurfaces::MaterialSurfaces(SurfaceSettings settings) : settings_(settings) {
+  long long cell = 1;
+  for (int s : settings_.stride) {
     if (s < 1) throw std::invalid_argument("MaterialSurfaces: stride must be at least 1");
+    cell *= s;
   }
+  if (cell > 65535) throw std::invalid_argument("MaterialSurfaces: more than 65535 voxels per cell");
+  if (!(settings_.adaptivity >= 0 && settings_.adaptivity <= 1))
+    throw std::invalid_argument("MaterialSurfaces: adaptivity outside [0, 1]");
+  cell_voxels_ = static_cast<int>(cell);
 }
 
 MaterialSurfaces::~MaterialSurfaces() = default;
@@ -98,21 +111,29 @@ void MaterialSurfaces::begin(const FabricationGrid& grid, const MaterialPalette&
   openvdb::initialize();
   print_grid_ = grid;
   mesh_grid_ = grid;
+  const std::array<int, 3>& stride = settings_.stride;
   for (int axis = 0; axis < 3; ++axis) {
-    mesh_grid_.size[axis] = (grid.size[axis] + stride_[axis] - 1) / stride_[axis];
-    mesh_grid_.voxel_mm[axis] = grid.voxel_mm[axis] * stride_[axis];
+    mesh_grid_.size[axis] = (grid.size[axis] + stride[axis] - 1) / stride[axis];
+    mesh_grid_.voxel_mm[axis] = grid.voxel_mm[axis] * stride[axis];
+    // A cell's sample sits at the centre of its box of print voxels.
+    mesh_grid_.origin_mm[axis] = grid.origin_mm[axis] + 0.5 * (stride[axis] - 1) * grid.voxel_mm[axis];
   }
   materials_ = palette.size();
   width_ = mesh_grid_.size[0] + 2;
   height_ = mesh_grid_.size[1] + 2;
-  layers_seen_ = 0;
+  accumulating_ = -1;
+  layers_pushed_ = 0;
+  counts_.assign(static_cast<size_t>(mesh_grid_.slice_voxels()) * materials_, 0);
+  census_.assign(materials_, 0);
+  level_cells_.assign(materials_, std::vector<long long>(static_cast<size_t>(cell_voxels_) + 1, 0));
   const size_t padded = static_cast<size_t>(width_) * static_cast<size_t>(height_);
-  for (int i = 0; i < 3; ++i) {
-    window_[i].assign(padded, kVoid);
-    window_min_[i].assign(padded, kVoid);
-    window_max_[i].assign(padded, kVoid);
+  for (Layer& layer : window_) {
+    layer.count.assign(materials_, std::vector<std::uint16_t>(padded, 0));
+    layer.lo = layer.count;
+    layer.hi = layer.count;
+    layer.present.assign(materials_, false);
   }
-  // Index (i, j, k) of every grid is mesh voxel (i, j, k): its centre in mm.
+  // Index (i, j, k) of every grid is mesh cell (i, j, k): its centre in mm.
   openvdb::Mat4d index_to_mm = openvdb::Mat4d::identity();
   for (int axis = 0; axis < 3; ++axis) {
     index_to_mm(axis, axis) = mesh_grid_.voxel_mm[axis];
@@ -128,85 +149,186 @@ void MaterialSurfaces::begin(const FabricationGrid& grid, const MaterialPalette&
     grids_->accessors.push_back(grids_->grids.back()->getAccessor());
   }
   meshes_.clear();
+  reports_.clear();
 }
 
 void MaterialSurfaces::consume(int z, const MaterialId* ids) {
-  if (z % stride_[2] != 0) return;
-  std::rotate(window_.begin(), window_.begin() + 1, window_.end());
-  std::rotate(window_min_.begin(), window_min_.begin() + 1, window_min_.end());
-  std::rotate(window_max_.begin(), window_max_.begin() + 1, window_max_.end());
-  std::vector<MaterialId>& slice = window_[2];
-  const size_t print_width = static_cast<size_t>(print_grid_.size[0]);
-  for (int y = 0; y < mesh_grid_.size[1]; ++y) {
-    const MaterialId* row =
-        ids + static_cast<size_t>(y) * static_cast<size_t>(stride_[1]) * print_width;
-    MaterialId* out = slice.data() + static_cast<size_t>(y + 1) * static_cast<size_t>(width_) + 1;
-    for (int x = 0; x < mesh_grid_.size[0]; ++x)
-      out[x] = row[static_cast<size_t>(x) * static_cast<size_t>(stride_[0])];
+  const std::array<int, 3>& stride = settings_.stride;
+  const int layer = z / stride[2];
+  if (layer != accumulating_) {
+    flush_layer();
+    accumulating_ = layer;
   }
-  min_max_3x3(slice, width_, height_, window_min_[2], window_max_[2]);
-  process_layer(layers_seen_ - 1);
-  ++layers_seen_;
-}
-
-void MaterialSurfaces::process_layer(int layer) {
-  const size_t count = static_cast<size_t>(width_) * static_cast<size_t>(height_);
-  for (size_t i = 0; i < count; ++i) {
-    const MaterialId lo = std::min({window_min_[0][i], window_min_[1][i], window_min_[2][i]});
-    const MaterialId hi = std::max({window_max_[0][i], window_max_[1][i], window_max_[2][i]});
-    if (lo == hi) continue;  // uniform neighbourhood: no boundary of any material here
-    const int px = static_cast<int>(i % static_cast<size_t>(width_));
-    const int py = static_cast<int>(i / static_cast<size_t>(width_));
-    const MaterialId self = window_[1][i];
-    const openvdb::Coord coord(px - 1, py - 1, layer);
-    // Every material met in the 3 × 3 × 3 neighbourhood gets this voxel in
-    // its band: inside when it is that material, outside otherwise.
-    std::array<MaterialId, 27> seen{};
-    int seen_count = 0;
-    for (int dz = 0; dz < 3; ++dz) {
-      for (int dy = -1; dy <= 1; ++dy) {
-        const int ny = std::clamp(py + dy, 0, height_ - 1);
-        for (int dx = -1; dx <= 1; ++dx) {
-          const int nx = std::clamp(px + dx, 0, width_ - 1);
-          const MaterialId m = window_[dz][static_cast<size_t>(ny) * static_cast<size_t>(width_) +
-                                           static_cast<size_t>(nx)];
-          if (m == kVoid ||
-              std::find(seen.begin(), seen.begin() + seen_count, m) != seen.begin() + seen_count)
-            continue;
-          seen[static_cast<size_t>(seen_count++)] = m;
-          grids_->accessors[m].setValue(coord, m == self ? kInside : kOutside);
-        }
-      }
+  const int print_width = print_grid_.size[0], print_height = print_grid_.size[1];
+  const int cells_x = mesh_grid_.size[0];
+  for (int y = 0; y < print_height; ++y) {
+    const MaterialId* row = ids + static_cast<size_t>(y) * static_cast<size_t>(print_width);
+    std::uint16_t* counts =
+        counts_.data() + static_cast<size_t>(y / stride[1]) * static_cast<size_t>(cells_x) * materials_;
+    for (int cx = 0, x = 0; cx < cells_x; ++cx, counts += materials_) {
+      const int end = std::min(x + stride[0], print_width);
+      for (; x < end; ++x) ++counts[row[x]];
     }
   }
 }
 
-void MaterialSurfaces::finish() {
-  // Two void layers close the top.
-  const int last = layers_seen_;
-  for (int k = 0; k < 2; ++k) {
-    std::rotate(window_.begin(), window_.begin() + 1, window_.end());
-    std::rotate(window_min_.begin(), window_min_.begin() + 1, window_min_.end());
-    std::rotate(window_max_.begin(), window_max_.begin() + 1, window_max_.end());
-    std::fill(window_[2].begin(), window_[2].end(), kVoid);
-    std::fill(window_min_[2].begin(), window_min_[2].end(), kVoid);
-    std::fill(window_max_[2].begin(), window_max_[2].end(), kVoid);
-    process_layer(last - 1 + k);
+void MaterialSurfaces::flush_layer() {
+  if (accumulating_ < 0) return;
+  // Layers below the first one streamed (a slab's run) stay void.
+  layers_pushed_ = accumulating_;
+  push_layer();
+  std::fill(counts_.begin(), counts_.end(), std::uint16_t{0});
+}
+
+void MaterialSurfaces::push_layer() {
+  std::rotate(window_.begin(), window_.begin() + 1, window_.end());
+  Layer& layer = window_[2];
+  const int cells_x = mesh_grid_.size[0], cells_y = mesh_grid_.size[1];
+  const bool streamed = layers_pushed_ == accumulating_;
+  for (size_t m = 0; m < materials_; ++m) {
+    std::vector<std::uint16_t>& count = layer.count[m];
+    bool present = false;
+    if (streamed && m != kVoid) {
+      long long total = 0;
+      for (int y = 0; y < cells_y; ++y) {
+        const std::uint16_t* in = counts_.data() + static_cast<size_t>(y) * static_cast<size_t>(cells_x) * materials_ + m;
+        std::uint16_t* out = count.data() + static_cast<size_t>(y + 1) * static_cast<size_t>(width_) + 1;
+        for (int x = 0; x < cells_x; ++x, in += materials_) {
+          out[x] = *in;
+          total += *in;
+        }
+      }
+      census_[m] += total;
+      present = total > 0;
+    }
+    if (present) {
+      min_max_3x3(count, width_, height_, layer.lo[m], layer.hi[m]);
+    } else if (layer.present[m] || !streamed) {
+      std::fill(count.begin(), count.end(), std::uint16_t{0});
+      std::fill(layer.lo[m].begin(), layer.lo[m].end(), std::uint16_t{0});
+      std::fill(layer.hi[m].begin(), layer.hi[m].end(), std::uint16_t{0});
+    }
+    layer.present[m] = present;
   }
-  grids_->accessors.clear();  // their caches would go stale in the flood fill
-  meshes_.assign(materials_, Mesh{});
-  for (size_t id = 1; id < materials_; ++id) {
-    openvdb::FloatGrid& grid = *grids_->grids[id];
-    if (grid.activeVoxelCount() == 0) continue;
-    openvdb::tools::signedFloodFill(grid.tree());
+  process_layer(layers_pushed_ - 1);
+  ++layers_pushed_;
+}
+
+void MaterialSurfaces::process_layer(int layer) {
+  const size_t count = static_cast<size_t>(width_) * static_cast<size_t>(height_);
+  const auto full = static_cast<std::uint16_t>(cell_voxels_);
+  const float to_fraction = 1.0f / static_cast<float>(cell_voxels_);
+  const Layer &below = window_[0], &at = window_[1], &above = window_[2];
+  for (size_t m = 1; m < materials_; ++m) {
+    if (!below.present[m] && !at.present[m] && !above.present[m]) continue;
+    openvdb::FloatGrid::Accessor& grid = grids_->accessors[m];
+    std::vector<long long>& levels = level_cells_[m];
+    const std::uint16_t* own = at.count[m].data();
+    for (size_t i = 0; i < count; ++i) {
+      const std::uint16_t c = own[i];
+      if (c == full) ++levels[full];
+      const std::uint16_t lo = std::min({below.lo[m][i], at.lo[m][i], above.lo[m][i]});
+      const std::uint16_t hi = std::max({below.hi[m][i], at.hi[m][i], above.hi[m][i]});
+      if (lo == hi && (c == 0 || c == full)) continue;  // no change of fraction near this cell
+      if (c != 0 && c != full) ++levels[c];
+      const int px = static_cast<int>(i % static_cast<size_t>(width_));
+      const int py = static_cast<int>(i / static_cast<size_t>(width_));
+      grid.setValue(openvdb::Coord(px - 1, py - 1, layer), 0.5f - static_cast<float>(c) * to_fraction);
+    }
+  }
+}
+
+Mesh MaterialSurfaces::extract(size_t material, SurfaceReport& report) const {
+  const openvdb::FloatGrid& grid = *grids_->grids[material];
+  const double cell_mm3 = mesh_grid_.voxel_volume_mm3();
+  const double target = report.census_mm3;
+  auto mesh_at = [&](double level) {
     std::vector<openvdb::Vec3s> points;
     std::vector<openvdb::Vec3I> triangles;
     std::vector<openvdb::Vec4I> quads;
-    openvdb::tools::volumeToMesh(grid, points, triangles, quads, 0.0, 0.0,
+    openvdb::tools::volumeToMesh(grid, points, triangles, quads, 0.5 - level, settings_.adaptivity,
                                  /*relaxDisorientedTriangles=*/true);
     Mesh mesh = to_mesh(points, triangles, quads);
     if (mesh.signed_volume() < 0) mesh.flip();
-    meshes_[id] = std::move(mesh);
+    ++report.extractions;
+    return mesh;
+  };
+  // The guess after ½: the level at which the count of cells above it,
+  // times the cell volume, comes closest to the census.
+  const std::vector<long long>& levels = level_cells_[material];
+  double guess = 0.5, best_gap = std::numeric_limits<double>::infinity();
+  long long above = 0;
+  for (int c = cell_voxels_; c >= 1; --c) {
+    above += levels[static_cast<size_t>(c)];
+    const double gap = std::abs(static_cast<double>(above) * cell_mm3 - target);
+    if (gap < best_gap) {
+      best_gap = gap;
+      guess = (c - 0.5) / cell_voxels_;
+    }
+  }
+  guess = std::clamp(guess, kLowestLevel, kHighestLevel);
+  double level = 0.5;
+  // Level ½ first (right for thick regions), then a safeguarded secant on
+  // the mesh's own volume, which falls as the level rises: brackets when it
+  // has them, the guess or steps of 0.1 until then.
+  struct Sample {
+    double level, volume;
+  };
+  std::optional<Sample> too_much, too_little;
+  Mesh best;
+  double best_error = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < kMaxExtractions; ++i) {
+    Mesh mesh = mesh_at(level);
+    const double volume = mesh.signed_volume();
+    const double error = std::abs(volume - target);
+    spdlog::debug("surface {}: level {:.4f} volume {:.2f} target {:.2f}", material, level, volume, target);
+    if (error < best_error) {
+      best_error = error;
+      best = std::move(mesh);
+      report.level = level;
+      report.mesh_mm3 = volume;
+    }
+    if (error <= settings_.volume_tolerance * target) break;
+    (volume > target ? too_much : too_little) = Sample{level, volume};
+    double next;
+    if (too_much && too_little) {
+      // The volume falls about exponentially with the level where a thin
+      // layer thins out: interpolate its logarithm.
+      const double floor = 1e-9 * target;
+      const double a = std::log(std::max(too_much->volume, floor));
+      const double b = std::log(std::max(too_little->volume, floor));
+      next = too_much->level + (std::log(target) - a) / (b - a) * (too_little->level - too_much->level);
+      const double lo = std::min(too_much->level, too_little->level);
+      const double hi = std::max(too_much->level, too_little->level);
+      if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+    } else if (i == 0 && std::abs(guess - level) > 1e-3 && (guess > level) == (volume > target)) {
+      next = guess;
+    } else {
+      next = std::clamp(level + (volume > target ? 0.1 : -0.1), kLowestLevel, kHighestLevel);
+      if (next == level) break;  // the census is out of reach at this mesh grid
+    }
+    level = next;
+  }
+  return best;
+}
+
+void MaterialSurfaces::finish() {
+  flush_layer();
+  // Two void layers close the top.
+  for (int k = 0; k < 2; ++k) {
+    accumulating_ = -1;
+    push_layer();
+  }
+  grids_->accessors.clear();  // their caches would go stale in the flood fill
+  meshes_.assign(materials_, Mesh{});
+  reports_.assign(materials_, SurfaceReport{});
+  for (size_t id = 1; id < materials_; ++id) {
+    openvdb::FloatGrid& grid = *grids_->grids[id];
+    if (census_[id] == 0 || grid.activeVoxelCount() == 0) continue;
+    openvdb::tools::signedFloodFill(grid.tree());
+    SurfaceReport& report = reports_[id];
+    report.census_mm3 = static_cast<double>(census_[id]) * print_grid_.voxel_volume_mm3();
+    meshes_[id] = extract(id, report);
     grids_->grids[id].reset();  // free the band as soon as its mesh is out
   }
   grids_.reset();
@@ -233,8 +355,10 @@ class StlFiles final : public PrintWriter {
       : palette_(context.palette), folder_(context.folder) {}
   static TypeDoc doc() {
     return {"print/<material>.stl: one closed surface per material (binary STL, mm), as the paper sent "
-            "to its printer; the surfaces share their common boundaries.",
-            output_option_docs({"mesh_voxel_mm"}),
+            "to its printer: the iso-surface of the material's fraction in each mesh cell, at the level "
+            "that makes the mesh's volume the material's voxel count (within 0.5 %), so that layers "
+            "thinner than a cell keep their volume.",
+            output_option_docs({"mesh_voxel_mm", "mesh_adaptivity"}),
             R"({"output": {"stl": true}})"};
   }
   bool needs_surfaces() const override { return true; }

@@ -3,13 +3,24 @@
 /// occupies in the print, as the paper sent to the Objet500 Connex (one STL
 /// per material).
 ///
-/// Built from slices as they stream past: a 3-slice window finds the voxels
-/// next to a material boundary, and only those go into a sparse OpenVDB grid
-/// per material (−½ inside, +½ outside, in voxel units), so memory is
-/// O(surface), not O(volume). At the end each grid's interior is filled by
-/// sign (signedFloodFill) and OpenVDB's volumeToMesh extracts the iso-surface
-/// at 0 — half-way between a voxel of the material and one without it. Two
-/// adjacent materials therefore share their common boundary.
+/// The surfaces live on a mesh grid coarser than the print (whole boxes of
+/// stride[0] × stride[1] × stride[2] print voxels): a print at 600 dpi meshed
+/// voxel by voxel runs to tens of millions of triangles, and the slice stack
+/// carries the full resolution anyway. As slices stream past, each mesh cell
+/// counts its print voxels of every material (a box filter, so Σ fraction ×
+/// cell volume is the material's census exactly), and only the cells near a
+/// change of fraction go into a sparse OpenVDB grid per material: memory is
+/// O(surface), not O(volume), and no dense grid of the object is ever held.
+///
+/// At the end each material's surface is OpenVDB's (adaptive) volumeToMesh of
+/// its fraction field at a level t chosen so that the mesh encloses the
+/// material's census volume (within `volume_tolerance`). t = ½ is right for
+/// thick regions — the surface crosses a box-filtered step half-way — but a
+/// layer thinner than a mesh cell never reaches ½ and would vanish; the level
+/// search keeps such layers, thinned or thickened to their true volume.
+/// Materials therefore no longer share boundaries exactly where their levels
+/// differ (a thin ink layer may overlap its neighbour by a fraction of a mesh
+/// cell); the slice stack is the exact print.
 
 #include <array>
 #include <filesystem>
@@ -21,11 +32,27 @@
 
 namespace spec2fab {
 
+struct SurfaceSettings {
+  /// Print voxels per mesh cell along x, y, z (1: the print resolution).
+  std::array<int, 3> stride{1, 1, 1};
+  /// OpenVDB's adaptivity in [0, 1]: 0 gives one vertex per crossed cell;
+  /// larger merges cells whose normals differ by less (flat regions first).
+  double adaptivity = 0;
+  /// Relative volume error at which the level search stops.
+  double volume_tolerance = 0.005;
+};
+
+/// How one material's surface came out.
+struct SurfaceReport {
+  double census_mm3 = 0;  ///< print voxels × voxel volume
+  double mesh_mm3 = 0;    ///< enclosed by the mesh
+  double level = 0.5;     ///< fraction level of the iso-surface
+  int extractions = 0;    ///< meshes extracted by the level search
+};
+
 class MaterialSurfaces final : public SliceSink {
  public:
-  /// Samples every `stride`-th print voxel along x, y, z (1: the print
-  /// resolution; larger strides give coarser, smaller meshes).
-  explicit MaterialSurfaces(std::array<int, 3> stride = {1, 1, 1});
+  explicit MaterialSurfaces(SurfaceSettings settings = {});
   ~MaterialSurfaces() override;
 
   void begin(const FabricationGrid& grid, const MaterialPalette& palette) override;
@@ -35,23 +62,37 @@ class MaterialSurfaces final : public SliceSink {
   /// After finish(): a closed, outward-facing triangle mesh (mm) per material
   /// id; index 0 (void) and absent materials are empty meshes.
   const std::vector<Mesh>& meshes() const { return meshes_; }
-  /// The sampled grid the surfaces were built on.
+  const std::vector<SurfaceReport>& reports() const { return reports_; }
+  /// The mesh grid: cell (i, j, k) covers print voxels [i·stride, (i+1)·stride).
   const FabricationGrid& mesh_grid() const { return mesh_grid_; }
 
  private:
   struct Grids;
+  void flush_layer();
+  void push_layer();
   void process_layer(int layer);
+  Mesh extract(size_t material, SurfaceReport& report) const;
 
-  std::array<int, 3> stride_;
+  SurfaceSettings settings_;
   FabricationGrid print_grid_, mesh_grid_;
   size_t materials_ = 0;
-  int width_ = 0, height_ = 0;  // padded slice size (mesh grid + 1 void voxel each side)
-  int layers_seen_ = 0;
-  // Padded slices below, at and above the layer being processed, with their
-  // 3 × 3 in-plane minimum and maximum.
-  std::array<std::vector<MaterialId>, 3> window_, window_min_, window_max_;
+  int width_ = 0, height_ = 0;  // padded layer size (mesh grid + 1 void cell each side)
+  int cell_voxels_ = 1;         // print voxels per mesh cell
+  int accumulating_ = -1;       // mesh layer being counted (−1: none)
+  int layers_pushed_ = 0;
+  std::vector<std::uint16_t> counts_;  // per cell of the unpadded layer, per material
+  std::vector<long long> census_;      // print voxels per material
+  // Per window layer (below, at, above the one processed) and material: the
+  // padded layer's counts and their 3 × 3 in-plane minimum and maximum.
+  struct Layer {
+    std::vector<std::vector<std::uint16_t>> count, lo, hi;
+    std::vector<bool> present;
+  };
+  std::array<Layer, 3> window_;
+  std::vector<std::vector<long long>> level_cells_;  // per material, cells per count
   std::unique_ptr<Grids> grids_;
   std::vector<Mesh> meshes_;
+  std::vector<SurfaceReport> reports_;
 };
 
 /// Writes `mesh` as binary STL to `file`, via a temporary name.

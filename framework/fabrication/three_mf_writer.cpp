@@ -1,5 +1,6 @@
 #include "fabrication/three_mf_writer.h"
 
+#include "fabrication/fabricate.h"
 #include "fabrication/print_writer.h"
 
 #include <cmath>
@@ -146,8 +147,8 @@ class ThreeMfFile final : public PrintWriter {
       : palette_(context.palette), folder_(context.folder) {}
   static TypeDoc doc() {
     return {"print/model.3mf: one named object per material in its display colour, assembled in one frame "
-            "(lib3mf).",
-            {},
+            "(lib3mf); the surfaces are the STLs'.",
+            output_option_docs({"mesh_voxel_mm", "mesh_adaptivity"}),
             R"({"output": {"3mf": true}})"};
   }
   bool needs_surfaces() const override { return true; }

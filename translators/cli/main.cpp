@@ -78,7 +78,7 @@ int main(int argc, char** argv) {
   export_cmd
       ->add_option(
           "--mesh-voxel-mm", export_arguments.mesh_voxel_mm,
-          "voxel of the STL/3MF surfaces (default: print voxels, <= 512 along the longest side)")
+          "cell of the STL/3MF surfaces (default: <= 128 cells along the longest side)")
       ->check(CLI::NonNegativeNumber);
   export_cmd->add_flag("-q,--quiet", quiet, "only warnings and errors");
   export_cmd->footer(
