@@ -153,6 +153,35 @@ SurfaceField::Sampler::Sampler(const SurfaceField& field)
 SurfaceField::Sampler::~Sampler() = default;
 SurfaceField::Sampler::Sampler(Sampler&&) noexcept = default;
 
+SurfaceSample SurfaceField::Sampler::sample_run(const Vec3& point, const Vec3& step, int count,
+                                               int& run) {
+  run = 1;
+  Impl& s = *impl_;
+  const SurfaceField::Impl& f = *s.field;
+  const Vec3 x = point * f.inverse_voxel;
+  const openvdb::Coord ijk(nearest_int(x.x()), nearest_int(x.y()), nearest_int(x.z()));
+  openvdb::Int32 cell = kOutside;
+  if (count < 2 || s.cells.probeValue(ijk, cell) || !(step.x() > 0) || step.y() != 0 || step.z() != 0)
+    return sample(point);
+  // The value resides at some depth of the tree (root 0, leaf 3; −1:
+  // background); everything in the node extent it covers has it.
+  constexpr int kLog2Extent[] = {12, 12, 7, 3, 0};  // by depth + 1
+  const int depth = s.cells.getValueDepth(ijk);
+  const int log2 = kLog2Extent[std::clamp(depth, -1, 3) + 1];
+  if (log2 > 0) {
+    // Cells up to `last` along x share it; a point maps to the cell of its
+    // nearest centre, so it stays in the extent while x/voxel < last + ½
+    // (with a margin for rounding).
+    const int last = ((ijk.x() >> log2) + 1) * (1 << log2) - 1;
+    const double room = ((last + 0.5) * f.voxel_mm - point.x()) / step.x() - 1e-6;
+    run = static_cast<int>(std::clamp(std::floor(room), 0.0, static_cast<double>(count - 1))) + 1;
+  }
+  SurfaceSample result;
+  result.inside = cell < 0;
+  result.depth_mm = f.interior_band_mm;
+  return result;
+}
+
 SurfaceSample SurfaceField::Sampler::sample(const Vec3& point) {
   Impl& s = *impl_;
   const SurfaceField::Impl& f = *s.field;

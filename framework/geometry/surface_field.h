@@ -50,6 +50,11 @@ class SurfaceField {
     ~Sampler();
     Sampler(Sampler&&) noexcept;
     SurfaceSample sample(const Vec3& point);
+    /// sample(point), and in `run` how many of the points point + k·step,
+    /// k = 0 … count − 1, are sure to give the same sample (at least 1):
+    /// more than one only beyond the band, where the field is a tile of
+    /// one value, and only for a step along +x.
+    SurfaceSample sample_run(const Vec3& point, const Vec3& step, int count, int& run);
 
    private:
     struct Impl;

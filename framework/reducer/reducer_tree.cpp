@@ -1,5 +1,6 @@
 #include "reducer/reducer_tree.h"
 
+#include <algorithm>
 #include <sstream>
 #include <stdexcept>
 
@@ -139,10 +140,23 @@ std::vector<size_t> ReducerTree::path_to(const ReducerNode& node) const {
 void ReducerTree::Query::material_row(const Vec3& start_mm, const Vec3& step_mm, int count,
                                       MaterialId* out) {
   QueryPoint point;
-  for (int i = 0; i < count; ++i) {
+  for (int i = 0; i < count;) {
     point.world = start_mm + static_cast<double>(i) * step_mm;
-    point.surface = sampler_.sample(point.world);
+    int run = 1;
+    point.surface = sampler_.sample_run(point.world, step_mm, count - i, run);
+    if (!point.surface.inside) {  // void, whatever the tree
+      std::fill(out + i, out + i + run, kVoid);
+      i += run;
+      continue;
+    }
+    // Beyond the band the sample is the same along the run, but a node may
+    // still route by position.
     out[i] = tree_.walk(point);
+    for (int k = 1; k < run; ++k) {
+      point.world = start_mm + static_cast<double>(i + k) * step_mm;
+      out[i + k] = tree_.walk(point);
+    }
+    i += run;
   }
 }
 

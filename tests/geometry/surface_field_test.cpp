@@ -119,6 +119,42 @@ TEST(SurfaceField, BeyondTheBandOnlyInsideIsKnown) {
   EXPECT_FALSE(sampler.sample(Vec3(1e5, -3e5, 2e5)).inside);
 }
 
+// Runs let a row skip the field's tiles beyond the band; every point of a
+// run must still get exactly its own sample, on rows through the band, deep
+// inside and far outside, with steps finer and coarser than a field voxel.
+TEST(SurfaceField, RunsGiveEveryPointItsOwnSample) {
+  const double r = 10;
+  const Solid solid(make_sphere(r, 64, 32), UvSource::mesh);
+  const SurfaceField& field = solid.field(1.0, 0.2);
+  SurfaceField::Sampler runs(field), single(field);
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<double> coordinate(-1.3 * r, 1.3 * r);
+  long long skipped = 0;
+  for (int row = 0; row < 300; ++row) {
+    const double step = (row % 3 == 0 ? 0.037 : row % 3 == 1 ? 0.41 : 3.3) * field.voxel_mm();
+    const Vec3 start(-60.0 - coordinate(rng), coordinate(rng), coordinate(rng));
+    const int count = static_cast<int>(120.0 / step);
+    for (int i = 0; i < count;) {
+      const Vec3 p = start + Vec3(i * step, 0, 0);
+      int run = 0;
+      const SurfaceSample first = runs.sample_run(p, Vec3(step, 0, 0), count - i, run);
+      ASSERT_GE(run, 1);
+      ASSERT_LE(run, count - i);
+      for (int k = 0; k < run; ++k) {
+        const SurfaceSample expected = single.sample(start + Vec3((i + k) * step, 0, 0));
+        ASSERT_EQ(first.inside, expected.inside) << row << " " << i << " + " << k;
+        ASSERT_EQ(first.near_surface, expected.near_surface) << row << " " << i << " + " << k;
+        if (!expected.near_surface) {
+          ASSERT_EQ(first.depth_mm, expected.depth_mm);
+        }
+      }
+      skipped += run - 1;
+      i += run;
+    }
+  }
+  EXPECT_GT(skipped, 100000);  // the runs do skip
+}
+
 TEST(SurfaceField, DepthCoversTheRequestedBand) {
   const double r = 10;
   const Solid solid(make_sphere(r, 128, 64), UvSource::mesh);
