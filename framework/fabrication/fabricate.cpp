@@ -8,6 +8,7 @@
 
 #include "core/build_options.h"
 #include "core/log.h"
+#include "core/ranks.h"
 #include "fabrication/fabricator.h"
 #include "fabrication/material_surfaces.h"
 #include "fabrication/print_writer.h"
@@ -64,6 +65,19 @@ void check_fabrication(const ReducerTree& tree, const PrinterProfile& printer,
 
 namespace {
 
+// A writer's sink on a rank other than 0: it consumes the rank's slab, and
+// rank 0 alone finishes it.
+class SlabSink final : public SliceSink {
+ public:
+  explicit SlabSink(SliceSink& sink) : sink_(sink) {}
+  bool parallel() const override { return sink_.parallel(); }
+  void begin(const FabricationGrid& grid, const MaterialPalette& palette) override { sink_.begin(grid, palette); }
+  void consume(int z, const MaterialId* ids) override { sink_.consume(z, ids); }
+
+ private:
+  SliceSink& sink_;
+};
+
 // 128 cells along a 50 mm sphere (0.4 mm) give its Earth print five STLs and
 // a 3MF of 50 MB together; 0.25 mm cells gave 170 MB (benchmarks/RESULTS.md).
 constexpr int kDefaultMeshCells = 128;
@@ -91,7 +105,7 @@ FabricationReport fabricate(const ReducerTree& tree, const PrinterProfile& print
                             const FabricationOptions& options, RunFolder& folder) {
   const auto start = std::chrono::steady_clock::now();
   FabricationReport report;
-  const Fabricator fabricator(tree, printer);
+  Fabricator fabricator(tree, printer);
   const FabricationPlan& plan = fabricator.plan();
   const FabricationGrid& grid = plan.grid;
   const MaterialPalette& palette = tree.palette();
@@ -116,18 +130,43 @@ FabricationReport fabricate(const ReducerTree& tree, const PrinterProfile& print
     need_surfaces |= writers.back()->needs_surfaces();
     if (SliceSink* sink = writers.back()->sink()) sinks.push_back(sink);
   }
+  // Split over ranks by whole mesh layers, so that no mesh cell straddles two.
+  const std::array<int, 3> stride = mesh_stride(grid, options.mesh_voxel_mm);
+  const bool split = options.split_over_ranks && ranks::size() > 1;
+  int first_layer = 0, layer_count = -1;
+  if (split) {
+    const int unit = need_surfaces ? stride[2] : 1;  // print layers per share unit
+    const long long units = (grid.size[2] + unit - 1) / unit;
+    const auto [begin, end] = ranks::share(units, ranks::rank(), ranks::size());
+    first_layer = static_cast<int>(begin * unit);
+    layer_count = static_cast<int>(std::min<long long>(end * unit, grid.size[2])) - first_layer;
+  }
+  // On ranks other than 0 the writers only consume their slab: rank 0
+  // finishes them (manifest, meshes, render) for the whole print.
+  std::vector<std::unique_ptr<SlabSink>> slab_sinks;
+  if (split && !ranks::root()) {
+    for (SliceSink*& sink : sinks) sink = slab_sinks.emplace_back(std::make_unique<SlabSink>(*sink)).get();
+  }
   std::optional<MaterialSurfaces> surfaces;
   if (need_surfaces) {
-    surfaces.emplace(SurfaceSettings{mesh_stride(grid, options.mesh_voxel_mm), options.mesh_adaptivity,
-                                     options.mesh_volume_tolerance});
+    surfaces.emplace(SurfaceSettings{stride, options.mesh_adaptivity, options.mesh_volume_tolerance, split});
     sinks.push_back(&*surfaces);
   }
+  fabricator.time_sample_rows(need_surfaces);
   spdlog::info("fabricating for {}: {}", printer.name, plan.describe());
-  Progress progress("fabricating", grid.size[2]);
-  const std::vector<long long> voxels = fabricator.run(sinks, [&](int done, int) {
-    if (options.progress) progress.update(done);
-  });
+  spdlog::debug("sampled rows: {:.3g} s per voxel on one thread", plan.sampled_seconds_per_voxel);
+  Progress progress("fabricating", layer_count < 0 ? grid.size[2] : layer_count);
+  std::vector<long long> voxels = fabricator.run(
+      sinks,
+      [&](int done, int) {
+        if (options.progress && ranks::root()) progress.update(done);
+      },
+      first_layer, layer_count);
   progress.finish();
+  if (split) {
+    ranks::sum(voxels);
+    if (!ranks::root()) return report;  // rank 0 reports and writes the rest
+  }
 
   nlohmann::json materials = nlohmann::json::object();
   nlohmann::json files = nlohmann::json::object();

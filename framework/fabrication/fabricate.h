@@ -80,6 +80,11 @@ struct FabricationOptions {
   /// translator writes its predicted look as render.png.
   std::string render_file = "preview/render.png";
   bool progress = true;              ///< progress line on a terminal
+  /// Under mpirun: each rank fabricates its share of whole mesh layers
+  /// (rank order = z order) and writes its slices; rank 0 sums the census,
+  /// meshes every rank's layers and writes the rest. Outputs are those of
+  /// one process, byte for byte (`spec2fab export` sets it).
+  bool split_over_ranks = false;
 
   bool writes(std::string_view writer) const {
     const auto found = writers.find(writer);

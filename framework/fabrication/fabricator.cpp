@@ -1,5 +1,6 @@
 #include "fabrication/fabricator.h"
 
+#include <chrono>
 #include <cmath>
 #include <memory>
 #include <thread>
@@ -36,6 +37,12 @@ constexpr double kVoxelsPerSecondPerCore = 25e6;
 // Compressed palette PNGs of typical prints take ~0.02 byte/voxel; assume
 // more so that the disk estimate errs on the safe side.
 constexpr double kDiskBytesPerVoxel = 0.05;
+// Calibrated on the shipped experiments (benchmarks/RESULTS.md, "Fabrication
+// at scale"): the share of two cores' tree evaluation that overlaps, and the
+// writers' and surfaces' cost per voxel beyond it.
+constexpr double kParallelEfficiency = 0.9;
+constexpr double kWriterSecondsPerVoxel = 0;
+constexpr double kSurfaceSecondsPerVoxel = 2e-9;
 
 std::string human_bytes(double bytes) {
   if (bytes >= 1e9) return fmt::format("{:.1f} GB", bytes / 1e9);
@@ -64,13 +71,49 @@ Fabricator::Fabricator(const ReducerTree& tree, const PrinterProfile& printer, i
   if (!tree.is_bound()) throw std::logic_error("Fabricator: the tree is not bound to a solid");
   plan_.grid = FabricationGrid::covering(tree.solid().bounds(), printer.voxel_mm());
   plan_.voxels = plan_.grid.voxels();
-  const int cores =
-      threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const int cores = threads > 0 ? threads : tbb::this_task_arena::max_concurrency();
+  cores_ = cores;
   plan_.estimated_seconds = static_cast<double>(plan_.voxels) / (kVoxelsPerSecondPerCore * cores);
   plan_.estimated_bytes =
       static_cast<long long>(kDiskBytesPerVoxel * static_cast<double>(plan_.voxels));
   plan_.working_bytes =
       4 * (cores + 1) * plan_.grid.slice_voxels() * static_cast<long long>(sizeof(MaterialId));
+}
+
+void Fabricator::time_sample_rows(bool surfaces) {
+  const FabricationGrid& grid = plan_.grid;
+  const int width = grid.size[0];
+  // About 1 % of the voxels, at most 2e6 (a few tens of ms), whole rows so
+  // that runs along x cost what they cost in the real thing.
+  const long long budget = std::clamp(plan_.voxels / 100, 1LL, 2'000'000LL);
+  const long long rows_total = static_cast<long long>(grid.size[1]) * grid.size[2];
+  const long long rows = std::clamp(budget / std::max(width, 1), 1LL, rows_total);
+  const int slices = static_cast<int>(std::clamp(std::llround(std::sqrt(static_cast<double>(rows))), 1LL,
+                                                 static_cast<long long>(grid.size[2])));
+  const int per_slice = static_cast<int>(std::clamp((rows + slices - 1) / slices, 1LL,
+                                                    static_cast<long long>(grid.size[1])));
+  std::vector<MaterialId> row(static_cast<size_t>(width));
+  ReducerTree::Query query(tree_);
+  const Vec3 step(grid.voxel_mm[0], 0, 0);
+  const auto start = std::chrono::steady_clock::now();
+  long long timed = 0;
+  for (int s = 0; s < slices; ++s) {
+    const int z = static_cast<int>((s + 0.5) * grid.size[2] / slices);
+    for (int r = 0; r < per_slice; ++r) {
+      const int y = static_cast<int>((r + 0.5) * grid.size[1] / per_slice);
+      query.material_row(grid.centre_mm(0, y, z), step, width, row.data());
+      timed += width;
+    }
+  }
+  const double per_voxel =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() /
+      static_cast<double>(std::max(timed, 1LL));
+  const double voxels = static_cast<double>(plan_.voxels);
+  // Tree evaluation spreads over the cores at kParallelEfficiency; the rest
+  // is per voxel on the writers' serial stage, and the surfaces' meshing.
+  plan_.estimated_seconds = voxels * per_voxel / (kParallelEfficiency * cores_) +
+                            voxels * (kWriterSecondsPerVoxel + (surfaces ? kSurfaceSecondsPerVoxel : 0));
+  plan_.sampled_seconds_per_voxel = per_voxel;
 }
 
 void Fabricator::check(long long max_voxels, const std::string& option) const {

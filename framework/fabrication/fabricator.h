@@ -40,6 +40,7 @@ struct FabricationPlan {
   double estimated_seconds = 0;   ///< tree evaluation and slice writing on `threads` cores
   long long estimated_bytes = 0;  ///< files on disk (rough: PNGs compress by content)
   long long working_bytes = 0;    ///< slice buffers in memory
+  double sampled_seconds_per_voxel = 0;  ///< from time_sample_rows (0: not timed)
   std::string describe() const;   ///< "1181 x 590 x 1852 voxels (1.29e9), ~26 s, ~0.4 GB"
 };
 
@@ -64,6 +65,11 @@ class Fabricator {
   Fabricator(const ReducerTree& tree, const PrinterProfile& printer, int threads = 0);
 
   const FabricationPlan& plan() const { return plan_; }
+  /// Times the tree on a sample of whole rows (evenly spread over y and z,
+  /// about 1 % of a large print, one thread) and re-estimates the plan's
+  /// seconds from it; the first estimate assumes a fixed rate per core.
+  /// `surfaces`: the run meshes the materials too. Call after check().
+  void time_sample_rows(bool surfaces);
   /// Throws InputError naming the figures and `option` (the setting that
   /// raises the limit) when the plan exceeds `max_voxels`, or when the object
   /// does not fit the printer's build volume.
@@ -82,6 +88,7 @@ class Fabricator {
   const ReducerTree& tree_;
   const PrinterProfile& printer_;
   FabricationPlan plan_;
+  int cores_ = 1;
 };
 
 }  // namespace spec2fab

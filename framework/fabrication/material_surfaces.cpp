@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <optional>
 #include <stdexcept>
@@ -14,6 +15,7 @@
 #include <openvdb/tools/SignedFloodFill.h>
 #include <openvdb/tools/VolumeToMesh.h>
 
+#include "core/ranks.h"
 #include "geometry/mesh_io.h"
 
 namespace spec2fab {
@@ -174,6 +176,14 @@ void MaterialSurfaces::consume(int z, const MaterialId* ids) {
 
 void MaterialSurfaces::flush_layer() {
   if (accumulating_ < 0) return;
+  if (settings_.split_over_ranks && !ranks::root()) {
+    const size_t at = outgoing_.size(), bytes = counts_.size() * sizeof(std::uint16_t);
+    outgoing_.resize(at + sizeof(int) + bytes);
+    std::memcpy(outgoing_.data() + at, &accumulating_, sizeof(int));
+    std::memcpy(outgoing_.data() + at + sizeof(int), counts_.data(), bytes);
+    std::fill(counts_.begin(), counts_.end(), std::uint16_t{0});
+    return;
+  }
   // Layers below the first one streamed (a slab's run) stay void.
   layers_pushed_ = accumulating_;
   push_layer();
@@ -314,6 +324,27 @@ Mesh MaterialSurfaces::extract(size_t material, SurfaceReport& report) const {
 
 void MaterialSurfaces::finish() {
   flush_layer();
+  if (settings_.split_over_ranks && ranks::size() > 1) {
+    if (!ranks::root()) {
+      ranks::send(0, outgoing_);
+      outgoing_ = {};
+      grids_.reset();
+      meshes_.assign(materials_, Mesh{});
+      reports_.assign(materials_, SurfaceReport{});
+      return;
+    }
+    const size_t bytes = counts_.size() * sizeof(std::uint16_t);
+    for (int from = 1; from < ranks::size(); ++from) {
+      const std::vector<std::uint8_t> layers = ranks::receive(from);
+      if (layers.size() % (sizeof(int) + bytes) != 0)
+        throw std::runtime_error("MaterialSurfaces: rank " + std::to_string(from) + " sent a partial layer");
+      for (size_t at = 0; at < layers.size(); at += sizeof(int) + bytes) {
+        std::memcpy(&accumulating_, layers.data() + at, sizeof(int));
+        std::memcpy(counts_.data(), layers.data() + at + sizeof(int), bytes);
+        flush_layer();
+      }
+    }
+  }
   // Two void layers close the top.
   for (int k = 0; k < 2; ++k) {
     accumulating_ = -1;

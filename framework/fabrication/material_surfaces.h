@@ -40,6 +40,11 @@ struct SurfaceSettings {
   double adaptivity = 0;
   /// Relative volume error at which the level search stops.
   double volume_tolerance = 0.005;
+  /// An MPI run split over z (ranks::share of whole mesh layers, rank order
+  /// = z order): rank 0 meshes every rank's layer counts, received in rank
+  /// order after its own, so the surfaces are those of one process; the
+  /// other ranks only count and send, and their meshes() stay empty.
+  bool split_over_ranks = false;
 };
 
 /// How one material's surface came out.
@@ -93,6 +98,7 @@ class MaterialSurfaces final : public SliceSink {
   std::unique_ptr<Grids> grids_;
   std::vector<Mesh> meshes_;
   std::vector<SurfaceReport> reports_;
+  std::vector<std::uint8_t> outgoing_;  // a non-root rank's layers: index, counts
 };
 
 /// Writes `mesh` as binary STL to `file`, via a temporary name.

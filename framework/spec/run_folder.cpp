@@ -11,6 +11,7 @@
 
 #include "core/error.h"
 #include "core/interrupt.h"
+#include "core/ranks.h"
 
 namespace spec2fab {
 
@@ -40,6 +41,11 @@ void remove_stale_partials(const fs::path& parent) {
 
 RunFolder::RunFolder(fs::path destination) : destination_(std::move(destination)) {
   if (destination_.filename().empty()) destination_ = destination_.parent_path();
+  if (!ranks::root()) {
+    staging_ = ranks::broadcast("");
+    shared_ = true;
+    return;
+  }
   const fs::path parent = destination_.has_parent_path() ? destination_.parent_path() : fs::path(".");
   std::error_code error;
   fs::create_directories(parent, error);
@@ -57,9 +63,11 @@ RunFolder::RunFolder(fs::path destination) : destination_(std::move(destination)
     interrupt::release_partial(staging_);
     throw InputError(staging_.string() + ": cannot create output folder: " + error.message());
   }
+  ranks::broadcast(staging_.string());
 }
 
 RunFolder::~RunFolder() {
+  if (shared_) return;
   if (!committed_) {
     std::error_code ignored;
     fs::remove_all(staging_, ignored);
@@ -84,6 +92,11 @@ void RunFolder::write_json(const fs::path& relative, const nlohmann::json& value
 }
 
 void RunFolder::commit() {
+  ranks::barrier();  // every rank's files are in
+  if (shared_) {
+    committed_ = true;
+    return;
+  }
   std::error_code error;
   if (fs::exists(destination_)) fs::remove_all(destination_, error);
   if (error) throw std::runtime_error("cannot replace " + destination_.string() + ": " + error.message());

@@ -24,12 +24,15 @@ class RunFolder {
   void write_text(const std::filesystem::path& relative, const std::string& text) const;
   /// Pretty-printed with a trailing newline; key order as stored (sorted).
   void write_json(const std::filesystem::path& relative, const nlohmann::json& value) const;
-  /// Moves the finished folder into place, replacing an older one.
+  /// Moves the finished folder into place, replacing an older one. Under
+  /// mpirun every rank writes into rank 0's folder (the constructor and
+  /// commit() are collective): commit waits for all, and rank 0 moves it.
   void commit();
 
  private:
   std::filesystem::path destination_, staging_;
   bool committed_ = false;
+  bool shared_ = false;  // a rank other than 0 of an MPI run: rank 0's folder
 };
 
 }  // namespace spec2fab

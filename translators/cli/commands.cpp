@@ -19,6 +19,7 @@
 #include "core/error.h"
 #include "core/strings.h"
 #include "fabrication/fabricate.h"
+#include "core/ranks.h"
 #include "geometry/mesh_io.h"
 #include "materials/material_library.h"
 #include "materials/printer_profile.h"
@@ -179,10 +180,15 @@ int export_command(const ExportArguments& arguments) {
   FabricationOptions options;
   if (arguments.max_voxels > 0) options.max_voxels = static_cast<long long>(arguments.max_voxels);
   options.mesh_voxel_mm = arguments.mesh_voxel_mm;
+  options.split_over_ranks = true;
   check_fabrication(tree, printer, options);
 
   RunFolder folder(arguments.out);
   const FabricationReport report = fabricate(tree, printer, options, folder);
+  if (!ranks::root()) {  // its slices are in; rank 0 writes the record
+    folder.commit();
+    return 0;
+  }
   folder.write_json("export.json", {{"tree", tree_file.string()},
                                     {"geometry", mesh_file.string()},
                                     {"materials", materials_file.string()},
@@ -190,9 +196,10 @@ int export_command(const ExportArguments& arguments) {
                                     {"fabrication", report.result}});
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  folder.write_json(
-      "timing.json",
-      {{"threads", threads}, {"wall_seconds", seconds}, {"fabrication_seconds", report.seconds}});
+  folder.write_json("timing.json", {{"threads", threads},
+                                    {"ranks", ranks::size()},
+                                    {"wall_seconds", seconds},
+                                    {"fabrication_seconds", report.seconds}});
   folder.commit();
   std::cout << "wrote " << arguments.out.string()
             << "/ (export.json, print/, preview/render.png)\n";

@@ -12,6 +12,7 @@
 #include "core/build_options.h"
 #include "core/error.h"
 #include "core/interrupt.h"
+#include "core/ranks.h"
 #include "core/log.h"
 #include "core/strings.h"
 #include "core/version.h"
@@ -180,7 +181,19 @@ int main(int argc, char** argv) {
     std::cerr << "error: " << e.what() << " (see spec2fab --help)\n";
     return 2;
   }
-  configure_logging(quiet ? Verbosity::quiet : verbose ? Verbosity::verbose : Verbosity::normal);
+  // Under mpirun only rank 0 speaks (the ranks do the same work on the same
+  // inputs, so they fail alike), and only export splits its work.
+  ranks::start();
+  const struct StopRanks {
+    ~StopRanks() { ranks::stop(); }
+  } stop_ranks;
+  configure_logging(quiet || !ranks::root() ? Verbosity::quiet : verbose ? Verbosity::verbose : Verbosity::normal);
+  if (ranks::size() > 1 && !*export_cmd) {
+    if (ranks::root())
+      std::cerr << "error: under mpirun only 'spec2fab export' splits its work over ranks (" << ranks::size()
+                << " here); run the others as one process\n";
+    return 2;
+  }
   if (*seed_option) run.seed = seed;
 
   try {
@@ -199,10 +212,12 @@ int main(int argc, char** argv) {
     }
     if (*list_cmd) return cli::list_command(kind, list_verbose, datasets);
   } catch (const InputError& e) {
-    std::cerr << "error: " << e.what() << "\n";
+    // Every rank read the same inputs and stopped at the same point.
+    if (ranks::root()) std::cerr << "error: " << e.what() << "\n";
     return 2;
   } catch (const std::exception& e) {
     std::cerr << "internal error: " << e.what() << "\n";
+    ranks::abort_all(1);
     return 1;
   }
   return 1;

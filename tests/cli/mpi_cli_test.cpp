@@ -1,0 +1,85 @@
+// mpirun -np N spec2fab export: each rank fabricates its share of whole mesh
+// layers and writes its slices, rank 0 meshes every rank's layer counts in
+// order; the files must be those of one process, byte for byte.
+
+#include "cli_support.h"
+
+#include <map>
+
+#include "core/build_options.h"
+
+namespace spec2fab_cli_test {
+namespace {
+
+std::string mpirun(int ranks) {
+  // As root in a container: Open MPI needs to be told that is fine; shared
+  // memory between the ranks of this machine, no network.
+  return "mpirun --allow-run-as-root --oversubscribe --mca btl self,vader -np " + std::to_string(ranks) + " ";
+}
+
+// Every file under `folder` but timing.json, by relative path.
+std::map<std::string, std::string> files_of(const fs::path& folder) {
+  std::map<std::string, std::string> files;
+  for (const auto& entry : fs::recursive_directory_iterator(folder)) {
+    if (!entry.is_regular_file() || entry.path().filename() == "timing.json") continue;
+    files[fs::relative(entry.path(), folder).string()] = read(entry.path());
+  }
+  return files;
+}
+
+TEST_F(Cli, MpiExportIsByteIdenticalToOneProcess) {
+  if (!SPEC2FAB_WITH_MPI) GTEST_SKIP() << "built without MPI (SPEC2FAB_WITH_MPI=OFF)";
+  if (run_command("command -v mpirun").code != 0) GTEST_SKIP() << "mpirun not installed";
+  // Columns of cyan layers of different depths over white: thin layers and
+  // material changes in every slab.
+  const std::string tree =
+      R"({"type": "stratum", "depth_mm": 2, "shell": {"type": "column", "count": [3, 1], "children": [)"
+      R"({"type": "layered", "layers": [{"material": "VeroCyan", "thickness_mm": 0.3}], "fill": "VeroWhitePlus"},)"
+      R"({"type": "layered", "layers": [{"material": "VeroCyan", "thickness_mm": 1.1}], "fill": "VeroWhitePlus"},)"
+      R"({"type": "layered", "material": "VeroWhitePlus"}]}, "core": {"type": "layered", "material": "VeroWhitePlus"}})";
+  const fs::path file = experiment("src", valid_body(tree, R"(, "output": {"slices": false, "stl": false,
+                                                                         "3mf": false, "render": false})"));
+  ASSERT_EQ(run_spec2fab("run -q " + file.string() + " --out " + (dir_ / "run").string()).code, 0);
+  std::ofstream(dir_ / "fine.json")
+      << R"({"name": "fine", "technology": "polyjet", "resolution_dpi": [127, 127], "layer_mm": 0.2,
+             "build_volume_mm": [200, 200, 200], "model_materials": ["VeroCyan", "VeroWhitePlus"],
+             "source": "test"})";
+  // 250 layers in mesh layers of 4 (0.8 mm): 63, split 32 + 31 and 21 x 3.
+  const std::string arguments = "export -q " + (dir_ / "run").string() + " --printer " + (dir_ / "fine.json").string() +
+                                " --mesh-voxel-mm 0.8 --out ";
+  const Result one = run_spec2fab(arguments + (dir_ / "one").string());
+  ASSERT_EQ(one.code, 0) << one.out;
+  const std::map<std::string, std::string> expected = files_of(dir_ / "one");
+  ASSERT_GT(expected.size(), 250u);  // the slices, manifest, STLs, render, export.json
+  for (int ranks : {2, 3}) {
+    const fs::path out = dir_ / ("ranks" + std::to_string(ranks));
+    const Result r = run_command(mpirun(ranks) + SPEC2FAB_CLI_PATH + " " + arguments + out.string());
+    ASSERT_EQ(r.code, 0) << r.out;
+    const std::map<std::string, std::string> got = files_of(out);
+    ASSERT_EQ(got.size(), expected.size()) << ranks << " ranks";
+    for (const auto& [name, bytes] : expected) {
+      const auto found = got.find(name);
+      ASSERT_NE(found, got.end()) << name << " missing with " << ranks << " ranks";
+      EXPECT_TRUE(found->second == bytes) << name << " differs with " << ranks << " ranks";
+    }
+    EXPECT_THAT(read(out / "timing.json"), HasSubstr("\"ranks\": " + std::to_string(ranks)));
+    // Nothing left beside the folder: no rank's staging folder.
+    for (const auto& entry : fs::directory_iterator(dir_))
+      EXPECT_THAT(entry.path().filename().string(), ::testing::Not(HasSubstr("partial")));
+  }
+}
+
+TEST_F(Cli, UnderMpirunOnlyExportRuns) {
+  if (!SPEC2FAB_WITH_MPI) GTEST_SKIP() << "built without MPI (SPEC2FAB_WITH_MPI=OFF)";
+  if (run_command("command -v mpirun").code != 0) GTEST_SKIP() << "mpirun not installed";
+  const fs::path file = experiment("src", valid_body(
+      R"({"type": "layered", "material": "VeroCyan"})", R"(, "output": {"slices": false})"));
+  const Result r = run_command(mpirun(2) + SPEC2FAB_CLI_PATH + " run -q " + file.string() + " --out " +
+                               (dir_ / "out").string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("only 'spec2fab export' splits its work over ranks"));
+  EXPECT_FALSE(fs::exists(dir_ / "out"));
+}
+
+}  // namespace
+}  // namespace spec2fab_cli_test
