@@ -161,18 +161,33 @@ SurfaceSample SurfaceField::Sampler::sample_run(const Vec3& point, const Vec3& s
   const Vec3 x = point * f.inverse_voxel;
   const openvdb::Coord ijk(nearest_int(x.x()), nearest_int(x.y()), nearest_int(x.z()));
   openvdb::Int32 cell = kOutside;
-  if (count < 2 || s.cells.probeValue(ijk, cell) || !(step.x() > 0) || step.y() != 0 || step.z() != 0)
-    return sample(point);
-  // The value resides at some depth of the tree (root 0, leaf 3; −1:
-  // background); everything in the node extent it covers has it.
-  constexpr int kLog2Extent[] = {12, 12, 7, 3, 0};  // by depth + 1
-  const int depth = s.cells.getValueDepth(ijk);
-  const int log2 = kLog2Extent[std::clamp(depth, -1, 3) + 1];
-  if (log2 > 0) {
-    // Cells up to `last` along x share it; a point maps to the cell of its
-    // nearest centre, so it stays in the extent while x/voxel < last + ½
-    // (with a margin for rounding).
-    const int last = ((ijk.x() >> log2) + 1) * (1 << log2) - 1;
+  if (s.cells.probeValue(ijk, cell)) return sample_band(point, cell);
+  if (count < 2 || !(step.x() > 0) || step.y() != 0 || step.z() != 0) {
+    SurfaceSample result;
+    result.inside = cell < 0;
+    result.depth_mm = f.interior_band_mm;
+    return result;
+  }
+  // Cells up to `last` along x have the same value: within a leaf, the
+  // inactive cells that follow with that value; in a tile, the node extent
+  // it covers (root 4096, then 128, 8 cells).
+  int last = ijk.x();
+  using Leaf = openvdb::Int32Tree::LeafNodeType;
+  if (const Leaf* leaf = s.cells.probeConstLeaf(ijk)) {
+    openvdb::Coord next = ijk;
+    for (const int leaf_end = ijk.x() | int(Leaf::DIM - 1); last < leaf_end; ++last) {
+      next.setX(last + 1);
+      const openvdb::Index offset = Leaf::coordToOffset(next);
+      if (leaf->isValueOn(offset) || leaf->getValue(offset) != cell) break;
+    }
+  } else {
+    constexpr int kLog2Extent[] = {12, 12, 7, 3};  // by depth + 1: background, root, internal 5, internal 4
+    const int log2 = kLog2Extent[std::clamp(s.cells.getValueDepth(ijk), -1, 2) + 1];
+    last = ((ijk.x() >> log2) + 1) * (1 << log2) - 1;
+  }
+  if (last > ijk.x()) {
+    // A point maps to the cell of its nearest centre, so it stays within
+    // them while x/voxel < last + ½ (with a margin for rounding).
     const double room = ((last + 0.5) * f.voxel_mm - point.x()) / step.x() - 1e-6;
     run = static_cast<int>(std::clamp(std::floor(room), 0.0, static_cast<double>(count - 1))) + 1;
   }
@@ -188,13 +203,19 @@ SurfaceSample SurfaceField::Sampler::sample(const Vec3& point) {
   const Vec3 x = point * f.inverse_voxel;
   const openvdb::Coord ijk(nearest_int(x.x()), nearest_int(x.y()), nearest_int(x.z()));
 
-  SurfaceSample result;
   openvdb::Int32 cell = kOutside;
   if (!s.cells.probeValue(ijk, cell)) {
+    SurfaceSample result;
     result.inside = cell < 0;
     result.depth_mm = f.interior_band_mm;
     return result;
   }
+  return sample_band(point, cell);
+}
+
+SurfaceSample SurfaceField::Sampler::sample_band(const Vec3& point, int cell) {
+  const SurfaceField::Impl& f = *impl_->field;
+  SurfaceSample result;
   const int decoded = std::abs(cell) - 1;
   int triangle = decoded >> 2;
   const Solid::Impl& solid = *f.solid;

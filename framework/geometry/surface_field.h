@@ -57,6 +57,9 @@ class SurfaceField {
     SurfaceSample sample_run(const Vec3& point, const Vec3& step, int count, int& run);
 
    private:
+    /// The sample at `point`, whose nearest field cell is in the band and
+    /// holds `cell` (its closest triangle and sign code).
+    SurfaceSample sample_band(const Vec3& point, int cell);
     struct Impl;
     std::unique_ptr<Impl> impl_;
   };
