@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 #include <tbb/concurrent_queue.h>
+#include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_pipeline.h>
 
@@ -71,7 +72,12 @@ Fabricator::Fabricator(const ReducerTree& tree, const PrinterProfile& printer, i
   if (!tree.is_bound()) throw std::logic_error("Fabricator: the tree is not bound to a solid");
   plan_.grid = FabricationGrid::covering(tree.solid().bounds(), printer.voxel_mm());
   plan_.voxels = plan_.grid.voxels();
-  const int cores = threads > 0 ? threads : tbb::this_task_arena::max_concurrency();
+  // The arena's width, as narrowed by a global_control (--threads).
+  const int cores = threads > 0 ? threads
+                                : static_cast<int>(std::min<size_t>(
+                                      static_cast<size_t>(tbb::this_task_arena::max_concurrency()),
+                                      tbb::global_control::active_value(
+                                          tbb::global_control::max_allowed_parallelism)));
   cores_ = cores;
   plan_.estimated_seconds = static_cast<double>(plan_.voxels) / (kVoxelsPerSecondPerCore * cores);
   plan_.estimated_bytes =
