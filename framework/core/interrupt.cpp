@@ -4,6 +4,7 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cstdio>
 #include <mutex>
 #include <set>
@@ -22,7 +23,32 @@ std::set<std::filesystem::path>& registry() {
   return folders;
 }
 
+std::atomic<bool> stop_requested{false};
+
+// Writers on other threads keep going while a folder is removed: a file
+// they create in it makes removal fail, and a folder they create brings it
+// back. So the folder is first renamed away (atomic; later writes to its old
+// paths fail), keeping the ".partial-PID" ending that lets a later run
+// clean it up should this process die mid-way; the old path is removed
+// again at the end in case a folder was re-created meanwhile.
+void remove_partial(const std::filesystem::path& folder) {
+  std::error_code ignored;
+  std::string name = folder.filename().string();
+  const size_t mark = name.rfind(".partial-");
+  name.insert(mark == std::string::npos ? name.size() : mark, ".stopped");
+  const std::filesystem::path away = folder.parent_path() / name;
+  std::filesystem::rename(folder, away, ignored);
+  std::filesystem::remove_all(away, ignored);
+  std::filesystem::remove_all(folder, ignored);
+}
+
 }  // namespace
+
+bool stopping() { return stop_requested.load(); }
+
+void wait_if_stopping() {
+  while (stop_requested.load()) pause();  // the signal thread ends the process
+}
 
 void exit_cleanly_on_signals() {
   sigset_t signals;
@@ -34,11 +60,11 @@ void exit_cleanly_on_signals() {
     int signal = 0;
     while (sigwait(&signals, &signal) != 0) {
     }
+    stop_requested = true;
     std::lock_guard lock(registry_mutex());  // held to the end: no folder is registered after this
     std::string removed;
     for (const std::filesystem::path& folder : registry()) {
-      std::error_code ignored;
-      std::filesystem::remove_all(folder, ignored);
+      remove_partial(folder);
       removed += (removed.empty() ? " " : ", ") + folder.string();
     }
     const std::string line = std::string("stopped by ") + (signal == SIGINT ? "SIGINT" : "SIGTERM") +

@@ -19,4 +19,10 @@ void exit_cleanly_on_signals();
 void register_partial(const std::filesystem::path& folder);
 void release_partial(const std::filesystem::path& folder);
 
+/// True once a signal is being handled. Code that creates folders (which
+/// would re-create a partial folder being removed) waits instead: the
+/// process is about to exit.
+bool stopping();
+void wait_if_stopping();
+
 }  // namespace spec2fab::interrupt

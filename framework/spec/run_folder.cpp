@@ -76,6 +76,7 @@ RunFolder::~RunFolder() {
 }
 
 fs::path RunFolder::path(const fs::path& relative) const {
+  interrupt::wait_if_stopping();  // creating folders now would bring a removed one back
   const fs::path full = staging_ / relative;
   fs::create_directories(full.parent_path());
   return full;
