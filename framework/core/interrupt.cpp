@@ -44,8 +44,6 @@ void remove_partial(const std::filesystem::path& folder) {
 
 }  // namespace
 
-bool stopping() { return stop_requested.load(); }
-
 void wait_if_stopping() {
   while (stop_requested.load()) pause();  // the signal thread ends the process
 }

@@ -19,10 +19,9 @@ void exit_cleanly_on_signals();
 void register_partial(const std::filesystem::path& folder);
 void release_partial(const std::filesystem::path& folder);
 
-/// True once a signal is being handled. Code that creates folders (which
-/// would re-create a partial folder being removed) waits instead: the
-/// process is about to exit.
-bool stopping();
+/// Returns at once, unless a signal is being handled: then never (the
+/// process is about to exit). Code that creates folders calls it first, so
+/// that it cannot re-create a partial folder being removed.
 void wait_if_stopping();
 
 }  // namespace spec2fab::interrupt

@@ -3,7 +3,6 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
-#include <thread>
 
 #include <fmt/format.h>
 #include <tbb/concurrent_queue.h>
@@ -40,9 +39,8 @@ constexpr double kVoxelsPerSecondPerCore = 25e6;
 constexpr double kDiskBytesPerVoxel = 0.05;
 // Calibrated on the shipped experiments (benchmarks/RESULTS.md, "Fabrication
 // at scale"): the share of two cores' tree evaluation that overlaps, and the
-// writers' and surfaces' cost per voxel beyond it.
+// surfaces' cost per voxel beyond it (the slice writers' hides in the first).
 constexpr double kParallelEfficiency = 0.9;
-constexpr double kWriterSecondsPerVoxel = 0;
 constexpr double kSurfaceSecondsPerVoxel = 2e-9;
 
 std::string human_bytes(double bytes) {
@@ -115,10 +113,10 @@ void Fabricator::time_sample_rows(bool surfaces) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() /
       static_cast<double>(std::max(timed, 1LL));
   const double voxels = static_cast<double>(plan_.voxels);
-  // Tree evaluation spreads over the cores at kParallelEfficiency; the rest
-  // is per voxel on the writers' serial stage, and the surfaces' meshing.
+  // Tree evaluation spreads over the cores at kParallelEfficiency; the
+  // surfaces' counting and meshing come on top.
   plan_.estimated_seconds = voxels * per_voxel / (kParallelEfficiency * cores_) +
-                            voxels * (kWriterSecondsPerVoxel + (surfaces ? kSurfaceSecondsPerVoxel : 0));
+                            (surfaces ? voxels * kSurfaceSecondsPerVoxel : 0);
   plan_.sampled_seconds_per_voxel = per_voxel;
 }
 

@@ -186,15 +186,14 @@ void MaterialSurfaces::flush_layer() {
   }
   // Layers below the first one streamed (a slab's run) stay void.
   layers_pushed_ = accumulating_;
-  push_layer();
+  push_layer(/*streamed=*/true);
   std::fill(counts_.begin(), counts_.end(), std::uint16_t{0});
 }
 
-void MaterialSurfaces::push_layer() {
+void MaterialSurfaces::push_layer(bool streamed) {
   std::rotate(window_.begin(), window_.begin() + 1, window_.end());
   Layer& layer = window_[2];
   const int cells_x = mesh_grid_.size[0], cells_y = mesh_grid_.size[1];
-  const bool streamed = layers_pushed_ == accumulating_;
   for (size_t m = 0; m < materials_; ++m) {
     std::vector<std::uint16_t>& count = layer.count[m];
     bool present = false;
@@ -347,8 +346,7 @@ void MaterialSurfaces::finish() {
   }
   // Two void layers close the top.
   for (int k = 0; k < 2; ++k) {
-    accumulating_ = -1;
-    push_layer();
+    push_layer(/*streamed=*/false);
   }
   grids_->accessors.clear();  // their caches would go stale in the flood fill
   meshes_.assign(materials_, Mesh{});

@@ -74,7 +74,8 @@ class MaterialSurfaces final : public SliceSink {
  private:
   struct Grids;
   void flush_layer();
-  void push_layer();
+  /// Moves the window up one layer: counts_ when `streamed`, else void.
+  void push_layer(bool streamed);
   void process_layer(int layer);
   Mesh extract(size_t material, SurfaceReport& report) const;
 
