@@ -1,6 +1,7 @@
 #include "core/ranks.h"
 
 #include <cstdlib>
+#include <limits>
 #include <stdexcept>
 
 #include "core/build_options.h"
@@ -68,6 +69,30 @@ std::string broadcast(const std::string& text) {
   return out;
 }
 
+std::vector<std::vector<std::uint8_t>> all_gather(const std::vector<std::uint8_t>& mine) {
+  if (rank_count == 1) return {mine};
+  std::vector<long long> lengths(static_cast<size_t>(rank_count));
+  const long long length = static_cast<long long>(mine.size());
+  check(MPI_Allgather(&length, 1, MPI_LONG_LONG, lengths.data(), 1, MPI_LONG_LONG, MPI_COMM_WORLD), "all-gather");
+  std::vector<int> counts, offsets;
+  long long total = 0;
+  for (long long l : lengths) {
+    counts.push_back(static_cast<int>(l));
+    offsets.push_back(static_cast<int>(total));
+    total += l;
+  }
+  // MPI counts and displacements are int.
+  if (total > std::numeric_limits<int>::max()) throw std::runtime_error("MPI: all-gather of more than 2 GiB");
+  std::vector<std::uint8_t> all(static_cast<size_t>(total));
+  check(MPI_Allgatherv(mine.data(), static_cast<int>(length), MPI_BYTE, all.data(), counts.data(), offsets.data(),
+                       MPI_BYTE, MPI_COMM_WORLD),
+        "all-gather");
+  std::vector<std::vector<std::uint8_t>> parts;
+  for (size_t r = 0; r < lengths.size(); ++r)
+    parts.emplace_back(all.begin() + offsets[r], all.begin() + offsets[r] + counts[r]);
+  return parts;
+}
+
 void send(int to, const std::vector<std::uint8_t>& bytes) {
   long long length = static_cast<long long>(bytes.size());
   check(MPI_Send(&length, 1, MPI_LONG_LONG, to, 0, MPI_COMM_WORLD), "send");
@@ -102,6 +127,7 @@ int size() { return 1; }
 void barrier() {}
 void sum(std::vector<long long>&) {}
 std::string broadcast(const std::string& text) { return text; }
+std::vector<std::vector<std::uint8_t>> all_gather(const std::vector<std::uint8_t>& mine) { return {mine}; }
 void send(int, const std::vector<std::uint8_t>&) { throw std::logic_error("ranks::send without MPI"); }
 std::vector<std::uint8_t> receive(int) { throw std::logic_error("ranks::receive without MPI"); }
 

@@ -1,9 +1,9 @@
 #pragma once
-/// The processes of an MPI run (`mpirun -np N spec2fab export …`): each is a
-/// rank; without mpirun, or in a build without MPI (SPEC2FAB_WITH_MPI=OFF),
+/// The processes of an MPI run (`mpirun -np N spec2fab run|export …`): each
+/// is a rank; without mpirun, or in a build without MPI (SPEC2FAB_WITH_MPI=OFF),
 /// there is one rank, 0, and every call here is trivial. Only what
-/// fabrication's split over z needs: a barrier, a sum, a broadcast and
-/// point-to-point byte buffers, always in a fixed order so that the outputs
+/// fabrication's split over z and the tuners' split over ranks need: a
+/// barrier, a sum, a broadcast, an all-gather and point-to-point byte buffers, always in a fixed order so that the outputs
 /// are byte-identical for any rank count.
 
 #include <cstdint>
@@ -29,6 +29,8 @@ void barrier();
 void sum(std::vector<long long>& values);
 /// Rank 0's `text` on every rank.
 std::string broadcast(const std::string& text);
+/// Every rank's `mine`, indexed by rank, on every rank.
+std::vector<std::vector<std::uint8_t>> all_gather(const std::vector<std::uint8_t>& mine);
 void send(int to, const std::vector<std::uint8_t>& bytes);
 std::vector<std::uint8_t> receive(int from);
 

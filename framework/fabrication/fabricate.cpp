@@ -132,7 +132,7 @@ FabricationReport fabricate(const ReducerTree& tree, const PrinterProfile& print
   }
   // Split over ranks by whole mesh layers, so that no mesh cell straddles two.
   const std::array<int, 3> stride = mesh_stride(grid, options.mesh_voxel_mm);
-  const bool split = options.split_over_ranks && ranks::size() > 1;
+  const bool split = ranks::size() > 1;
   int first_layer = 0, layer_count = -1;
   if (split) {
     const int unit = need_surfaces ? stride[2] : 1;  // print layers per share unit

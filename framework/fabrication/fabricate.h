@@ -80,11 +80,6 @@ struct FabricationOptions {
   /// translator writes its predicted look as render.png.
   std::string render_file = "preview/render.png";
   bool progress = true;              ///< progress line on a terminal
-  /// Under mpirun: each rank fabricates its share of whole mesh layers
-  /// (rank order = z order) and writes its slices; rank 0 sums the census,
-  /// meshes every rank's layers and writes the rest. Outputs are those of
-  /// one process, byte for byte (`spec2fab export` sets it).
-  bool split_over_ranks = false;
 
   bool writes(std::string_view writer) const {
     const auto found = writers.find(writer);
@@ -110,6 +105,11 @@ void check_fabrication(const ReducerTree& tree, const PrinterProfile& printer,
 
 /// Fabricates `tree` (bound) for `printer` into `folder`. The tree's palette
 /// must be the printer's. Does nothing but report when no writer is enabled.
+/// Under mpirun every rank calls it: each fabricates its share of whole mesh
+/// layers (rank order = z order) and writes its slices; rank 0 sums the
+/// census, meshes every rank's layers, writes the rest and reports (the other
+/// ranks' reports hold the grid only). Outputs are those of one process,
+/// byte for byte.
 FabricationReport fabricate(const ReducerTree& tree, const PrinterProfile& printer,
                             const FabricationOptions& options, RunFolder& folder);
 

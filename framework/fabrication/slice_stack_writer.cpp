@@ -142,7 +142,7 @@ namespace {
 class SliceStackFiles final : public PrintWriter {
  public:
   SliceStackFiles(const Properties& /*switch*/, const PrintWriterContext& context)
-      : writer_(context.folder.path("print/slices/manifest.json").parent_path(), context.printer,
+      : writer_(context.folder.shared_path("print/slices/manifest.json").parent_path(), context.printer,
                 context.options.png_compression) {}
   static TypeDoc doc() {
     return {"print/slices/: one indexed-colour PNG per printer layer (palette index = material) and "

@@ -44,6 +44,11 @@ RunFolder::RunFolder(fs::path destination) : destination_(std::move(destination)
   if (!ranks::root()) {
     staging_ = ranks::broadcast("");
     shared_ = true;
+    // Node-local, and named so that no run's clean-up (which judges PIDs of
+    // its own machine) mistakes it for a dead run's.
+    scratch_ = fs::temp_directory_path() /
+               ("spec2fab-rank-" + std::to_string(ranks::rank()) + "-" + std::to_string(getpid()));
+    interrupt::register_partial(scratch_);
     return;
   }
   const fs::path parent = destination_.has_parent_path() ? destination_.parent_path() : fs::path(".");
@@ -67,7 +72,12 @@ RunFolder::RunFolder(fs::path destination) : destination_(std::move(destination)
 }
 
 RunFolder::~RunFolder() {
-  if (shared_) return;
+  if (shared_) {
+    std::error_code ignored;
+    fs::remove_all(scratch_, ignored);
+    interrupt::release_partial(scratch_);
+    return;
+  }
   if (!committed_) {
     std::error_code ignored;
     fs::remove_all(staging_, ignored);
@@ -76,6 +86,16 @@ RunFolder::~RunFolder() {
 }
 
 fs::path RunFolder::path(const fs::path& relative) const {
+  if (shared_) {
+    interrupt::wait_if_stopping();
+    const fs::path full = scratch_ / relative;
+    fs::create_directories(full.parent_path());
+    return full;
+  }
+  return shared_path(relative);
+}
+
+fs::path RunFolder::shared_path(const fs::path& relative) const {
   interrupt::wait_if_stopping();  // creating folders now would bring a removed one back
   const fs::path full = staging_ / relative;
   fs::create_directories(full.parent_path());

@@ -6,8 +6,10 @@
 #include <spdlog/spdlog.h>
 #include <tbb/global_control.h>
 
+#include "core/ranks.h"
 #include "core/version.h"
 #include "reducer/reducer_tree.h"
+#include "tuning/schedule.h"
 
 namespace spec2fab {
 
@@ -83,6 +85,14 @@ std::filesystem::path run_experiment(const std::filesystem::path& file, const Ru
   folder.write_json("result.json", result);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   timing["wall_seconds"] = seconds;
+  if (ranks::size() > 1) {
+    // Which rank tuned how much: the parallel phases' split.
+    std::vector<long long> runs(static_cast<size_t>(ranks::size()), 0);
+    runs[static_cast<size_t>(ranks::rank())] = tuner_runs_in_this_process();
+    ranks::sum(runs);
+    timing["ranks"] = ranks::size();
+    timing["tuner_runs_per_rank"] = runs;
+  }
   folder.write_json("timing.json", timing);
   folder.commit();
   return out;

@@ -1,6 +1,8 @@
 #include "tuning/schedule.h"
 
 #include <algorithm>
+#include <atomic>
+#include <limits>
 #include <chrono>
 #include <numeric>
 #include <sstream>
@@ -12,6 +14,7 @@
 #include <tbb/parallel_for.h>
 
 #include "core/log.h"
+#include "core/ranks.h"
 #include "core/seed.h"
 #include "core/properties.h"
 
@@ -124,12 +127,71 @@ Schedule& Schedule::add(Phase phase) {
 
 namespace {
 
+std::atomic<long long> tuner_runs_here{0};
+
+// A summary whole, wall times included, for another rank: CBOR keeps every
+// double (NaN too) bit for bit, so records are those of one process.
+nlohmann::json summary_state(const Summary& s) {
+  nlohmann::json trace = nlohmann::json::array();
+  for (const IterationRecord& r : s.trace) trace.push_back({r.iteration, r.evaluations, r.error, r.best_error, r.seconds});
+  return {s.optimizer, static_cast<int>(s.termination), s.message, s.initial_error, s.final_error, s.initial_x,
+          s.final_x, s.evaluations, s.iterations, s.seconds, trace, s.details};
+}
+
+Summary summary_from_state(const nlohmann::json& j) {
+  Summary s;
+  s.optimizer = j[0].get<std::string>();
+  s.termination = static_cast<Termination>(j[1].get<int>());
+  s.message = j[2].get<std::string>();
+  const auto number = [](const nlohmann::json& v) {  // CBOR's NaN comes back as a float
+    return v.is_number() ? v.get<double>() : std::numeric_limits<double>::quiet_NaN();
+  };
+  s.initial_error = number(j[3]);
+  s.final_error = number(j[4]);
+  s.initial_x = j[5].get<std::vector<double>>();
+  s.final_x = j[6].get<std::vector<double>>();
+  s.evaluations = j[7].get<long long>();
+  s.iterations = j[8].get<int>();
+  s.seconds = j[9].get<double>();
+  for (const auto& r : j[10])
+    s.trace.push_back({r[0].get<int>(), r[1].get<long long>(), number(r[2]), number(r[3]), r[4].get<double>()});
+  s.details = j[11];
+  return s;
+}
+
+// Under mpirun each rank has tuned its share of a colour class: every rank
+// takes up the others' tunings (their values, set and simulated, and their
+// summaries), so that all hold the network one process would.
+void share_colour_tunings(TunerNetwork& network, const std::vector<size_t>& colour, size_t begin, size_t end,
+                          std::vector<Summary>& summaries) {
+  nlohmann::json mine = nlohmann::json::array();
+  for (size_t i = begin; i < end; ++i) {
+    const size_t t = colour[i];
+    mine.push_back({t, network.tuner(t).search_space().values(), summary_state(summaries[t])});
+  }
+  const std::vector<std::vector<std::uint8_t>> parts = ranks::all_gather(nlohmann::json::to_cbor(mine));
+  std::vector<std::pair<size_t, std::vector<double>>> adopted;
+  for (int from = 0; from < ranks::size(); ++from) {
+    if (from == ranks::rank()) continue;
+    for (const auto& entry : nlohmann::json::from_cbor(parts[static_cast<size_t>(from)])) {
+      const auto t = entry[0].get<size_t>();
+      summaries[t] = summary_from_state(entry[2]);
+      adopted.emplace_back(t, entry[1].get<std::vector<double>>());
+    }
+  }
+  // Tuners of one colour class are independent: each simulates on its own.
+  tbb::parallel_for(size_t{0}, adopted.size(),
+                    [&](size_t k) { network.tuner(adopted[k].first).adopt(adopted[k].second); });
+}
+
 std::string progress_detail(int sweep, double error_sum, size_t runs) {
   return fmt::format("sweep {}, mean error {:.4g}", sweep + 1,
                      error_sum / static_cast<double>(std::max<size_t>(runs, 1)));
 }
 
 }  // namespace
+
+long long tuner_runs_in_this_process() { return tuner_runs_here; }
 
 std::vector<size_t> Phase::members(size_t network_size) const {
   if (!tuners.empty()) return tuners;
@@ -182,7 +244,11 @@ RunRecord Schedule::run(TunerNetwork& network, std::uint64_t seed) const {
       };
       if (parallel) {
         for (const auto& colour : classes) {
-          tbb::parallel_for(size_t{0}, colour.size(), [&](size_t i) { tune_one(colour[i]); });
+          // Under mpirun each rank tunes its share of the class.
+          const auto [begin, end] = ranks::share(static_cast<long long>(colour.size()), ranks::rank(), ranks::size());
+          tbb::parallel_for(static_cast<size_t>(begin), static_cast<size_t>(end), [&](size_t i) { tune_one(colour[i]); });
+          tuner_runs_here += end - begin;
+          if (ranks::size() > 1) share_colour_tunings(network, colour, static_cast<size_t>(begin), static_cast<size_t>(end), summaries);
           for (size_t t : colour) {
             tuned[t] = true;
             if (phase.coupling) phase.coupling->after_tune(network, t, tuned);
@@ -195,6 +261,7 @@ RunRecord Schedule::run(TunerNetwork& network, std::uint64_t seed) const {
       } else {
         for (size_t t : tuners) {
           tune_one(t);
+          ++tuner_runs_here;
           tuned[t] = true;
           if (phase.coupling) phase.coupling->after_tune(network, t, tuned);
           sweep_error += summaries[t].final_error;

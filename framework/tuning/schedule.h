@@ -3,7 +3,9 @@
 /// sweeps, and whether serially (in the listed order) or in parallel. A
 /// parallel phase colours the network so that no two neighbours run at once,
 /// and every tuner run draws its random seed from (run seed, phase, sweep,
-/// tuner): results are identical for any thread count.
+/// tuner): results are identical for any thread count. Under mpirun a
+/// parallel phase's colour classes are split over the ranks as well, with
+/// results identical for any rank count.
 ///
 /// A Coupling says how tuners of a phase interact with their neighbours
 /// around their own tuning (error diffusion, for example); a phase may fix
@@ -179,6 +181,11 @@ class Schedule {
 /// inside the other's subtree — or nullopt. Tuners that run in parallel
 /// must not overlap: both would set the same parameters at once.
 std::optional<std::pair<size_t, size_t>> overlapping_tuners(TunerNetwork& network, const std::vector<size_t>& tuners);
+
+/// Tuner runs this process has made, in every schedule so far. Under mpirun
+/// a parallel phase's colour classes are split over the ranks (each tunes its
+/// share, then takes up the others' results), so this is the rank's share.
+long long tuner_runs_in_this_process();
 
 /// The seed of one tuner run (SplitMix64 of the inputs).
 std::uint64_t tuner_seed(std::uint64_t run_seed, size_t phase, int sweep, size_t tuner);

@@ -172,6 +172,12 @@ double Tuner::error_at(std::span<const double> x) {
   return error() + (penalty_ ? penalty_(x, {}) : 0.0);
 }
 
+void Tuner::adopt(std::span<const double> x) {
+  collect_search_space();
+  set_values(x);
+  error();
+}
+
 double Tuner::error_and_gradient_at(std::span<const double> x, std::span<double> gradient) {
   set_values(x);
   double e = error();

@@ -51,6 +51,10 @@ class Tuner {
   /// Sets the free parameters to x and refreshes the subtree, simulating
   /// nothing (simulated() is then stale until the next error()).
   void set_values(std::span<const double> x);
+  /// Takes up a tuning made elsewhere (another rank of an MPI run): sets the
+  /// free parameters to x and simulates them, leaving the tuner as tune()
+  /// would have left it had it found x.
+  void adopt(std::span<const double> x);
   /// The same with ∂error/∂x (simulator and metric both differentiable;
   /// problem() then has Capability::gradient).
   double error_and_gradient_at(std::span<const double> x, std::span<double> gradient);

@@ -1,11 +1,14 @@
-// mpirun -np N spec2fab export: each rank fabricates its share of whole mesh
-// layers and writes its slices, rank 0 meshes every rank's layer counts in
-// order; the files must be those of one process, byte for byte.
+// mpirun -np N spec2fab run|export: each rank fabricates its share of whole
+// mesh layers and writes its slices, rank 0 meshes every rank's layer counts
+// in order; a run's parallel tuner phases split their colour classes over the
+// ranks. The files must be those of one process, byte for byte.
 
 #include "cli_support.h"
 
 #include <cstdlib>
 #include <map>
+
+#include <nlohmann/json.hpp>
 
 #include "core/build_options.h"
 
@@ -77,16 +80,59 @@ TEST_F(Cli, MpiExportIsByteIdenticalToOneProcess) {
   }
 }
 
-TEST_F(Cli, UnderMpirunOnlyExportRuns) {
+TEST_F(Cli, MpiRunSplitsTunersAndSlicesAndIsByteIdenticalToOneProcess) {
   if (!SPEC2FAB_WITH_MPI) GTEST_SKIP() << "built without MPI (SPEC2FAB_WITH_MPI=OFF)";
   if (run_command("command -v mpirun").code != 0) GTEST_SKIP() << "mpirun not installed";
-  const fs::path file = experiment("src", valid_body(
-      R"({"type": "layered", "material": "VeroCyan"})", R"(, "output": {"slices": false})"));
-  const Result r = run_command(mpirun(2) + SPEC2FAB_CLI_PATH + " run -q " + file.string() + " --out " +
-                               (dir_ / "out").string());
+  // The subsurface chessboard: one parallel phase of 3 x 2 independent
+  // column tuners (branch and bound), then fabrication with slices and STLs.
+  const std::string body =
+      R"({"name": "board", "translator": "subsurface",
+          "geometry": {"mesh": ")" + (kDatasets / "meshes/board_60x60x8.stl").string() + R"(", "uv": "planar"},
+          "goal": {"media": ["marble", "skimmilk"], "columns": [3, 2], "layers": 2,
+                   "materials": ["VeroWhitePlus", "VeroCyan"], "thickness_steps": [1, 2],
+                   "radius_mm": 8, "samples": 64},
+          "output": {"3mf": false, "render": false},
+          "materials": ")" + (kDatasets / "materials/polyjet.json").string() + R"(",
+          "printer": ")" + (dir_ / "coarse_printer.json").string() + R"("})";
+  const std::string arguments = "run -q " + experiment("board", body).string() + " --out ";
+  const Result one = run_spec2fab(arguments + (dir_ / "one").string());
+  ASSERT_EQ(one.code, 0) << one.out;
+  const std::map<std::string, std::string> expected = files_of(dir_ / "one");
+  ASSERT_GT(expected.size(), 20u);  // result, tree, previews, slices, manifest, STLs
+  for (int ranks : {2, 3}) {
+    const fs::path out = dir_ / ("ranks" + std::to_string(ranks));
+    const Result r = run_command(mpirun(ranks) + SPEC2FAB_CLI_PATH + " " + arguments + out.string());
+    ASSERT_EQ(r.code, 0) << r.out;
+    const std::map<std::string, std::string> got = files_of(out);
+    ASSERT_EQ(got.size(), expected.size()) << ranks << " ranks";
+    for (const auto& [name, bytes] : expected) {
+      const auto found = got.find(name);
+      ASSERT_NE(found, got.end()) << name << " missing with " << ranks << " ranks";
+      EXPECT_TRUE(found->second == bytes) << name << " differs with " << ranks << " ranks";
+    }
+    // Every rank tuned its share of the six columns.
+    const auto timing = nlohmann::json::parse(read(out / "timing.json"));
+    EXPECT_EQ(timing["ranks"], ranks);
+    const auto per_rank = timing["tuner_runs_per_rank"].get<std::vector<long long>>();
+    ASSERT_EQ(per_rank.size(), static_cast<size_t>(ranks));
+    long long total = 0;
+    for (long long runs : per_rank) {
+      EXPECT_GT(runs, 0) << timing.dump();
+      total += runs;
+    }
+    EXPECT_EQ(total, 6);
+    for (const auto& entry : fs::directory_iterator(dir_))
+      EXPECT_THAT(entry.path().filename().string(), ::testing::Not(HasSubstr("partial")));
+  }
+}
+
+TEST_F(Cli, UnderMpirunOnlyRunAndExportSplitTheirWork) {
+  if (!SPEC2FAB_WITH_MPI) GTEST_SKIP() << "built without MPI (SPEC2FAB_WITH_MPI=OFF)";
+  if (run_command("command -v mpirun").code != 0) GTEST_SKIP() << "mpirun not installed";
+  const fs::path file = experiment("src", valid_body(R"({"type": "layered", "material": "VeroCyan"})"));
+  const Result r = run_command(mpirun(2) + SPEC2FAB_CLI_PATH + " validate " + file.string());
   EXPECT_EQ(r.code, 2) << r.out;
-  EXPECT_THAT(r.out, HasSubstr("only 'spec2fab export' splits its work over ranks"));
-  EXPECT_FALSE(fs::exists(dir_ / "out"));
+  EXPECT_THAT(r.out, HasSubstr("only 'spec2fab run' and 'spec2fab export' split their work over ranks"));
 }
 
 }  // namespace

@@ -42,7 +42,7 @@ int run_command(const RunArguments& arguments) {
   options.threads = arguments.threads;
   options.seed = arguments.seed;
   const fs::path folder = run_experiment(arguments.experiment, options);
-  std::cout << "wrote " << folder.string() << "/ (result.json, tree.json, preview/, print/)\n";
+  if (ranks::root()) std::cout << "wrote " << folder.string() << "/ (result.json, tree.json, preview/, print/)\n";
   return 0;
 }
 
@@ -180,7 +180,6 @@ int export_command(const ExportArguments& arguments) {
   FabricationOptions options;
   if (arguments.max_voxels > 0) options.max_voxels = static_cast<long long>(arguments.max_voxels);
   options.mesh_voxel_mm = arguments.mesh_voxel_mm;
-  options.split_over_ranks = true;
   check_fabrication(tree, printer, options);
 
   RunFolder folder(arguments.out);

@@ -182,16 +182,16 @@ int main(int argc, char** argv) {
     return 2;
   }
   // Under mpirun only rank 0 speaks (the ranks do the same work on the same
-  // inputs, so they fail alike), and only export splits its work.
+  // inputs, so they fail alike), and only run and export split their work.
   ranks::start();
   const struct StopRanks {
     ~StopRanks() { ranks::stop(); }
   } stop_ranks;
   configure_logging(quiet || !ranks::root() ? Verbosity::quiet : verbose ? Verbosity::verbose : Verbosity::normal);
-  if (ranks::size() > 1 && !*export_cmd) {
+  if (ranks::size() > 1 && !*export_cmd && !*run_cmd) {
     if (ranks::root())
-      std::cerr << "error: under mpirun only 'spec2fab export' splits its work over ranks (" << ranks::size()
-                << " here); run the others as one process\n";
+      std::cerr << "error: under mpirun only 'spec2fab run' and 'spec2fab export' split their work over ranks ("
+                << ranks::size() << " here); run the others as one process\n";
     return 2;
   }
   if (*seed_option) run.seed = seed;
