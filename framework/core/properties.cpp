@@ -219,7 +219,15 @@ void Properties::fail(std::string_view key, const std::string& problem) const {
 }
 
 const json& Properties::lookup(std::string_view key) const {
-  if (!has(key)) fail(key, "missing required key");
+  if (!has(key)) {
+    // A misspelling of the key here says so, rather than only that it is missing.
+    std::vector<std::string> present;
+    for (const auto& item : object_->items())
+      if (!item.key().empty() && item.key()[0] != '_') present.push_back(item.key());
+    if (const std::string near = closest_match(key, present); !near.empty())
+      fail(key, "missing required key (is '" + near + "' a misspelling of it?)");
+    fail(key, "missing required key");
+  }
   return object_->at(std::string(key));
 }
 
@@ -323,6 +331,7 @@ std::filesystem::path Properties::existing_file(std::string_view key) const {
   const std::filesystem::path given = get<std::string>(key);
   const std::filesystem::path resolved =
       given.is_absolute() ? given : document_->base_directory / given;
+  if (std::filesystem::is_directory(resolved)) fail(key, "is a folder, not a file: " + resolved.lexically_normal().string());
   if (!std::filesystem::is_regular_file(resolved)) {
     fail(key, "file not found: " + resolved.lexically_normal().string());
   }

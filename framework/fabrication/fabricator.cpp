@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <memory>
 
 #include <fmt/format.h>
@@ -19,10 +20,13 @@ FabricationGrid FabricationGrid::covering(const Bounds& bounds,
   FabricationGrid grid;
   grid.voxel_mm = voxel_mm;
   const Vec3 size = bounds.size();
+  grid.needed_voxels = 1;
   for (int axis = 0; axis < 3; ++axis) {
     // Centres span the bounds, centred on them, so the shape sits
     // symmetrically in its voxels.
-    const int n = std::max(1, static_cast<int>(std::ceil(size[axis] / voxel_mm[axis] - 1e-9)));
+    const double needed = std::max(1.0, std::ceil(size[axis] / voxel_mm[axis] - 1e-9));
+    grid.needed_voxels *= needed;
+    const int n = static_cast<int>(std::min(needed, static_cast<double>(std::numeric_limits<int>::max())));
     grid.size[axis] = n;
     grid.origin_mm[axis] = bounds.center()[axis] - 0.5 * (n - 1) * voxel_mm[axis];
   }
@@ -60,7 +64,7 @@ struct Slice {
 std::string FabricationPlan::describe() const {
   return fmt::format(
       "{} x {} x {} voxels ({:.3g}) of {:.4g} x {:.4g} x {:.4g} mm, ~{:.0f} s, ~{} on disk",
-      grid.size[0], grid.size[1], grid.size[2], static_cast<double>(voxels), grid.voxel_mm[0],
+      grid.size[0], grid.size[1], grid.size[2], grid.needed_voxels, grid.voxel_mm[0],
       grid.voxel_mm[1], grid.voxel_mm[2], estimated_seconds,
       human_bytes(static_cast<double>(estimated_bytes)));
 }
@@ -69,7 +73,7 @@ Fabricator::Fabricator(const ReducerTree& tree, const PrinterProfile& printer, i
     : tree_(tree), printer_(printer) {
   if (!tree.is_bound()) throw std::logic_error("Fabricator: the tree is not bound to a solid");
   plan_.grid = FabricationGrid::covering(tree.solid().bounds(), printer.voxel_mm());
-  plan_.voxels = plan_.grid.voxels();
+  plan_.voxels = plan_.grid.needed_voxels < 9e18 ? plan_.grid.voxels() : std::numeric_limits<long long>::max();
   // The arena's width, as narrowed by a global_control (--threads).
   const int cores = threads > 0 ? threads
                                 : static_cast<int>(std::min<size_t>(
@@ -133,7 +137,7 @@ void Fabricator::check(long long max_voxels, const std::string& option) const {
                       printer_.build_volume_mm[1], printer_.build_volume_mm[2]));
     }
   }
-  if (plan_.voxels > max_voxels) {
+  if (plan_.grid.needed_voxels > static_cast<double>(max_voxels)) {
     throw InputError(fmt::format(
         "fabrication at {}'s resolution needs {}, more than the limit of {:.3g} voxels; "
         "raise {} to go ahead, or turn print files off",

@@ -21,6 +21,10 @@ struct FabricationGrid {
   std::array<int, 3> size{};         ///< voxels along x, y, z
   std::array<double, 3> voxel_mm{};  ///< voxel edge along x, y, z
   Vec3 origin_mm = Vec3::Zero();     ///< centre of voxel (0, 0, 0)
+  /// The voxels the bounds need, counted in floating point: `size` is held
+  /// to an int per axis, so a grid beyond that (a 1e-12 mm layer) is judged
+  /// by this figure, never by a wrapped or clamped count.
+  double needed_voxels = 0;
 
   long long voxels() const { return static_cast<long long>(size[0]) * size[1] * size[2]; }
   long long slice_voxels() const { return static_cast<long long>(size[0]) * size[1]; }

@@ -2,11 +2,18 @@
 
 #include <algorithm>
 
+#include <fmt/format.h>
+
 #include "core/strings.h"
 
 namespace spec2fab {
 
 NodePtr build_node(const Properties& properties, const NodeContext& context) {
+  if (context.depth > NodeContext::kMaxDepth) {
+    properties.fail(fmt::format("the tree is nested more than {} levels deep here; a tree that deep is "
+                                "refused (a generated tree gone wrong?)",
+                                NodeContext::kMaxDepth));
+  }
   return NodeRegistry::instance().create(properties, "node", context);
 }
 
@@ -66,13 +73,13 @@ nlohmann::json material_parameter_to_json(const Parameter& parameter,
 }
 
 void ChildNode::read(const Properties& properties, const char* name, const NodeContext& context) {
-  if (required || properties.has(name)) node = build_node(properties.object(name), context);
+  if (required || properties.has(name)) node = build_node(properties.object(name), context.child());
 }
 
 void ChildNodes::read(const Properties& properties, const char* name, const NodeContext& context) {
   given = properties.has(name);
   if (!given) return;
-  for (const Properties& child : properties.objects(name)) nodes.push_back(build_node(child, context));
+  for (const Properties& child : properties.objects(name)) nodes.push_back(build_node(child, context.child()));
 }
 
 void MaterialOption::read(const Properties& properties, const char* name, const NodeContext& context) {

@@ -35,6 +35,13 @@ using NodePtr = std::unique_ptr<ReducerNode>;
 /// What a node reads while it is built from JSON.
 struct NodeContext {
   const MaterialPalette& palette;
+  int depth = 0;  ///< of the node being built; the root is 0
+
+  /// Deeper than this, a tree is refused: every walk over a tree recurses,
+  /// and thousands of levels would overflow the stack. The paper's trees are
+  /// five levels deep.
+  static constexpr int kMaxDepth = 100;
+  NodeContext child() const { return {palette, depth + 1}; }
 };
 
 using NodeRegistry = Registry<ReducerNode, const NodeContext&>;

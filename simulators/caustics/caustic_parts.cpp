@@ -21,6 +21,7 @@
 #include "core/error.h"
 #include "core/parameter.h"
 #include "core/properties.h"
+#include "tuning/image_file.h"
 #include "tuning/parts.h"
 
 namespace spec2fab {
@@ -428,10 +429,7 @@ class CausticImageGoal final : public GoalFor<ImageObservation> {
   CausticImageGoal(const Properties& properties, const PartContext& /*context*/) {
     const Options options = read_options<Options>(properties);
     const std::filesystem::path& file = options.image;
-    const cv::Mat picture = cv::imread(file.string(), cv::IMREAD_GRAYSCALE);
-    if (picture.empty())
-      throw InputError(properties.where("image") + ": cannot read " + file.string() +
-                       " as an image");
+    const cv::Mat picture = read_image(file, properties.where("image"), cv::IMREAD_GRAYSCALE);
     const std::array<int, 2>& size = options.size;
     const std::array<double, 2>& receiver = options.receiver_mm;
     const double flux = options.flux_mm2;

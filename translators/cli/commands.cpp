@@ -112,13 +112,12 @@ namespace {
 
 // A path recorded in result.json: absolute, or relative to the folder the run
 // was started in (tried from here).
-fs::path recorded_file(const nlohmann::json& value, const fs::path& result_file,
-                       const std::string& pointer) {
-  if (!value.is_string()) throw InputError(result_file.string() + ": " + pointer + ": missing");
-  const fs::path file = value.get<std::string>();
+fs::path recorded_file(const Properties& record, const std::string& key) {
+  const fs::path file = record.get<std::string>(key);
+  if (fs::is_directory(file)) record.fail(key, "is a folder, not a file: " + file.string());
   if (!fs::is_regular_file(file)) {
-    throw InputError(result_file.string() + ": " + pointer + ": file not found: " + file.string() +
-                     " (relative paths are read from the folder the run was started in)");
+    record.fail(key, "file not found: " + file.string() +
+                         " (relative paths are read from the folder the run was started in)");
   }
   return file;
 }
@@ -140,33 +139,23 @@ int export_command(const ExportArguments& arguments) {
         result_file.string() +
         ": file not found; export reads the geometry from the run folder tree.json came from");
   }
-  nlohmann::json result;
-  try {
-    std::ifstream(result_file) >> result;
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(result_file.string() + ": malformed JSON: " + e.what());
-  }
-  const nlohmann::json geometry =
-      result.value("/inputs/geometry"_json_pointer, nlohmann::json::object());
-  const fs::path mesh_file =
-      recorded_file(geometry.value("mesh", nlohmann::json()), result_file, "/inputs/geometry/mesh");
-  const fs::path materials_file =
-      arguments.materials.empty()
-          ? recorded_file(result.value("/inputs/materials"_json_pointer, nlohmann::json()),
-                          result_file, "/inputs/materials")
-          : arguments.materials;
+  // Read as any input is: a value of the wrong type is named by its path.
+  const Properties result = Properties::load(result_file);
+  const Properties inputs = result.object("inputs");
+  const Properties geometry = inputs.object("geometry");
+  const fs::path mesh_file = recorded_file(geometry, "mesh");
+  const fs::path materials_file = arguments.materials.empty() ? recorded_file(inputs, "materials") : arguments.materials;
 
   const PrinterProfile printer = PrinterProfile::load(arguments.printer);
   const MaterialLibrary library = MaterialLibrary::load(materials_file);
   const MaterialPalette palette(library, printer);
   UvSource uv = UvSource::mesh;
   try {
-    uv = parse_uv_source(geometry.value("uv", std::string("mesh")));
+    uv = parse_uv_source(geometry.get<std::string>("uv", "mesh"));
   } catch (const std::invalid_argument&) {
-    throw InputError(result_file.string() + ": /inputs/geometry/uv: unknown uv source");
+    geometry.fail("uv", "unknown uv source");
   }
-  Solid solid(load_mesh(mesh_file, geometry.value("scale_to_mm", 1.0)), uv,
-              geometry.value("uv_axis", 2));
+  Solid solid(load_mesh(mesh_file, geometry.get<double>("scale_to_mm", 1.0)), uv, geometry.get<int>("uv_axis", 2));
   // Materials the tree names must be loaded in the new printer: the palette
   // says which one is missing, where, and what the printer holds.
   ReducerTree tree(Properties::load(tree_file), palette);
@@ -176,7 +165,7 @@ int export_command(const ExportArguments& arguments) {
                           : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism,
                                   static_cast<size_t>(threads));
-  tree.bind(solid, geometry.value("field_voxel_mm", 0.0));
+  tree.bind(solid, geometry.get<double>("field_voxel_mm", 0.0));
   FabricationOptions options;
   if (arguments.max_voxels > 0) options.max_voxels = static_cast<long long>(arguments.max_voxels);
   options.mesh_voxel_mm = arguments.mesh_voxel_mm;

@@ -2,9 +2,11 @@
 // Exit codes: 0 success, 2 bad input (one line saying what and where), 1 internal error,
 // 130 / 143 stopped by SIGINT / SIGTERM (core/interrupt.h).
 
+#include <algorithm>
 #include <cstdlib>
 #include <iostream>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
@@ -169,6 +171,16 @@ int main(int argc, char** argv) {
   list_cmd->add_option("--datasets", datasets,
                        "datasets folder (default $SPEC2FAB_DATASETS or the source tree's)");
 
+  // A first word that is no command: CLI11 would only say one is required.
+  if (argc > 1 && argv[1][0] != '-') {
+    std::vector<std::string> commands;
+    for (const CLI::App* command : app.get_subcommands({})) commands.push_back(command->get_name());
+    if (std::find(commands.begin(), commands.end(), argv[1]) == commands.end()) {
+      std::cerr << "error: unknown command '" << argv[1] << "'" << did_you_mean(argv[1], commands)
+                << " (commands: " << join(commands) << "; see spec2fab --help)\n";
+      return 2;
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

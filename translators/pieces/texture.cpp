@@ -23,6 +23,7 @@
 #include "reducer/node.h"
 #include "reducer/reducer_tree.h"
 #include "spec/experiment.h"
+#include "tuning/image_file.h"
 #include "tuning/tuner.h"
 
 namespace spec2fab {
@@ -41,8 +42,7 @@ double lookup_megabytes(long long columns) { return 1e-6 * kLookupBytesPerColumn
 
 GoalImage load_goal_image(const Properties& goal, const std::string& key, std::array<int, 2>& columns) {
   const std::filesystem::path file = goal.existing_file(key);
-  const cv::Mat image = cv::imread(file.string(), cv::IMREAD_COLOR);
-  if (image.empty()) goal.fail(key, "cannot read image " + file.string());
+  const cv::Mat image = read_image(file, goal.where(key), cv::IMREAD_COLOR);
   if (columns[0] == 0) columns = {image.cols, image.rows};
   // Decoded first: resampling averages light, which sRGB codes do not.
   cv::Mat linear(image.rows, image.cols, CV_32FC3);
@@ -212,6 +212,9 @@ TexturePiece::TexturePiece(const Properties& goal, const Experiment& experiment,
                           columns_[0], columns_[1], static_cast<double>(column_count()),
                           lookup_seconds(column_count()), lookup_megabytes(column_count()), o.max_columns));
   image_ = load_goal_image(goal, o.keys.image, columns_);
+  if (!lookup_ && column_count() > 1'000'000)  // the image's own size, known only now
+    goal.fail(o.keys.image, fmt::format("{} x {} pixels, so as many columns: more than a million for tuners "
+                                        "(give fewer {})", columns_[0], columns_[1], o.keys.columns));
   top_row_at_highest_v_ = o.top_row_at_highest_v;
   if (top_row_at_highest_v_) {
     std::vector<Rgb> rows_from_bottom;

@@ -183,7 +183,7 @@ class TexturePiece {
   static std::vector<PropertyDoc> docs(const TextureOptions& options);
 
   std::array<int, 2> columns() const { return columns_; }
-  int column_count() const { return columns_[0] * columns_[1]; }
+  long long column_count() const { return static_cast<long long>(columns_[0]) * columns_[1]; }
   const std::vector<std::string>& inks() const { return inks_; }
   const std::string& metric() const { return metric_; }
   /// The goal, in column order (column row 0 at v = 0).

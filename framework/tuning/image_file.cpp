@@ -1,0 +1,103 @@
+#include "tuning/image_file.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <optional>
+
+#include <fmt/format.h>
+#include <opencv2/imgcodecs.hpp>
+
+#include "core/error.h"
+
+namespace spec2fab {
+
+namespace {
+
+struct PngSize {
+  long long width = 0, height = 0;
+};
+
+// A PNG's size from its IHDR chunk, which the format puts first: nullopt
+// when the file is not a PNG (decoding then judges it).
+std::optional<PngSize> png_size(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::array<unsigned char, 24> head{};
+  if (!in.read(reinterpret_cast<char*>(head.data()), head.size())) return std::nullopt;
+  static constexpr unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (!std::equal(kSignature, kSignature + 8, head.begin()) || std::string(head.begin() + 12, head.begin() + 16) != "IHDR")
+    return std::nullopt;
+  const auto big_endian = [&](size_t at) {
+    return (static_cast<long long>(head[at]) << 24) | (head[at + 1] << 16) | (head[at + 2] << 8) | head[at + 3];
+  };
+  return PngSize{big_endian(16), big_endian(20)};
+}
+
+// What a decoder prints on stderr while `decode` runs (libpng's "Read
+// Error", its warnings), taken instead of shown: a failed read is then one
+// line with that text in it, and a good one prints nothing. Images are read
+// while an experiment is prepared, before any worker thread writes.
+template <class Decode>
+std::string capturing_stderr(Decode&& decode) {
+  std::fflush(stderr);
+  const std::unique_ptr<FILE, int (*)(FILE*)> capture(std::tmpfile(), &std::fclose);
+  const int saved = capture ? dup(STDERR_FILENO) : -1;
+  if (saved < 0) {
+    decode();
+    return {};
+  }
+  dup2(fileno(capture.get()), STDERR_FILENO);
+  const auto restore = [&] {
+    std::fflush(stderr);
+    dup2(saved, STDERR_FILENO);
+    close(saved);
+  };
+  try {
+    decode();
+  } catch (...) {
+    restore();
+    throw;
+  }
+  restore();
+  std::string text;
+  std::rewind(capture.get());
+  for (int c; (c = std::fgetc(capture.get())) != EOF;) text += c == '\n' ? ' ' : static_cast<char>(c);
+  while (!text.empty() && text.back() == ' ') text.pop_back();
+  return text;
+}
+
+}  // namespace
+
+cv::Mat read_image(const std::filesystem::path& file, const std::string& where, int flags, long long max_pixels) {
+  const std::string named = where + ": " + file.string();
+  if (std::filesystem::is_directory(file)) throw InputError(named + ": is a folder, not an image");
+  if (const auto size = png_size(file); size && size->width * size->height > max_pixels) {
+    throw InputError(fmt::format("{}: the image is {} x {} pixels, more than the {:.3g} read at most", named,
+                                 size->width, size->height, static_cast<double>(max_pixels)));
+  }
+  cv::Mat image;
+  std::string refused;
+  const std::string decoder_said = capturing_stderr([&] {
+    try {
+      image = cv::imread(file.string(), flags);
+    } catch (const cv::Exception& e) {
+      refused = e.err;  // OpenCV refuses headers beyond its own limits (2^30 pixels) by assertion
+    }
+  });
+  if (!refused.empty()) throw InputError(named + ": cannot decode the image (its header is refused: " + refused + ")");
+  if (image.empty()) {
+    throw InputError(named + ": cannot read it as an image (PNG, JPEG, BMP, TIFF, ...)" +
+                     (decoder_said.empty() ? std::string() : "; the decoder said: " + decoder_said));
+  }
+  if (static_cast<long long>(image.cols) * image.rows > max_pixels) {
+    throw InputError(fmt::format("{}: the image is {} x {} pixels, more than the {:.3g} read at most", named,
+                                 image.cols, image.rows, static_cast<double>(max_pixels)));
+  }
+  return image;
+}
+
+}  // namespace spec2fab

@@ -1,0 +1,24 @@
+#pragma once
+/// Reading the pictures experiments name (texture and caustic goals) as bad
+/// input is reported: a PNG's header is read first and a picture beyond
+/// `max_pixels` is refused with its size named before anything is decoded
+/// or allocated; a file OpenCV cannot decode, or whose header OpenCV's own
+/// limit refuses (other formats), is one InputError naming `where` and the
+/// file instead of OpenCV's text.
+
+#include <filesystem>
+#include <string>
+
+#include <opencv2/core.hpp>
+
+namespace spec2fab {
+
+/// 64 million pixels: an 8000 x 8000 photograph, 1.5 GB as linear floats.
+constexpr long long kMaxImagePixels = 64'000'000;
+
+/// cv::imread(file, flags), checked. `where` is the JSON path (with its
+/// file) that named the picture.
+cv::Mat read_image(const std::filesystem::path& file, const std::string& where, int flags,
+                   long long max_pixels = kMaxImagePixels);
+
+}  // namespace spec2fab

@@ -1,0 +1,379 @@
+// The bad-input corpus (issue 19): malformed and hostile inputs of every
+// kind a user hands spec2fab — experiments, meshes, images, printers,
+// material libraries, simulate configs, run folders for export. Each must be
+// refused with exit code 2, one line that names the problem, and no output
+// folder (nor a staging folder) left behind.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "cli_support.h"
+
+namespace spec2fab_cli_test {
+namespace {
+
+using ::testing::HasSubstr;
+
+// A PNG of nothing but its signature and an IHDR chunk claiming width x
+// height: the header a decoder reads first (valid CRC, no pixel data).
+std::string png_header_only(std::uint32_t width, std::uint32_t height) {
+  std::array<std::uint32_t, 256> table{};
+  for (std::uint32_t n = 0; n < 256; ++n) {
+    std::uint32_t c = n;
+    for (int k = 0; k < 8; ++k) c = (c & 1) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+    table[n] = c;
+  }
+  const auto big_endian = [](std::uint32_t v) {
+    return std::string{static_cast<char>(v >> 24), static_cast<char>(v >> 16), static_cast<char>(v >> 8),
+                       static_cast<char>(v)};
+  };
+  std::string chunk = "IHDR" + big_endian(width) + big_endian(height) + std::string("\x08\x02\x00\x00\x00", 5);
+  std::uint32_t crc = 0xFFFFFFFFu;
+  for (unsigned char byte : chunk) crc = table[(crc ^ byte) & 0xFF] ^ (crc >> 8);
+  return std::string("\x89PNG\r\n\x1a\n", 8) + big_endian(13) + chunk + big_endian(crc ^ 0xFFFFFFFFu);
+}
+
+struct Case {
+  std::string name;
+  std::map<std::string, std::string> files;  // written into the test's folder first
+  std::string arguments;                      // {dir}: the test's folder
+  std::string expected;                       // in the one line
+};
+
+class BadInputCorpus : public Cli {
+ protected:
+  std::string sphere() const { return (kDatasets / "meshes/sphere_r25.obj").string(); }
+  std::string library() const { return (kDatasets / "materials/polyjet.json").string(); }
+  std::string printer() const { return (dir_ / "coarse_printer.json").string(); }
+
+  // An experiment of the tree translator with `replace` applied to its text.
+  std::string tree_experiment(const std::string& tree, const std::string& extra = "") {
+    return valid_body(tree, extra);
+  }
+  std::string with_mesh(const std::string& mesh) {
+    std::string body = valid_body(kLayered);
+    body.replace(body.find(sphere()), sphere().size(), mesh);
+    return body;
+  }
+  std::string with_printer(const std::string& file) {
+    std::string body = valid_body(kLayered);
+    body.replace(body.find(printer()), printer().size(), file);
+    return body;
+  }
+  std::string with_materials(const std::string& file) {
+    std::string body = valid_body(kLayered);
+    body.replace(body.find(library()), library().size(), file);
+    return body;
+  }
+  std::string albedo_experiment(const std::string& image, const std::string& goal_extra = "") {
+    return R"({"translator": "albedo", "geometry": {"mesh": ")" + sphere() + R"(", "uv": "mesh"}, "goal": {"image": ")" +
+           image + "\"" + goal_extra + R"(}, "output": {"slices": false, "stl": false, "3mf": false, "render": false},
+           "materials": ")" + library() + R"(", "printer": ")" + printer() + R"("})";
+  }
+  std::string caustic_experiment(const std::string& image) {
+    return R"({"translator": "smooth_caustics", "geometry": {"mesh": ")" +
+           (kDatasets / "meshes/board_60x60x8.stl").string() + R"(", "uv": "planar"}, "goal": {"image": ")" + image +
+           R"("}, "materials": ")" + library() + R"(", "printer": ")" + (kDatasets / "printers/j750.json").string() +
+           R"("})";  // the J750 holds the clear material the slab is made of
+  }
+  static std::string printer_json(const std::string& dpi, const std::string& layer,
+                                  const std::string& materials = R"(["VeroCyan", "VeroWhitePlus"])") {
+    return R"({"name": "p", "technology": "polyjet", "resolution_dpi": )" + dpi + R"(, "layer_mm": )" + layer +
+           R"(, "build_volume_mm": [200, 200, 200], "model_materials": )" + materials + R"(, "source": "test"})";
+  }
+
+  void check(const Case& c) {
+    SCOPED_TRACE(c.name);
+    for (const auto& [name, text] : c.files) std::ofstream(dir_ / name, std::ios::binary) << text;
+    std::string arguments = c.arguments;
+    for (size_t at; (at = arguments.find("{dir}")) != std::string::npos;) arguments.replace(at, 5, dir_.string());
+    const Result r = run_spec2fab(arguments);
+    EXPECT_EQ(r.code, 2) << r.out;
+    EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << r.out;
+    EXPECT_THAT(r.out, ::testing::StartsWith("error: ")) << r.out;
+    EXPECT_THAT(r.out, HasSubstr(c.expected));
+    EXPECT_FALSE(fs::exists(dir_ / "out")) << r.out;
+    for (const auto& entry : fs::directory_iterator(dir_))
+      EXPECT_THAT(entry.path().filename().string(), ::testing::Not(HasSubstr("partial")));
+    fs::remove_all(dir_ / "out");
+    for (const auto& [name, text] : c.files) fs::remove(dir_ / name);  // the next case starts clean
+  }
+
+  static constexpr const char* kLayered = R"({"type": "layered", "material": "VeroCyan"})";
+};
+
+std::string run_of(const std::string& file) { return "run {dir}/" + file + " --out {dir}/out"; }
+
+TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
+  std::vector<Case> cases;
+  const auto experiment_case = [&](const std::string& name, const std::string& body, const std::string& expected) {
+    cases.push_back({"experiment: " + name, {{"e.json", body}}, run_of("e.json"), expected});
+  };
+  const std::string good = tree_experiment(kLayered);
+
+  // Experiments: JSON that does not parse.
+  experiment_case("truncated", good.substr(0, good.size() / 2), "malformed JSON");
+  experiment_case("empty file", "", "malformed JSON");
+  experiment_case("trailing comma", good.substr(0, good.size() - 1) + ",}", "malformed JSON");
+  experiment_case("not an object", "[1, 2, 3]", "expected a JSON object");
+  experiment_case("a bare string", "\"tree\"", "expected a JSON object");
+  experiment_case("binary garbage", std::string("\x00\xff\xfe\x01garbage", 11), "malformed JSON");
+  experiment_case("a number beyond a double", tree_experiment(kLayered, R"(, "seed": 1e999)"), "number overflow");
+  experiment_case("NaN spelt out", tree_experiment(kLayered, R"(, "seed": NaN)"), "malformed JSON");
+  experiment_case("comments", "// a comment\n" + good, "malformed JSON");
+  // Experiments: keys, types and values.
+  experiment_case("misspelt top-level key", tree_experiment(kLayered, R"(, "sede": 3)"), "did you mean 'seed'");
+  experiment_case("seed as a string", tree_experiment(kLayered, R"(, "seed": "one")"), "/seed");
+  experiment_case("seed negative", tree_experiment(kLayered, R"(, "seed": -1)"), "/seed");
+  experiment_case("seed a fraction", tree_experiment(kLayered, R"(, "seed": 1.5)"), "/seed");
+  experiment_case("name as a number", tree_experiment(kLayered, R"(, "name": 7)"), "/name");
+  experiment_case("unknown output key", tree_experiment(kLayered, R"(, "output": {"slicez": false})"),
+                  "did you mean 'slices'");
+  experiment_case("output switch as a string", tree_experiment(kLayered, R"(, "output": {"slices": "no"})"),
+                  "/output/slices");
+  experiment_case("max_voxels negative", tree_experiment(kLayered, R"(, "output": {"max_voxels": -5})"),
+                  "/output/max_voxels");
+  experiment_case("max_voxels exceeded", tree_experiment(kLayered, R"(, "output": {"max_voxels": 1000})"),
+                  "raise output.max_voxels");
+  experiment_case("png_compression out of range", tree_experiment(kLayered, R"(, "output": {"png_compression": 12})"),
+                  "/output/png_compression");
+  {
+    std::string body = good;
+    body.replace(body.find("\"tree\""), 6, "\"albedoo\"");
+    experiment_case("unknown translator", body, "unknown translator 'albedoo'");
+  }
+  {
+    std::string body = good;
+    body.replace(body.find("\"translator\": \"tree\", "), 22, "");
+    experiment_case("no translator", body, "/translator");
+  }
+  {
+    std::string body = good;
+    const size_t at = body.find("\"materials\"");
+    body.replace(at, body.find(',', at) - at + 1, "");
+    experiment_case("no materials", body, "/materials");
+  }
+  // Experiments: trees.
+  const auto tree_case = [&](const std::string& name, const std::string& tree, const std::string& expected) {
+    experiment_case("tree: " + name, tree_experiment(tree), expected);
+  };
+  tree_case("unknown node", R"({"type": "stratm", "shell": {}, "core": {}})", "unknown node 'stratm'");
+  tree_case("no type", R"({"material": "VeroCyan"})", "/goal/tree");
+  tree_case("type as a number", R"({"type": 3})", "/goal/tree/type");
+  tree_case("material not loaded", R"({"type": "layered", "material": "VeroMagenta"})", "not loaded in printer");
+  tree_case("material unknown", R"({"type": "layered", "material": "Unobtainium"})", "Unobtainium");
+  tree_case("material as a number", R"({"type": "layered", "material": 4})", "/goal/tree/material");
+  tree_case("stratum depth negative",
+            R"({"type": "stratum", "depth_mm": -1, "shell": {"type": "layered", "material": "VeroCyan"},
+                "core": {"type": "layered", "material": "VeroWhitePlus"}})",
+            "/goal/tree/depth_mm");
+  tree_case("stratum without core",
+            R"({"type": "stratum", "depth_mm": 1, "shell": {"type": "layered", "material": "VeroCyan"}})",
+            "/goal/tree/core");
+  tree_case("column count zero", R"({"type": "column", "count": [0, 1], "child": {"type": "layered", "material": "VeroCyan"}})",
+            "/goal/tree/count");
+  tree_case("column count negative",
+            R"({"type": "column", "count": [-3, 1], "child": {"type": "layered", "material": "VeroCyan"}})",
+            "/goal/tree/count");
+  tree_case("column count beyond an int",
+            R"({"type": "column", "count": [4294967297, 1], "child": {"type": "layered", "material": "VeroCyan"}})",
+            "beyond");
+  tree_case("column count of one number",
+            R"({"type": "column", "count": 4, "child": {"type": "layered", "material": "VeroCyan"}})",
+            "/goal/tree/count");
+  tree_case("column children too few",
+            R"({"type": "column", "count": [2, 1], "children": [{"type": "layered", "material": "VeroCyan"}]})",
+            "/goal/tree/children");
+  tree_case("column both child and children",
+            R"({"type": "column", "count": [1, 1], "child": {"type": "layered", "material": "VeroCyan"},
+                "children": [{"type": "layered", "material": "VeroCyan"}]})",
+            "give either");
+  tree_case("layer thickness negative",
+            R"({"type": "layered", "layers": [{"material": "VeroCyan", "thickness_mm": -0.2}], "fill": "VeroWhitePlus"})",
+            "thickness_mm");
+  tree_case("layer thickness as a string",
+            R"({"type": "layered", "layers": [{"material": "VeroCyan", "thickness_mm": "thin"}], "fill": "VeroWhitePlus"})",
+            "thickness_mm");
+  tree_case("misspelt key in a first layer",
+            R"({"type": "layered", "layers": [{"materal": "VeroCyan", "thickness_mm": 0.2},
+                {"material": "VeroCyan", "thickness_mm": 0.2}], "fill": "VeroWhitePlus"})",
+            "is 'materal' a misspelling of it?");
+  tree_case("free material not among its choices",
+            R"({"type": "layered", "material": {"value": "VeroCyan", "choices": ["VeroWhitePlus"]}})",
+            "not among the choices");
+  tree_case("free material without choices",
+            R"({"type": "layered", "material": {"value": "VeroCyan", "choices": []}})", "no materials to choose from");
+  tree_case("unknown key in a node", R"({"type": "layered", "material": "VeroCyan", "colour": "red"})",
+            "/goal/tree/colour");
+  {
+    std::string deep = kLayered;
+    for (int level = 0; level < 5000; ++level)
+      deep = R"({"type": "stratum", "depth_mm": 1, "shell": {"type": "layered", "material": "VeroCyan"}, "core": )" +
+             deep + "}";
+    tree_case("5000 levels deep", deep, "nested more than 100 levels deep");
+  }
+  // Experiments: files they name.
+  experiment_case("mesh not found", with_mesh("/nonexistent/mesh.obj"), "file not found");
+  experiment_case("mesh is a folder", with_mesh(dir_.string()), dir_.string());
+  experiment_case("printer not found", with_printer("/nonexistent/printer.json"), "file not found");
+  experiment_case("materials not found", with_materials("/nonexistent/materials.json"), "file not found");
+
+  // Meshes.
+  const auto mesh_case = [&](const std::string& name, const std::string& file, const std::string& text,
+                             const std::string& expected) {
+    cases.push_back({"mesh: " + name, {{file, text}, {"e.json", with_mesh((dir_ / file).string())}}, run_of("e.json"),
+                     expected});
+  };
+  mesh_case("empty OBJ", "empty.obj", "", "empty.obj");
+  mesh_case("garbage OBJ", "garbage.obj", "this is not a mesh\n\x01\x02\x03", "garbage.obj");
+  mesh_case("vertices only", "points.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n", "points.obj");
+  mesh_case("open tetrahedron", "open.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\n",
+            "not closed: 3 boundary edges");
+  mesh_case("face index out of range", "range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n", "range.obj");
+  mesh_case("flat (no volume)", "flat.obj",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 2 4 3\nf 1 3 2\nf 2 3 4\n", "flat.obj");
+  mesh_case("truncated binary STL", "cut.stl", std::string(80, ' ') + std::string("\x10\x00\x00\x00", 4) + "abc",
+            "cut.stl");
+  mesh_case("unknown format", "mesh.xyz", "1 2 3\n", "mesh.xyz");
+  mesh_case("ASCII STL with no facets", "none.stl", "solid none\nendsolid none\n", "none.stl");
+
+  // Images: texture goals (albedo) and caustic goals.
+  const auto image_case = [&](const std::string& name, const std::string& file, const std::string& bytes,
+                              const std::string& expected) {
+    cases.push_back({"albedo image: " + name,
+                     {{file, bytes}, {"e.json", albedo_experiment((dir_ / file).string(), R"(, "columns": [8, 4])")}},
+                     run_of("e.json"), expected});
+    cases.push_back({"caustic image: " + name,
+                     {{file, bytes}, {"e.json", caustic_experiment((dir_ / file).string())}}, run_of("e.json"),
+                     expected});
+  };
+  image_case("empty file", "empty.png", "", "cannot read it as an image");
+  image_case("not an image", "text.png", "hello, world\n", "cannot read it as an image");
+  image_case("header of 100000 x 100000 pixels", "huge.png", png_header_only(100000, 100000),
+             "100000 x 100000 pixels");
+  image_case("header of 9000 x 9000 pixels", "big.png", png_header_only(9000, 9000), "9000 x 9000 pixels");
+  image_case("truncated PNG", "cut.png", png_header_only(16, 16), "cut.png");
+  cases.push_back({"albedo image: not found", {{"e.json", albedo_experiment("/nonexistent/goal.png")}},
+                   run_of("e.json"), "file not found"});
+  cases.push_back({"albedo image: a folder", {{"e.json", albedo_experiment(dir_.string())}}, run_of("e.json"),
+                   "is a folder"});
+  cases.push_back({"albedo: columns beyond max_columns",
+                   {{"e.json", albedo_experiment((kDatasets / "images/earth_96x48.png").string(),
+                                                 R"(, "columns": [40000, 40000])")}},
+                   run_of("e.json"), "max_columns"});
+
+  // Printers.
+  const auto printer_case = [&](const std::string& name, const std::string& text, const std::string& expected) {
+    cases.push_back({"printer: " + name, {{"p.json", text}, {"e.json", with_printer((dir_ / "p.json").string())}},
+                     run_of("e.json"), expected});
+  };
+  printer_case("malformed", "{\"name\": ", "malformed JSON");
+  printer_case("dpi zero", printer_json("[0, 600]", "0.03"), "resolution_dpi");
+  printer_case("dpi negative", printer_json("[600, -600]", "0.03"), "resolution_dpi");
+  printer_case("dpi of one number", printer_json("600", "0.03"), "resolution_dpi");
+  printer_case("layer zero", printer_json("[600, 600]", "0"), "layer_mm");
+  printer_case("layer as a string", printer_json("[600, 600]", "\"thin\""), "layer_mm");
+  printer_case("layer of 1e-12 mm", printer_json("[600, 600]", "1e-12"), "max_voxels");
+  printer_case("1e12 dpi", printer_json("[1e12, 1e12]", "0.03"), "max_voxels");
+  printer_case("no materials", printer_json("[600, 600]", "0.03", "[]"), "model_materials");
+  printer_case("unknown material", printer_json("[600, 600]", "0.03", R"(["VeroCyan", "Unobtainium"])"),
+               "Unobtainium");
+  printer_case("duplicate material", printer_json("[600, 600]", "0.03", R"(["VeroCyan", "VeroCyan"])"),
+               "model_materials");
+  printer_case("unknown technology",
+               R"({"name": "p", "technology": "laser", "resolution_dpi": [600, 600], "layer_mm": 0.03,
+                   "build_volume_mm": [200, 200, 200], "model_materials": ["VeroCyan"], "source": "t"})",
+               "technology");
+  printer_case("misspelt key",
+               R"({"name": "p", "technology": "polyjet", "resolution_dpi": [600, 600], "layer_mm": 0.03,
+                   "build_volum_mm": [200, 200, 200], "model_materials": ["VeroCyan"], "source": "t"})",
+               "is 'build_volum_mm' a misspelling of it?");
+  printer_case("object too big for the tray",
+               R"({"name": "p", "technology": "polyjet", "resolution_dpi": [63.5, 63.5], "layer_mm": 0.4,
+                   "build_volume_mm": [20, 20, 20], "model_materials": ["VeroCyan", "VeroWhitePlus"], "source": "t"})",
+               "build volume");
+  cases.push_back({"printer: a folder", {{"e.json", with_printer(dir_.string())}}, run_of("e.json"), dir_.string()});
+
+  // Material libraries.
+  const auto library_case = [&](const std::string& name, const std::string& text, const std::string& expected) {
+    cases.push_back({"materials: " + name,
+                     {{"m.json", text}, {"e.json", with_materials((dir_ / "m.json").string())}}, run_of("e.json"),
+                     expected});
+  };
+  library_case("malformed", "{\"library\": [", "malformed JSON");
+  library_case("no materials array", R"({"library": "x"})", "materials");
+  library_case("materials not an array", R"({"library": "x", "materials": 3})", "materials");
+  library_case("a material without a name", R"({"library": "x", "materials": [{"kind": "rigid"}]})", "name");
+  library_case("no materials listed", R"({"library": "x", "materials": []})", "lists no materials");
+  library_case("a material without its optics",
+               R"({"library": "x", "materials": [{"name": "Other", "kind": "rigid", "display_srgb": [1, 1, 1]}]})",
+               "/materials/0/optical");
+
+  // simulate configs.
+  const auto simulate_case = [&](const std::string& name, const std::string& simulator, const std::string& text,
+                                 const std::string& expected) {
+    cases.push_back({"simulate: " + name, {{"s.json", text}}, "simulate " + simulator + " {dir}/s.json --out {dir}/out",
+                     expected});
+  };
+  const std::string simulate_head = R"({"materials": ")" + library() + R"(", "printer": ")" + printer() + "\"";
+  simulate_case("unknown simulator", "subsurfase",
+                simulate_head + R"(, "subtree": {"type": "layered", "material": "VeroCyan"}})",
+                "did you mean 'subsurface'");
+  simulate_case("no subtree", "subsurface", simulate_head + "}", "subtree");
+  simulate_case("malformed", "subsurface", simulate_head, "malformed JSON");
+  simulate_case("unknown simulator option", "subsurface",
+                simulate_head + R"(, "subtree": {"type": "layered", "material": "VeroCyan"}, "simulator": {"sampels": 4}})",
+                "did you mean 'samples'");
+  simulate_case("simulator option out of range", "subsurface",
+                simulate_head + R"(, "subtree": {"type": "layered", "material": "VeroCyan"}, "simulator": {"samples": -4}})",
+                "samples");
+  simulate_case("materials not found", "subsurface",
+                R"({"materials": "/nonexistent.json", "printer": ")" + printer() +
+                    R"(", "subtree": {"type": "layered", "material": "VeroCyan"}})",
+                "file not found");
+
+  // Command lines.
+  cases.push_back({"command: unknown subcommand", {}, "frobnicate", "frobnicate"});
+  cases.push_back({"command: threads zero", {{"e.json", good}}, "run {dir}/e.json --threads 0 --out {dir}/out", "threads"});
+  cases.push_back({"command: experiment not found", {}, "run {dir}/missing.json --out {dir}/out", "missing.json"});
+  cases.push_back({"command: experiment is a folder", {}, "run {dir} --out {dir}/out", dir_.string()});
+
+  // Run folders for export.
+  const auto export_case = [&](const std::string& name, std::map<std::string, std::string> files,
+                               const std::string& expected) {
+    fs::create_directories(dir_ / "run");
+    std::map<std::string, std::string> in_run;
+    for (auto& [file, text] : files) in_run["run/" + file] = text;
+    cases.push_back({"export: " + name, in_run,
+                     "export {dir}/run --printer " + printer() + " --out {dir}/out", expected});
+  };
+  const std::string tree = kLayered;
+  const std::string result = R"({"inputs": {"geometry": {"mesh": ")" + sphere() + R"("}, "materials": ")" + library() +
+                             R"("}})";
+  export_case("no tree.json", {{"result.json", result}}, "tree.json: file not found");
+  export_case("no result.json", {{"tree.json", tree}}, "result.json: file not found");
+  export_case("result.json malformed", {{"tree.json", tree}, {"result.json", "{"}}, "malformed JSON");
+  export_case("result.json without the mesh", {{"tree.json", tree}, {"result.json", R"({"inputs": {}})"}},
+              "/inputs/geometry: missing required key");
+  export_case("a string where the scale belongs",
+              {{"tree.json", tree},
+               {"result.json", R"({"inputs": {"geometry": {"mesh": ")" + sphere() +
+                                   R"(", "scale_to_mm": "big"}, "materials": ")" + library() + R"("}})"}},
+              "scale_to_mm");
+  export_case("tree.json malformed", {{"tree.json", "{\"type\": "}, {"result.json", result}}, "malformed JSON");
+  export_case("tree.json names an unknown node", {{"tree.json", R"({"type": "nod"})"}, {"result.json", result}},
+              "unknown node 'nod'");
+
+  ASSERT_GE(cases.size(), 100u) << "the corpus holds " << cases.size() << " cases";
+  for (const Case& c : cases) check(c);
+}
+
+}  // namespace
+}  // namespace spec2fab_cli_test
