@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <numeric>
+#include <sstream>
 #include <vector>
 
 #include <spdlog/spdlog.h>
@@ -132,6 +133,15 @@ void require_closed_manifold(Mesh& mesh) {
     }
   }
   if (mesh.triangles.empty()) throw InputError(name + ": empty mesh: no triangles");
+  // Before anything measures it: a NaN would pass every comparison below.
+  for (const Vec3& vertex : mesh.vertices) {
+    if (!vertex.allFinite()) {
+      std::ostringstream where;
+      where << vertex.transpose();
+      throw InputError(name + ": a vertex has a coordinate that is not a finite number (" + where.str() +
+                       " as read); every coordinate must be");
+    }
+  }
 
   const MeshDefects d = find_mesh_defects(mesh);
   if (d.boundary_edges > 0)

@@ -242,6 +242,11 @@ TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
   mesh_case("truncated binary STL", "cut.stl", std::string(80, ' ') + std::string("\x10\x00\x00\x00", 4) + "abc",
             "cut.stl");
   mesh_case("unknown format", "mesh.xyz", "1 2 3\n", "mesh.xyz");
+  const std::string tetrahedron_faces = "f 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n";
+  mesh_case("an infinite coordinate", "inf.obj", "v 0 0 0\nv 1e999 0 0\nv 0 1 0\nv 0 0 1\n" + tetrahedron_faces,
+            "a vertex has a coordinate that is not a finite number");
+  mesh_case("a NaN coordinate", "nan.obj", "v 0 0 0\nv 1 0 0\nv 0 nan 0\nv 0 0 1\n" + tetrahedron_faces,
+            "nan.obj");
   mesh_case("ASCII STL with no facets", "none.stl", "solid none\nendsolid none\n", "none.stl");
 
   // Images: texture goals (albedo) and caustic goals.
