@@ -145,6 +145,10 @@ long long SurfaceField::band_voxels() const {
 struct SurfaceField::Sampler::Impl {
   const SurfaceField::Impl* field;
   CellAccessor cells;
+  // affine_run's last scan: cells run_first … run_last along x hold run_cell.
+  openvdb::Coord run_first{0, 0, 0};
+  int run_last = 0;
+  openvdb::Int32 run_cell = kOutside;
   explicit Impl(const SurfaceField::Impl& f) : field(&f), cells(f.cells->constTree()) {}
 };
 
@@ -195,6 +199,59 @@ SurfaceSample SurfaceField::Sampler::sample_run(const Vec3& point, const Vec3& s
   result.inside = cell < 0;
   result.depth_mm = f.interior_band_mm;
   return result;
+}
+
+int SurfaceField::Sampler::affine_run(const Vec3& point, const Vec3& step, int count) {
+  Impl& s = *impl_;
+  const SurfaceField::Impl& f = *s.field;
+  const Solid::Impl& solid = *f.solid;
+  if (count < 3 || !(step.x() > 0) || step.y() != 0 || step.z() != 0) return 1;
+  // Cylindrical and spherical uv are angles: not affine along a line.
+  if (solid.uv_source != UvSource::mesh && solid.uv_source != UvSource::planar) return 1;
+  const Vec3 x = point * f.inverse_voxel;
+  openvdb::Coord ijk(nearest_int(x.x()), nearest_int(x.y()), nearest_int(x.z()));
+  openvdb::Int32 cell = kOutside;
+  if (!s.cells.probeValue(ijk, cell)) return 1;
+  // The band cells that follow along x with the same triangle and sign code,
+  // found once for all the points of a row that fall in them.
+  int last = ijk.x();
+  if (s.run_cell == cell && s.run_first.y() == ijk.y() && s.run_first.z() == ijk.z() && s.run_first.x() <= ijk.x() &&
+      ijk.x() <= s.run_last) {
+    last = s.run_last;
+  } else {
+    const int last_possible = nearest_int((point.x() + (count - 1) * step.x()) * f.inverse_voxel);
+    openvdb::Coord next = ijk;
+    for (openvdb::Int32 value = 0; last < last_possible; ++last) {
+      next.setX(last + 1);
+      if (!s.cells.probeValue(next, value) || value != cell) break;
+    }
+    s.run_first = ijk;
+    s.run_last = last;
+    s.run_cell = cell;
+  }
+  const double room = ((last + 0.5) * f.voxel_mm - point.x()) / step.x() - 1e-6;
+  int run = static_cast<int>(std::clamp(std::floor(room), 0.0, static_cast<double>(count - 1))) + 1;
+  if (run < 3) return 1;
+  // The ends must project onto the triangle's face (then every point between
+  // does too: the projection onto the plane is affine and the triangle
+  // convex), on one side of it. Along a line from a start that does, the
+  // points that do form a prefix: the longest is found by bisection.
+  const TriangleRecord& triangle = solid.triangles[(std::abs(cell) - 1) >> 2];
+  const TriangleProjection first = project_onto_triangle(triangle, point);
+  if (first.feature != kFace || first.plane_distance == 0) return 1;
+  const auto end_holds = [&](int length) {
+    const TriangleProjection end = project_onto_triangle(triangle, point + (length - 1) * step);
+    return end.feature == kFace && first.plane_distance * end.plane_distance > 0;
+  };
+  if (!end_holds(run)) {
+    int good = 1;  // end_holds(good), !end_holds(run)
+    while (run - good > 1) {
+      const int middle = good + (run - good) / 2;
+      (end_holds(middle) ? good : run) = middle;
+    }
+    run = good;
+  }
+  return run < 3 ? 1 : run;
 }
 
 SurfaceSample SurfaceField::Sampler::sample(const Vec3& point) {

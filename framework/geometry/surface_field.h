@@ -55,6 +55,15 @@ class SurfaceField {
     /// more than one only beyond the band, where the field is a tile of
     /// one value, and only for a step along +x.
     SurfaceSample sample_run(const Vec3& point, const Vec3& step, int count, int& run);
+    /// For `point` in the band: how many of the points point + k·step,
+    /// k = 0 … count − 1 (a step along +x), are sure to have samples affine
+    /// in k, at least 1. More than one where their field cells all hold one
+    /// triangle, both ends of the run project onto its face, on one side of
+    /// the surface, and the uv comes from the mesh or a planar projection:
+    /// then depth and uv at every point of the run, as sample() computes
+    /// them, lie on the line between their values at the ends (up to
+    /// rounding), so whatever is affine in them changes sign at most once.
+    int affine_run(const Vec3& point, const Vec3& step, int count);
 
    private:
     /// The sample at `point`, whose nearest field cell is in the band and

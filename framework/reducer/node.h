@@ -96,6 +96,16 @@ class ReducerNode {
                                  const LocalFrame& /*frame*/) const {
     return 1.0;
   }
+  /// True when what this node decides (a geometry node's child, a material
+  /// node's material) is a function of the signs of its interface levels
+  /// alone, those levels are affine in its incoming frame and the point's
+  /// surface sample, and so are the frames it hands its children. Then along
+  /// a run of points with affine samples, where every level on the path
+  /// keeps its sign from one end to the other, every point between gets the
+  /// same material: fabrication fills such runs without walking each voxel
+  /// (ReducerTree::Query::material_row). False by default, which is always
+  /// safe.
+  virtual bool decided_by_interfaces() const { return false; }
   /// The node as JSON, in the form build_node reads (parameters at their
   /// current values, materials by name).
   virtual nlohmann::json to_json(const MaterialPalette& palette) const = 0;

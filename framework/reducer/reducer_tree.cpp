@@ -1,6 +1,8 @@
 #include "reducer/reducer_tree.h"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -137,13 +139,137 @@ std::vector<size_t> ReducerTree::path_to(const ReducerNode& node) const {
   return path;
 }
 
+void ReducerTree::Query::walk_recording(const QueryPoint& point, Walk& walk) const {
+  walk.path.clear();
+  walk.levels.clear();
+  walk.level_ends.clear();
+  walk.decided_by_interfaces = true;
+  const ReducerNode* node = tree_.root_.get();
+  LocalFrame frame{point.world.x(), point.world.y(), point.world.z()};
+  for (;;) {
+    if (walk.decided_by_interfaces) {
+      walk.decided_by_interfaces = node->decided_by_interfaces();
+      for (int k = 0; walk.decided_by_interfaces && k < node->interface_count(); ++k)
+        walk.levels.push_back(node->interface_level(k, point, frame));
+      walk.level_ends.push_back(static_cast<int>(walk.levels.size()));
+    }
+    if (node->role() != ReducerNode::Role::geometry) break;
+    const GeometryNode::Route route = static_cast<const GeometryNode*>(node)->route(point, frame);
+    walk.path.push_back(route.child);
+    node = &node->child(static_cast<size_t>(route.child));
+    frame = route.frame;
+  }
+  walk.material = static_cast<const MaterialNode*>(node)->material(point, frame);
+}
+
+namespace {
+
+// Levels this far from zero at both ends of an affine run keep their sign
+// between, whatever the rounding of each point's own sample (~1e-15 of the
+// coordinates): every point's walk there equals the ends'.
+constexpr double kLevelMargin = 1e-9;
+
+bool same_everywhere_between(const auto& a, const auto& b) {
+  if (!a.decided_by_interfaces || !b.decided_by_interfaces || a.path != b.path || a.material != b.material ||
+      a.levels.size() != b.levels.size())
+    return false;
+  for (size_t k = 0; k < a.levels.size(); ++k) {
+    const double la = a.levels[k], lb = b.levels[k];
+    if (!(la * lb > 0) || std::abs(la) < kLevelMargin || std::abs(lb) < kLevelMargin) return false;
+  }
+  return true;
+}
+
+// Where in (0, 1) between two walks' points a level of theirs first crosses
+// zero, by its affine interpolation; NaN when none of the levels they share
+// (those of the nodes up to where their paths part) changes sign.
+double first_crossing(const auto& a, const auto& b) {
+  size_t shared = 0;  // levels of the nodes both paths pass through
+  for (size_t n = 0; n < a.level_ends.size() && n < b.level_ends.size(); ++n) {
+    if (a.level_ends[n] != b.level_ends[n]) break;
+    shared = static_cast<size_t>(a.level_ends[n]);
+    if (n >= a.path.size() || n >= b.path.size() || a.path[n] != b.path[n]) break;
+  }
+  double first = std::numeric_limits<double>::quiet_NaN();
+  for (size_t k = 0; k < shared; ++k) {
+    const double la = a.levels[k], lb = b.levels[k];
+    if (la * lb > 0 || la == lb) continue;
+    const double t = la / (la - lb);
+    if (!(first <= t)) first = t;
+  }
+  return first;
+}
+
+}  // namespace
+
+void ReducerTree::Query::fill_affine_run(const Vec3& start_mm, const Vec3& step_mm, int first, int count,
+                                         MaterialId* out) {
+  // Bisection: a span whose ends walk alike is filled; otherwise it is
+  // halved at a point sampled exactly, down to single points. walks_[0] is
+  // the first point's.
+  size_t walks = 1;
+  const auto walk_at = [&](int k) {
+    if (walks == walks_.size()) walks_.emplace_back();
+    QueryPoint point;
+    point.world = row_point(start_mm, step_mm, first + k);
+    point.surface = sampler_.sample(point.world);
+    walk_recording(point, walks_[walks]);
+    out[k] = walks_[walks].material;
+    return walks++;
+  };
+  out[0] = walks_[0].material;
+  spans_.clear();
+  spans_.push_back({0, count - 1, 0, walk_at(count - 1)});
+  while (!spans_.empty()) {
+    const Span span = spans_.back();
+    spans_.pop_back();
+    if (span.end - span.begin < 2) continue;  // both ends written
+    if (same_everywhere_between(walks_[span.begin_walk], walks_[span.end_walk])) {
+      std::fill(out + span.begin + 1, out + span.end, walks_[span.begin_walk].material);
+      band_points_filled_ += span.end - span.begin - 1;
+      continue;
+    }
+    // Levels are affine along the run: the first crossing is found where
+    // the ends' levels put it, then checked by the spans on either side
+    // (halving where none is seen, as where only a margin is in doubt).
+    const double t = first_crossing(walks_[span.begin_walk], walks_[span.end_walk]);
+    const int length = span.end - span.begin;
+    int middle = span.begin + length / 2;
+    if (t > 0 && t < 1) middle = std::clamp(span.begin + static_cast<int>(std::floor(t * length)), span.begin + 1, span.end - 1);
+    const size_t middle_walk = walk_at(middle);
+    spans_.push_back({middle, span.end, middle_walk, span.end_walk});
+    spans_.push_back({span.begin, middle, span.begin_walk, middle_walk});
+  }
+}
+
 void ReducerTree::Query::material_row(const Vec3& start_mm, const Vec3& step_mm, int count,
                                       MaterialId* out) {
+  if (walks_.empty()) walks_.emplace_back();
   QueryPoint point;
   for (int i = 0; i < count;) {
-    point.world = start_mm + static_cast<double>(i) * step_mm;
+    point.world = row_point(start_mm, step_mm, i);
     int run = 1;
     point.surface = sampler_.sample_run(point.world, step_mm, count - i, run);
+    if (point.surface.near_surface) {
+      // In the band a run of points may still be affine: on one side of the
+      // surface (void outside), or filled from its ends where the tree's
+      // path decides by interfaces.
+      if (!point.surface.inside) {
+        const int affine = sampler_.affine_run(point.world, step_mm, count - i);
+        std::fill(out + i, out + i + affine, kVoid);
+        i += affine;
+        continue;
+      }
+      walk_recording(point, walks_[0]);
+      const int affine = walks_[0].decided_by_interfaces ? sampler_.affine_run(point.world, step_mm, count - i) : 1;
+      if (affine > 1) {
+        fill_affine_run(start_mm, step_mm, i, affine, out + i);
+      } else {
+        out[i] = walks_[0].material;
+      }
+      i += affine;
+      continue;
+    }
     if (!point.surface.inside) {  // void, whatever the tree
       std::fill(out + i, out + i + run, kVoid);
       i += run;
@@ -153,7 +279,7 @@ void ReducerTree::Query::material_row(const Vec3& start_mm, const Vec3& step_mm,
     // still route by position.
     out[i] = tree_.walk(point);
     for (int k = 1; k < run; ++k) {
-      point.world = start_mm + static_cast<double>(i + k) * step_mm;
+      point.world = row_point(start_mm, step_mm, i + k);
       out[i + k] = tree_.walk(point);
     }
     i += run;

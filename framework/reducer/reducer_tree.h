@@ -55,12 +55,43 @@ class ReducerTree {
     /// The point with what the solid says about it (inside, depth, uv), as
     /// every node reads it.
     QueryPoint query_point(const Vec3& world_mm);
-    /// Materials at `count` points start, start + step, ... into `out`.
+    /// Materials at `count` points start, start + step, ... into `out`:
+    /// what material_at gives each point. Runs that one sample serves
+    /// (beyond the surface's band) or whose samples are affine and whose
+    /// path decides by interfaces (ReducerNode::decided_by_interfaces) are
+    /// filled without walking every point.
     void material_row(const Vec3& start_mm, const Vec3& step_mm, int count, MaterialId* out);
+    /// Points material_row filled inside the band without walking them.
+    long long band_points_filled() const { return band_points_filled_; }
 
    private:
+    // A point's walk as the run filler compares it: the material, the child
+    // taken at each geometry node, and every interface level on the path.
+    struct Walk {
+      MaterialId material = 0;
+      bool decided_by_interfaces = true;  ///< by every node on the path
+      std::vector<int> path;
+      std::vector<double> levels;
+      std::vector<int> level_ends;  ///< levels of the path's nodes end here, node by node
+    };
+    void walk_recording(const QueryPoint& point, Walk& walk) const;
+    // out[0 … count) for the points start + (first + k)·step of a run whose
+    // samples are affine (SurfaceField::Sampler::affine_run), whose first
+    // point's walk is walks_[0] and decided by interfaces.
+    void fill_affine_run(const Vec3& start_mm, const Vec3& step_mm, int first, int count, MaterialId* out);
+    Vec3 row_point(const Vec3& start_mm, const Vec3& step_mm, int i) const {
+      return start_mm + static_cast<double>(i) * step_mm;
+    }
+
     const ReducerTree& tree_;
     SurfaceField::Sampler sampler_;
+    std::vector<Walk> walks_;  // reused by fill_affine_run
+    struct Span {
+      int begin, end;              // inclusive, relative to the run
+      size_t begin_walk, end_walk;  // into walks_
+    };
+    std::vector<Span> spans_;
+    long long band_points_filled_ = 0;
   };
 
   /// Materials at many world points through the whole tree, in parallel

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <random>
+#include <set>
 
 #include "geometry/primitives.h"
 #include "geometry/solid.h"
@@ -143,6 +144,46 @@ TEST(TextureTree, BatchRowsEqualSingleQueries) {
     seen.insert(row[static_cast<size_t>(i)]);
   }
   EXPECT_GE(seen.size(), 4u);  // the row crosses void, shell layers and core
+}
+
+// Fabrication fills runs of the band whose samples are affine (big flat
+// faces) from their ends, bisecting where a layer or column boundary lies
+// between: every point must still get what its own query gives, at every
+// boundary, over rows at all heights through a box and across its sides.
+TEST(TextureTree, AffineRunsInTheBandEqualSingleQueries) {
+  const Solid solid(make_box(Vec3(0, 0, 0), Vec3(40, 30, 12), 2), UvSource::planar, 2);
+  const auto palette = texture_palette();
+  // The texture tree, and a stack whose material comes back deeper down
+  // (c0a, c0b, c0a): a run across a side face may end in c0a at both ends
+  // with c0b between, which only the layer levels' signs reveal.
+  const char* kReturningStack = R"({"type": "stratum", "depth_mm": 3.0,
+      "shell": {"type": "layered", "layers": [{"material": "c0a", "thickness_mm": 0.5},
+                                               {"material": "c0b", "thickness_mm": 0.5}], "fill": "c0a"},
+      "core": {"type": "layered", "material": "c0a"}})";
+  for (const char* json : {kTextureTree, kReturningStack}) {
+    auto tree = testing::make_tree(json, *palette);
+    tree->bind(solid);
+    ReducerTree::Query query(*tree);
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> unit(0, 1);
+    const int n = 500;
+    std::vector<MaterialId> row(n);
+    const Vec3 step(44.0 / n, 0, 0);
+    long long points = 0;
+    std::set<MaterialId> seen;
+    for (int r = 0; r < 300; ++r) {
+      const Vec3 start(-2, -1 + 32 * unit(rng), -1 + 14 * unit(rng));
+      query.material_row(start, step, n, row.data());
+      for (int i = 0; i < n; ++i) {
+        ASSERT_EQ(row[static_cast<size_t>(i)], tree->material_at(start + i * step)) << "row " << r << ", point " << i;
+        seen.insert(row[static_cast<size_t>(i)]);
+      }
+      points += n;
+    }
+    EXPECT_EQ(seen.size(), json == kTextureTree ? 11u : 3u);  // void and every material of the tree
+    // Many band points are filled, not walked: the test covers the fill.
+    EXPECT_GT(query.band_points_filled(), points / 10) << query.band_points_filled() << " of " << points;
+  }
 }
 
 }  // namespace

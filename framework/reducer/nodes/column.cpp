@@ -71,6 +71,7 @@ class ColumnNode final : public ClonableNode<ColumnNode, GeometryNode> {
     const int c = static_cast<int>(child);
     return cell_frame(c % counts_[0], c / counts_[0], frame);
   }
+  bool decided_by_interfaces() const override { return true; }
   // The inner grid lines: a = lower + i·cell (i = 1..na-1), then b likewise.
   int interface_count() const override { return counts_[0] - 1 + counts_[1] - 1; }
   double interface_level(int k, const QueryPoint& /*point*/,

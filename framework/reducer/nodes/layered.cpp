@@ -101,6 +101,7 @@ class LayeredNode final : public ClonableNode<LayeredNode, MaterialNode> {
     return known;
   }
 
+  bool decided_by_interfaces() const override { return true; }
   // Every finite layer boundary (whether the materials on either side differ
   // or not: a tuner may change them).
   int interface_count() const override { return finite_boundaries_; }

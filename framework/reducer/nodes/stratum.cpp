@@ -57,6 +57,7 @@ class StratumNode final : public ClonableNode<StratumNode, GeometryNode> {
     if (child == 1) return frame;
     return {point.surface.uv.x(), point.surface.uv.y(), shell_depth(point.surface)};
   }
+  bool decided_by_interfaces() const override { return true; }
   int interface_count() const override { return 1; }
   double interface_level(int /*k*/, const QueryPoint& point,
                          const LocalFrame& /*frame*/) const override {
