@@ -12,6 +12,7 @@
 #include <Eigen/Geometry>
 
 #include "core/error.h"
+#include "geometry/mesh_shells.h"
 
 namespace spec2fab {
 
@@ -170,6 +171,7 @@ void require_closed_manifold(Mesh& mesh) {
     spdlog::info("{}: triangles face inwards; flipping them", name);
     mesh.flip();
   }
+  require_sound_shells(mesh, name);
 }
 
 }  // namespace spec2fab

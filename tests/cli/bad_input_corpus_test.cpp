@@ -40,6 +40,23 @@ std::string png_header_only(std::uint32_t width, std::uint32_t height) {
   return std::string("\x89PNG\r\n\x1a\n", 8) + big_endian(13) + chunk + big_endian(crc ^ 0xFFFFFFFFu);
 }
 
+// A cube's 8 vertices and 12 triangles in OBJ, its corner at `at`, facing
+// outwards (or inwards), its indices after `first` earlier vertices.
+std::string cube_obj(double at, double size, int first, bool inwards = false) {
+  std::string text;
+  for (int v = 0; v < 8; ++v)
+    text += "v " + std::to_string(at + size * (v & 1)) + " " + std::to_string(at + size * ((v >> 1) & 1)) + " " +
+            std::to_string(at + size * ((v >> 2) & 1)) + "\n";
+  static const int kFaces[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                                    {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+  for (const auto& f : kFaces) {
+    const int b = inwards ? f[2] : f[1], c = inwards ? f[1] : f[2];
+    text += "f " + std::to_string(first + f[0] + 1) + " " + std::to_string(first + b + 1) + " " +
+            std::to_string(first + c + 1) + "\n";
+  }
+  return text;
+}
+
 struct Case {
   std::string name;
   std::map<std::string, std::string> files;  // written into the test's folder first
@@ -242,6 +259,11 @@ TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
   mesh_case("truncated binary STL", "cut.stl", std::string(80, ' ') + std::string("\x10\x00\x00\x00", 4) + "abc",
             "cut.stl");
   mesh_case("unknown format", "mesh.xyz", "1 2 3\n", "mesh.xyz");
+  mesh_case("two overlapping parts", "overlap.obj", cube_obj(0, 10, 0) + cube_obj(5, 10, 8), "2 shells overlap");
+  mesh_case("a part turned inside out", "inverted.obj", cube_obj(0, 10, 0) + cube_obj(20, 5, 8, true),
+            "a part turned inside out");
+  mesh_case("a solid inside another", "nested.obj", cube_obj(0, 10, 0) + cube_obj(3, 4, 8),
+            "a solid inside another");
   const std::string tetrahedron_faces = "f 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n";
   mesh_case("an infinite coordinate", "inf.obj", "v 0 0 0\nv 1e999 0 0\nv 0 1 0\nv 0 0 1\n" + tetrahedron_faces,
             "a vertex has a coordinate that is not a finite number");

@@ -136,3 +136,48 @@ TEST(MeshCheck, GoodMeshPasses) { EXPECT_EQ(message_of(make_torus(3, 1, 12, 8)),
 
 }  // namespace
 }  // namespace spec2fab
+
+namespace spec2fab {
+namespace {
+
+// `b`'s vertices and triangles after `a`'s: a mesh of two shells.
+Mesh with_shell(Mesh a, const Mesh& b, bool flip_b = false) {
+  const int offset = static_cast<int>(a.vertices.size());
+  a.vertices.insert(a.vertices.end(), b.vertices.begin(), b.vertices.end());
+  for (Eigen::Vector3i t : b.triangles) {
+    if (flip_b) std::swap(t[1], t[2]);
+    a.triangles.push_back(t + Eigen::Vector3i::Constant(offset));
+  }
+  a.corner_uv.clear();
+  a.name = "shells.obj";
+  return a;
+}
+
+const Mesh kOuter = make_box(Vec3(0, 0, 0), Vec3(10, 10, 10), 2);
+const Mesh kInner = make_box(Vec3(3, 3, 3), Vec3(7, 7, 7), 2);
+
+TEST(MeshShells, CavitiesFacingInwardsAndIslandsInThemAreAccepted) {
+  Mesh hollow = with_shell(kOuter, kInner, /*flip_b=*/true);
+  EXPECT_EQ(message_of(hollow), "no error");
+  // A solid island in the cavity faces outwards again.
+  EXPECT_EQ(message_of(with_shell(hollow, make_box(Vec3(4, 4, 4), Vec3(6, 6, 6)))), "no error");
+  // Two parts side by side, both facing outwards.
+  EXPECT_EQ(message_of(with_shell(kOuter, make_box(Vec3(20, 0, 0), Vec3(25, 5, 5)))), "no error");
+}
+
+TEST(MeshShells, APartTurnedInsideOutIsRefused) {
+  EXPECT_THAT(message_of(with_shell(kOuter, make_box(Vec3(20, 0, 0), Vec3(25, 5, 5)), true)),
+              HasSubstr("shells.obj: shell 2 of 2 (125 mm³) faces inwards inside 0 other shell(s): a part turned inside out"));
+}
+
+TEST(MeshShells, ASolidInsideAnotherIsRefused) {
+  EXPECT_THAT(message_of(with_shell(kOuter, kInner)), HasSubstr("shell 2 of 2 (64 mm³) faces outwards inside 1 other shell(s)"));
+}
+
+TEST(MeshShells, OverlappingShellsAreRefused) {
+  EXPECT_THAT(message_of(with_shell(kOuter, make_box(Vec3(5, 5, 5), Vec3(15, 15, 15)))),
+              HasSubstr("shells.obj: 2 shells overlap"));
+}
+
+}  // namespace
+}  // namespace spec2fab
