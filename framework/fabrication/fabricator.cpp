@@ -65,9 +65,9 @@ struct Slice {
 
 std::string FabricationPlan::describe() const {
   return fmt::format(
-      "{} x {} x {} voxels ({:.3g}) of {:.4g} x {:.4g} x {:.4g} mm, ~{:.0f} s, ~{} on disk",
+      "{} x {} x {} voxels ({:.3g}) of {:.4g} x {:.4g} x {:.4g} mm, ~{:.{}f} s, ~{} on disk",
       grid.size[0], grid.size[1], grid.size[2], grid.needed_voxels, grid.voxel_mm[0],
-      grid.voxel_mm[1], grid.voxel_mm[2], estimated_seconds,
+      grid.voxel_mm[1], grid.voxel_mm[2], estimated_seconds, estimated_seconds < 10 ? 1 : 0,
       human_bytes(static_cast<double>(estimated_bytes)));
 }
 

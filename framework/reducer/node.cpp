@@ -93,6 +93,16 @@ bool RepeatedChildren::check(std::string* why) const {
 }
 
 std::vector<NodePtr> RepeatedChildren::take(size_t count, const std::string& where) {
+  // Each cell is a node of its own (a few hundred bytes and a walk's worth
+  // of routing): millions of them are a texture, which stack_grid holds in
+  // one node.
+  constexpr size_t kMaxCells = 1'000'000;
+  if (count > kMaxCells) {
+    throw InputError(fmt::format("{}: {:.3g} cells of nodes, more than the {:.0e} one node may hold (~{:.1f} GB); a "
+                                 "texture's columns belong in a stack_grid node",
+                                 where, static_cast<double>(count), static_cast<double>(kMaxCells),
+                                 static_cast<double>(count) * 400e-9));
+  }
   std::vector<NodePtr> out;
   if (child.node) {
     out.reserve(count);

@@ -1,5 +1,7 @@
 #include "spec/experiment.h"
 
+#include <fmt/format.h>
+
 #include <cctype>
 
 #include <spdlog/spdlog.h>
@@ -65,6 +67,20 @@ Experiment Experiment::load(const std::filesystem::path& file) {
   spdlog::debug("loaded {}: {} vertices, {} triangles", g.mesh.string(), mesh.vertices.size(),
                 mesh.triangles.size());
   experiment.solid_ = std::make_shared<Solid>(std::move(mesh), g.uv, g.uv_axis);
+  if (g.field_voxel_mm > 0) {
+    // The surface field's band is at least three of its voxels thick over the
+    // whole surface, before any tree asks for more: its voxels are known now.
+    constexpr double kMaxBandVoxels = 5e7;  // ~1 GB; the default field aims at 2e6
+    const double band_voxels = 3 * experiment.solid_->mesh().surface_area() / (g.field_voxel_mm * g.field_voxel_mm);
+    if (band_voxels > kMaxBandVoxels) {
+      geometry.fail("field_voxel_mm",
+                    fmt::format("{:.3g} mm makes the surface field's band at least {:.3g} voxels (~{:.1f} GB), more "
+                                "than the {:.0e} allowed; give a coarser field_voxel_mm, or leave it out (here the "
+                                "default would be {:.3g} mm)",
+                                g.field_voxel_mm, band_voxels, band_voxels * 20e-9, kMaxBandVoxels,
+                                experiment.solid_->default_field_voxel(0)));
+    }
+  }
   return experiment;
 }
 

@@ -1,5 +1,9 @@
 #include "spec/tree_outputs.h"
 
+#include <cmath>
+
+#include <fmt/format.h>
+
 #include "core/strings.h"
 #include "fabrication/cross_section.h"
 #include "fabrication/print_writer.h"
@@ -15,6 +19,17 @@ TreeOutputOptions TreeOutputOptions::read(const Properties& goal, const Experime
   const GoalKeys goal_keys = read_options<GoalKeys>(goal);
   options.census_voxel_mm = std::isnan(goal_keys.census_voxel_mm) ? longest / 128 : goal_keys.census_voxel_mm;
   require_in(goal, "census_voxel_mm", options.census_voxel_mm, Range::closed(longest / 2048, longest));
+  // The census walks every one of its voxels: refused before, by count.
+  constexpr double kMaxCensusVoxels = 1e9;
+  double census_voxels = 1;
+  for (int axis = 0; axis < 3; ++axis)
+    census_voxels *= std::max(1.0, std::ceil(experiment.solid().bounds().size()[axis] / options.census_voxel_mm));
+  if (census_voxels > kMaxCensusVoxels) {
+    goal.fail("census_voxel_mm",
+              fmt::format("{:.3g} mm makes a census of {:.3g} voxels, more than the {:.0e} it takes at most (minutes of "
+                          "walking the tree); give a coarser census_voxel_mm (the default is {:.3g} mm)",
+                          options.census_voxel_mm, census_voxels, kMaxCensusVoxels, longest / 128));
+  }
   const auto output = experiment.output();
   if (output) options.section_pixels = read_options<OutputKeys>(*output).section_pixels;
   options.fabrication = FabricationOptions::from_properties(output);

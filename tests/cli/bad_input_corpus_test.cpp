@@ -236,6 +236,19 @@ TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
              deep + "}";
     tree_case("5000 levels deep", deep, "nested more than 100 levels deep");
   }
+  tree_case("16 million columns of nodes",
+            R"({"type": "column", "count": [4000, 4000], "child": {"type": "layered", "material": "VeroCyan"}})",
+            "a texture's columns belong in a stack_grid node");
+  {
+    std::string body = good;
+    body.replace(body.find("\"uv\": \"mesh\""), 12, "\"uv\": \"mesh\", \"field_voxel_mm\": 0.001");
+    experiment_case("a surface field of 0.001 mm voxels", body, "/geometry/field_voxel_mm: 0.001 mm makes the surface field");
+  }
+  {
+    std::string body = good;
+    body.replace(body.find("\"goal\": {"), 9, "\"goal\": {\"census_voxel_mm\": 0.0245, ");
+    experiment_case("the finest census", body, "/goal/census_voxel_mm: 0.0245 mm makes a census of 8.5e+09 voxels");
+  }
   // Experiments: files they name.
   experiment_case("mesh not found", with_mesh("/nonexistent/mesh.obj"), "file not found");
   experiment_case("mesh is a folder", with_mesh(dir_.string()), dir_.string());
