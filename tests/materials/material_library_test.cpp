@@ -239,7 +239,8 @@ TEST(MaterialLibrary, ValueErrorsNameFileAndPointer) {
             "lib.json: /materials/0/optical/absorption_per_mm/value: G value -0.2 is outside "
             "[0, inf)");
   EXPECT_EQ(library_error(replaced(valid, R"("source": "s"}}})", R"("sauce": "s"}}})")),
-            "lib.json: /materials/0/mechanical/density_kg_m3/source: missing required key");
+            "lib.json: /materials/0/mechanical/density_kg_m3/source: missing required key (is 'sauce' a "
+            "misspelling of it?)");
   EXPECT_EQ(library_error(replaced(valid, R"("value": 1.5,)", R"("value": 0.9,)")),
             "lib.json: /materials/0/optical/refractive_index/value: value 0.9 is outside [1, 3]");
 }
