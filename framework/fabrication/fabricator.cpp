@@ -86,8 +86,10 @@ Fabricator::Fabricator(const ReducerTree& tree, const PrinterProfile& printer, i
   plan_.estimated_seconds = static_cast<double>(plan_.voxels) / (kVoxelsPerSecondPerCore * cores);
   plan_.estimated_bytes =
       static_cast<long long>(kDiskBytesPerVoxel * static_cast<double>(plan_.voxels));
-  plan_.working_bytes =
-      4 * (cores + 1) * plan_.grid.slice_voxels() * static_cast<long long>(sizeof(MaterialId));
+  // In floating point: a grid held to an int per axis (refused by check())
+  // would overflow the product.
+  plan_.working_bytes = static_cast<long long>(
+      std::min(4.0 * (cores + 1) * static_cast<double>(plan_.grid.slice_voxels()) * sizeof(MaterialId), 9e18));
 }
 
 void Fabricator::time_sample_rows(bool surfaces) {
