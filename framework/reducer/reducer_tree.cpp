@@ -204,9 +204,9 @@ double first_crossing(const auto& a, const auto& b) {
 
 void ReducerTree::Query::fill_affine_run(const Vec3& start_mm, const Vec3& step_mm, int first, int count,
                                          MaterialId* out) {
-  // Bisection: a span whose ends walk alike is filled; otherwise it is
-  // halved at a point sampled exactly, down to single points. walks_[0] is
-  // the first point's.
+  // A span whose ends walk alike is filled; otherwise it is split at a point
+  // sampled exactly (where the ends' levels put the first crossing, else
+  // halfway), down to single points. walks_[0] is the first point's.
   size_t walks = 1;
   const auto walk_at = [&](int k) {
     if (walks == walks_.size()) walks_.emplace_back();
