@@ -4,7 +4,9 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <algorithm>
 #include <fstream>
+#include <iterator>
 #include <stdexcept>
 
 #include <spdlog/spdlog.h>
@@ -19,9 +21,18 @@ namespace fs = std::filesystem;
 
 namespace {
 
-/// Removes the staging folders (".NAME.partial-PID") in `parent` of runs
-/// that no longer exist: what a killed run (SIGKILL, a power cut) left.
-void remove_stale_partials(const fs::path& parent) {
+constexpr const char* kCheckpointFolder = "checkpoint";
+
+struct StalePartial {
+  fs::path folder;
+  std::string destination_name;  ///< the NAME of ".NAME.partial-PID"
+  pid_t pid = 0;
+};
+
+/// The staging folders (".NAME.partial-PID") in `parent` of runs that no
+/// longer exist: what a killed run (SIGKILL, a power cut) left.
+std::vector<StalePartial> stale_partials(const fs::path& parent) {
+  std::vector<StalePartial> found;
   std::error_code error;
   for (const fs::directory_entry& entry : fs::directory_iterator(parent, error)) {
     const std::string name = entry.path().filename().string();
@@ -31,15 +42,28 @@ void remove_stale_partials(const fs::path& parent) {
     if (digits.empty() || digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) continue;
     const pid_t pid = static_cast<pid_t>(std::stol(digits));
     if (pid == getpid() || kill(pid, 0) == 0 || errno != ESRCH) continue;  // alive, or not ours to judge
-    std::error_code ignored;
-    if (fs::remove_all(entry.path(), ignored) > 0 && !ignored)
-      spdlog::info("removed {}, left by a run that was killed (process {})", entry.path().string(), pid);
+    found.push_back({entry.path(), name.substr(1, mark - 1), pid});
   }
+  // Newest first, so that a resume takes up the latest of several killed runs.
+  std::sort(found.begin(), found.end(), [](const StalePartial& a, const StalePartial& b) {
+    std::error_code ignored;
+    return fs::last_write_time(a.folder / kCheckpointFolder, ignored) >
+           fs::last_write_time(b.folder / kCheckpointFolder, ignored);
+  });
+  return found;
+}
+
+void remove_stale(const StalePartial& stale, const std::string& destination_name) {
+  const bool resumable = stale.destination_name == destination_name && fs::is_directory(stale.folder / kCheckpointFolder);
+  std::error_code ignored;
+  if (fs::remove_all(stale.folder, ignored) > 0 && !ignored)
+    spdlog::info("removed {}, left by a run that was killed (process {}){}", stale.folder.string(), stale.pid,
+                 resumable ? "; `spec2fab run --resume` would have continued it from its last finished phase" : "");
 }
 
 }  // namespace
 
-RunFolder::RunFolder(fs::path destination) : destination_(std::move(destination)) {
+RunFolder::RunFolder(fs::path destination, bool resume) : destination_(std::move(destination)) {
   if (destination_.filename().empty()) destination_ = destination_.parent_path();
   if (!ranks::root()) {
     staging_ = ranks::broadcast("");
@@ -60,9 +84,25 @@ RunFolder::RunFolder(fs::path destination) : destination_(std::move(destination)
   staging_name += destination_.filename().string();
   staging_name += ".partial-" + std::to_string(getpid());
   staging_ = parent / staging_name;
-  remove_stale_partials(parent);
   fs::remove_all(staging_);
   interrupt::register_partial(staging_);
+  const std::string name = destination_.filename().string();
+  for (const StalePartial& stale : stale_partials(parent)) {
+    if (resume && !resumed_ && stale.destination_name == name && fs::is_directory(stale.folder / kCheckpointFolder)) {
+      // What the killed run wrote besides its checkpoint is written again.
+      for (const fs::directory_entry& entry : fs::directory_iterator(stale.folder))
+        if (entry.path().filename() != kCheckpointFolder) fs::remove_all(entry.path());
+      fs::rename(stale.folder, staging_, error);
+      if (error) throw InputError(stale.folder.string() + ": cannot take up the killed run's folder: " + error.message());
+      resumed_ = true;
+      resumed_from_ = stale.folder;
+      spdlog::info("resuming the run that process {} left in {}", stale.pid, stale.folder.string());
+      continue;
+    }
+    remove_stale(stale, name);
+  }
+  if (resume && !resumed_)
+    spdlog::info("--resume: no run of {} was killed with a checkpoint here; starting from the beginning", destination_.string());
   fs::create_directories(staging_, error);
   if (error) {
     interrupt::release_partial(staging_);
@@ -112,6 +152,42 @@ void RunFolder::write_json(const fs::path& relative, const nlohmann::json& value
   write_text(relative, value.dump(2) + "\n");
 }
 
+void RunFolder::give_back_resumed() {
+  if (!resumed_ || committed_) return;
+  for (const fs::directory_entry& entry : fs::directory_iterator(staging_))
+    if (entry.path().filename() != kCheckpointFolder) fs::remove_all(entry.path());
+  std::error_code error;
+  fs::rename(staging_, resumed_from_, error);
+  if (!error) {
+    committed_ = true;  // nothing of ours is left to remove
+    interrupt::release_partial(staging_);
+  }
+}
+
+fs::path RunFolder::checkpoint_path(const std::string& name) const {
+  const fs::path folder = staging_ / kCheckpointFolder;
+  fs::create_directories(folder);
+  return folder / name;
+}
+
+void RunFolder::write_checkpoint(const std::string& name, const std::vector<std::uint8_t>& bytes) const {
+  if (shared_) return;
+  interrupt::wait_if_stopping();
+  const fs::path file = checkpoint_path(name), temporary = fs::path(file).concat(".partial");
+  {
+    std::ofstream out(temporary, std::ios::binary);
+    out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+    if (!out) throw std::runtime_error("cannot write " + temporary.string());
+  }
+  fs::rename(temporary, file);
+}
+
+std::vector<std::uint8_t> RunFolder::read_checkpoint(const std::string& name) const {
+  std::ifstream in(staging_ / kCheckpointFolder / name, std::ios::binary);
+  if (!in) return {};
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
 void RunFolder::commit() {
   ranks::barrier();  // every rank's files are in
   if (shared_) {
@@ -119,6 +195,7 @@ void RunFolder::commit() {
     return;
   }
   std::error_code error;
+  fs::remove_all(staging_ / kCheckpointFolder, error);
   if (fs::exists(destination_)) fs::remove_all(destination_, error);
   if (error) throw std::runtime_error("cannot replace " + destination_.string() + ": " + error.message());
   fs::rename(staging_, destination_, error);

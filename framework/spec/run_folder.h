@@ -5,7 +5,9 @@
 /// nothing behind.
 
 #include <filesystem>
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -13,7 +15,10 @@ namespace spec2fab {
 
 class RunFolder {
  public:
-  explicit RunFolder(std::filesystem::path destination);
+  /// With `resume`, takes up the folder a killed run of the same destination
+  /// left (the newest with a checkpoint), keeping its checkpoint/ and
+  /// nothing else; resumed() says whether there was one.
+  explicit RunFolder(std::filesystem::path destination, bool resume = false);
   ~RunFolder();  ///< removes the temporary folder unless committed
   RunFolder(const RunFolder&) = delete;
   RunFolder& operator=(const RunFolder&) = delete;
@@ -30,6 +35,19 @@ class RunFolder {
   void write_text(const std::filesystem::path& relative, const std::string& text) const;
   /// Pretty-printed with a trailing newline; key order as stored (sorted).
   void write_json(const std::filesystem::path& relative, const nlohmann::json& value) const;
+  /// Whether this folder continues one a killed run left.
+  bool resumed() const { return resumed_; }
+  /// Puts a resumed folder back where the killed run left it (a resume
+  /// refused must not cost the user the checkpoint).
+  void give_back_resumed();
+  /// Where the run keeps what a resumed run needs (checkpoint/; removed at
+  /// commit): rank 0's folder only.
+  std::filesystem::path checkpoint_path(const std::string& name) const;
+  /// Writes `bytes` to checkpoint_path(name) all or nothing (a temporary
+  /// file renamed over the old one): a kill mid-write leaves the last whole one.
+  void write_checkpoint(const std::string& name, const std::vector<std::uint8_t>& bytes) const;
+  /// The bytes checkpoint_path(name) holds, or nothing.
+  std::vector<std::uint8_t> read_checkpoint(const std::string& name) const;
   /// Moves the finished folder into place, replacing an older one. Under
   /// mpirun every rank writes into rank 0's folder (the constructor and
   /// commit() are collective): commit waits for all, and rank 0 moves it.
@@ -38,7 +56,9 @@ class RunFolder {
  private:
   std::filesystem::path destination_, staging_;
   std::filesystem::path scratch_;  // a rank other than 0: where path() points
+  std::filesystem::path resumed_from_;
   bool committed_ = false;
+  bool resumed_ = false;
   bool shared_ = false;  // a rank other than 0 of an MPI run: rank 0's folder
 };
 

@@ -1,11 +1,14 @@
 #include "spec/translator.h"
 
 #include <chrono>
+#include <fstream>
+#include <iterator>
 #include <thread>
 
 #include <spdlog/spdlog.h>
 #include <tbb/global_control.h>
 
+#include "core/error.h"
 #include "core/ranks.h"
 #include "core/version.h"
 #include "reducer/reducer_tree.h"
@@ -24,6 +27,51 @@ PreparedExperiment prepare_experiment(const std::filesystem::path& file) {
 }
 
 namespace {
+
+/// A schedule's checkpoint in the run folder (checkpoint/schedule.cbor).
+class FolderCheckpoint final : public PhaseCheckpoint {
+ public:
+  explicit FolderCheckpoint(const RunFolder& folder) : folder_(folder) {}
+  std::vector<std::uint8_t> load() override { return folder_.read_checkpoint("schedule.cbor"); }
+  void save(const std::vector<std::uint8_t>& state) override { folder_.write_checkpoint("schedule.cbor", state); }
+
+ private:
+  const RunFolder& folder_;
+};
+
+std::string file_text(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+/// What a checkpoint was made from: a resumed run must have the same.
+nlohmann::json run_identity(const Experiment& experiment, const nlohmann::json& result) {
+  return {{"spec2fab_version", result["spec2fab_version"]},
+          {"seed", result["seed"]},
+          {"inputs", result["inputs"]},
+          {"experiment_text", file_text(experiment.file())}};
+}
+
+/// Refuses to resume a run of other inputs; records this run's for a later resume.
+void check_run_identity(RunFolder& folder, const nlohmann::json& identity) {
+  const std::vector<std::uint8_t> saved = folder.read_checkpoint("run.json");
+  if (folder.resumed() && !saved.empty()) {
+    const nlohmann::json before = nlohmann::json::parse(saved.begin(), saved.end(), nullptr, false);
+    if (before != identity) {
+      std::string what;
+      for (const char* key : {"experiment_text", "inputs", "seed", "spec2fab_version"})
+        if (before.is_discarded() || before.value(key, nlohmann::json()) != identity[key]) {
+          what = key == std::string("experiment_text") ? "experiment file" : key;
+          break;
+        }
+      folder.give_back_resumed();
+      throw InputError(folder.destination().string() + ": --resume: the killed run had another " + what +
+                       "; run without --resume to start afresh");
+    }
+  }
+  const std::string text = identity.dump();
+  folder.write_checkpoint("run.json", std::vector<std::uint8_t>(text.begin(), text.end()));
+}
 
 nlohmann::json describe_inputs(const Experiment& experiment) {
   const Solid& solid = experiment.solid();
@@ -67,7 +115,9 @@ std::filesystem::path run_experiment(const std::filesystem::path& file, const Ru
                                   static_cast<size_t>(threads));
   const std::filesystem::path out =
       options.out.empty() ? std::filesystem::path("out") / experiment.name() : options.out;
-  RunFolder folder(out);
+  if (options.resume && ranks::size() > 1)
+    throw InputError("--resume: a run under mpirun cannot be resumed; run it in one process");
+  RunFolder folder(out, options.resume);
 
   // result.json holds only what the inputs determine, so that a rerun with any
   // thread count is byte-identical; wall-clock times go to timing.json.
@@ -77,7 +127,9 @@ std::filesystem::path run_experiment(const std::filesystem::path& file, const Ru
                            {"seed", options.seed.value_or(experiment.seed())},
                            {"inputs", describe_inputs(experiment)}};
   nlohmann::json timing = {{"threads", threads}};
-  RunContext context{experiment, folder, threads, options.seed.value_or(experiment.seed()), result, &timing};
+  check_run_identity(folder, run_identity(experiment, result));
+  FolderCheckpoint checkpoint(folder);
+  RunContext context{experiment, folder, threads, options.seed.value_or(experiment.seed()), result, &timing, &checkpoint};
   spdlog::info("running '{}' ({}) on {} thread(s)", experiment.name(), experiment.translator(), threads);
   prepared.translator->run(context);
 

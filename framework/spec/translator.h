@@ -22,6 +22,7 @@
 namespace spec2fab {
 
 class ReducerTree;
+class PhaseCheckpoint;
 
 struct RunContext {
   const Experiment& experiment;
@@ -32,6 +33,9 @@ struct RunContext {
   /// timing.json (wall-clock figures, which would break result.json's
   /// byte-identity); null when nobody records timings.
   nlohmann::json* timing = nullptr;
+  /// Where a tuning schedule saves its state after each phase and finds what
+  /// a killed run saved (Schedule::run); null: no checkpoints.
+  PhaseCheckpoint* checkpoint = nullptr;
 };
 
 class Translator {
@@ -59,6 +63,10 @@ struct RunOptions {
   std::filesystem::path out;  ///< empty: out/<experiment name>
   int threads = 0;            ///< 0: all cores
   std::optional<std::uint64_t> seed;  ///< overrides the experiment's seed
+  /// Go on from the last phase a killed run of the same experiment, seed and
+  /// output folder finished (its checkpoint), to the files an uninterrupted
+  /// run writes; with none, start from the beginning.
+  bool resume = false;
 };
 
 /// Prepares and runs an experiment, writing the run folder all-or-nothing.

@@ -24,7 +24,7 @@ void TuningTranslator::run(RunContext& context) {
     prepare(context);
     RunRecord record;
     if (network_.size() > 0) {
-      record = schedule_.run(network_, context.seed);
+      record = schedule_.run(network_, context.seed, context.checkpoint);
       tree_->evaluate();
       write_tuning_outputs(record, network_, context);
     }

@@ -93,6 +93,11 @@ class Optimizer {
   /// sweep, tuner), so results never depend on which thread ran what.
   /// Stochastic optimizers draw from random_seed(their "seed" option).
   void set_seed(std::uint64_t schedule_seed) { schedule_seed_ = schedule_seed; }
+  /// What the method carries from one run to the next (annealing's place in
+  /// a temperature schedule that spans runs): a schedule's checkpoint saves
+  /// it, and restore() takes it up in a resumed run.
+  virtual nlohmann::json saved_state() const { return nullptr; }
+  virtual void restore(const nlohmann::json& /*state*/) {}
 
   /// Minimises `problem` from `x` (start in, best point out). Refuses, with
   /// std::invalid_argument naming the optimizer and the missing capability,

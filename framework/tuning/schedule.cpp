@@ -10,9 +10,11 @@
 #include <unordered_map>
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include <tbb/parallel_for.h>
 
+#include "core/error.h"
 #include "core/log.h"
 #include "core/ranks.h"
 #include "core/seed.h"
@@ -184,6 +186,76 @@ void share_colour_tunings(TunerNetwork& network, const std::vector<size_t>& colo
                     [&](size_t k) { network.tuner(adopted[k].first).adopt(adopted[k].second); });
 }
 
+std::vector<double> doubles_from(const nlohmann::json& j) {
+  std::vector<double> out;
+  out.reserve(j.size());
+  for (const auto& v : j) out.push_back(v.is_number() ? v.get<double>() : std::numeric_limits<double>::quiet_NaN());
+  return out;
+}
+
+// The state after `done` phases, as CBOR: doubles bit for bit.
+std::vector<std::uint8_t> checkpoint_state(const std::vector<Phase>& phases, size_t done, const RunRecord& record,
+                                           TunerNetwork& network) {
+  nlohmann::json names = nlohmann::json::array(), couplings = nlohmann::json::array();
+  for (const Phase& phase : phases) names.push_back(phase.name);
+  for (size_t p = 0; p < done; ++p) couplings.push_back(phases[p].coupling ? phases[p].coupling->saved_state() : nullptr);
+  nlohmann::json runs = nlohmann::json::array(), tuners = nlohmann::json::array();
+  for (const TunerRun& run : record.runs) runs.push_back({run.phase, run.sweep, run.tuner, summary_state(run.summary)});
+  for (size_t t = 0; t < network.size(); ++t) {
+    if (!network.tuner(t).is_bound()) {
+      tuners.push_back(nullptr);
+      continue;
+    }
+    const Tuner::State s = network.tuner(t).state();
+    tuners.push_back({s.parameters, s.target, s.simulated, s.published, s.free, s.optimizer});
+  }
+  return nlohmann::json::to_cbor({{"phases", names},
+                                  {"phases_done", done},
+                                  {"runs", runs},
+                                  {"phase_seconds", record.phase_seconds},
+                                  {"phase_tuner_runs", record.phase_tuner_runs},
+                                  {"phase_evaluations", record.phase_evaluations},
+                                  {"couplings", couplings},
+                                  {"tuners", tuners}});
+}
+
+// Takes up a state checkpoint_state() saved; returns the phases it had done.
+size_t restore_checkpoint(const std::vector<std::uint8_t>& saved, const std::vector<Phase>& phases, RunRecord& record,
+                          TunerNetwork& network) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::from_cbor(saved);
+    nlohmann::json names = nlohmann::json::array();
+    for (const Phase& phase : phases) names.push_back(phase.name);
+    if (j.at("phases") != names || j.at("tuners").size() != network.size())
+      throw InputError("the saved state is of another schedule (phases " + j.at("phases").dump() + ", " +
+                       std::to_string(j.at("tuners").size()) + " tuners)");
+    const size_t done = j.at("phases_done").get<size_t>();
+    if (done > phases.size()) throw InputError("the saved state claims more phases than the schedule has");
+    for (size_t p = 0; p < done; ++p) {
+      record.phase_names.push_back(phases[p].name);
+      if (phases[p].coupling) phases[p].coupling->restore(j.at("couplings").at(p));
+    }
+    for (const auto& run : j.at("runs"))
+      record.runs.push_back({run.at(0).get<size_t>(), run.at(1).get<int>(), run.at(2).get<size_t>(), summary_from_state(run.at(3))});
+    record.phase_seconds = j.at("phase_seconds").get<std::vector<double>>();
+    record.phase_tuner_runs = j.at("phase_tuner_runs").get<std::vector<long long>>();
+    record.phase_evaluations = j.at("phase_evaluations").get<std::vector<long long>>();
+    const auto& tuners = j.at("tuners");
+    for (size_t t = 0; t < network.size(); ++t) {
+      const auto& s = tuners.at(t);
+      if (s.is_null() || !network.tuner(t).is_bound()) continue;
+      network.tuner(t).restore({doubles_from(s.at(0)), doubles_from(s.at(1)), doubles_from(s.at(2)),
+                                doubles_from(s.at(3)), s.at(4).get<std::vector<bool>>(), s.at(5)});
+    }
+    return done;
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(std::string("the saved state is unreadable: ") + e.what());
+  } catch (const std::invalid_argument& e) {
+    throw InputError(std::string("the saved state does not fit: ") + e.what());
+  }
+}
+
 std::string progress_detail(int sweep, double error_sum, size_t runs) {
   return fmt::format("sweep {}, mean error {:.4g}", sweep + 1,
                      error_sum / static_cast<double>(std::max<size_t>(runs, 1)));
@@ -200,9 +272,18 @@ std::vector<size_t> Phase::members(size_t network_size) const {
   return all;
 }
 
-RunRecord Schedule::run(TunerNetwork& network, std::uint64_t seed) const {
+RunRecord Schedule::run(TunerNetwork& network, std::uint64_t seed, PhaseCheckpoint* checkpoint) const {
   RunRecord record;
-  for (size_t p = 0; p < phases_.size(); ++p) {
+  size_t first = 0;
+  if (checkpoint) {
+    if (const std::vector<std::uint8_t> saved = checkpoint->load(); !saved.empty()) {
+      first = restore_checkpoint(saved, phases_, record, network);
+      if (first > 0)
+        spdlog::info("resuming after phase '{}' ({} of {}), which the killed run had finished", phases_[first - 1].name,
+                  first, phases_.size());
+    }
+  }
+  for (size_t p = first; p < phases_.size(); ++p) {
     const Phase& phase = phases_[p];
     const std::vector<size_t> tuners = phase.members(network.size());
     for (size_t t : tuners) {
@@ -284,6 +365,7 @@ RunRecord Schedule::run(TunerNetwork& network, std::uint64_t seed) const {
     }
     record.phase_seconds.push_back(
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    if (checkpoint) checkpoint->save(checkpoint_state(phases_, p + 1, record, network));
   }
   return record;
 }

@@ -39,6 +39,23 @@ class Coupling {
                           const std::vector<bool>& /*tuned*/) {}
   /// Called once after the phase's last sweep.
   virtual void end_phase(TunerNetwork& /*network*/, const std::vector<size_t>& /*tuners*/) {}
+  /// What the coupling keeps of a finished phase for the run's report (a
+  /// checkpoint saves it; restore() takes it up in a resumed run).
+  virtual nlohmann::json saved_state() const { return nullptr; }
+  virtual void restore(const nlohmann::json& /*state*/) {}
+};
+
+/// Where a schedule keeps its state after each phase: every tuner's state,
+/// the couplings' and the record so far. A run killed in a later phase goes
+/// on from the last phase saved in a new process (spec2fab run --resume), to
+/// the results an uninterrupted run gives, bit for bit.
+class PhaseCheckpoint {
+ public:
+  virtual ~PhaseCheckpoint() = default;
+  /// What an earlier process saved last, or nothing (start from the first phase).
+  virtual std::vector<std::uint8_t> load() = 0;
+  /// Replaces what was saved, all or nothing.
+  virtual void save(const std::vector<std::uint8_t>& state) = 0;
 };
 
 struct Phase;
@@ -114,6 +131,8 @@ class NeighbourSwaps final : public Coupling {
   void begin_sweep(TunerNetwork& network, const std::vector<size_t>& tuners) override;
   void end_phase(TunerNetwork& network, const std::vector<size_t>& tuners) override;
   const std::vector<double>& energies() const { return energies_; }
+  nlohmann::json saved_state() const override { return energies_; }
+  void restore(const nlohmann::json& state) override { energies_ = state.get<std::vector<double>>(); }
 
  private:
   Delta delta_;
@@ -170,8 +189,10 @@ class Schedule {
   const std::vector<Phase>& phases() const { return phases_; }
   /// Runs every phase; throws std::invalid_argument for a parallel phase with
   /// a coupling that forbids it or tuners whose subtrees overlap, or a tuner
-  /// index out of range.
-  RunRecord run(TunerNetwork& network, std::uint64_t seed) const;
+  /// index out of range. With a checkpoint, saves the state after each phase
+  /// and starts after the last phase an earlier process saved (InputError
+  /// when that state is not of this schedule and network).
+  RunRecord run(TunerNetwork& network, std::uint64_t seed, PhaseCheckpoint* checkpoint = nullptr) const;
 
  private:
   std::vector<Phase> phases_;

@@ -1,6 +1,8 @@
 #include "tuning/tuner.h"
 
 #include <algorithm>
+#include <functional>
+#include <stdexcept>
 
 namespace spec2fab {
 
@@ -19,6 +21,11 @@ void collect_free_parameters(ReducerNode& node, const std::string& path, SearchS
     const std::string label = node.child_label(i);
     collect_free_parameters(node.child(i), path.empty() ? label : path + "/" + label, space);
   }
+}
+
+void visit_subtree_parameters(ReducerNode& node, const std::function<void(Parameter&)>& visit) {
+  node.visit_parameters([&](const std::string&, Parameter& parameter) { visit(parameter); });
+  for (size_t i = 0; i < node.child_count(); ++i) visit_subtree_parameters(node.child(i), visit);
 }
 
 std::string incompatibility(const Simulator& simulator, const ErrorMetric& metric, const Goal& goal) {
@@ -199,6 +206,45 @@ void Tuner::exchange_state(Tuner& other) {
   const std::vector<double> own = space_.values();
   error_at(other.space_.values());
   other.error_at(own);
+}
+
+Tuner::State Tuner::state() {
+  State state;
+  visit_subtree_parameters(*node_, [&](Parameter& p) {
+    state.parameters.push_back(p.value());
+    state.free.push_back(p.is_free());
+  });
+  const auto copy = [](std::span<const double> values) { return std::vector<double>(values.begin(), values.end()); };
+  state.target = copy(effective_target_->values());
+  state.simulated = copy(simulated_->values());
+  state.published = published_;
+  state.optimizer = optimizer_->saved_state();
+  return state;
+}
+
+void Tuner::restore(const State& state) {
+  size_t count = 0;
+  visit_subtree_parameters(*node_, [&](Parameter&) { ++count; });
+  const auto refuse = [&](const std::string& what) {
+    throw std::invalid_argument("tuner '" + name_ + "': the saved state's " + what + " do not fit its subtree");
+  };
+  if (count != state.parameters.size() || count != state.free.size()) refuse("parameters");
+  if (state.target.size() != effective_target_->values().size()) refuse("target values");
+  size_t i = 0;
+  // The saved values are admissible already: set() leaves them as they are.
+  visit_subtree_parameters(*node_, [&](Parameter& p) {
+    p.set_free(state.free[i]);
+    p.set(state.parameters[i++]);
+  });
+  evaluate_subtree(*node_);
+  collect_search_space();
+  std::copy(state.target.begin(), state.target.end(), effective_target_->values().begin());
+  // A simulator shapes its observation on the first simulation.
+  if (simulated_->values().size() != state.simulated.size()) simulate();
+  if (simulated_->values().size() != state.simulated.size()) refuse("simulated values");
+  std::copy(state.simulated.begin(), state.simulated.end(), simulated_->values().begin());
+  published_ = state.published;
+  optimizer_->restore(state.optimizer);
 }
 
 Summary Tuner::tune(const IterationCallback& callback) {

@@ -116,6 +116,20 @@ class Tuner {
   /// Resets the effective target to the goal's.
   void reset_target();
 
+  /// What a tuner holds between schedule phases: every parameter of its
+  /// subtree (free and fixed, in visiting order), its effective target, its
+  /// last simulation and what it publishes. A schedule's checkpoint saves it
+  /// after each phase; restore() takes it up in a new process, so that a run
+  /// resumed after a kill continues bit for bit (spec2fab run --resume).
+  struct State {
+    std::vector<double> parameters, target, simulated, published;
+    std::vector<bool> free;  ///< per parameter: an earlier phase may have fixed it
+    nlohmann::json optimizer;  ///< Optimizer::saved_state
+  };
+  State state();
+  /// Throws std::invalid_argument when `state` is of another subtree's shape.
+  void restore(const State& state);
+
   std::vector<double>& published() { return published_; }
   const std::vector<double>& published() const { return published_; }
 

@@ -91,6 +91,8 @@ class Annealing final : public Optimizer {
     options_.schedule_iterations = 0;
     scheduled_ = 0;
   }
+  nlohmann::json saved_state() const override { return scheduled_; }
+  void restore(const nlohmann::json& state) override { scheduled_ = state.get<long long>(); }
 
  protected:
   void run(Problem& problem, std::vector<double>& x, Summary& summary,

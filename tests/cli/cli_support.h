@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 
@@ -48,6 +49,29 @@ inline std::string read(const fs::path& file) {
   std::stringstream s;
   s << in.rdbuf();
   return s.str();
+}
+
+/// Every file under `folder` but timing.json (wall times), by relative path.
+inline std::map<std::string, std::string> files_of(const fs::path& folder) {
+  std::map<std::string, std::string> files;
+  for (const auto& entry : fs::recursive_directory_iterator(folder)) {
+    if (!entry.is_regular_file() || entry.path().filename() == "timing.json") continue;
+    files[fs::relative(entry.path(), folder).string()] = read(entry.path());
+  }
+  return files;
+}
+
+/// Every file of `expected` is in `out`, byte for byte, and nothing else;
+/// `how` names the run in failures.
+inline void expect_same_files(const std::map<std::string, std::string>& expected, const fs::path& out,
+                              const std::string& how) {
+  const std::map<std::string, std::string> got = files_of(out);
+  ASSERT_EQ(got.size(), expected.size()) << how;
+  for (const auto& [name, bytes] : expected) {
+    const auto found = got.find(name);
+    ASSERT_NE(found, got.end()) << name << " missing " << how;
+    EXPECT_TRUE(found->second == bytes) << name << " differs " << how;
+  }
 }
 
 class Cli : public ::testing::Test {

@@ -28,29 +28,6 @@ std::string mpirun(int ranks) {
          std::to_string(ranks) + " ";
 }
 
-// Every file of `expected` is in `out`, byte for byte, and nothing else.
-void expect_same_files(const std::map<std::string, std::string>& expected, const fs::path& out, int ranks);
-
-// Every file under `folder` but timing.json, by relative path.
-std::map<std::string, std::string> files_of(const fs::path& folder) {
-  std::map<std::string, std::string> files;
-  for (const auto& entry : fs::recursive_directory_iterator(folder)) {
-    if (!entry.is_regular_file() || entry.path().filename() == "timing.json") continue;
-    files[fs::relative(entry.path(), folder).string()] = read(entry.path());
-  }
-  return files;
-}
-
-void expect_same_files(const std::map<std::string, std::string>& expected, const fs::path& out, int ranks) {
-  const std::map<std::string, std::string> got = files_of(out);
-  ASSERT_EQ(got.size(), expected.size()) << ranks << " ranks";
-  for (const auto& [name, bytes] : expected) {
-    const auto found = got.find(name);
-    ASSERT_NE(found, got.end()) << name << " missing with " << ranks << " ranks";
-    EXPECT_TRUE(found->second == bytes) << name << " differs with " << ranks << " ranks";
-  }
-}
-
 TEST_F(Cli, MpiExportIsByteIdenticalToOneProcess) {
   if (!SPEC2FAB_WITH_MPI) GTEST_SKIP() << "built without MPI (SPEC2FAB_WITH_MPI=OFF)";
   if (run_command("command -v mpirun").code != 0) GTEST_SKIP() << "mpirun not installed";
@@ -79,7 +56,7 @@ TEST_F(Cli, MpiExportIsByteIdenticalToOneProcess) {
     const fs::path out = dir_ / ("ranks" + std::to_string(ranks));
     const Result r = run_command(mpirun(ranks) + SPEC2FAB_CLI_PATH + " " + arguments + out.string());
     ASSERT_EQ(r.code, 0) << r.out;
-    expect_same_files(expected, out, ranks);
+    expect_same_files(expected, out, "with " + std::to_string(ranks) + " ranks");
     EXPECT_THAT(read(out / "timing.json"), HasSubstr("\"ranks\": " + std::to_string(ranks)));
     // Nothing left beside the folder: no rank's staging folder.
     for (const auto& entry : fs::directory_iterator(dir_))
@@ -110,7 +87,7 @@ TEST_F(Cli, MpiRunSplitsTunersAndSlicesAndIsByteIdenticalToOneProcess) {
     const fs::path out = dir_ / ("ranks" + std::to_string(ranks));
     const Result r = run_command(mpirun(ranks) + SPEC2FAB_CLI_PATH + " " + arguments + out.string());
     ASSERT_EQ(r.code, 0) << r.out;
-    expect_same_files(expected, out, ranks);
+    expect_same_files(expected, out, "with " + std::to_string(ranks) + " ranks");
     // Every rank tuned its share of the six columns.
     const auto timing = nlohmann::json::parse(read(out / "timing.json"));
     EXPECT_EQ(timing["ranks"], ranks);

@@ -1,5 +1,6 @@
 // A run stopped by SIGTERM or SIGINT removes its partial output and exits
-// with 128 + the signal; what a killed run left is removed by the next one.
+// with 128 + the signal; what a killed run left is removed by the next one,
+// or continued by `run --resume` to the files an uninterrupted run writes.
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -73,6 +74,68 @@ TEST_F(Cli, TheNextRunRemovesWhatAKilledRunLeft) {
   EXPECT_FALSE(fs::exists(stale));
   EXPECT_TRUE(fs::exists(alive));
   EXPECT_TRUE(fs::exists(dir_ / "small" / "result.json"));
+}
+
+// Three phases of 4 x 4 colour patches (albedo tuners on a 4-neighbour
+// network): error diffusion, parallel annealing whose temperature schedule
+// spans its sweeps (state an optimizer carries between runs), and a serial
+// pass; then slices and STLs on a coarse printer.
+std::string three_phase_body(const fs::path& printer) {
+  std::string tuners;
+  const char* colours[] = {"[0.45, 0.75, 0.9]", "[0.9, 0.5, 0.7]", "[0.95, 0.92, 0.45]", "[0.1, 0.65, 0.85]"};
+  for (int i = 0; i < 16; ++i) {
+    tuners += std::string(i ? ", " : "") + R"({"name": "p)" + std::to_string(i) + R"(", "node": "shell/)" +
+              std::to_string(i) + R"(", "simulator": {"type": "albedo", "depth_mm": 1}, "metric": {"type": "ciede2000"},
+        "goal": {"type": "albedo", "srgb": )" + colours[i % 4] + R"(},
+        "optimizer": {"type": "annealing", "iterations": 6000, "schedule_iterations": 60000, "initial_temperature": 2}})";
+  }
+  return R"({"translator": "tree", "geometry": {"mesh": ")" + (kDatasets / "meshes/box_40x30x20.stl").string() +
+         R"(", "uv": "planar"}, "goal": {"tree": {"type": "stratum", "depth_mm": 1, "shell": {"type": "column", "count": [4, 4],
+           "child": {"type": "layered", "layers": [
+             {"material": {"value": "VeroCyan", "choices": ["VeroCyan", "VeroMagenta", "VeroYellow"]}, "thickness_mm": {"value": 0.135, "min": 0, "max": 0.54}},
+             {"material": {"value": "VeroWhitePlus", "choices": ["VeroWhitePlus", "VeroYellow"]}, "thickness_mm": {"value": 0.2, "min": 0, "max": 0.54}},
+             {"material": "VeroWhitePlus"}]}},
+           "core": {"type": "layered", "material": "VeroWhitePlus"}},
+         "tuners": [)" + tuners + R"(], "network": {"type": "grid4", "width": 4},
+         "schedule": [{"name": "diffuse", "mode": "serial", "coupling": "error_diffusion"},
+                      {"name": "anneal", "mode": "parallel", "sweeps": 10},
+                      {"name": "polish", "mode": "serial", "sweeps": 2}]},
+         "output": {"3mf": false, "render": false}, "seed": 3, "materials": ")" +
+         (kDatasets / "materials/polyjet.json").string() + R"(", "printer": ")" + printer.string() + R"("})";
+}
+
+TEST_F(Cli, AKilledRunResumesFromItsLastPhaseToTheFilesOfAnUninterruptedRun) {
+  const fs::path printer = dir_ / "four_inks.json";
+  std::ofstream(printer) << R"({"name": "coarse", "technology": "polyjet", "resolution_dpi": [63.5, 63.5], "layer_mm": 0.4,
+      "build_volume_mm": [200, 200, 200], "model_materials": ["VeroCyan", "VeroMagenta", "VeroYellow", "VeroWhitePlus"],
+      "source": "test"})";
+  const fs::path file = experiment("three_phases", three_phase_body(printer));
+  const Result whole = run_spec2fab("run -q " + file.string() + " --out " + (dir_ / "whole").string() + " --threads 2");
+  ASSERT_EQ(whole.code, 0) << whole.out;
+
+  // kill -9 as soon as the first phase's checkpoint is on disk (one thread:
+  // the rest takes seconds).
+  const std::string partial = (dir_ / ".run.partial-").string();
+  const Result killed = run_command(
+      "sh -c '" + std::string(SPEC2FAB_CLI_PATH) + " run -q " + file.string() + " --out " + (dir_ / "run").string() +
+      " --threads 1 & pid=$!; for i in $(seq 1 3000); do ls " + partial + "*/checkpoint/schedule.cbor >/dev/null 2>&1 && break; "
+      "sleep 0.01; done; kill -9 $pid; wait $pid'");
+  ASSERT_EQ(killed.code, 128 + 9) << "the run ended before it was killed: " << killed.out;
+  ASSERT_EQ(leftovers(dir_).size(), 1u);
+  const fs::path left = dir_ / leftovers(dir_).front();
+
+  // A resume of other inputs is refused, and the checkpoint is kept.
+  const Result other = run_spec2fab("run -q " + file.string() + " --out " + (dir_ / "run").string() + " --seed 4 --resume");
+  EXPECT_EQ(other.code, 2) << other.out;
+  EXPECT_THAT(single_line(other.out), HasSubstr("--resume: the killed run had another seed"));
+  EXPECT_TRUE(fs::exists(left / "checkpoint" / "schedule.cbor"));
+
+  const Result resumed = run_spec2fab("run " + file.string() + " --out " + (dir_ / "run").string() + " --threads 2 --resume");
+  ASSERT_EQ(resumed.code, 0) << resumed.out;
+  EXPECT_THAT(resumed.out, HasSubstr("resuming after phase '"));
+  expect_same_files(files_of(dir_ / "whole"), dir_ / "run", "after --resume");
+  EXPECT_THAT(leftovers(dir_), ::testing::ElementsAre("run"));
+  EXPECT_FALSE(fs::exists(dir_ / "run" / "checkpoint"));
 }
 
 }  // namespace

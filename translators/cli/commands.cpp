@@ -41,6 +41,7 @@ int run_command(const RunArguments& arguments) {
   options.out = arguments.out;
   options.threads = arguments.threads;
   options.seed = arguments.seed;
+  options.resume = arguments.resume;
   const fs::path folder = run_experiment(arguments.experiment, options);
   if (ranks::root()) std::cout << "wrote " << folder.string() << "/ (result.json, tree.json, preview/, print/)\n";
   return 0;
@@ -207,34 +208,41 @@ int validate_command(const fs::path& experiment) {
   return 0;
 }
 
-int simulate_command(const SimulateArguments& arguments) {
-  const Properties config = Properties::load(arguments.config);
-  const MaterialLibrary library = MaterialLibrary::load(config.existing_file("materials"));
-  const PrinterProfile printer = PrinterProfile::load(config.existing_file("printer"));
-  const MaterialPalette palette(library, printer);
-  RunCache cache;
-  const PartContext context{palette, &cache};
+PreparedSimulation prepare_simulation(const fs::path& config_file, const std::string& simulator) {
+  PreparedSimulation prepared;
+  const Properties config = Properties::load(config_file);
+  prepared.library = std::make_unique<MaterialLibrary>(MaterialLibrary::load(config.existing_file("materials")));
+  prepared.printer = std::make_unique<PrinterProfile>(PrinterProfile::load(config.existing_file("printer")));
+  prepared.palette = std::make_unique<MaterialPalette>(*prepared.library, *prepared.printer);
+  prepared.cache = std::make_unique<RunCache>();
+  const PartContext context{*prepared.palette, prepared.cache.get()};
   const auto& simulators = SimulatorRegistry::instance();
-  if (!simulators.contains(arguments.simulator)) {
-    throw InputError("simulate: unknown simulator '" + arguments.simulator + "'" +
-                     did_you_mean(arguments.simulator, simulators.names()) +
+  if (!simulators.contains(simulator)) {
+    throw InputError("simulate: unknown simulator '" + simulator + "'" + did_you_mean(simulator, simulators.names()) +
                      " (known: " + join(simulators.names()) + ")");
   }
   // With a "mesh", the subtree becomes the root of a tree bound to that solid
   // (volumetric simulators need one); without, it is simulated on its own.
-  std::unique_ptr<Solid> solid;
   if (config.has("mesh")) {
-    solid = std::make_unique<Solid>(load_mesh(config.existing_file("mesh")), UvSource::planar);
+    prepared.solid = std::make_unique<Solid>(load_mesh(config.existing_file("mesh")), UvSource::planar);
   }
-  ReducerTree tree(config.object("subtree"), palette);
-  if (solid) tree.bind(*solid);
-  const ReducerNode& subtree = tree.root();
+  prepared.tree = std::make_unique<ReducerTree>(config.object("subtree"), *prepared.palette);
+  if (prepared.solid) prepared.tree->bind(*prepared.solid);
   const auto options = config.optional_object("simulator");
-  const Properties no_options =
-      Properties::wrap(nlohmann::json::object(), arguments.config.string() + " (simulator)");
-  std::unique_ptr<Simulator> simulator = simulators.create_named(
-      arguments.simulator, options ? *options : no_options, "simulator", context);
+  const Properties no_options = Properties::wrap(nlohmann::json::object(), config_file.string() + " (simulator)");
+  prepared.simulator = simulators.create_named(simulator, options ? *options : no_options, "simulator", context);
   config.check_all_read();
+  return prepared;
+}
+
+int simulate_command(const SimulateArguments& arguments) {
+  const PreparedSimulation prepared = prepare_simulation(arguments.config, arguments.simulator);
+  const MaterialPalette& palette = *prepared.palette;
+  const PrinterProfile& printer = *prepared.printer;
+  ReducerTree& tree = *prepared.tree;
+  const ReducerNode& subtree = tree.root();
+  Simulator* simulator = prepared.simulator.get();
+  const bool solid = prepared.solid != nullptr;
 
   using Clock = std::chrono::steady_clock;
   const auto setup_start = Clock::now();

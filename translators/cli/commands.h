@@ -3,9 +3,18 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
+
+#include "core/run_cache.h"
+#include "geometry/solid.h"
+#include "materials/material_library.h"
+#include "materials/palette.h"
+#include "materials/printer_profile.h"
+#include "reducer/reducer_tree.h"
+#include "tuning/parts.h"
 
 namespace spec2fab::cli {
 
@@ -13,6 +22,7 @@ struct RunArguments {
   std::filesystem::path experiment, out;
   int threads = 0;
   std::optional<std::uint64_t> seed;
+  bool resume = false;
 };
 
 struct ExportArguments {
@@ -44,6 +54,20 @@ struct BenchArguments {
   bool quick = false;
   bool progress = false;
 };
+
+/// What `simulate` reads from its config before any work: every part built,
+/// every key checked (InputError otherwise). Members refer to each other:
+/// held by pointer so that their addresses stay put.
+struct PreparedSimulation {
+  std::unique_ptr<MaterialLibrary> library;
+  std::unique_ptr<PrinterProfile> printer;
+  std::unique_ptr<MaterialPalette> palette;
+  std::unique_ptr<RunCache> cache;
+  std::unique_ptr<Solid> solid;  ///< null without a "mesh"
+  std::unique_ptr<ReducerTree> tree;
+  std::unique_ptr<Simulator> simulator;
+};
+PreparedSimulation prepare_simulation(const std::filesystem::path& config, const std::string& simulator);
 
 int run_command(const RunArguments& arguments);
 /// Runs the optimizer x problem matrix and writes its report (docs/benchmarking.md).

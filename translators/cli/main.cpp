@@ -50,6 +50,9 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 1024));
   CLI::Option* seed_option =
       run_cmd->add_option("--seed", seed, "random seed (overrides the experiment's)");
+  run_cmd->add_flag("--resume", run.resume,
+                    "go on from the last tuning phase a killed run (SIGKILL, power cut) of the same experiment, "
+                    "seed and --out finished; without one, start afresh");
   run_cmd->add_flag("-q,--quiet", quiet, "only warnings and errors");
   run_cmd->footer(
       "Writes <out>/result.json (inputs, goal metrics), tree.json (the tuned tree; `export` "
@@ -58,7 +61,9 @@ int main(int argc, char** argv) {
       "experiment and seed give\n"
       "byte-identical files for any thread count, except timing.json.\n"
       "Stopped by Ctrl-C or SIGTERM, a run removes its partial folder and exits with 130 or 143;\n"
-      "what a killed run (SIGKILL) left is removed by the next run into the same parent folder.");
+      "what a killed run (SIGKILL) left is removed by the next run into the same parent folder,\n"
+      "unless that run is `spec2fab run --resume` into the same --out: it continues from the killed\n"
+      "run's checkpoint (saved after each tuning phase) to the files an uninterrupted run writes.");
 
   cli::ExportArguments export_arguments;
   CLI::App* export_cmd = app.add_subcommand("export",
