@@ -4,15 +4,17 @@
 
 #include <fmt/format.h>
 
+#include "core/limits.h"
+
 #include "core/strings.h"
 
 namespace spec2fab {
 
 NodePtr build_node(const Properties& properties, const NodeContext& context) {
-  if (context.depth > NodeContext::kMaxDepth) {
-    properties.fail(fmt::format("the tree is nested more than {} levels deep here; a tree that deep is "
-                                "refused (a generated tree gone wrong?)",
-                                NodeContext::kMaxDepth));
+  if (const double max_depth = limits::get("tree_depth"); context.depth > max_depth) {
+    properties.fail(fmt::format("the tree is nested more than {:g} levels deep here; a tree that deep is "
+                                "refused (a generated tree gone wrong?) {}",
+                                max_depth, limits::how_to_change("tree_depth")));
   }
   return NodeRegistry::instance().create(properties, "node", context);
 }
@@ -96,12 +98,11 @@ std::vector<NodePtr> RepeatedChildren::take(size_t count, const std::string& whe
   // Each cell is a node of its own (a few hundred bytes and a walk's worth
   // of routing): millions of them are a texture, which stack_grid holds in
   // one node.
-  constexpr size_t kMaxCells = 1'000'000;
-  if (count > kMaxCells) {
-    throw InputError(fmt::format("{}: {:.3g} cells of nodes, more than the {:.0e} one node may hold (~{:.1f} GB); a "
-                                 "texture's columns belong in a stack_grid node",
-                                 where, static_cast<double>(count), static_cast<double>(kMaxCells),
-                                 static_cast<double>(count) * 400e-9));
+  if (const double max_cells = limits::get("column_cells"); static_cast<double>(count) > max_cells) {
+    throw InputError(fmt::format("{}: {:.3g} cells of nodes (~{:.1f} GB), more than the {:.3g} one node may hold; a "
+                                 "texture's columns belong in a stack_grid node {}",
+                                 where, static_cast<double>(count), static_cast<double>(count) * 400e-9, max_cells,
+                                 limits::how_to_change("column_cells")));
   }
   std::vector<NodePtr> out;
   if (child.node) {

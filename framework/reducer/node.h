@@ -37,10 +37,9 @@ struct NodeContext {
   const MaterialPalette& palette;
   int depth = 0;  ///< of the node being built; the root is 0
 
-  /// Deeper than this, a tree is refused: every walk over a tree recurses,
-  /// and thousands of levels would overflow the stack. The paper's trees are
-  /// five levels deep.
-  static constexpr int kMaxDepth = 100;
+  // Deeper than limits::get("tree_depth") (core/limits.h), a tree is
+  // refused: every walk over a tree recurses, and thousands of levels would
+  // overflow the stack. The paper's trees are five levels deep.
   NodeContext child() const { return {palette, depth + 1}; }
 };
 

@@ -1,5 +1,7 @@
 #include "spec/experiment.h"
 
+#include "core/limits.h"
+
 #include <fmt/format.h>
 
 #include <cctype>
@@ -39,7 +41,10 @@ std::vector<PropertyDoc> ExperimentKeys::docs() {
   rows.insert(rows.begin() + 2, {{"geometry", "object", "required", "the shape (below)"},
                                  {"goal", "object", "required", "what the print should do; its keys are the translator's"},
                                  {"optimizer", "optimizer", "the translator's", "the translator's optimizer, overriding its default"},
-                                 {"output", "object", "-", "output choices; its keys are the translator's"}});
+                                 {"output", "object", "-", "output choices; its keys are the translator's"},
+                                 {"limits", "object", "-",
+                                  "resource limits for this experiment's runs, by name (docs/robustness.md; "
+                                  "`--limit NAME=VALUE` wins)"}});
   return rows;
 }
 
@@ -47,6 +52,9 @@ Experiment Experiment::load(const std::filesystem::path& file) {
   Experiment experiment(Properties::load(file));
   const Properties& root = experiment.root_;
   experiment.file_ = file;
+  // Before anything they bound is read: the mesh, images, trees.
+  if (const auto limits = root.optional_object("limits")) limits::set_from_experiment(*limits);
+  else limits::set_from_experiment(Properties::wrap(nlohmann::json::object(), file.string()));
   const ExperimentKeys keys = read_options<ExperimentKeys>(root);
   experiment.name_ = keys.name.empty() ? default_name(file) : keys.name;
   for (char c : experiment.name_) {
@@ -70,15 +78,15 @@ Experiment Experiment::load(const std::filesystem::path& file) {
   if (g.field_voxel_mm > 0) {
     // The surface field's band is at least three of its voxels thick over the
     // whole surface, before any tree asks for more: its voxels are known now.
-    constexpr double kMaxBandVoxels = 5e7;  // ~1 GB; the default field aims at 2e6
+    const double max_band_voxels = limits::get("field_band_voxels");  // the default field aims at 2e6
     const double band_voxels = 3 * experiment.solid_->mesh().surface_area() / (g.field_voxel_mm * g.field_voxel_mm);
-    if (band_voxels > kMaxBandVoxels) {
+    if (band_voxels > max_band_voxels) {
       geometry.fail("field_voxel_mm",
                     fmt::format("{:.3g} mm makes the surface field's band at least {:.3g} voxels (~{:.1f} GB), more "
-                                "than the {:.0e} allowed; give a coarser field_voxel_mm, or leave it out (here the "
-                                "default would be {:.3g} mm)",
-                                g.field_voxel_mm, band_voxels, band_voxels * 20e-9, kMaxBandVoxels,
-                                experiment.solid_->default_field_voxel(0)));
+                                "than the {:.3g} allowed; give a coarser field_voxel_mm, or leave it out (here the "
+                                "default would be {:.3g} mm) {}",
+                                g.field_voxel_mm, band_voxels, band_voxels * 20e-9, max_band_voxels,
+                                experiment.solid_->default_field_voxel(0), limits::how_to_change("field_band_voxels")));
     }
   }
   return experiment;

@@ -1,5 +1,7 @@
 #include "spec/tree_outputs.h"
 
+#include "core/limits.h"
+
 #include <cmath>
 
 #include <fmt/format.h>
@@ -20,15 +22,16 @@ TreeOutputOptions TreeOutputOptions::read(const Properties& goal, const Experime
   options.census_voxel_mm = std::isnan(goal_keys.census_voxel_mm) ? longest / 128 : goal_keys.census_voxel_mm;
   require_in(goal, "census_voxel_mm", options.census_voxel_mm, Range::closed(longest / 2048, longest));
   // The census walks every one of its voxels: refused before, by count.
-  constexpr double kMaxCensusVoxels = 1e9;
+  const double max_census_voxels = limits::get("census_voxels");
   double census_voxels = 1;
   for (int axis = 0; axis < 3; ++axis)
     census_voxels *= std::max(1.0, std::ceil(experiment.solid().bounds().size()[axis] / options.census_voxel_mm));
-  if (census_voxels > kMaxCensusVoxels) {
+  if (census_voxels > max_census_voxels) {
     goal.fail("census_voxel_mm",
-              fmt::format("{:.3g} mm makes a census of {:.3g} voxels, more than the {:.0e} it takes at most (minutes of "
-                          "walking the tree); give a coarser census_voxel_mm (the default is {:.3g} mm)",
-                          options.census_voxel_mm, census_voxels, kMaxCensusVoxels, longest / 128));
+              fmt::format("{:.3g} mm makes a census of {:.3g} voxels (minutes of walking the tree), more than the "
+                          "{:.3g} it takes at most; give a coarser census_voxel_mm (the default is {:.3g} mm) {}",
+                          options.census_voxel_mm, census_voxels, max_census_voxels, longest / 128,
+                          limits::how_to_change("census_voxels")));
   }
   const auto output = experiment.output();
   if (output) options.section_pixels = read_options<OutputKeys>(*output).section_pixels;

@@ -1,5 +1,7 @@
 #include "tuning/image_file.h"
 
+#include "core/limits.h"
+
 #include <unistd.h>
 
 #include <algorithm>
@@ -72,12 +74,15 @@ std::string capturing_stderr(Decode&& decode) {
 
 }  // namespace
 
-cv::Mat read_image(const std::filesystem::path& file, const std::string& where, int flags, long long max_pixels) {
+cv::Mat read_image(const std::filesystem::path& file, const std::string& where, int flags, double max_pixels) {
   const std::string named = where + ": " + file.string();
+  std::string limit;  // built piecewise: g++ 12 warns falsely (-Wrestrict) on " " + std::string&&
+  if (!(max_pixels > 0)) limit.append(" ").append(limits::how_to_change("image_pixels"));
+  if (!(max_pixels > 0)) max_pixels = limits::get("image_pixels");
   if (std::filesystem::is_directory(file)) throw InputError(named + ": is a folder, not an image");
-  if (const auto size = png_size(file); size && size->width * size->height > max_pixels) {
-    throw InputError(fmt::format("{}: the image is {} x {} pixels, more than the {:.3g} read at most", named,
-                                 size->width, size->height, static_cast<double>(max_pixels)));
+  if (const auto size = png_size(file); size && static_cast<double>(size->width) * static_cast<double>(size->height) > max_pixels) {
+    throw InputError(fmt::format("{}: the image is {} x {} pixels, more than the {:.3g} read at most{}", named,
+                                 size->width, size->height, max_pixels, limit));
   }
   cv::Mat image;
   std::string refused;
@@ -93,9 +98,9 @@ cv::Mat read_image(const std::filesystem::path& file, const std::string& where, 
     throw InputError(named + ": cannot read it as an image (PNG, JPEG, BMP, TIFF, ...)" +
                      (decoder_said.empty() ? std::string() : "; the decoder said: " + decoder_said));
   }
-  if (static_cast<long long>(image.cols) * image.rows > max_pixels) {
-    throw InputError(fmt::format("{}: the image is {} x {} pixels, more than the {:.3g} read at most", named,
-                                 image.cols, image.rows, static_cast<double>(max_pixels)));
+  if (static_cast<double>(image.cols) * image.rows > max_pixels) {
+    throw InputError(fmt::format("{}: the image is {} x {} pixels, more than the {:.3g} read at most{}", named,
+                                 image.cols, image.rows, max_pixels, limit));
   }
   return image;
 }

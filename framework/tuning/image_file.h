@@ -13,12 +13,11 @@
 
 namespace spec2fab {
 
-/// 64 million pixels: an 8000 x 8000 photograph, 1.5 GB as linear floats.
-constexpr long long kMaxImagePixels = 64'000'000;
-
 /// cv::imread(file, flags), checked. `where` is the JSON path (with its
-/// file) that named the picture.
-cv::Mat read_image(const std::filesystem::path& file, const std::string& where, int flags,
-                   long long max_pixels = kMaxImagePixels);
+/// file) that named the picture. A picture of more than `max_pixels` (0:
+/// the limit "image_pixels", 64 million by default: an 8000 x 8000
+/// photograph, 1.5 GB as linear floats) is refused, a PNG by its header
+/// before it is decoded.
+cv::Mat read_image(const std::filesystem::path& file, const std::string& where, int flags, double max_pixels = 0);
 
 }  // namespace spec2fab

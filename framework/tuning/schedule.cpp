@@ -15,6 +15,7 @@
 #include <tbb/parallel_for.h>
 
 #include "core/error.h"
+#include "core/limits.h"
 #include "core/log.h"
 #include "core/ranks.h"
 #include "core/seed.h"
@@ -283,6 +284,13 @@ RunRecord Schedule::run(TunerNetwork& network, std::uint64_t seed, PhaseCheckpoi
                   first, phases_.size());
     }
   }
+  double planned_runs = 0;  // the loops below, bounded before they start
+  for (size_t p = first; p < phases_.size(); ++p)
+    planned_runs += static_cast<double>(phases_[p].sweeps) * static_cast<double>(phases_[p].members(network.size()).size());
+  if (const double max_runs = limits::get("tuner_runs"); planned_runs > max_runs)
+    throw InputError(fmt::format("schedule: its phases ask for {:.3g} tuner runs (sweeps times tuners), more than the "
+                                 "{:.3g} allowed {}",
+                                 planned_runs, max_runs, limits::how_to_change("tuner_runs")));
   for (size_t p = first; p < phases_.size(); ++p) {
     const Phase& phase = phases_[p];
     const std::vector<size_t> tuners = phase.members(network.size());

@@ -9,11 +9,13 @@
 #include <vector>
 
 #include <CLI/CLI.hpp>
+#include <fmt/format.h>
 
 #include "commands.h"
 #include "core/build_options.h"
 #include "core/error.h"
 #include "core/interrupt.h"
+#include "core/limits.h"
 #include "core/ranks.h"
 #include "core/log.h"
 #include "core/strings.h"
@@ -158,6 +160,15 @@ int main(int argc, char** argv) {
       app.add_subcommand("validate", "check an experiment and everything it names, run nothing");
   validate_cmd->add_option("experiment", validate_file, "experiment file (JSON)")->required();
 
+  // Resource limits (core/limits.h): the same option on every command that reads user input.
+  std::vector<std::string> limit_assignments;
+  std::string limit_help = "set a resource limit for this command, e.g. --limit tets=2e7 (repeatable; wins over an "
+                           "experiment's \"limits\"). Limits and defaults:";
+  for (const LimitDoc& doc : limits::docs())
+    limit_help += "\n  " + doc.name + " (" + fmt::format("{:g}", doc.default_value) + "): " + doc.meaning;
+  for (CLI::App* command : {run_cmd, validate_cmd, simulate_cmd, export_cmd})
+    command->add_option("--limit", limit_assignments, limit_help)->type_name("NAME=VALUE");
+
   std::string kind;
   bool list_verbose = false;
   std::filesystem::path datasets = default_datasets();
@@ -214,6 +225,7 @@ int main(int argc, char** argv) {
   if (*seed_option) run.seed = seed;
 
   try {
+    for (const std::string& assignment : limit_assignments) limits::set_from_command_line(assignment);
     if (*run_cmd) return cli::run_command(run);
     if (*validate_cmd) return cli::validate_command(validate_file);
     if (*bench_cmd) return cli::bench_command(bench);

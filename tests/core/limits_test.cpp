@@ -1,0 +1,58 @@
+// Resource limits: defaults, an experiment's "limits", the command line's
+// --limit winning over both, and refusals of what cannot be a limit.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <functional>
+
+#include "core/error.h"
+#include "core/limits.h"
+#include "core/properties.h"
+
+namespace spec2fab {
+namespace {
+
+using ::testing::HasSubstr;
+
+struct LimitsTest : ::testing::Test {
+  ~LimitsTest() override { limits::reset(); }
+};
+
+std::string refusal(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST_F(LimitsTest, TheCommandLineWinsOverTheExperimentWhichWinsOverTheDefault) {
+  EXPECT_EQ(limits::get("tets"), 1e7);
+  limits::set_from_experiment(Properties::parse(R"({"tets": 5000, "census_voxels": 2e9})", "e.json", "."));
+  EXPECT_EQ(limits::get("tets"), 5000);
+  EXPECT_EQ(limits::get("census_voxels"), 2e9);
+  limits::set_from_command_line("tets=7e4");
+  EXPECT_EQ(limits::get("tets"), 7e4);
+  EXPECT_EQ(limits::get("census_voxels"), 2e9);
+  // Another experiment replaces the first's limits, not the command line's.
+  limits::set_from_experiment(Properties::parse(R"({})", "f.json", "."));
+  EXPECT_EQ(limits::get("census_voxels"), 1e9);
+  EXPECT_EQ(limits::get("tets"), 7e4);
+  EXPECT_THAT(limits::how_to_change("tets"), HasSubstr("limit tets = 7e+04; set it with --limit tets="));
+}
+
+TEST_F(LimitsTest, WhatCannotBeALimitIsRefused) {
+  EXPECT_THAT(refusal([] { limits::set_from_command_line("tet=5"); }), HasSubstr("did you mean 'tets'?"));
+  EXPECT_THAT(refusal([] { limits::set_from_command_line("tets"); }), HasSubstr("NAME=VALUE with a positive number"));
+  EXPECT_THAT(refusal([] { limits::set_from_command_line("tets=-1"); }), HasSubstr("positive number"));
+  EXPECT_THAT(refusal([] { limits::set_from_command_line("tets=1e9x"); }), HasSubstr("positive number"));
+  EXPECT_THAT(refusal([] { limits::set_from_command_line("tree_depth=2000"); }), HasSubstr("at most 1000"));
+  EXPECT_THAT(refusal([] { limits::set_from_experiment(Properties::parse(R"({"tets": 0})", "e.json", ".")); }),
+              HasSubstr("e.json: /tets: must be a positive number"));
+  EXPECT_EQ(limits::get("tets"), 1e7);  // nothing refused was kept
+}
+
+}  // namespace
+}  // namespace spec2fab
