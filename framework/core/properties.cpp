@@ -154,6 +154,9 @@ Properties::Properties(std::shared_ptr<Document> document, const json* object, s
     : document_(std::move(document)), object_(object), pointer_(std::move(pointer)) {}
 
 Properties Properties::load(const std::filesystem::path& file) {
+  if (std::filesystem::is_directory(file)) throw InputError(file.string() + ": is a folder, not a file");
+  if (std::filesystem::exists(file) && !std::filesystem::is_regular_file(file))
+    throw InputError(file.string() + ": not a regular file");  // a FIFO or device would never end
   std::ifstream in(file, std::ios::binary);
   if (!in) {
     throw InputError(file.string() + ": cannot open: " +

@@ -5,6 +5,17 @@
 #include <cctype>
 #include <cstdint>
 #include <cstring>
+#include <chrono>
+#include <csignal>
+#include <cstdlib>
+#include <string_view>
+
+#include <fcntl.h>
+#include <poll.h>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <fstream>
+#include <sstream>
 #include <memory>
 #include <unordered_map>
 
@@ -14,8 +25,10 @@
 #include <assimp/Importer.hpp>
 
 #include <Eigen/Geometry>
+#include <fmt/format.h>
 
 #include "core/error.h"
+#include "core/limits.h"
 
 namespace spec2fab {
 
@@ -97,18 +110,117 @@ struct SceneWalker {
   }
 };
 
+int ply_type_size(const std::string& type) {
+  static const std::unordered_map<std::string, int> sizes = {
+      {"char", 1},  {"uchar", 1},  {"int8", 1},   {"uint8", 1},   {"short", 2},  {"ushort", 2},
+      {"int16", 2}, {"uint16", 2}, {"int", 4},    {"uint", 4},    {"int32", 4},  {"uint32", 4},
+      {"float", 4}, {"float32", 4}, {"double", 8}, {"float64", 8}};
+  const auto found = sizes.find(type);
+  return found == sizes.end() ? 0 : found->second;
+}
+
+/// Assimp's PLY reader loops forever on some malformed headers and trusts
+/// element counts when it allocates, so a PLY file's header is read first:
+/// its grammar, and counts that the bytes after it can hold (each element
+/// at least its scalar properties' bytes, or two characters in ASCII).
+void check_ply_header(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::string line;
+  if (!std::getline(in, line) || line.rfind("ply", 0) != 0) return;  // not a PLY file: its reader decides
+  const auto bad = [&](int number, const std::string& what) {
+    fail(file, "read", "malformed PLY header, line " + std::to_string(number) + ": " + what);
+  };
+  const std::uintmax_t size = std::filesystem::file_size(file);
+  std::string format;
+  double needed_bytes = 0;  // at least, for the elements declared
+  double element_count = -1, element_bytes = 0;
+  const auto close_element = [&] {
+    if (element_count >= 0) needed_bytes += element_count * (format == "ascii" ? 2.0 : std::max(element_bytes, 1.0));
+  };
+  for (int number = 2; std::getline(in, line); ++number) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    std::istringstream words(line);
+    std::string keyword;
+    words >> keyword;
+    if (keyword == "comment" || keyword == "obj_info" || keyword.empty()) continue;
+    if (keyword == "format") {
+      std::string version;
+      words >> format >> version;
+      if (format != "ascii" && format != "binary_little_endian" && format != "binary_big_endian")
+        bad(number, "unknown format '" + format + "'");
+    } else if (keyword == "element") {
+      std::string name, count;
+      words >> name >> count;
+      if (format.empty()) bad(number, "an element before the format line");
+      if (name.empty() || count.empty() || count.find_first_not_of("0123456789") != std::string::npos || count.size() > 12)
+        bad(number, "'element' needs a name and a count, got '" + line + "'");
+      close_element();
+      element_count = std::stod(count);
+      element_bytes = 0;
+    } else if (keyword == "property") {
+      if (element_count < 0) bad(number, "a property before any element");
+      std::string type;
+      words >> type;
+      if (type == "list") {
+        std::string count_type, item_type, name;
+        words >> count_type >> item_type >> name;
+        if (ply_type_size(count_type) == 0 || ply_type_size(item_type) == 0 || name.empty())
+          bad(number, "'property list' needs a count type, an item type and a name, got '" + line + "'");
+        element_bytes += ply_type_size(count_type);
+      } else {
+        std::string name;
+        words >> name;
+        if (ply_type_size(type) == 0 || name.empty())
+          bad(number, "'property' needs a type and a name, got '" + line + "'");
+        element_bytes += ply_type_size(type);
+      }
+    } else if (keyword == "end_header") {
+      close_element();
+      const double left = static_cast<double>(size) - static_cast<double>(in.tellg());
+      if (needed_bytes > left)
+        fail(file, "read", "the PLY header declares elements that need at least " + std::to_string(static_cast<long long>(needed_bytes)) +
+                               " bytes, and the file has " + std::to_string(static_cast<long long>(left)) + " after it (truncated?)");
+      return;
+    } else {
+      bad(number, "unknown keyword '" + keyword + "'");
+    }
+    if (number > 10000) bad(number, "no end_header");
+  }
+  fail(file, "read", "malformed PLY header: no end_header");
+}
+
+void check_face_indices(const std::filesystem::path& file, const aiScene& scene) {
+  for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
+    const aiMesh* mesh = scene.mMeshes ? scene.mMeshes[m] : nullptr;
+    if (mesh == nullptr) fail(file, "read", "corrupt file: an empty mesh record");
+    if (mesh->mNumFaces > 0 && (mesh->mFaces == nullptr || mesh->mVertices == nullptr))
+      fail(file, "read", "corrupt file: faces without vertices");
+    for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
+      const aiFace& face = mesh->mFaces[f];
+      if (face.mNumIndices > 0 && face.mIndices == nullptr) fail(file, "read", "corrupt file: face " + std::to_string(f) + " has no corners");
+      for (unsigned k = 0; k < face.mNumIndices; ++k) {
+        if (face.mIndices[k] >= mesh->mNumVertices)
+          fail(file, "read", "face " + std::to_string(f) + " refers to vertex " + std::to_string(face.mIndices[k]) +
+                                 ", and there are " + std::to_string(mesh->mNumVertices));
+      }
+    }
+  }
+}
+
 }  // namespace
 
-Mesh load_mesh(const std::filesystem::path& file, double scale_to_mm) {
-  std::error_code error;
-  if (!std::filesystem::exists(file, error)) fail(file, "read", "file not found");
-  if (!std::filesystem::is_regular_file(file, error)) fail(file, "read", "not a regular file");
-  if (!(scale_to_mm > 0)) fail(file, "read", "scale to mm must be positive");
+namespace {
 
+Mesh import_with_assimp(const std::filesystem::path& file, double scale_to_mm) {
   // No DefaultLogger is created, so Assimp stays silent (its NullLogger).
   Assimp::Importer importer;
-  const aiScene* scene =
-      importer.ReadFile(file.string(), aiProcess_Triangulate | aiProcess_ValidateDataStructure);
+  // Read without post-processing first: Assimp's steps (triangulation
+  // included) abort the process on faces that point past the vertices,
+  // which its readers pass through from a malformed file.
+  const aiScene* scene = importer.ReadFile(file.string(), 0);
+  if (scene == nullptr) fail(file, "read", one_line(importer.GetErrorString()));
+  check_face_indices(file, *scene);
+  scene = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_ValidateDataStructure);
   if (scene == nullptr) fail(file, "read", one_line(importer.GetErrorString()));
   if (scene->mRootNode == nullptr || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE))
     fail(file, "read", "no triangles");
@@ -120,6 +232,118 @@ Mesh load_mesh(const std::filesystem::path& file, double scale_to_mm) {
   if (mesh.triangles.empty()) fail(file, "read", "no triangles");
   if (!walker.all_have_uv) mesh.corner_uv.clear();
   return mesh;
+}
+
+template <class T>
+void append_raw(std::string& out, const std::vector<T>& values) {
+  const std::uint64_t count = values.size();
+  out.append(reinterpret_cast<const char*>(&count), sizeof count);
+  out.append(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(T));
+}
+
+template <class T>
+bool take_raw(std::string_view& in, std::vector<T>& values) {
+  std::uint64_t count = 0;
+  if (in.size() < sizeof count) return false;
+  std::memcpy(&count, in.data(), sizeof count);
+  in.remove_prefix(sizeof count);
+  if (count > in.size() / sizeof(T)) return false;
+  values.resize(count);
+  std::memcpy(static_cast<void*>(values.data()), in.data(), count * sizeof(T));  // plain numbers (Eigen fixed-size)
+  in.remove_prefix(count * sizeof(T));
+  return true;
+}
+
+/// Runs Assimp in a child process: its readers crash (SIGSEGV, aborted
+/// assertions) and loop forever on some malformed files, which must cost a
+/// clear refusal, not the run. The child sends back the mesh, or the
+/// refusal's text; a child that dies, or takes longer than `seconds`, is
+/// named as such.
+Mesh import_isolated(const std::filesystem::path& file, double scale_to_mm, double seconds) {
+  int pipe_ends[2];
+  if (pipe2(pipe_ends, O_CLOEXEC) != 0) return import_with_assimp(file, scale_to_mm);
+  const pid_t child = fork();
+  if (child < 0) {
+    close(pipe_ends[0]);
+    close(pipe_ends[1]);
+    return import_with_assimp(file, scale_to_mm);
+  }
+  if (child == 0) {
+    close(pipe_ends[0]);
+    // Die by the signal, so that the parent sees it (a fuzzer's or
+    // sanitizer's handler would report the child's crash as the parent's).
+    for (int signal : {SIGSEGV, SIGBUS, SIGABRT, SIGFPE, SIGILL}) std::signal(signal, SIG_DFL);
+    std::string answer;
+    try {
+      const Mesh mesh = import_with_assimp(file, scale_to_mm);
+      answer.push_back('M');  // not = "M": g++ 12 warns falsely (-Wrestrict) on assigning a literal here
+      append_raw(answer, mesh.vertices);
+      append_raw(answer, mesh.triangles);
+      append_raw(answer, mesh.corner_uv);
+    } catch (const std::exception& e) {
+      answer.assign(1, 'E');
+      answer += e.what();
+    }
+    for (size_t sent = 0; sent < answer.size();) {
+      const ssize_t n = write(pipe_ends[1], answer.data() + sent, answer.size() - sent);
+      if (n <= 0) _exit(3);
+      sent += static_cast<size_t>(n);
+    }
+    _exit(0);
+  }
+  close(pipe_ends[1]);
+  std::string answer;
+  bool timed_out = false;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+  for (char buffer[65536];;) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    pollfd wait_for{pipe_ends[0], POLLIN, 0};
+    const int ready = left.count() > 0 ? poll(&wait_for, 1, static_cast<int>(std::min<long long>(left.count(), 1000))) : 0;
+    if (ready < 0 && errno == EINTR) continue;
+    if (ready == 0) {
+      if (std::chrono::steady_clock::now() < deadline) continue;
+      timed_out = true;
+      kill(child, SIGKILL);
+      break;
+    }
+    const ssize_t n = read(pipe_ends[0], buffer, sizeof buffer);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    answer.append(buffer, static_cast<size_t>(n));
+  }
+  close(pipe_ends[0]);
+  int status = 0;
+  while (waitpid(child, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (timed_out)
+    fail(file, "read", fmt::format("the mesh reader (Assimp) did not finish in {:g} s; the file is malformed or far "
+                                   "too large {}", seconds, limits::how_to_change("mesh_read_seconds")));
+  if (WIFSIGNALED(status) || !WIFEXITED(status) || WEXITSTATUS(status) != 0 || answer.empty()) {
+    const int signal = WIFSIGNALED(status) ? WTERMSIG(status) : 0;
+    fail(file, "read", std::string("the mesh reader (Assimp) crashed on it") +
+                           (signal ? " (" + std::string(strsignal(signal)) + ")" : std::string()) + "; the file is malformed");
+  }
+  if (answer[0] == 'E') throw InputError(answer.substr(1));
+  Mesh mesh;
+  mesh.name = file.filename().string();
+  std::string_view in(answer);
+  in.remove_prefix(1);
+  if (!take_raw(in, mesh.vertices) || !take_raw(in, mesh.triangles) || !take_raw(in, mesh.corner_uv) || !in.empty())
+    fail(file, "read", "the mesh reader's answer was cut short");
+  return mesh;
+}
+
+}  // namespace
+
+Mesh load_mesh(const std::filesystem::path& file, double scale_to_mm, double reader_seconds) {
+  std::error_code error;
+  if (!std::filesystem::exists(file, error)) fail(file, "read", "file not found");
+  if (!std::filesystem::is_regular_file(file, error)) fail(file, "read", "not a regular file");
+  if (!(scale_to_mm > 0)) fail(file, "read", "scale to mm must be positive");
+  check_ply_header(file);
+  // Open MPI forbids fork() in its processes: under mpirun Assimp runs here.
+  if (std::getenv("OMPI_COMM_WORLD_SIZE") != nullptr) return import_with_assimp(file, scale_to_mm);
+  return import_isolated(file, scale_to_mm, reader_seconds > 0 ? reader_seconds : limits::get("mesh_read_seconds"));
 }
 
 namespace {

@@ -14,7 +14,12 @@ namespace spec2fab {
 /// Throws InputError ("file: cannot read mesh: reason") when the file is
 /// missing, unreadable or holds no triangles. Does not check topology: see
 /// mesh_check.h.
-Mesh load_mesh(const std::filesystem::path& file, double scale_to_mm = 1.0);
+///
+/// Assimp's readers crash or hang on some malformed files, so they run in a
+/// child process (not under mpirun, whose processes must not fork): a reader
+/// that dies, or takes longer than `reader_seconds` (0: the limit
+/// "mesh_read_seconds", 60 s by default), is a refusal naming the file. A PLY header is checked before any reader sees it.
+Mesh load_mesh(const std::filesystem::path& file, double scale_to_mm = 1.0, double reader_seconds = 0);
 
 /// Writes a mesh (format from the extension: .obj, .stl, .ply) — used to make
 /// datasets and test fixtures.

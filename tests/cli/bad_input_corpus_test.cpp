@@ -251,7 +251,7 @@ TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
   }
   // Experiments: files they name.
   experiment_case("mesh not found", with_mesh("/nonexistent/mesh.obj"), "file not found");
-  experiment_case("mesh is a folder", with_mesh(dir_.string()), dir_.string());
+  experiment_case("mesh is a folder", with_mesh(dir_.string()), "is a folder");
   experiment_case("printer not found", with_printer("/nonexistent/printer.json"), "file not found");
   experiment_case("materials not found", with_materials("/nonexistent/materials.json"), "file not found");
 
@@ -283,6 +283,24 @@ TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
   mesh_case("a NaN coordinate", "nan.obj", "v 0 0 0\nv 1 0 0\nv 0 nan 0\nv 0 0 1\n" + tetrahedron_faces,
             "nan.obj");
   mesh_case("ASCII STL with no facets", "none.stl", "solid none\nendsolid none\n", "none.stl");
+  // Found by fuzz_mesh: Assimp's readers hang or crash on these.
+  const std::string ply_head = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                               "property float z\nelement face 4\nproperty list uchar int vertex_indices\nend_header\n";
+  mesh_case("PLY header with an element of no count", "count.ply",
+            "ply\nformat ascii 1.0\nelement operty float y\nproperty float z\nend_header\n0 0 0\n",
+            "malformed PLY header, line 3: 'element' needs a name and a count");
+  mesh_case("PLY whose counts the file cannot hold", "short.ply", ply_head + "0 0 0\n", "truncated?");
+  mesh_case("PLY with a property before any element", "early.ply", "ply\nformat ascii 1.0\nproperty float x\nend_header\n",
+            "a property before any element");
+  mesh_case("PLY face past the vertices", "past.ply",
+            ply_head + "0 0 0\n10 0 0\n0 10 0\n0 0 10\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 9\n", "past.ply");
+  mesh_case("OFF that crashes Assimp's reader", "crash.off",
+            std::string("OFF\n4 4 0\n0 0 0\n10 0 0\n0 10 0\n5 0 10\n3 0\xc8" "2 1\n3 0 v 2 0 0\nv OFF\n4 4 0\n"
+            "0 0 0\n10 0 0\n0 30 0\n0 10 0 0\nv 0 10 0\nv 0 0 10\nf 1 3 2\nf 1 2 4\nf 1 4 2 3 2 3 4\n"
+            "0 10\n3 0 2 4 0\n0 0 0\n10 0 0\n0 30 0\n0 101 3\n3\x1f" "0 3 2\n3 1  0 0\nv 0 10 0\n"
+            "v 0 0 10\nf 1 3 2\nf 1 2 4\nf 1 2 3\n4 2 3 2 3 4\n0 10\n3 0 2 1 1\n3 0 1 3\n3 0 3 2\n"
+            "3 1 2 3\n\n", 301),
+            "crashed on it");
 
   // Images: texture goals (albedo) and caustic goals.
   const auto image_case = [&](const std::string& name, const std::string& file, const std::string& bytes,
@@ -339,7 +357,7 @@ TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
                R"({"name": "p", "technology": "polyjet", "resolution_dpi": [63.5, 63.5], "layer_mm": 0.4,
                    "build_volume_mm": [20, 20, 20], "model_materials": ["VeroCyan", "VeroWhitePlus"], "source": "t"})",
                "build volume");
-  cases.push_back({"printer: a folder", {{"e.json", with_printer(dir_.string())}}, run_of("e.json"), dir_.string()});
+  cases.push_back({"printer: a folder", {{"e.json", with_printer(dir_.string())}}, run_of("e.json"), "is a folder"});
 
   // Material libraries.
   const auto library_case = [&](const std::string& name, const std::string& text, const std::string& expected) {
@@ -383,7 +401,28 @@ TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
   cases.push_back({"command: unknown subcommand", {}, "frobnicate", "frobnicate"});
   cases.push_back({"command: threads zero", {{"e.json", good}}, "run {dir}/e.json --threads 0 --out {dir}/out", "threads"});
   cases.push_back({"command: experiment not found", {}, "run {dir}/missing.json --out {dir}/out", "missing.json"});
-  cases.push_back({"command: experiment is a folder", {}, "run {dir} --out {dir}/out", dir_.string()});
+  cases.push_back({"command: experiment is a folder", {}, "run {dir} --out {dir}/out", "is a folder"});
+
+  // Resource limits (core/limits.h), from the command line and the experiment.
+  cases.push_back({"limits: an unknown name", {{"e.json", good}}, run_of("e.json") + " --limit tet=5",
+                   "no limit 'tet'; did you mean 'tets'?"});
+  cases.push_back({"limits: not a number", {{"e.json", good}}, run_of("e.json") + " --limit tets=abc",
+                   "positive number"});
+  cases.push_back({"limits: a tree depth the stack cannot take", {{"e.json", good}},
+                   run_of("e.json") + " --limit tree_depth=5000", "at most 1000"});
+  std::string misspelt_limit = good;
+  misspelt_limit.insert(misspelt_limit.rfind('}'), R"(, "limits": {"tet": 5})");
+  cases.push_back({"limits: misspelt in the experiment", {{"e.json", misspelt_limit}}, run_of("e.json"),
+                   "/limits/tet: unknown key; did you mean 'tets'?"});
+  const std::string two_levels = tree_experiment(
+      R"({"type": "stratum", "depth_mm": 1, "shell": {"type": "layered", "material": "VeroCyan"},
+          "core": {"type": "layered", "material": "VeroWhitePlus"}})");
+  cases.push_back({"limits: a tree deeper than tree_depth", {{"e.json", two_levels}}, run_of("e.json") + " --limit tree_depth=0.5",
+                   "nested more than 0.5 levels deep here"});
+  cases.push_back({"limits: a mesh reader slower than mesh_read_seconds", {{"e.json", good}},
+                   run_of("e.json") + " --limit mesh_read_seconds=0.001", "did not finish in 0.001 s"});
+  cases.push_back({"limits: an image beyond image_pixels", {{"e.json", albedo_experiment((kDatasets / "images/earth_96x48.png").string())}},
+                   run_of("e.json") + " --limit image_pixels=100", "96 x 48 pixels, more than the 100 read at most"});
 
   // Run folders for export.
   const auto export_case = [&](const std::string& name, std::map<std::string, std::string> files,

@@ -26,7 +26,7 @@
 namespace spec2fab {
 
 class Experiment;
-class PrinterProfile;
+struct PrinterProfile;
 class Properties;
 class Solid;
 class AlbedoLookup;

@@ -1,0 +1,15 @@
+// Experiment files, as `spec2fab validate` and `run` read them: the JSON,
+// every file it names (meshes, images, materials, printers from datasets/)
+// and the translator built from it, every key checked. Nothing runs.
+#include "fuzz_support.h"
+#include "spec/translator.h"
+
+extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  spec2fab::fuzz::quiet_logging();
+  return 0;
+}
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const auto file = spec2fab::fuzz::input_file(data, size, "experiments/input.json");
+  return spec2fab::fuzz::accept_or_refuse([&] { spec2fab::prepare_experiment(file); });
+}

@@ -1,0 +1,20 @@
+// `spec2fab simulate` configs: materials, printer, an optional mesh, the
+// subtree and the simulator's options, every part built and every key
+// checked (prepare_simulation), for every registered simulator in turn.
+// Nothing is simulated.
+#include "commands.h"
+#include "fuzz_support.h"
+
+extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  spec2fab::fuzz::quiet_logging();
+  return 0;
+}
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  using namespace spec2fab;
+  // Beside the experiments, so that "../materials/…" resolves as in datasets/simulations.
+  const auto file = fuzz::input_file(data, size, "experiments/simulate.json");
+  for (const std::string& simulator : SimulatorRegistry::instance().names())
+    fuzz::accept_or_refuse([&] { cli::prepare_simulation(file, simulator); });
+  return 0;
+}
