@@ -238,7 +238,7 @@ template <class T>
 void append_raw(std::string& out, const std::vector<T>& values) {
   const std::uint64_t count = values.size();
   out.append(reinterpret_cast<const char*>(&count), sizeof count);
-  out.append(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(T));
+  if (!values.empty()) out.append(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(T));
 }
 
 template <class T>
@@ -249,7 +249,7 @@ bool take_raw(std::string_view& in, std::vector<T>& values) {
   in.remove_prefix(sizeof count);
   if (count > in.size() / sizeof(T)) return false;
   values.resize(count);
-  std::memcpy(static_cast<void*>(values.data()), in.data(), count * sizeof(T));  // plain numbers (Eigen fixed-size)
+  if (count > 0) std::memcpy(static_cast<void*>(values.data()), in.data(), count * sizeof(T));  // plain numbers (Eigen fixed-size)
   in.remove_prefix(count * sizeof(T));
   return true;
 }
@@ -273,6 +273,8 @@ Mesh import_isolated(const std::filesystem::path& file, double scale_to_mm, doub
     // Die by the signal, so that the parent sees it (a fuzzer's or
     // sanitizer's handler would report the child's crash as the parent's).
     for (int signal : {SIGSEGV, SIGBUS, SIGABRT, SIGFPE, SIGILL}) std::signal(signal, SIG_DFL);
+    // What a crash prints (a sanitizer's report) is not the user's one line.
+    if (const int quiet = open("/dev/null", O_WRONLY); quiet >= 0) dup2(quiet, STDERR_FILENO);
     std::string answer;
     try {
       const Mesh mesh = import_with_assimp(file, scale_to_mm);
