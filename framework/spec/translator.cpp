@@ -129,7 +129,9 @@ std::filesystem::path run_experiment(const std::filesystem::path& file, const Ru
   nlohmann::json timing = {{"threads", threads}};
   check_run_identity(folder, run_identity(experiment, result));
   FolderCheckpoint checkpoint(folder);
-  RunContext context{experiment, folder, threads, options.seed.value_or(experiment.seed()), result, &timing, &checkpoint};
+  // Only rank 0's folder keeps a checkpoint: the other ranks need not build one.
+  RunContext context{experiment, folder, threads, options.seed.value_or(experiment.seed()), result, &timing,
+                     ranks::root() ? &checkpoint : nullptr};
   spdlog::info("running '{}' ({}) on {} thread(s)", experiment.name(), experiment.translator(), threads);
   prepared.translator->run(context);
 
