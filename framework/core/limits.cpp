@@ -58,6 +58,8 @@ const std::vector<LimitDoc>& docs() {
       {"column_cells", 1e6, "cells of one column node, each a subtree of nodes"},
       {"tets", 1e7, "tetrahedra TetGen would make for the FEM (about 4.6 kB and 42 us of one solve each)"},
       {"tuner_runs", 1e8, "tuner runs a schedule asks for (sweeps times tuners, summed over its phases)"},
+      {"evaluations", 1e12, "error evaluations a schedule plans (each tuner run's optimizer's, summed over its phases)"},
+      {"tuning_hours", 72, "hours of tuning a schedule may take, projected from the pace of each phase's first runs"},
       {"mesh_read_seconds", 60, "seconds a mesh file's reader may take before the file is refused"},
   };
   return all;

@@ -46,6 +46,10 @@ class Translator {
   virtual void run(RunContext& context) = 0;
   /// The tuned tree (after run), written to tree.json.
   virtual const ReducerTree& tree() const = 0;
+  /// Refuses (InputError) work past the resource limits that only the built
+  /// translator can count, such as its schedule's tuner runs and planned
+  /// evaluations: `validate` then refuses it too.
+  virtual void check_limits() {}
 };
 
 using TranslatorRegistry = Registry<Translator, const Experiment&>;

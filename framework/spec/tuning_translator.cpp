@@ -19,6 +19,10 @@ void TuningTranslator::set_tree(const nlohmann::json& tree, const std::string& w
            goal, experiment);
 }
 
+void TuningTranslator::check_limits() {
+  if (network_.size() > 0) schedule_.check_plan(network_);
+}
+
 void TuningTranslator::run(RunContext& context) {
   if (tunes()) {
     prepare(context);

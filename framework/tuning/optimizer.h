@@ -89,6 +89,12 @@ class Optimizer {
   /// evaluation limit) spans that budget instead of its own default length.
   /// Methods without a schedule ignore it; the caller still stops the run.
   virtual void plan_evaluations(long long /*evaluations*/) {}
+  /// How many error evaluations one run on `problem` makes at most, the
+  /// start's included, as its options stand (annealing's iterations + 1,
+  /// NLopt's max_evaluations…): what a schedule's estimate counts before it
+  /// starts (docs/robustness.md). Nothing when the method cannot say in
+  /// advance (branch and bound prunes as it goes).
+  virtual std::optional<double> planned_evaluations(const Problem& /*problem*/) const { return std::nullopt; }
   /// A schedule gives every tuner run a seed derived from (run seed, phase,
   /// sweep, tuner), so results never depend on which thread ran what.
   /// Stochastic optimizers draw from random_seed(their "seed" option).

@@ -132,6 +132,58 @@ namespace {
 
 std::atomic<long long> tuner_runs_here{0};
 
+// What the phases from `first` on ask for, counted before they start: tuner
+// runs (sweeps × tuners) and error evaluations (each run's optimizer plan;
+// runs whose optimizer cannot say are left out of that count and named).
+void check_schedule_plan(const std::vector<Phase>& phases, size_t first, TunerNetwork& network) {
+  double runs = 0, evaluations = 0, unplanned_runs = 0;
+  for (size_t p = first; p < phases.size(); ++p) {
+    const Phase& phase = phases[p];
+    const std::vector<size_t> members = phase.members(network.size());
+    runs += static_cast<double>(phase.sweeps) * static_cast<double>(members.size());
+    std::unique_ptr<Optimizer> phase_optimizer;
+    if (!phase.optimizer.is_null())
+      phase_optimizer = build_optimizer(Properties::wrap(phase.optimizer, "schedule phase '" + phase.name + "' optimizer"));
+    for (size_t t : members) {
+      if (t >= network.size()) continue;  // refused, naming the tuner, when the phase starts
+      Tuner& tuner = network.tuner(t);
+      const Optimizer& optimizer = phase_optimizer ? *phase_optimizer : tuner.optimizer();
+      if (const std::optional<double> planned = optimizer.planned_evaluations(tuner.problem()))
+        evaluations += static_cast<double>(phase.sweeps) * *planned;
+      else
+        unplanned_runs += phase.sweeps;
+    }
+  }
+  if (const double max_runs = limits::get("tuner_runs"); runs > max_runs)
+    throw InputError(fmt::format("schedule: its phases ask for {:.3g} tuner runs (sweeps times tuners), more than the "
+                                 "{:.3g} allowed {}",
+                                 runs, max_runs, limits::how_to_change("tuner_runs")));
+  if (const double max_evaluations = limits::get("evaluations"); evaluations > max_evaluations)
+    throw InputError(fmt::format("schedule: its phases plan {:.3g} error evaluations (each tuner run's optimizer "
+                                 "evaluations, summed){}, more than the {:.3g} allowed {}",
+                                 evaluations,
+                                 unplanned_runs > 0 ? fmt::format(" besides {:.3g} runs of optimizers that cannot say "
+                                                                  "how many they make", unplanned_runs)
+                                                    : std::string(),
+                                 max_evaluations, limits::how_to_change("evaluations")));
+}
+
+// The time a phase would take at the pace of its tuner runs so far, added to
+// the run's time before it, against the tuning_hours limit. Checked as runs
+// finish, so that a schedule far beyond the limit stops after its first runs
+// rather than after days. Under mpirun the ranks' clocks differ and a refusal
+// on one would leave the others waiting: only runs of one process are checked.
+void check_phase_pace(const Phase& phase, long long done, long long total, double phase_seconds, double seconds_before) {
+  if (done <= 0 || done >= total || ranks::size() > 1) return;
+  const double projected = seconds_before + phase_seconds / static_cast<double>(done) * static_cast<double>(total);
+  const double max_hours = limits::get("tuning_hours");
+  if (projected <= max_hours * 3600) return;
+  throw InputError(fmt::format("schedule: phase '{}' took {:.3g} s for its first {} of {} tuner runs; at that pace "
+                               "the run's tuning would take about {:.3g} h, more than the {:.3g} h allowed {}",
+                               phase.name, phase_seconds, done, total, projected / 3600, max_hours,
+                               limits::how_to_change("tuning_hours")));
+}
+
 // A summary whole, wall times included, for another rank: CBOR keeps every
 // double (NaN too) bit for bit, so records are those of one process.
 nlohmann::json summary_state(const Summary& s) {
@@ -273,6 +325,10 @@ std::vector<size_t> Phase::members(size_t network_size) const {
   return all;
 }
 
+void Schedule::check_plan(TunerNetwork& network, size_t first_phase) const {
+  check_schedule_plan(phases_, first_phase, network);
+}
+
 RunRecord Schedule::run(TunerNetwork& network, std::uint64_t seed, PhaseCheckpoint* checkpoint) const {
   RunRecord record;
   size_t first = 0;
@@ -284,13 +340,11 @@ RunRecord Schedule::run(TunerNetwork& network, std::uint64_t seed, PhaseCheckpoi
                   first, phases_.size());
     }
   }
-  double planned_runs = 0;  // the loops below, bounded before they start
-  for (size_t p = first; p < phases_.size(); ++p)
-    planned_runs += static_cast<double>(phases_[p].sweeps) * static_cast<double>(phases_[p].members(network.size()).size());
-  if (const double max_runs = limits::get("tuner_runs"); planned_runs > max_runs)
-    throw InputError(fmt::format("schedule: its phases ask for {:.3g} tuner runs (sweeps times tuners), more than the "
-                                 "{:.3g} allowed {}",
-                                 planned_runs, max_runs, limits::how_to_change("tuner_runs")));
+  check_plan(network, first);  // the loops below, bounded before they start
+  const auto schedule_start = std::chrono::steady_clock::now();
+  const auto seconds_since = [](std::chrono::steady_clock::time_point since) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+  };
   for (size_t p = first; p < phases_.size(); ++p) {
     const Phase& phase = phases_[p];
     const std::vector<size_t> tuners = phase.members(network.size());
@@ -318,7 +372,9 @@ RunRecord Schedule::run(TunerNetwork& network, std::uint64_t seed, PhaseCheckpoi
       const Properties properties = Properties::wrap(phase.optimizer, "schedule phase '" + phase.name + "' optimizer");
       for (size_t t : tuners) own_optimizers.push_back(network.tuner(t).exchange_optimizer(build_optimizer(properties)));
     }
-    Progress progress(phase.name, static_cast<long long>(tuners.size()) * phase.sweeps);
+    const long long phase_runs = static_cast<long long>(tuners.size()) * phase.sweeps;
+    Progress progress(phase.name, phase_runs);
+    const double seconds_before = std::chrono::duration<double>(start - schedule_start).count();
     long long done = 0, evaluations = 0;
     for (int sweep = 0; sweep < phase.sweeps; ++sweep) {
       if (phase.coupling) phase.coupling->begin_sweep(network, tuners);
@@ -346,6 +402,7 @@ RunRecord Schedule::run(TunerNetwork& network, std::uint64_t seed, PhaseCheckpoi
           for (size_t t : colour) sweep_error += summaries[t].final_error;
           swept += colour.size();
           progress.update(done, progress_detail(sweep, sweep_error, swept));
+          check_phase_pace(phase, done, phase_runs, seconds_since(start), seconds_before);
         }
       } else {
         for (size_t t : tuners) {
@@ -355,6 +412,7 @@ RunRecord Schedule::run(TunerNetwork& network, std::uint64_t seed, PhaseCheckpoi
           if (phase.coupling) phase.coupling->after_tune(network, t, tuned);
           sweep_error += summaries[t].final_error;
           progress.update(++done, progress_detail(sweep, sweep_error, ++swept));
+          check_phase_pace(phase, done, phase_runs, seconds_since(start), seconds_before);
         }
       }
       for (size_t t : tuners) evaluations += summaries[t].evaluations;

@@ -193,6 +193,13 @@ class Schedule {
   /// and starts after the last phase an earlier process saved (InputError
   /// when that state is not of this schedule and network).
   RunRecord run(TunerNetwork& network, std::uint64_t seed, PhaseCheckpoint* checkpoint = nullptr) const;
+  /// What run() checks before it starts (run() checks it again): InputError
+  /// when the phases from `first_phase` on ask for more tuner runs, or plan
+  /// more error evaluations (Optimizer::planned_evaluations), than the
+  /// limits tuner_runs and evaluations allow. While it runs, run() projects
+  /// each phase's time from the pace of its finished tuner runs and stops,
+  /// with InputError, when the tuning would take longer than tuning_hours.
+  void check_plan(TunerNetwork& network, size_t first_phase = 0) const;
 
  private:
   std::vector<Phase> phases_;

@@ -91,6 +91,9 @@ class Annealing final : public Optimizer {
     options_.schedule_iterations = 0;
     scheduled_ = 0;
   }
+  std::optional<double> planned_evaluations(const Problem& /*problem*/) const override {
+    return options_.iterations + 1.0;
+  }
   nlohmann::json saved_state() const override { return scheduled_; }
   void restore(const nlohmann::json& state) override { scheduled_ = state.get<long long>(); }
 

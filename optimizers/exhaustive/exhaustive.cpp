@@ -41,6 +41,15 @@ class Exhaustive final : public Optimizer {
 
   std::string name() const override { return "exhaustive"; }
   std::vector<Capability> requirements() const override { return {Capability::discrete_only}; }
+  /// Every assignment, up to max_candidates (beyond it the run refuses at once).
+  std::optional<double> planned_evaluations(const Problem& problem) const override {
+    double candidates = 1;
+    for (int i = 0; i < problem.dimension(); ++i) {
+      candidates *= static_cast<double>(problem.domain(i).cardinality());
+      if (candidates > options_.max_candidates) return 1.0;
+    }
+    return candidates + 1.0;
+  }
 
  protected:
   void run(Problem& problem, std::vector<double>& x, Summary& summary,

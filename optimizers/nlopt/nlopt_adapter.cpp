@@ -158,6 +158,9 @@ class NloptAdapter final : public Optimizer {
   void plan_evaluations(long long evaluations) override {
     options_.max_evaluations = static_cast<int>(std::clamp<long long>(evaluations - 1, 1, 1'000'000'000));
   }
+  std::optional<double> planned_evaluations(const Problem& /*problem*/) const override {
+    return options_.max_evaluations + 1.0;
+  }
 
  protected:
   void run(Problem& problem, std::vector<double>& x, Summary& summary,

@@ -85,6 +85,9 @@ class Spsa final : public Optimizer {
     const long long fixed = 1 + (options_.a == 0 ? 2 * kCalibrationSamples : 0) + 1;
     options_.iterations = static_cast<int>(std::clamp<long long>((evaluations - fixed) / 2, 1, 1'000'000'000));
   }
+  std::optional<double> planned_evaluations(const Problem& /*problem*/) const override {
+    return 2.0 + (options_.a == 0 ? 2.0 * kCalibrationSamples : 0.0) + 2.0 * options_.iterations;
+  }
 
  protected:
   void run(Problem& problem, std::vector<double>& x, Summary& summary,

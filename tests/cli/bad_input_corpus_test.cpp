@@ -427,6 +427,26 @@ TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
   cases.push_back({"limits: an image beyond image_pixels", {{"e.json", albedo_experiment((kDatasets / "images/earth_96x48.png").string())}},
                    run_of("e.json") + " --limit image_pixels=100", "96 x 48 pixels, more than the 100 read at most"});
 
+  // A schedule of two exhaustive tuners (11 thicknesses each, 12 evaluations
+  // with the start's), one after the other.
+  std::string tuned = valid_body(R"({"type": "column", "count": [2, 1], "child": {"type": "layered", "layers": [
+      {"material": "VeroCyan", "thickness_mm": {"value": 0.5, "min": 0, "max": 0.5, "step": 0.05}},
+      {"material": "VeroWhitePlus"}]}})");
+  std::string tuners;
+  for (const char* node : {"0", "1"})
+    tuners += std::string(tuners.empty() ? "" : ", ") + R"({"node": ")" + node +
+              R"(", "simulator": {"type": "albedo", "depth_mm": 1}, "metric": {"type": "ciede2000"},
+                 "goal": {"type": "albedo", "srgb": [0.5, 0.9, 0.9]}, "optimizer": {"type": "exhaustive"}})";
+  tuned.insert(tuned.find(R"(}, "materials")"), R"(, "tuners": [)" + tuners +
+                                                    R"(], "schedule": [{"name": "patches", "mode": "serial"}])");
+  cases.push_back({"limits: a schedule beyond tuner_runs", {{"e.json", tuned}}, run_of("e.json") + " --limit tuner_runs=1",
+                   "ask for 2 tuner runs (sweeps times tuners), more than the 1 allowed"});
+  cases.push_back({"limits: a schedule beyond evaluations", {{"e.json", tuned}},
+                   run_of("e.json") + " --limit evaluations=23", "plan 24 error evaluations"});
+  // Refused once the first run shows the pace: after the run's "running" line (-q silences it).
+  cases.push_back({"limits: a schedule beyond tuning_hours", {{"e.json", tuned}},
+                   "run -q {dir}/e.json --out {dir}/out --limit tuning_hours=1e-9", "for its first 1 of 2 tuner runs; at that pace"});
+
   // Run folders for export.
   const auto export_case = [&](const std::string& name, std::map<std::string, std::string> files,
                                const std::string& expected) {

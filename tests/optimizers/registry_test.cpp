@@ -220,3 +220,56 @@ TEST(Summary, NotRunUntilMinimized) {
 
 }  // namespace
 }  // namespace spec2fab
+
+namespace spec2fab {
+namespace {
+
+// What a schedule counts before it starts (Schedule::check_plan): each
+// optimizer's planned evaluations bound what a run spends, and equal it
+// where the method always runs to its length.
+TEST(OptimizerRegistry, PlannedEvaluationsBoundWhatARunSpends) {
+  struct Case {
+    std::string json;
+    bool runs_to_its_length;
+  };
+  const std::vector<Case> cases = {
+      {R"({"type": "annealing", "iterations": 300})", true},
+      {R"({"type": "spsa", "iterations": 50})", true},
+      {R"({"type": "spsa", "iterations": 50, "a": 0})", true},
+      {R"({"type": "exhaustive"})", true},
+      {R"({"type": "nlopt", "algorithm": "GN_DIRECT", "max_evaluations": 200})", true},
+      {R"({"type": "nlopt", "algorithm": "LD_LBFGS", "max_evaluations": 200})", false},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.json);
+    if (!testing::optimizer_built(c.json)) continue;
+    auto optimizer = optimizer_from(c.json);
+    const bool discrete = c.json.find("exhaustive") != std::string::npos;
+    testing::LeastSquaresProblem problem = testing::rosenbrock(3, -2, 2);
+    testing::LeastSquaresProblem grid(std::vector<VariableDomain>(3, VariableDomain::discrete(-2, 2, 0.5)),
+                                      problem.residual_count(),
+                                      [&](std::span<const double> x, std::span<double> r, std::span<double> j) {
+                                        problem.residuals(x, r, j);
+                                      });
+    Problem& target = discrete ? static_cast<Problem&>(grid) : problem;
+    const std::optional<double> planned = optimizer->planned_evaluations(target);
+    ASSERT_TRUE(planned.has_value());
+    std::vector<double> x(3, discrete ? 0.5 : -1.2);
+    const Summary summary = optimizer->minimize(target, x);
+    if (c.runs_to_its_length)
+      EXPECT_EQ(static_cast<double>(summary.evaluations), *planned);
+    else
+      EXPECT_LE(static_cast<double>(summary.evaluations), *planned);
+    EXPECT_GT(summary.evaluations, 1);
+  }
+  // Branch and bound prunes as it goes, and Ceres evaluates as often as its
+  // steps need (76 evaluations in 20 iterations on rosenbrock(3)): neither can say.
+  testing::LeastSquaresProblem problem = testing::rosenbrock(2);
+  EXPECT_FALSE(optimizer_from(R"({"type": "branch_and_bound"})")->planned_evaluations(problem).has_value());
+  if (SPEC2FAB_WITH_CERES) {
+    EXPECT_FALSE(optimizer_from(R"({"type": "ceres"})")->planned_evaluations(problem).has_value());
+  }
+}
+
+}  // namespace
+}  // namespace spec2fab
