@@ -53,7 +53,11 @@ std::string join(const std::vector<std::string>& items, std::string_view separat
 
 std::string format_seconds(double seconds) {
   char text[32];
-  if (seconds >= 1) {
+  if (seconds >= 3600) {
+    std::snprintf(text, sizeof text, "%.3g h", seconds / 3600);
+  } else if (seconds >= 60) {
+    std::snprintf(text, sizeof text, "%.3g min", seconds / 60);
+  } else if (seconds >= 1) {
     std::snprintf(text, sizeof text, "%.3g s", seconds);
   } else if (seconds >= 1e-3) {
     std::snprintf(text, sizeof text, "%.3g ms", seconds * 1e3);

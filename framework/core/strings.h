@@ -19,7 +19,7 @@ std::string did_you_mean(std::string_view word, const std::vector<std::string>& 
 
 /// "a, b, c" — for listing valid choices in a message.
 std::string join(const std::vector<std::string>& items, std::string_view separator = ", ");
-/// A duration for people: "12.3 s", "4.56 ms", "789 ns".
+/// A duration for people: "2.5 h", "12.3 min", "12.3 s", "4.56 ms", "789 ns".
 std::string format_seconds(double seconds);
 
 /// The first sentence of a summary: up to the first full stop that ends a

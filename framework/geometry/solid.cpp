@@ -1,6 +1,7 @@
 #include "geometry/solid.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -8,8 +9,12 @@
 #include <string>
 
 #include <Eigen/Geometry>
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include "core/error.h"
+#include "core/limits.h"
+#include "core/strings.h"
 #include "geometry/mesh_check.h"
 #include "geometry/solid_impl.h"
 #include "geometry/surface_field.h"
@@ -267,6 +272,24 @@ double Solid::default_field_voxel(double interior_band_mm) const {
   return std::max(fine, std::cbrt(band_volume / kBandVoxelBudget));
 }
 
+double Solid::field_band_voxels(double interior_band_mm, double voxel_mm) const {
+  // Interior band, the exterior band of two voxels and one of margin.
+  return impl_->mesh.surface_area() * (std::max(interior_band_mm, 0.0) + 3 * voxel_mm) / (voxel_mm * voxel_mm * voxel_mm);
+}
+
+std::string Solid::field_beyond_limit(double interior_band_mm, double voxel_mm) const {
+  // Measured on a 50 mm sphere (Release, 2 threads): 13-15 bytes and 0.19-0.24 us a voxel.
+  constexpr double kBytesPerVoxel = 20, kSecondsPerVoxel = 0.25e-6;
+  const double voxels = field_band_voxels(interior_band_mm, voxel_mm);
+  const double max_voxels = limits::get("field_band_voxels");
+  if (voxels <= max_voxels) return {};
+  return fmt::format("{:g} mm makes the surface field over a {:g} mm band about {:.3g} voxels (~{:.2g} GB, ~{} to "
+                     "build), more than the {:.3g} allowed; give a coarser field_voxel_mm, or leave it out (here the "
+                     "default would be {:.3g} mm) {}",
+                     voxel_mm, interior_band_mm, voxels, voxels * kBytesPerVoxel * 1e-9, format_seconds(voxels * kSecondsPerVoxel),
+                     max_voxels, default_field_voxel(interior_band_mm), limits::how_to_change("field_band_voxels"));
+}
+
 const SurfaceField& Solid::field(double interior_band_mm, double voxel_mm) const {
   Impl& impl = *impl_;
   if (!(voxel_mm > 0)) voxel_mm = default_field_voxel(interior_band_mm);
@@ -279,7 +302,11 @@ const SurfaceField& Solid::field(double interior_band_mm, double voxel_mm) const
     voxel_mm = std::min(voxel_mm, impl.field_voxel_mm);
   }
   impl.field.reset();
+  const auto start = std::chrono::steady_clock::now();
   impl.field = std::make_unique<SurfaceField>(*this, voxel_mm, interior_band_mm, 2 * voxel_mm);
+  spdlog::debug("surface field: {} band voxels of {:g} mm over a {:g} mm band (estimated {:.3g}), built in {:.3g} s",
+                impl.field->band_voxels(), voxel_mm, interior_band_mm, field_band_voxels(interior_band_mm, voxel_mm),
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   impl.field_band_mm = interior_band_mm;
   impl.field_voxel_mm = voxel_mm;
   return *impl.field;

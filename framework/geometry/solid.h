@@ -59,6 +59,13 @@ class Solid {
   /// two million voxels at most (build time and memory stay bounded; accuracy
   /// near the surface comes from the exact projection, not the voxel size).
   double default_field_voxel(double interior_band_mm) const;
+  /// About how many voxels field(interior_band_mm, voxel_mm) holds, before
+  /// it is built: the band's volume over the surface in voxels.
+  double field_band_voxels(double interior_band_mm, double voxel_mm) const;
+  /// Why field(interior_band_mm, voxel_mm) must not be built — its voxels
+  /// past the field_band_voxels limit, with their memory and build time —
+  /// or nothing.
+  std::string field_beyond_limit(double interior_band_mm, double voxel_mm) const;
 
  private:
   friend class SurfaceField;  // its hot path projects onto triangles inline

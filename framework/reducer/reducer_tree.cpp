@@ -27,6 +27,11 @@ void ReducerTree::bind(const Solid& solid, double field_voxel_mm) {
   world.box = Eigen::AlignedBox3d(solid.bounds().lower, solid.bounds().upper);
   root_->bind_domain(world, context);
   evaluate();
+  // The default voxel keeps any band near two million voxels; a given one may not.
+  if (field_voxel_mm > 0) {
+    if (std::string problem = solid.field_beyond_limit(context.required_band_mm, field_voxel_mm); !problem.empty())
+      throw FieldBeyondLimit(problem);
+  }
   field_ = &solid.field(context.required_band_mm, field_voxel_mm);
 }
 

@@ -12,11 +12,19 @@
 #include <string>
 #include <vector>
 
+#include "core/error.h"
 #include "core/search_space.h"
 #include "geometry/solid.h"
 #include "reducer/node.h"
 
 namespace spec2fab {
+
+/// The field a tree needs is past the field_band_voxels limit (the caller
+/// names the experiment's geometry.field_voxel_mm).
+class FieldBeyondLimit : public InputError {
+ public:
+  using InputError::InputError;
+};
 
 class ReducerTree {
  public:
@@ -32,6 +40,8 @@ class ReducerTree {
   /// Binds the tree to a solid (which must outlive it): nodes take their
   /// default domains from the shape, and the solid's SurfaceField is built to
   /// the depth the nodes need. `field_voxel_mm` 0 lets the solid choose.
+  /// Throws FieldBeyondLimit when the field the tree needs, at
+  /// `field_voxel_mm`, would pass the field_band_voxels limit.
   void bind(const Solid& solid, double field_voxel_mm = 0);
   bool is_bound() const { return field_ != nullptr; }
   const Solid& solid() const { return *solid_; }

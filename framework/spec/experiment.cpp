@@ -76,18 +76,10 @@ Experiment Experiment::load(const std::filesystem::path& file) {
                 mesh.triangles.size());
   experiment.solid_ = std::make_shared<Solid>(std::move(mesh), g.uv, g.uv_axis);
   if (g.field_voxel_mm > 0) {
-    // The surface field's band is at least three of its voxels thick over the
-    // whole surface, before any tree asks for more: its voxels are known now.
-    const double max_band_voxels = limits::get("field_band_voxels");  // the default field aims at 2e6
-    const double band_voxels = 3 * experiment.solid_->mesh().surface_area() / (g.field_voxel_mm * g.field_voxel_mm);
-    if (band_voxels > max_band_voxels) {
-      geometry.fail("field_voxel_mm",
-                    fmt::format("{:.3g} mm makes the surface field's band at least {:.3g} voxels (~{:.1f} GB), more "
-                                "than the {:.3g} allowed; give a coarser field_voxel_mm, or leave it out (here the "
-                                "default would be {:.3g} mm) {}",
-                                g.field_voxel_mm, band_voxels, band_voxels * 20e-9, max_band_voxels,
-                                experiment.solid_->default_field_voxel(0), limits::how_to_change("field_band_voxels")));
-    }
+    // The field's band is at least a few of its voxels thick, before any tree
+    // asks for a deeper one (ReducerTree::bind checks that band).
+    if (const std::string problem = experiment.solid_->field_beyond_limit(0, g.field_voxel_mm); !problem.empty())
+      geometry.fail("field_voxel_mm", problem);
   }
   return experiment;
 }

@@ -26,12 +26,15 @@ TreeOutputOptions TreeOutputOptions::read(const Properties& goal, const Experime
   double census_voxels = 1;
   for (int axis = 0; axis < 3; ++axis)
     census_voxels *= std::max(1.0, std::ceil(experiment.solid().bounds().size()[axis] / options.census_voxel_mm));
+  // Measured on a 50 mm sphere under a two-level tree (Release, 2 threads):
+  // 7.4 ns a voxel, counted as it goes (no memory per voxel); deeper trees take longer.
+  constexpr double kSecondsPerVoxel = 7.4e-9;
   if (census_voxels > max_census_voxels) {
     goal.fail("census_voxel_mm",
-              fmt::format("{:.3g} mm makes a census of {:.3g} voxels (minutes of walking the tree), more than the "
+              fmt::format("{:.3g} mm makes a census of {:.3g} voxels (~{} of walking the tree), more than the "
                           "{:.3g} it takes at most; give a coarser census_voxel_mm (the default is {:.3g} mm) {}",
-                          options.census_voxel_mm, census_voxels, max_census_voxels, longest / 128,
-                          limits::how_to_change("census_voxels")));
+                          options.census_voxel_mm, census_voxels, format_seconds(census_voxels * kSecondsPerVoxel),
+                          max_census_voxels, longest / 128, limits::how_to_change("census_voxels")));
   }
   const auto output = experiment.output();
   if (output) options.section_pixels = read_options<OutputKeys>(*output).section_pixels;

@@ -8,7 +8,11 @@ namespace spec2fab {
 void TuningTranslator::set_tree(std::unique_ptr<ReducerTree> tree, const Properties& goal,
                                 const Experiment& experiment) {
   tree_ = std::move(tree);
-  tree_->bind(experiment.solid(), experiment.geometry_spec().field_voxel_mm);
+  try {
+    tree_->bind(experiment.solid(), experiment.geometry_spec().field_voxel_mm);
+  } catch (const FieldBeyondLimit& e) {
+    experiment.root().object("geometry").fail("field_voxel_mm", e.what());
+  }
   outputs_ = TreeOutputOptions::read(goal, experiment, *tree_);
 }
 

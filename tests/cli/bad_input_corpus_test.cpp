@@ -245,6 +245,15 @@ TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
     experiment_case("a surface field of 0.001 mm voxels", body, "/geometry/field_voxel_mm: 0.001 mm makes the surface field");
   }
   {
+    // 0.05 mm voxels pass for a thin band (3 voxels: 9.4e6), but this tree
+    // reaches 10 mm below the surface: its band would hold 6.3e8.
+    std::string body = tree_experiment(R"({"type": "stratum", "depth_mm": 10, "shell": {"type": "layered", "material": "VeroCyan"},
+        "core": {"type": "layered", "material": "VeroWhitePlus"}})");
+    body.replace(body.find("\"uv\": \"mesh\""), 12, "\"uv\": \"mesh\", \"field_voxel_mm\": 0.05");
+    experiment_case("a surface field too deep for its voxels", body,
+                    "/geometry/field_voxel_mm: 0.05 mm makes the surface field over a 10 mm band about 6.36e+08 voxels (~13 GB, ~2.65 min to build)");
+  }
+  {
     std::string body = good;
     body.replace(body.find("\"goal\": {"), 9, "\"goal\": {\"census_voxel_mm\": 0.0245, ");
     experiment_case("the finest census", body, "/goal/census_voxel_mm: 0.0245 mm makes a census of 8.5e+09 voxels");

@@ -33,3 +33,17 @@ TEST(Strings, FirstSentenceSkipsAbbreviationsAndParentheses) {
 
 }  // namespace
 }  // namespace spec2fab
+
+namespace spec2fab {
+namespace {
+
+TEST(Strings, DurationsReadInTheUnitThatSuitsThem) {
+  EXPECT_EQ(format_seconds(2.5e-7), "250 ns");
+  EXPECT_EQ(format_seconds(0.0123), "12.3 ms");
+  EXPECT_EQ(format_seconds(12.34), "12.3 s");
+  EXPECT_EQ(format_seconds(159), "2.65 min");
+  EXPECT_EQ(format_seconds(9000), "2.5 h");
+}
+
+}  // namespace
+}  // namespace spec2fab
