@@ -15,4 +15,11 @@ class InputError : public std::runtime_error {
   explicit InputError(const std::string& message) : std::runtime_error(message) {}
 };
 
+/// For a catch (const InputError&) handler around work that a JSON object
+/// asked for (a tuner's simulator, metric and goal in setup and tuning):
+/// rethrows the InputError being handled as it is when it names the file
+/// of `location` ("exp.json: /goal/tuners/0") already, and otherwise — a
+/// part's own check, which knows no file — with `location` in front.
+[[noreturn]] void rethrow_located(const std::string& location);
+
 }  // namespace spec2fab

@@ -60,6 +60,9 @@ class Simulator {
   /// Simulates the subtree at its current parameters into `out` (made by
   /// make_observation); called thousands of times, so it must not allocate.
   virtual void simulate(const ReducerNode& subtree, Observation& out) = 0;
+  /// Why the last simulate() left non-finite values (an optimizer takes them
+  /// as the worst error; the simulate command names the reason), or nothing.
+  virtual std::string failure() const { return {}; }
 
   /// After simulate(subtree, out): writes what a person would look at into
   /// `folder` and returns the files written; by default the observation in

@@ -142,7 +142,12 @@ void Tuner::reset_target() { effective_target_ = goal_->target().clone(); }
 void Tuner::set_node(ReducerNode& node, const SimulationDomain& domain) {
   node_ = &node;
   collect_search_space();
-  simulator_->setup(node, domain);
+  try {
+    simulator_->setup(node, domain);
+  } catch (const InputError&) {
+    if (!origin_.empty()) rethrow_located(origin_);
+    throw;
+  }
 }
 
 void Tuner::set_node(ReducerTree& tree, ReducerNode& node) {
@@ -248,6 +253,17 @@ void Tuner::restore(const State& state) {
 }
 
 Summary Tuner::tune(const IterationCallback& callback) {
+  try {
+    return tune_here(callback);
+  } catch (const InputError&) {
+    // A part's own check (a metric finding the goal's grid unlike the
+    // simulator's) names no file: the tuner's JSON says where it was asked for.
+    if (!origin_.empty()) rethrow_located(origin_);
+    throw;
+  }
+}
+
+Summary Tuner::tune_here(const IterationCallback& callback) {
   collect_search_space();
   if (space_.dimension() == 0) {
     Summary summary;
@@ -273,8 +289,10 @@ std::unique_ptr<Tuner> build_tuner(const Properties& properties, std::string nam
   auto optimizer = build_optimizer(properties.object("optimizer"));
   const std::string problem = incompatibility(*simulator, *metric, *goal);
   if (!problem.empty()) properties.fail(problem);
-  return std::make_unique<Tuner>(std::move(name), std::move(simulator), std::move(metric),
-                                 std::move(goal), std::move(optimizer));
+  auto tuner = std::make_unique<Tuner>(std::move(name), std::move(simulator), std::move(metric), std::move(goal),
+                                       std::move(optimizer));
+  tuner->set_origin(properties.where());
+  return tuner;
 }
 
 }  // namespace spec2fab

@@ -29,6 +29,10 @@ class Tuner {
   ~Tuner();
 
   const std::string& name() const { return name_; }
+  /// Where the tuner was asked for ("exp.json: /goal/tuners/0"; build_tuner
+  /// sets it): an InputError of its parts in setup or tuning that names no
+  /// file comes out with it in front.
+  void set_origin(std::string location) { origin_ = std::move(location); }
   /// Binds the tuner to a subtree (the paper's setNode): collects its free
   /// parameters and runs the simulator's one-time setup. `domain` places the
   /// node in the run's solid and tree (volumetric simulators need it).
@@ -136,8 +140,10 @@ class Tuner {
  private:
   class TunerProblem;
   void collect_search_space();
+  Summary tune_here(const IterationCallback& callback);
 
   std::string name_;
+  std::string origin_;
   std::unique_ptr<Simulator> simulator_;
   std::unique_ptr<ErrorMetric> metric_;
   std::unique_ptr<Goal> goal_;

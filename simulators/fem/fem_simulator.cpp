@@ -6,6 +6,7 @@
 // Newton with load stepping, CHOLMOD (elastic_solver.h).
 
 #include <chrono>
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -98,11 +99,20 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
     // Every evaluation starts from rest: the answer is a function of the
     // parameters alone, whatever was evaluated before.
     std::fill(displacement_.begin(), displacement_.end(), 0.0);
-    report_ = solver_->solve(constraints_, settings_.solve, displacement_);
-    if (!report_.converged) {
-      spdlog::warn("fem: Newton did not converge (relative residual {:.3g})", report_.relative_residual);
-      std::fill(displacement_.begin(), displacement_.end(), std::numeric_limits<double>::quiet_NaN());
+    failure_.clear();
+    if (std::none_of(active_.begin(), active_.end(), [](char a) { return a != 0; })) {
+      // Nothing to solve, and nothing to warn about in a search that tries it.
+      failure_ = "every tet is void: no material carries the loads";
+      report_ = {};
+    } else {
+      report_ = solver_->solve(constraints_, settings_.solve, displacement_);
+      if (!report_.converged) {
+        failure_ = fmt::format("Newton did not converge (relative residual {:.3g})", report_.relative_residual);
+        spdlog::warn("fem: {}", failure_);
+      }
     }
+    if (!failure_.empty())
+      std::fill(displacement_.begin(), displacement_.end(), std::numeric_limits<double>::quiet_NaN());
     const size_t probes = probes_.size();
     out.probe_count = static_cast<int>(probes);
     out.xyz_mm.resize(3 * (probes + mesh_->nodes.size()));
@@ -117,6 +127,8 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
     std::copy(displacement_.begin(), displacement_.end(), out.xyz_mm.begin() + static_cast<long>(3 * probes));
     timings_.solve = seconds_since(start);
   }
+
+  std::string failure() const override { return failure_; }
 
   std::vector<std::string> write_report(const Observation& observation, const std::filesystem::path& folder,
                                         nlohmann::json& record) const override {
@@ -225,6 +237,7 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
   std::vector<MaterialId> materials_;
   std::vector<double> lambda_, mu_, displacement_;
   std::vector<char> active_;
+  std::string failure_;  // why the last simulate() gave NaN
   SolveReport report_;
   Timings timings_;
 };

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "build_gates.h"
 #include "cli_support.h"
 
 namespace spec2fab_cli_test {
@@ -397,6 +398,14 @@ TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
                 simulate_head + R"(, "subtree": {"type": "layered", "material": "VeroCyan"}})",
                 "did you mean 'subsurface'");
   simulate_case("no subtree", "subsurface", simulate_head + "}", "subtree");
+  if (SPEC2FAB_WITH_TETGEN) {
+    simulate_case("a body of nothing but void", "fem",
+                  simulate_head + R"(, "mesh": ")" + (kDatasets / "meshes/beam_100x10x10.stl").string() +
+                      R"(", "subtree": {"type": "layered", "material": "void"}, "simulator": {"max_tet_volume_mm3": 50,
+                      "fixed": [{"min": [0, 0, 0], "max": [0, 10, 10]}],
+                      "loads": [{"min": [100, 0, 0], "max": [100, 10, 10], "force_n": [0, 0, -1]}]}})",
+                  "s.json: /subtree: the fem simulator gives no finite answer for it: every tet is void");
+  }
   simulate_case("malformed", "subsurface", simulate_head, "malformed JSON");
   simulate_case("unknown simulator option", "subsurface",
                 simulate_head + R"(, "subtree": {"type": "layered", "material": "VeroCyan"}, "simulator": {"sampels": 4}})",
@@ -455,6 +464,19 @@ TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
   // Refused once the first run shows the pace: after the run's "running" line (-q silences it).
   cases.push_back({"limits: a schedule beyond tuning_hours", {{"e.json", tuned}},
                    "run -q {dir}/e.json --out {dir}/out --limit tuning_hours=1e-9", "for its first 1 of 2 tuner runs; at that pace"});
+
+  // A part's own check, which knows no file, is named by the tuner's JSON:
+  // found at the first evaluation, after the run's "running" line (-q).
+  std::string mismatched = valid_body(R"({"type": "layered", "layers": [
+      {"material": "VeroCyan", "thickness_mm": {"value": 0.5, "min": 0, "max": 0.5, "step": 0.25}},
+      {"material": "VeroWhitePlus"}]})");
+  mismatched.insert(mismatched.find(R"(}, "materials")"),
+                    R"(, "tuners": [{"node": "", "simulator": {"type": "subsurface", "radius_mm": 8},
+                         "metric": {"type": "profile_l2"}, "goal": {"type": "radial_profile", "medium": "marble"},
+                         "optimizer": {"type": "exhaustive"}}])");
+  cases.push_back({"tuners: a metric that finds the goal unlike the simulation", {{"e.json", mismatched}},
+                   "run -q {dir}/e.json --out {dir}/out",
+                   "e.json: /goal/tuners/0: profile_l2: the simulator's and the goal's profile grids differ"});
 
   // Run folders for export.
   const auto export_case = [&](const std::string& name, std::map<std::string, std::string> files,

@@ -227,6 +227,7 @@ PreparedSimulation prepare_simulation(const fs::path& config_file, const std::st
     prepared.solid = std::make_unique<Solid>(load_mesh(config.existing_file("mesh")), UvSource::planar);
   }
   prepared.tree = std::make_unique<ReducerTree>(config.object("subtree"), *prepared.palette);
+  prepared.subtree_location = config.where("subtree");
   if (prepared.solid) prepared.tree->bind(*prepared.solid);
   const auto options = config.optional_object("simulator");
   const Properties no_options = Properties::wrap(nlohmann::json::object(), config_file.string() + " (simulator)");
@@ -257,8 +258,13 @@ int simulate_command(const SimulateArguments& arguments) {
     ++evaluations;
   } while (arguments.repeat > 0 ? evaluations < arguments.repeat : evaluations < 100 && elapsed() < 2.0);
   const double simulate_seconds = elapsed() / evaluations;
+  // The config is all the simulator was given: an answer it cannot give is the config's problem.
   for (double v : observation->values()) {
-    if (!std::isfinite(v)) throw std::runtime_error(simulator->name() + " produced a non-finite value (see the warning above)");
+    if (!std::isfinite(v)) {
+      const std::string why = simulator->failure();
+      throw InputError(prepared.subtree_location + ": the " + simulator->name() + " simulator gives no finite answer for it" +
+                       (why.empty() ? std::string() : ": " + why));
+    }
   }
 
   RunFolder folder(arguments.out);

@@ -66,6 +66,7 @@ struct PreparedSimulation {
   std::unique_ptr<Solid> solid;  ///< null without a "mesh"
   std::unique_ptr<ReducerTree> tree;
   std::unique_ptr<Simulator> simulator;
+  std::string subtree_location;  ///< "config.json: /subtree", for what the simulator makes of it
 };
 PreparedSimulation prepare_simulation(const std::filesystem::path& config, const std::string& simulator);
 
