@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <array>
 #include <initializer_list>
 #include <cstdio>
@@ -41,8 +42,13 @@ std::optional<PngSize> png_size(const std::filesystem::path& file) {
 }
 
 // The formats a goal image may have, by their signatures. OpenCV would also
-// hand DICOM, EXR, HDR... files to decoders of its own, one of which hangs
-// on a 133-byte file fuzz_image made: only these common formats reach it.
+// hand DICOM, EXR, HDR... files to decoders of its own, whose readers hang
+// (a 133-byte file) or abort on an assertion (gdcm, on a PNG whose signature
+// was cut after "\x89PNG" and with "DICM" at byte 128: fuzz_image found both):
+// only these common formats reach it. Each signature is checked as strictly
+// as OpenCV's decoder of the format checks it, and OpenCV tries these
+// decoders before the others, so a file that passes goes to the decoder of
+// the format named here.
 const char* known_format(const std::filesystem::path& file) {
   std::ifstream in(file, std::ios::binary);
   std::array<unsigned char, 12> head{};
@@ -51,11 +57,11 @@ const char* known_format(const std::filesystem::path& file) {
   const auto starts = [&](std::initializer_list<unsigned char> magic, size_t at = 0) {
     return n >= at + magic.size() && std::equal(magic.begin(), magic.end(), head.begin() + static_cast<long>(at));
   };
-  if (starts({0x89, 'P', 'N', 'G'})) return "PNG";
+  if (starts({0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'})) return "PNG";
   if (starts({0xFF, 0xD8, 0xFF})) return "JPEG";
   if (starts({'B', 'M'})) return "BMP";
   if (starts({'I', 'I', 42, 0}) || starts({'M', 'M', 0, 42})) return "TIFF";
-  if (n >= 2 && head[0] == 'P' && head[1] >= '1' && head[1] <= '6') return "PNM";
+  if (n >= 3 && head[0] == 'P' && head[1] >= '1' && head[1] <= '6' && std::isspace(head[2])) return "PNM";
   if (starts({'R', 'I', 'F', 'F'}) && starts({'W', 'E', 'B', 'P'}, 8)) return "WebP";
   return nullptr;
 }

@@ -326,6 +326,19 @@ TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
   image_case("not an image", "text.png", "hello, world\n", "not a PNG, JPEG, BMP, TIFF, PNM or WebP image");
   // Found by fuzz_image: OpenCV's DICOM decoder does not return on this.
   image_case("a DICOM file", "scan.png", std::string(128, 'U') + "DICMF", "not a PNG, JPEG, BMP, TIFF, PNM or WebP image");
+  // Found by fuzz_image: a PNG signature cut after "\x89PNG", and "DICM" at
+  // byte 128, sent OpenCV to gdcm, which aborted on an assertion.
+  image_case("a cut PNG signature with DICOM's", "cut.png",
+             std::string(
+                         "\x89\x50\x4e\x47\x0d\x0a\xd7\xd7\xd7\xd7\xd7\xd7\xd7\xd7\xd7\x89\x50\x4e\x1a\x0a\x47\x0d\x0a\x00\x00\x00\x0d\x49\x48\x44\x52\x00"
+                         "\x00\x00\x02\x00\x00\x00\x02\x10\x06\x00\x00\x00\x22\x26\xd1\x67\x00\x00\x00\x0b\x49\x44\x41\x54\x78\x9c\x63\x60\x20\x04\x00\x00"
+                         "\x22\x00\x01\x5e\xb8\x21\xdb\x00\x00\x00\x00\x49\x45\x4e\x44\xae\x42\x60\x82\xd7\xd7\xd7\xd7\xd7\xd7\xd7\xd7\xd7\xd7\xd7\xd7\xd7"
+                         "\xd7\xd7\xd7\xd7\xd7\xd7\xd7\xd7\xd7\xd7\xd7\xd7\xd7\xd7\xd7\xd7\xd7\xd7\xd7\xd7\x1a\x0a\x00\x00\x00\x0d\x49\x48\x44\x44\x49\x43"
+                         "\x44\x49\x43\x4d\x60\xd7",
+                 134),
+             "not a PNG, JPEG, BMP, TIFF, PNM or WebP image");
+  image_case("a PNM signature without its space", "p6.png", "P6x" + std::string(125, '0') + "DICMF",
+             "not a PNG, JPEG, BMP, TIFF, PNM or WebP image");
   image_case("a JPEG cut after its signature", "cut.jpg", "\xFF\xD8\xFF\xE0", "cannot decode it as the JPEG image it starts as");
   image_case("header of 100000 x 100000 pixels", "huge.png", png_header_only(100000, 100000),
              "100000 x 100000 pixels");
