@@ -19,6 +19,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include "build_gates.h"
@@ -43,9 +44,22 @@ TEST_F(Cli, HelpAnswersForEveryCommand) {
 
 // Every shipped experiment validates; in a build without a part one of them
 // names, it is refused in one line saying which build option left it out.
+// Under ASan the four photo-scale albedo experiments (one translator, two
+// meshes, two images) take 30-76 s each to validate, most of the build's
+// test time: there the smallest of them stands for all four.
+#if defined(__SANITIZE_ADDRESS__)
+const std::set<std::string> kLeftToReleaseBuild = {"earth_sphere.json", "earth_torus.json", "photo_sphere.json"};
+#else
+const std::set<std::string> kLeftToReleaseBuild;
+#endif
+
 TEST_F(Cli, ValidateAcceptsShippedExperiments) {
-  int accepted = 0;
+  int accepted = 0, left = 0;
   for (const auto& entry : fs::directory_iterator(kDatasets / "experiments")) {
+    if (kLeftToReleaseBuild.count(entry.path().filename().string())) {
+      ++left;
+      continue;
+    }
     const Result r = run_spec2fab("validate " + entry.path().string());
     if (r.code == 2 && r.out.find("is left out of this build: configure with -DSPEC2FAB_WITH_") != std::string::npos)
       continue;
@@ -54,7 +68,8 @@ TEST_F(Cli, ValidateAcceptsShippedExperiments) {
     ++accepted;
   }
   if (SPEC2FAB_WITH_CERES && SPEC2FAB_WITH_NLOPT && SPEC2FAB_WITH_LIB3MF && SPEC2FAB_WITH_TETGEN && SPEC2FAB_WITH_HYPRE) {
-    EXPECT_EQ(accepted, std::distance(fs::directory_iterator(kDatasets / "experiments"), fs::directory_iterator()));
+    EXPECT_EQ(accepted + left, std::distance(fs::directory_iterator(kDatasets / "experiments"), fs::directory_iterator()));
+    EXPECT_EQ(left, static_cast<int>(kLeftToReleaseBuild.size()));
   } else {
     EXPECT_GE(accepted, 1);
   }
