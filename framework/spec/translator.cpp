@@ -23,7 +23,7 @@ PreparedExperiment prepare_experiment(const std::filesystem::path& file) {
   prepared.translator = TranslatorRegistry::instance().create(experiment.root(), "translator",
                                                               experiment, "translator");
   experiment.root().check_all_read();
-  prepared.translator->check_limits();
+  prepared.plan = prepared.translator->check_limits();
   return prepared;
 }
 

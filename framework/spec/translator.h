@@ -48,8 +48,9 @@ class Translator {
   virtual const ReducerTree& tree() const = 0;
   /// Refuses (InputError) work past the resource limits that only the built
   /// translator can count, such as its schedule's tuner runs and planned
-  /// evaluations: `validate` then refuses it too.
-  virtual void check_limits() {}
+  /// evaluations: `validate` then refuses it too. Returns what it counted,
+  /// for validate to show (empty: nothing).
+  virtual std::string check_limits() { return {}; }
 };
 
 using TranslatorRegistry = Registry<Translator, const Experiment&>;
@@ -58,6 +59,7 @@ using TranslatorRegistry = Registry<Translator, const Experiment&>;
 struct PreparedExperiment {
   std::unique_ptr<Experiment> experiment;  // stable address: the translator refers to it
   std::unique_ptr<Translator> translator;
+  std::string plan;  ///< Translator::check_limits' count
 };
 
 /// Throws InputError for any problem in the file or the inputs it names.

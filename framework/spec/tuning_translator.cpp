@@ -23,8 +23,8 @@ void TuningTranslator::set_tree(const nlohmann::json& tree, const std::string& w
            goal, experiment);
 }
 
-void TuningTranslator::check_limits() {
-  if (network_.size() > 0) schedule_.check_plan(network_);
+std::string TuningTranslator::check_limits() {
+  return network_.size() > 0 ? schedule_.check_plan(network_) : std::string();
 }
 
 void TuningTranslator::run(RunContext& context) {

@@ -22,7 +22,7 @@ class TuningTranslator : public Translator {
  public:
   const ReducerTree& tree() const final { return *tree_; }
   void run(RunContext& context) final;
-  void check_limits() final;
+  std::string check_limits() final;
 
  protected:
   /// Takes the tree, binds it to the experiment's solid and reads the

@@ -135,7 +135,7 @@ std::atomic<long long> tuner_runs_here{0};
 // What the phases from `first` on ask for, counted before they start: tuner
 // runs (sweeps × tuners) and error evaluations (each run's optimizer plan;
 // runs whose optimizer cannot say are left out of that count and named).
-void check_schedule_plan(const std::vector<Phase>& phases, size_t first, TunerNetwork& network) {
+std::string check_schedule_plan(const std::vector<Phase>& phases, size_t first, TunerNetwork& network) {
   double runs = 0, evaluations = 0, unplanned_runs = 0;
   for (size_t p = first; p < phases.size(); ++p) {
     const Phase& phase = phases[p];
@@ -166,6 +166,11 @@ void check_schedule_plan(const std::vector<Phase>& phases, size_t first, TunerNe
                                                                   "how many they make", unplanned_runs)
                                                     : std::string(),
                                  max_evaluations, limits::how_to_change("evaluations")));
+  const std::string counted = fmt::format("{:.0f} tuner run(s) in {} phase(s), ", runs, phases.size() - first);
+  if (unplanned_runs == 0) return counted + fmt::format("{:.3g} error evaluations planned", evaluations);
+  if (evaluations == 0) return counted + "by optimizers that cannot say how many evaluations they make";
+  return counted + fmt::format("{:.3g} error evaluations planned for all but {:.0f} (by optimizers that cannot say)",
+                               evaluations, unplanned_runs);
 }
 
 // The time a phase would take at the pace of its tuner runs so far, added to
@@ -325,8 +330,8 @@ std::vector<size_t> Phase::members(size_t network_size) const {
   return all;
 }
 
-void Schedule::check_plan(TunerNetwork& network, size_t first_phase) const {
-  check_schedule_plan(phases_, first_phase, network);
+std::string Schedule::check_plan(TunerNetwork& network, size_t first_phase) const {
+  return check_schedule_plan(phases_, first_phase, network);
 }
 
 RunRecord Schedule::run(TunerNetwork& network, std::uint64_t seed, PhaseCheckpoint* checkpoint) const {

@@ -199,7 +199,9 @@ class Schedule {
   /// limits tuner_runs and evaluations allow. While it runs, run() projects
   /// each phase's time from the pace of its finished tuner runs and stops,
   /// with InputError, when the tuning would take longer than tuning_hours.
-  void check_plan(TunerNetwork& network, size_t first_phase = 0) const;
+  /// What check_plan counted, for `spec2fab validate`: "N tuner runs in P
+  /// phase(s), M error evaluations planned".
+  std::string check_plan(TunerNetwork& network, size_t first_phase = 0) const;
 
  private:
   std::vector<Phase> phases_;

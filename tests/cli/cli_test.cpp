@@ -422,6 +422,9 @@ TEST_F(Cli, TunedRunRecordsEverySummaryAndFindsAReachableColour) {
           "schedule": [{"name": "patches", "mode": "parallel"}])";
   body.insert(body.find(R"(}, "materials")"), tuning);
   const fs::path file = experiment("tuned", body);
+  // validate shows what the schedule will cost: 11 thicknesses and the start, per tuner.
+  EXPECT_THAT(run_spec2fab("validate " + file.string()).out,
+              HasSubstr("  tuning:     2 tuner run(s) in 1 phase(s), 24 error evaluations planned\n"));
   const Result one = run_spec2fab("run -q " + file.string() + " --threads 1 --out " + (dir_ / "t1").string());
   ASSERT_EQ(one.code, 0) << one.out;
   ASSERT_EQ(run_spec2fab("run -q " + file.string() + " --threads 2 --out " + (dir_ / "t2").string()).code, 0);

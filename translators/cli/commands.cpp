@@ -205,6 +205,7 @@ int validate_command(const fs::path& experiment) {
             << " mm^3, uv " << to_string(e.solid().uv_source()) << ")\n"
             << "  printer:    " << e.printer().name << " (" << join(e.palette().names()) << ")\n"
             << "  translator: " << prepared.translator->summary() << "\n";
+  if (!prepared.plan.empty()) std::cout << "  tuning:     " << prepared.plan << "\n";
   return 0;
 }
 
