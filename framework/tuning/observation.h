@@ -87,6 +87,10 @@ struct DisplacementsObservation final : ObservationOf<DisplacementsObservation> 
   std::vector<double> xyz_mm;
   int probe_count = 0;
   std::vector<double> probe_rest_mm;
+  /// Per-tet von Mises stress (MPa; 0 in void) and its largest value and
+  /// 99th percentile over the solid's tets, for goals that bound stress.
+  std::vector<double> von_mises_mpa;
+  double stress_max_mpa = 0, stress_p99_mpa = 0;
   std::span<const double> probes() const { return {xyz_mm.data(), 3 * static_cast<size_t>(probe_count)}; }
   std::span<const double> values() const override { return xyz_mm; }
   std::span<double> values() override { return xyz_mm; }

@@ -23,9 +23,6 @@ Mat3 polar_rotation(const Mat3& f) {
   return u * v.transpose();
 }
 
-namespace {
-
-// Deformation gradient F = Ds·Bm from 12 corner coordinates.
 Mat3 deformation_gradient(const TetRest& rest, const double* x) {
   Mat3 ds;
   for (int c = 0; c < 3; ++c) {
@@ -33,6 +30,8 @@ Mat3 deformation_gradient(const TetRest& rest, const double* x) {
   }
   return ds * rest.inverse_rest_edges;
 }
+
+namespace {
 
 // f for nodes 1..3 = V·P·Bmᵀ (columns); node 0 balances them.
 void scatter_stress(const TetRest& rest, const Mat3& p, double* out) {

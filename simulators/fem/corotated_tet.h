@@ -42,6 +42,9 @@ inline double lame_mu(double youngs_mpa, double poisson) { return youngs_mpa / (
 /// inverted element, where the smallest singular value's sign is flipped).
 Mat3 polar_rotation(const Mat3& deformation_gradient);
 
+/// Deformation gradient F = Ds·Bm at current corner positions `x` (12 values, mm).
+Mat3 deformation_gradient(const TetRest& rest, const double* x);
+
 /// Internal (elastic) forces f = ∂E/∂x (N; the force the element exerts on its
 /// nodes is −f) at current corner positions `x` (12 values, mm), and, when
 /// `tangent` is not null, the consistent tangent ∂f/∂x (N/mm).

@@ -12,6 +12,7 @@
 #include <limits>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <spdlog/spdlog.h>
 
 #include "core/error.h"
@@ -22,6 +23,7 @@
 #include "fem/interface_conformer.h"
 #include "fem/mesh_cache.h"
 #include "fem/tetgen/tetgen_mesher.h"
+#include "fem/vtu_writer.h"
 #include "geometry/mesh_io.h"
 #include "tuning/parts.h"
 
@@ -68,6 +70,13 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
     conform_ = meshed_->conform;
     timings_.mesh = mesh_reused_ ? 0.0 : meshed_->mesh_seconds;
     timings_.conform = mesh_reused_ ? 0.0 : meshed_->conform_seconds;
+    moving_interfaces_ = settings_.follow_interfaces ? tuned_interface_parameters(domain.tree()) : std::vector<std::string>{};
+    if (!moving_interfaces_.empty() && !mesh_reused_) {
+      spdlog::info("fem: tuned {} move(s) interfaces; the mesh follows them where they are now, and later tets "
+                   "take their material by centroid (re-meshing per evaluation would make the error jump with "
+                   "TetGen's points)",
+                   fmt::join(moving_interfaces_, ", "));
+    }
     const auto rest = Clock::now();
     boundary_ = mesh_->boundary_faces();
     constraints_ = make_constraints(*mesh_, boundary_, settings_);
@@ -81,8 +90,8 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
     active_.resize(mesh_->tets.size());
     displacement_.assign(3 * mesh_->nodes.size(), 0.0);
     timings_.assemble_setup = seconds_since(rest);
-    spdlog::debug("fem: {} nodes, {} tets ({} from TetGen), {} free DOFs; mesh {:.2f} s", mesh_->nodes.size(),
-                  mesh_->tets.size(), conform_.tets_before, solver_->free_dofs(), timings_.mesh);
+    spdlog::debug("fem: {} nodes, {} tets ({} for the plain solid), {} free DOFs; mesh {:.2f} s", mesh_->nodes.size(),
+                  mesh_->tets.size(), meshed_->plain_tets, solver_->free_dofs(), timings_.mesh);
   }
 
   void simulate(const ReducerNode& /*subtree*/, DisplacementsObservation& out) override {
@@ -125,6 +134,10 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
       }
     }
     std::copy(displacement_.begin(), displacement_.end(), out.xyz_mm.begin() + static_cast<long>(3 * probes));
+    out.von_mises_mpa = von_mises_stress(*mesh_, lambda_, mu_, active_, displacement_, settings_.solve.nonlinear);
+    const StressSummary stress = summarize_stress(out.von_mises_mpa, active_);
+    out.stress_max_mpa = failure_.empty() ? stress.max_mpa : std::numeric_limits<double>::quiet_NaN();
+    out.stress_p99_mpa = failure_.empty() ? stress.p99_mpa : std::numeric_limits<double>::quiet_NaN();
     timings_.solve = seconds_since(start);
   }
 
@@ -146,6 +159,12 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
       if (!csv) throw std::runtime_error("cannot write " + (folder / "displacements.csv").string());
     }
     save_mesh(boundary_surface(*mesh_, boundary_, u), folder / "deformed.stl");
+    {
+      std::vector<int> ids(materials_.begin(), materials_.end());
+      std::vector<std::string> names;
+      for (MaterialId id = 0; id < palette_->size(); ++id) names.push_back(id == kVoid ? "void" : palette_->material(id).name);
+      write_vtu(folder / "fem.vtu", *mesh_, ids, names, u, out.von_mises_mpa);
+    }
     write_deformation_picture(*mesh_, boundary_, u, folder / "deformation.png");
     nlohmann::json probe_list = nlohmann::json::array();
     for (size_t p = 0; p < probes; ++p) {
@@ -160,11 +179,16 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
     record["values"] = "displacements.csv (nodes) and probes";
     record["mesh"] = {{"nodes", mesh_->nodes.size()},
                       {"tets", mesh_->tets.size()},
-                      {"tets_from_tetgen", conform_.tets_before},
+                      {"tets_plain_solid", meshed_->plain_tets},
                       {"reused_from_an_earlier_setup", mesh_reused_},
                       {"interfaces_followed", conform_.interfaces_cut},
-                      {"edges_split", conform_.edges_split},
+                      {"interfaces_as_tetgen_facets", meshed_->remeshed},
+                      {"interface_facets_merged", meshed_->plc.merged_facets},
+                      {"curved_interfaces_cut_in", meshed_->plc.interfaces_left_out},
+                      {"edges_split_after_tetgen", meshed_->cut_after.edges_split},
+                      {"nodes_snapped_after_tetgen", meshed_->cut_after.nodes_snapped},
                       {"subtrees_elastically_uniform", conform_.subtrees_uniform},
+                      {"interfaces_moved_by_tuned_parameters", moving_interfaces_},
                       {"free_dofs", solver_->free_dofs()},
                       {"cholesky_factor_nonzeros", solver_->factor_nonzeros()},
                       {"cholesky_factor_flops", solver_->factor_flops()},
@@ -182,11 +206,14 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
                        {"cg_iterations", report_.cg_iterations},
                        {"multigrid_operator_complexity", solver_->multigrid_complexity()},
                        {"max_displacement_mm", largest}};
+    record["stress"] = {{"von_mises_max_mpa", out.stress_max_mpa},
+                        {"von_mises_p99_mpa", out.stress_p99_mpa},
+                        {"per_tet", "fem.vtu (cell data von_mises_mpa)"}};
     record["timing"] = {{"mesh_seconds", timings_.mesh},
                         {"conform_seconds", timings_.conform},
                         {"pattern_and_analysis_seconds", timings_.assemble_setup},
                         {"solve_seconds", timings_.solve}};
-    std::vector<std::string> files{"displacements.csv", "deformed.stl", "deformation.png"};
+    std::vector<std::string> files{"displacements.csv", "deformed.stl", "deformation.png", "fem.vtu"};
     if (settings_.write_calculix_deck) {
       std::vector<double> youngs(mesh_->tets.size(), 0.0), poisson(mesh_->tets.size(), 0.0);
       for (size_t t = 0; t < mesh_->tets.size(); ++t) {
@@ -228,6 +255,7 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
   const TetMesh* mesh_ = nullptr;
   bool mesh_reused_ = false;
   ConformReport conform_;
+  std::vector<std::string> moving_interfaces_;  // tuned parameters that move a followed interface
   std::vector<Face> boundary_;
   Constraints constraints_;
   std::vector<ProbeLocation> probes_;

@@ -23,6 +23,9 @@
 /// has the same E and ν is not cut inside: its interfaces separate nothing
 /// the elastic model sees (a texture's rigid ink layers and columns).
 
+#include <string>
+#include <vector>
+
 #include "fem/tet_mesh.h"
 #include "reducer/reducer_tree.h"
 
@@ -32,11 +35,24 @@ struct ConformReport {
   size_t interfaces_cut = 0;  ///< level sets that crossed at least one tet
   size_t subtrees_uniform = 0;  ///< subtrees left whole: all their materials one E and ν
   size_t edges_split = 0;
+  size_t nodes_snapped = 0;  ///< nodes moved onto an interface instead of splitting next to them
   size_t tets_before = 0, tets_after = 0;
 };
 
 /// Splits `mesh` (inside tree's solid) so that no tet crosses an interface
-/// of `tree` (bound). Every new tet is positively oriented.
-ConformReport conform_to_interfaces(TetMesh& mesh, const ReducerTree& tree);
+/// of `tree` (bound). Every new tet is positively oriented. `labels`
+/// (optional) receives each tet's piece of the partition the interfaces
+/// make: tets of one label lie on one side of every interface; a label is a
+/// leaf region of the tree (or an elastically uniform subtree), split
+/// further by a material node's own interfaces (a layered stack's layers).
+ConformReport conform_to_interfaces(TetMesh& mesh, const ReducerTree& tree, std::vector<int>* labels = nullptr);
+
+/// The free continuous parameters that move an interface the mesh follows
+/// (a plane's tuned offset, a layer's tuned thickness), as parameter paths.
+/// The mesh is made once, at setup; moving interfaces are then seen through
+/// the tets' centroids. Re-meshing at each evaluation was not chosen: the
+/// error would jump whenever TetGen placed its points differently, which
+/// gradient-free and gradient optimizers alike read as noise.
+std::vector<std::string> tuned_interface_parameters(const ReducerTree& tree);
 
 }  // namespace spec2fab::fem

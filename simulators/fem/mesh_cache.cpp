@@ -1,6 +1,8 @@
 #include "fem/mesh_cache.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cstdlib>
 #include <cstring>
 #include <sstream>
 #include <string>
@@ -8,8 +10,11 @@
 
 #include <malloc.h>
 
+#include "core/error.h"
 #include "core/run_cache.h"
 #include "geometry/solid.h"
+
+#include <spdlog/spdlog.h>
 
 namespace spec2fab::fem {
 namespace {
@@ -53,8 +58,37 @@ std::shared_ptr<const ConformedMesh> conformed_mesh(const Solid& solid, const Re
     auto start = Clock::now();
     made->mesh = tetrahedralize(solid.mesh(), options);
     made->mesh_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    made->plain_tets = made->mesh.tets.size();
     start = Clock::now();
-    if (follow_interfaces) made->conform = conform_to_interfaces(made->mesh, tree);
+    if (follow_interfaces) {
+      std::vector<int> labels;
+      made->conform = conform_to_interfaces(made->mesh, tree, &labels);
+      const bool several_pieces =
+          std::any_of(labels.begin(), labels.end(), [&](int label) { return label != labels.front(); });
+      if (several_pieces) {
+        const Plc plc = labelled_mesh_plc(made->mesh, labels, solid.mesh().name, &made->plc);
+        if (const char* dump = std::getenv("SPEC2FAB_FEM_POLY")) write_poly(plc, dump);
+        const size_t first_pass_nodes = made->mesh.nodes.size();
+        made->mesh = TetMesh{};  // the first pass's memory goes before the second pass takes its own
+        TetgenOptions second = options;
+        // The interfaces need more points than the plain solid where layers
+        // are thinner than its tets; ten times as many means a runaway.
+        second.max_steiner_points = static_cast<long>(10 * first_pass_nodes + 10000);
+        try {
+          made->mesh = tetrahedralize(plc, second);
+          made->remeshed = true;
+          if (made->mesh.nodes.size() >= plc.points.size() + static_cast<size_t>(second.max_steiner_points))
+            spdlog::warn("fem: TetGen stopped adding points at {} with the interfaces as facets (a tiny feature "
+                         "in them); the mesh there is coarser than asked",
+                         second.max_steiner_points);
+        } catch (const InputError& e) {
+          // The solid alone meshed; its interfaces as facets did not: cut them in instead.
+          spdlog::warn("fem: {}; the interfaces are cut into the solid's mesh instead", e.what());
+          made->mesh = tetrahedralize(solid.mesh(), options);
+        }
+        made->cut_after = conform_to_interfaces(made->mesh, tree);
+      }
+    }
     made->conform_seconds = std::chrono::duration<double>(Clock::now() - start).count();
     // TetGen's pools are freed by now but glibc keeps their pages (~0.3 kB
     // per tet); hand them back so the solver's peak does not stand on them.

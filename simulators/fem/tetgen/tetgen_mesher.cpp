@@ -65,33 +65,38 @@ void run_tetgen(const std::string& switches, tetgenio& in, tetgenio& out, const 
 }  // namespace
 
 TetMesh tetrahedralize(const Mesh& surface, const TetgenOptions& options) {
-  const std::string name = surface.name.empty() ? std::string("mesh") : surface.name;
+  return tetrahedralize(surface_plc(surface), options);
+}
+
+TetMesh tetrahedralize(const Plc& plc, const TetgenOptions& options) {
+  const std::string& name = plc.name;
   tetgenio in;
   in.firstnumber = 0;
-  in.numberofpoints = static_cast<int>(surface.vertices.size());
-  in.pointlist = new REAL[3 * surface.vertices.size()];
-  for (size_t i = 0; i < surface.vertices.size(); ++i) {
-    for (int d = 0; d < 3; ++d) in.pointlist[3 * i + static_cast<size_t>(d)] = surface.vertices[i][d];
+  in.numberofpoints = static_cast<int>(plc.points.size());
+  in.pointlist = new REAL[3 * plc.points.size()];
+  for (size_t i = 0; i < plc.points.size(); ++i) {
+    for (int d = 0; d < 3; ++d) in.pointlist[3 * i + static_cast<size_t>(d)] = plc.points[i][d];
   }
-  in.numberoffacets = static_cast<int>(surface.triangles.size());
-  in.facetlist = new tetgenio::facet[surface.triangles.size()];
-  in.facetmarkerlist = new int[surface.triangles.size()];
-  for (size_t t = 0; t < surface.triangles.size(); ++t) {
-    tetgenio::facet& facet = in.facetlist[t];
+  in.numberoffacets = static_cast<int>(plc.facets.size());
+  in.facetlist = new tetgenio::facet[plc.facets.size()];
+  in.facetmarkerlist = new int[plc.facets.size()];
+  for (size_t f = 0; f < plc.facets.size(); ++f) {
+    tetgenio::facet& facet = in.facetlist[f];
     facet.numberofpolygons = 1;
     facet.polygonlist = new tetgenio::polygon[1];
     facet.numberofholes = 0;
     facet.holelist = nullptr;
     tetgenio::polygon& polygon = facet.polygonlist[0];
-    polygon.numberofvertices = 3;
-    polygon.vertexlist = new int[3];
-    for (int k = 0; k < 3; ++k) polygon.vertexlist[k] = surface.triangles[t][k];
-    in.facetmarkerlist[t] = 1;
+    polygon.numberofvertices = static_cast<int>(plc.facets[f].size());
+    polygon.vertexlist = new int[plc.facets[f].size()];
+    std::copy(plc.facets[f].begin(), plc.facets[f].end(), polygon.vertexlist);
+    in.facetmarkerlist[f] = plc.markers.empty() ? 1 : plc.markers[f];
   }
   std::ostringstream switches;
   switches.precision(17);
   // p: a PLC; q: quality; a: volume bound; z: number from 0; Q: quiet.
   switches << "pzQq" << options.radius_edge << "a" << options.max_volume_mm3;
+  if (options.max_steiner_points > 0) switches << "S" << options.max_steiner_points;
   tetgenio out;
   run_tetgen(switches.str(), in, out, name);
   if (!options.refine_box || !(options.refine_max_volume_mm3 > 0)) return read_result(out);
@@ -107,6 +112,15 @@ TetMesh tetrahedralize(const Mesh& surface, const TetgenOptions& options) {
   again.numberofcorners = 4;
   again.tetrahedronlist = new int[4 * static_cast<size_t>(out.numberoftetrahedra)];
   again.tetrahedronvolumelist = new REAL[static_cast<size_t>(out.numberoftetrahedra)];
+  // The facets' triangles (the boundary and the interfaces) go along, so
+  // that refining keeps them as faces.
+  again.numberoftrifaces = out.numberoftrifaces;
+  again.trifacelist = new int[3 * static_cast<size_t>(out.numberoftrifaces)];
+  std::copy(out.trifacelist, out.trifacelist + 3 * out.numberoftrifaces, again.trifacelist);
+  if (out.trifacemarkerlist) {
+    again.trifacemarkerlist = new int[static_cast<size_t>(out.numberoftrifaces)];
+    std::copy(out.trifacemarkerlist, out.trifacemarkerlist + out.numberoftrifaces, again.trifacemarkerlist);
+  }
   for (int t = 0; t < out.numberoftetrahedra; ++t) {
     Vec3 centroid = Vec3::Zero();
     for (int k = 0; k < 4; ++k) {
@@ -120,6 +134,7 @@ TetMesh tetrahedralize(const Mesh& surface, const TetgenOptions& options) {
   std::ostringstream refine;
   refine.precision(17);
   refine << "rzQq" << options.radius_edge << "a";
+  if (options.max_steiner_points > 0) refine << "S" << options.max_steiner_points;
   tetgenio refined;
   run_tetgen(refine.str(), again, refined, name);
   return read_result(refined);
@@ -129,9 +144,12 @@ TetMesh tetrahedralize(const Mesh& surface, const TetgenOptions& options) {
 
 bool tetgen_available() { return false; }
 
-TetMesh tetrahedralize(const Mesh& surface, const TetgenOptions& /*options*/) {
-  throw InputError((surface.name.empty() ? std::string("mesh") : surface.name) + ": " +
-                   left_out_of_build("mesher", "tetgen") + " (no tetrahedral meshes without it)");
+TetMesh tetrahedralize(const Plc& plc, const TetgenOptions& /*options*/) {
+  throw InputError(plc.name + ": " + left_out_of_build("mesher", "tetgen") + " (no tetrahedral meshes without it)");
+}
+
+TetMesh tetrahedralize(const Mesh& surface, const TetgenOptions& options) {
+  return tetrahedralize(surface_plc(surface), options);
 }
 
 #endif

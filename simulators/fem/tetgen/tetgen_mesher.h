@@ -13,6 +13,7 @@
 
 #include <Eigen/Geometry>
 
+#include "fem/interface_plc.h"
 #include "fem/tet_mesh.h"
 #include "geometry/mesh.h"
 
@@ -21,6 +22,10 @@ namespace spec2fab::fem {
 struct TetgenOptions {
   double max_volume_mm3 = 1.0;    ///< largest tet (TetGen -a)
   double radius_edge = 1.5;       ///< bound on circumradius / shortest edge (TetGen -q)
+  /// Most points TetGen may add (-S); 0: no bound. A PLC with a tiny
+  /// feature can make quality refinement run on until memory is gone; the
+  /// bound stops it with a coarser mesh there, and the caller says so.
+  long max_steiner_points = 0;
   /// Optional finer region: tets whose centroid lies in the box are refined
   /// to `refine_max_volume_mm3` (a second TetGen pass, -r -a).
   std::optional<Eigen::AlignedBox3d> refine_box;
@@ -34,5 +39,8 @@ bool tetgen_available();
 /// InputError naming the mesh when TetGen refuses it (self-intersections,
 /// open surface) or this build has no TetGen.
 TetMesh tetrahedralize(const Mesh& surface, const TetgenOptions& options);
+/// Tetrahedralises a PLC (interface_plc.h): every facet, inner ones too, is
+/// a union of faces of the result.
+TetMesh tetrahedralize(const Plc& plc, const TetgenOptions& options);
 
 }  // namespace spec2fab::fem
