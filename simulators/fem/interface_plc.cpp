@@ -95,6 +95,25 @@ class PlcBuilder {
       bool& planar = all_planar.try_emplace(sides, true).first->second;
       if (loops[g].empty()) planar = false;
     }
+    // A planar interface that ends on a curved one has that one's polyline
+    // as its boundary, short segments and all, and TetGen refines around
+    // them (the deformable Earth's core cells on its shell: 7,342 tets
+    // became 133,890): it is cut in too.
+    std::vector<char> on_curved(mesh_.nodes.size(), 0);
+    for (size_t g = 0; g < groups_.size(); ++g) {
+      const auto sides = faces_[static_cast<size_t>(groups_[g].front())].sides;
+      if (sides.second == kOutside || all_planar.at(sides)) continue;
+      for (int f : groups_[g])
+        for (int v : faces_[static_cast<size_t>(f)].corners) on_curved[static_cast<size_t>(v)] = 1;
+    }
+    std::set<std::pair<int, int>> ends_on_curved;
+    for (size_t g = 0; g < groups_.size(); ++g) {
+      const auto sides = faces_[static_cast<size_t>(groups_[g].front())].sides;
+      if (sides.second == kOutside || !all_planar.at(sides)) continue;
+      for (int v : loops[g])
+        if (on_curved[static_cast<size_t>(v)]) ends_on_curved.insert(sides);
+    }
+    for (const auto& sides : ends_on_curved) all_planar[sides] = false;
     std::vector<std::vector<int>> polygons;
     std::vector<int> markers;
     std::vector<char> pinned(mesh_.nodes.size(), 0);  // a corner of a kept triangle: never dropped

@@ -90,6 +90,12 @@ std::shared_ptr<const ConformedMesh> conformed_mesh(const Solid& solid, const Re
       }
     }
     made->conform_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    if (made->conform.interfaces_cut > 0)
+      spdlog::info("fem: {} tets ({} for the solid alone, {} with the planar interfaces as facets), {} nodes; {} "
+                   "interface(s) followed, {} cut in; {:.1f} s",
+                   made->mesh.tets.size(), made->plain_tets, made->cut_after.tets_before, made->mesh.nodes.size(),
+                   made->conform.interfaces_cut, made->plc.interfaces_left_out,
+                   made->mesh_seconds + made->conform_seconds);
     // TetGen's pools are freed by now but glibc keeps their pages (~0.3 kB
     // per tet); hand them back so the solver's peak does not stand on them.
     malloc_trim(0);

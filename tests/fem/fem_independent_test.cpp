@@ -20,6 +20,7 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 
 #include "fem/mesh_cache.h"
@@ -198,6 +199,11 @@ TEST_P(FemIndependent, RefinedApproachesConvergedCalculixBricks) {
   GTEST_SKIP() << "a minute of ccx and 90k-tet solves: the Release build runs it";
 #endif
   const Case& c = GetParam();
+  // The two slow converging cases take 40-80 s each on the 2-core CI
+  // machine; their figures are in docs/fem.md and this reruns them:
+  //   SPEC2FAB_LONG_CHECKS=1 build/tests/test_fem --gtest_filter='*Refined*'
+  if (c.refined_bound > 0.02 && !std::getenv("SPEC2FAB_LONG_CHECKS"))
+    GTEST_SKIP() << "a long check: set SPEC2FAB_LONG_CHECKS=1 to run it";
   const fs::path folder = work_folder(c.name + "_hex20r");
   ref::ReferenceOptions options;
   options.element = ref::Element::hex20r;
