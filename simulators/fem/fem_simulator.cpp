@@ -1,5 +1,5 @@
 // The `fem` simulator: static equilibrium of the run's solid, meshed by
-// TetGen and split along the tree's material interfaces, each tet with the
+// TetGen with the tree's material interfaces as faces (mesh_cache.h), each tet with the
 // E and ν of the material the tree assigns at its centroid (void tets
 // removed), under fixed regions, prescribed displacements and loads.
 // Co-rotated linear tetrahedra with a consistent tangent (corotated_tet.h),
@@ -231,11 +231,12 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
 
   static TypeDoc doc() {
     return {"Static equilibrium of the run's solid (co-rotated linear tetrahedra on a TetGen mesh "
-            "split along the tree's material interfaces; each tet's E and nu from the material at "
+            "whose faces follow the tree's material interfaces; each tet's E and nu from the material at "
             "its centroid; void tets removed) under fixed boxes, prescribed displacements and "
             "loads. Newton with load stepping (nonlinear) or one linear solve; CHOLMOD, or CG with "
             "algebraic multigrid (hypre) for big meshes. Produces "
-            "the probes' and every node's displacement (mm). Units: mm, N, MPa.",
+            "the probes' and every node's displacement (mm) and each tet's von Mises stress (MPa); "
+            "simulate writes fem.vtu for ParaView. Units: mm, N, MPa.",
             FemSettings::docs(),
             R"({"type": "fem", "max_tet_volume_mm3": 1.0, "fixed": [{"min": [0, 0, 0], "max": [0, 10, 10]}], )"
             R"("loads": [{"min": [100, 0, 0], "max": [100, 10, 10], "force_n": [0, 0, -1]}], )"

@@ -9,15 +9,21 @@
 ///
 /// the tree is walked from the root; at each node, the tets of its region
 /// are cut by each of the node's interfaces (ReducerNode::interface_level, a
-/// level set of the node's incoming frame) by splitting every edge whose ends
-/// lie on opposite sides at the level set's linear zero. An edge split
-/// bisects every tet around that edge — inside the region or not — so the
-/// mesh stays conforming without any cut spreading beyond the edge's star;
-/// the tets of one face split their edges in one global order, so they agree
-/// on the face's triangles. Then each tet goes to the child its centroid
-/// routes to, and the walk goes on. Plane, column, voxel and layer interfaces
-/// are planes in their frames and are followed exactly; a B-spline or
-/// stratum surface is followed to within its linear interpolation per edge.
+/// level set of the node's incoming frame). A node within a fifth of an
+/// edge of the level set is moved onto it (snapping: no sliver next to
+/// it); every other edge whose ends lie on opposite sides is split where
+/// the level crosses zero, found on the level itself (regula falsi and
+/// bisection: exact for planes, and right for a stratum's depth, which is
+/// a distance only near the surface). An edge split bisects every tet
+/// around that edge — inside the region or not — so the mesh stays
+/// conforming without any cut spreading beyond the edge's star; the tets
+/// of one face split their edges in one global order, so they agree on
+/// the face's triangles. Then each tet goes to the child its centroid
+/// routes to, and the walk goes on.
+///
+/// The FEM uses this twice (mesh_cache.h): on the plain solid, to find the
+/// interfaces and give the planar ones to TetGen as facets, and on
+/// TetGen's second mesh, to cut in the curved ones.
 ///
 /// A subtree whose every possible material (every choice its tuners have)
 /// has the same E and ν is not cut inside: its interfaces separate nothing

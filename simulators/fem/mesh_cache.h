@@ -1,5 +1,5 @@
 #pragma once
-/// The solid's TetGen mesh split along the tree's interfaces, made once per
+/// The solid's TetGen mesh following the tree's interfaces, made once per
 /// run and shared by every `fem` simulator of the run that asks for the
 /// same one (several tuners, repeated setups) through the run's RunCache.
 /// The key is content, not addresses: the surface's vertices and
