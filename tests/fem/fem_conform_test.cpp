@@ -238,6 +238,22 @@ TEST(TwoPassMesh, RefiningABoxKeepsTheInterfaces) {
   EXPECT_GT(refined.meshed->mesh.tets.size(), plain.meshed->mesh.tets.size() * 3);
 }
 
+// A tuned parameter that moves a followed interface is named (the FEM then
+// says in one line that it sees the move through centroids); material
+// choices and interfaces inside an elastically uniform subtree are not.
+TEST(MovingInterfaces, NamesTheTunedParametersThatMoveAFollowedInterface) {
+  const MaterialPalette palette({testing::elastic_material("a", 1e9, 0.3), testing::elastic_material("b", 1e8, 0.3),
+                                 testing::elastic_material("c", 1e9, 0.3)});
+  ReducerTree tree(Properties::parse(R"({"type": "plane", "offset_mm": {"value": 3, "min": 1, "max": 5},
+      "below": {"type": "layered", "layers": [{"material": {"value": "a", "choices": ["a", "b"]}, "thickness_mm": 1},
+                                              {"material": "b"}]},
+      "above": {"type": "layered", "layers": [{"material": "a", "thickness_mm": {"value": 1, "min": 0.5, "max": 2}},
+                                              {"material": "c"}]}})",
+                                     "tree.json"),
+                   palette);
+  EXPECT_EQ(tuned_interface_parameters(tree), (std::vector<std::string>{"offset_mm"}));
+}
+
 TEST(MeshCache, SharesAMeshWithinARunForTheSameSolidTreeAndOptionsOnly) {
   const MaterialPalette palette({testing::elastic_material("a", 1e9, 0.3), testing::elastic_material("b", 1e8, 0.3)});
   const std::string json = R"({"type": "layered", "layers": [{"material": "a", "thickness_mm": 2.3}, {"material": "b"}]})";
