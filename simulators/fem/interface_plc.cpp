@@ -276,10 +276,8 @@ class PlcBuilder {
     return loop;
   }
 
-  std::vector<int> faces_touching(int v) const {
-    std::vector<int> out;
-    // Edges are keyed by their ends; the faces around v are those of its
-    // edges. A full scan per vertex would be quadratic, so use an index.
+  // The faces around v, from an index made on first use.
+  const std::vector<int>& faces_touching(int v) const {
     if (vertex_faces_.empty()) {
       vertex_faces_.resize(mesh_.nodes.size());
       for (size_t f = 0; f < faces_.size(); ++f)
