@@ -45,6 +45,11 @@ if(SPEC2FAB_WITH_LIB3MF)
   add_library(spec2fab_lib3mf INTERFACE)
   target_link_libraries(spec2fab_lib3mf INTERFACE PkgConfig::LIB3MF PkgConfig::LIBZIP)
 endif()
+# PETSc 3.18 (Debian's petsc-dev) for the FEM's 'gamg' solver.
+if(SPEC2FAB_WITH_PETSC)
+  find_package(PkgConfig REQUIRED)
+  pkg_check_modules(PETSC REQUIRED IMPORTED_TARGET PETSc)
+endif()
 find_package(PNG REQUIRED)
 # OpenMP's runtime API only: the fem module keeps CHOLMOD's OpenMP regions serial.
 find_package(OpenMP REQUIRED COMPONENTS CXX)

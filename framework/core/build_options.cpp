@@ -9,6 +9,7 @@ const std::vector<OptionalModule>& optional_modules() {
       {"SPEC2FAB_WITH_LIB3MF", "lib3mf", SPEC2FAB_WITH_LIB3MF, {{"print writer", "3mf"}}},
       {"SPEC2FAB_WITH_TETGEN", "TetGen", SPEC2FAB_WITH_TETGEN, {{"mesher", "tetgen"}}},
       {"SPEC2FAB_WITH_HYPRE", "hypre", SPEC2FAB_WITH_HYPRE, {{"linear solver", "amg"}}},
+      {"SPEC2FAB_WITH_PETSC", "PETSc", SPEC2FAB_WITH_PETSC, {{"linear solver", "gamg"}}},
       {"SPEC2FAB_WITH_MPI", "Open MPI", SPEC2FAB_WITH_MPI, {}},
   };
   return modules;

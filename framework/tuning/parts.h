@@ -187,6 +187,11 @@ struct PartContext {
   /// What the run's parts share (tables, spectra, meshes); null outside a
   /// run, when each part makes its own.
   RunCache* cache = nullptr;
+  /// Every MPI rank of this process's run builds the same part and makes
+  /// the same calls (`mpirun … spec2fab simulate`): a simulator that can
+  /// spread one solve over the ranks does (the FEM's gamg solver); the
+  /// others compute the same answer on each rank.
+  bool solve_across_ranks = false;
 };
 
 using SimulatorRegistry = Registry<Simulator, const PartContext&>;

@@ -13,6 +13,7 @@
 #include "core/error.h"
 #include "fem/cholmod_factor.h"
 #include "fem/hypre/amg_solver.h"
+#include "fem/petsc/gamg_solver.h"
 
 namespace spec2fab::fem {
 
@@ -44,6 +45,7 @@ struct ElasticSolver::Impl {
   using Preconditioner = Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>>;
   std::unique_ptr<Eigen::ConjugateGradient<SparseMatrix, Eigen::Lower, Preconditioner>> cg;
   std::unique_ptr<AmgSolver> amg;
+  std::unique_ptr<GamgSolver> gamg;
 
   std::vector<double> lambda, mu;
   std::vector<char> active;
@@ -109,6 +111,15 @@ struct ElasticSolver::Impl {
       report.cg_iterations += amg->last_iterations();
       return converged && step.allFinite();
     }
+    if (kind == LinearSolver::elastic_multigrid) {
+      gamg->setup(stiffness);
+      report.factorization_seconds += seconds_since(start);
+      start = Clock::now();
+      const bool converged = gamg->solve(residual, step);
+      report.solve_seconds += seconds_since(start);
+      report.cg_iterations += gamg->last_iterations();
+      return converged && step.allFinite();
+    }
     if (kind == LinearSolver::conjugate_gradient) {
       cg->compute(stiffness);  // the incomplete factor
       report.factorization_seconds += seconds_since(start);
@@ -139,7 +150,8 @@ struct ElasticSolver::Impl {
   }
 };
 
-ElasticSolver::ElasticSolver(const TetMesh& mesh, const std::vector<char>& fixed, LinearSolver linear_solver)
+ElasticSolver::ElasticSolver(const TetMesh& mesh, const std::vector<char>& fixed, LinearSolver linear_solver,
+                             bool distributed)
     : mesh_(mesh), impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
   m.kind = linear_solver;
@@ -227,13 +239,16 @@ ElasticSolver::ElasticSolver(const TetMesh& mesh, const std::vector<char>& fixed
     m.cg = std::make_unique<Eigen::ConjugateGradient<SparseMatrix, Eigen::Lower, Impl::Preconditioner>>();
     m.cg->setTolerance(1e-12);
     m.cg->setMaxIterations(std::max(1000, 10 * static_cast<int>(std::sqrt(static_cast<double>(m.free_count)))));
-  } else if (m.kind == LinearSolver::multigrid) {
+  } else if (m.kind == LinearSolver::multigrid || m.kind == LinearSolver::elastic_multigrid) {
     std::vector<int> dof_of_free(static_cast<size_t>(m.free_count));
     for (size_t d = 0; d < dofs; ++d) {
       if (const int i = m.dof_index[d]; i >= 0) dof_of_free[static_cast<size_t>(i)] = static_cast<int>(d);
     }
     // CG to 1e-10 relative: below Newton's default force tolerance (1e-9).
-    m.amg = std::make_unique<AmgSolver>(m.stiffness, std::move(dof_of_free), mesh.nodes.size(), 1e-10, 5000);
+    if (m.kind == LinearSolver::multigrid)
+      m.amg = std::make_unique<AmgSolver>(m.stiffness, std::move(dof_of_free), mesh.nodes.size(), 1e-10, 5000);
+    else
+      m.gamg = std::make_unique<GamgSolver>(m.stiffness, std::move(dof_of_free), mesh.nodes, 1e-10, 5000, distributed);
   } else {
     m.cholesky.analyze(m.stiffness);
   }
@@ -266,8 +281,11 @@ double ElasticSolver::factor_flops() const {
 }
 
 double ElasticSolver::multigrid_complexity() const {
+  if (impl_->gamg) return impl_->gamg->operator_complexity();
   return impl_->amg ? impl_->amg->operator_complexity() : 0.0;
 }
+
+int ElasticSolver::solve_ranks() const { return impl_->gamg ? impl_->gamg->ranks() : 1; }
 
 void ElasticSolver::set_materials(std::span<const double> lambda, std::span<const double> mu,
                                   std::span<const char> active) {

@@ -36,6 +36,7 @@ enum class LinearSolver {
   cholesky,            ///< CHOLMOD supernodal (LDLᵀ fallback): exact, fast to repeat, memory of the factor
   conjugate_gradient,  ///< CG with an incomplete-Cholesky preconditioner: a fraction of the memory
   multigrid,           ///< CG with an algebraic multigrid preconditioner (hypre BoomerAMG): small memory, fast on big meshes
+  elastic_multigrid,   ///< CG with smoothed aggregation on the rigid-body modes (PETSc GAMG): fewest iterations; distributed under mpirun
 };
 
 struct SolveOptions {
@@ -54,15 +55,18 @@ struct SolveReport {
   double assembly_seconds = 0;       ///< element forces and tangents, scattered
   double factorization_seconds = 0;  ///< numeric Cholesky (or LDLᵀ)
   double solve_seconds = 0;          ///< triangular solves (or CG iterations)
-  long cg_iterations = 0;            ///< conjugate_gradient, multigrid: in all solves
+  long cg_iterations = 0;            ///< the iterative solvers: in all solves
 };
 
 class ElasticSolver {
  public:
   /// `fixed` holds 3 flags per node (1: prescribed). Throws InputError when
   /// nothing is fixed (the system would be singular).
+  /// `distributed` (elastic_multigrid only): every MPI rank of the run
+  /// constructs the same solver and makes the same calls, and the linear
+  /// solves are spread over the ranks.
   ElasticSolver(const TetMesh& mesh, const std::vector<char>& fixed,
-                LinearSolver linear_solver = LinearSolver::cholesky);
+                LinearSolver linear_solver = LinearSolver::cholesky, bool distributed = false);
   ~ElasticSolver();
   ElasticSolver(const ElasticSolver&) = delete;
   ElasticSolver& operator=(const ElasticSolver&) = delete;
@@ -92,7 +96,8 @@ class ElasticSolver {
   size_t free_dofs() const;
   double factor_nonzeros() const;  ///< nnz of the Cholesky factor (CHOLMOD's analysis)
   double factor_flops() const;     ///< flops of one numeric factorisation
-  double multigrid_complexity() const;  ///< multigrid: Σ nnz over its levels / nnz(K) (after a solve)
+  double multigrid_complexity() const;  ///< multigrids: Σ nnz over their levels / nnz(K) (after a solve)
+  int solve_ranks() const;              ///< MPI ranks a linear solve is spread over (1 unless distributed)
 
  private:
   struct Impl;

@@ -14,6 +14,7 @@
 #include "core/limits.h"
 #include "core/options.h"
 #include "fem/hypre/amg_solver.h"
+#include "fem/petsc/gamg_solver.h"
 
 namespace spec2fab::fem {
 namespace {
@@ -109,8 +110,9 @@ struct FemOptions {
     d.number(o.tolerance, "tolerance", Range::closed(1e-15, 1e-2), "relative force residual for convergence");
     d.choice(o.linear_solver, "linear_solver", linear_solver_names(),
              "sparse Cholesky (CHOLMOD: exact, fastest on small meshes); conjugate gradients with "
-             "algebraic multigrid (hypre BoomerAMG: fastest and smallest on big meshes); or with "
-             "incomplete Cholesky (small, slow)");
+             "smoothed-aggregation multigrid on the rigid-body modes (gamg, PETSc: fastest on big meshes, "
+             "distributed under mpirun), with algebraic multigrid (amg, hypre BoomerAMG: smallest); or with "
+             "incomplete Cholesky (cg: small, slow)");
     d.value(o.write_calculix_deck, "write_calculix_deck",
             "also write calculix.inp: the same mesh, materials and loads for CalculiX (ccx)");
   }
@@ -120,8 +122,8 @@ struct FemOptions {
              "singular (the body could move freely); give at least one \"fixed\" box";
       return false;
     }
-    if (linear_solver == "amg" && !AmgSolver::available()) {
-      *why = "linear_solver: " + left_out_of_build("linear solver", "amg");
+    if ((linear_solver == "amg" && !AmgSolver::available()) || (linear_solver == "gamg" && !GamgSolver::available())) {
+      *why = "linear_solver: " + left_out_of_build("linear solver", linear_solver);
       return false;
     }
     return true;
@@ -174,6 +176,7 @@ const char* to_string(LinearSolver solver) {
   switch (solver) {
     case LinearSolver::cholesky: return "cholesky";
     case LinearSolver::multigrid: return "amg";
+    case LinearSolver::elastic_multigrid: return "gamg";
     case LinearSolver::conjugate_gradient: return "cg";
   }
   return "?";

@@ -24,9 +24,10 @@ struct BoxRegion {
   std::string where;          ///< JSON location, for errors
 };
 
-/// The "linear_solver" names: "cholesky", "amg", "cg".
+/// The "linear_solver" names: "cholesky", "amg", "gamg", "cg".
 const char* to_string(LinearSolver solver);
 inline constexpr LinearSolver kLinearSolvers[] = {LinearSolver::cholesky, LinearSolver::multigrid,
+                                                  LinearSolver::elastic_multigrid,
                                                   LinearSolver::conjugate_gradient};
 
 struct FemSettings {

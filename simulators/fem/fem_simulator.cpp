@@ -42,7 +42,11 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
       : settings_(FemSettings::read(properties)),
         where_(properties.where()),
         palette_(&context.palette),
-        cache_(context.cache) {
+        cache_(context.cache),
+        across_ranks_(context.solve_across_ranks) {
+    if (across_ranks_ && settings_.linear_solver != LinearSolver::elastic_multigrid)
+      spdlog::warn("fem: under mpirun only the linear solver \"gamg\" spreads its solves over the ranks; "
+                   "\"{}\" solves the same system on every rank", to_string(settings_.linear_solver));
     // Lamé parameters (MPa = N/mm²) of every material the tree may assign.
     lame_.assign(palette_->size(), {0.0, 0.0});
     for (MaterialId id = 1; id < palette_->size(); ++id) {
@@ -81,7 +85,7 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
     boundary_ = mesh_->boundary_faces();
     constraints_ = make_constraints(*mesh_, boundary_, settings_);
     probes_ = locate_probes(*mesh_, settings_.probes, where_ + "/probes");
-    solver_ = std::make_unique<ElasticSolver>(*mesh_, constraints_.fixed, settings_.linear_solver);
+    solver_ = std::make_unique<ElasticSolver>(*mesh_, constraints_.fixed, settings_.linear_solver, across_ranks_);
     centroids_.resize(mesh_->tets.size());
     for (size_t t = 0; t < mesh_->tets.size(); ++t) centroids_[t] = mesh_->centroid(t);
     materials_.resize(mesh_->tets.size());
@@ -205,6 +209,7 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
                        {"linear_solver", to_string(settings_.linear_solver)},
                        {"cg_iterations", report_.cg_iterations},
                        {"multigrid_operator_complexity", solver_->multigrid_complexity()},
+                       {"ranks", solver_->solve_ranks()},
                        {"max_displacement_mm", largest}};
     record["stress"] = {{"von_mises_max_mpa", out.stress_max_mpa},
                         {"von_mises_p99_mpa", out.stress_p99_mpa},
@@ -234,7 +239,8 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
             "whose faces follow the tree's material interfaces; each tet's E and nu from the material at "
             "its centroid; void tets removed) under fixed boxes, prescribed displacements and "
             "loads. Newton with load stepping (nonlinear) or one linear solve; CHOLMOD, or CG with "
-            "algebraic multigrid (hypre) for big meshes. Produces "
+            "multigrid for big meshes (PETSc GAMG on the rigid-body modes, spread over the ranks under "
+            "mpirun; or hypre). Produces "
             "the probes' and every node's displacement (mm) and each tet's von Mises stress (MPa); "
             "simulate writes fem.vtu for ParaView. Units: mm, N, MPa.",
             FemSettings::docs(),
@@ -251,6 +257,7 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
   std::string where_;
   const MaterialPalette* palette_;
   RunCache* cache_;  ///< the run's: simulators of one run share a mesh
+  bool across_ranks_;  ///< every MPI rank runs this simulator alike: spread the solves
   SimulationDomain domain_;
   std::shared_ptr<const ConformedMesh> meshed_;  // shared with the run's other simulators (mesh_cache.h)
   const TetMesh* mesh_ = nullptr;

@@ -67,7 +67,7 @@ TEST_F(Cli, ValidateAcceptsShippedExperiments) {
     EXPECT_THAT(r.out, HasSubstr(": ok"));
     ++accepted;
   }
-  if (SPEC2FAB_WITH_CERES && SPEC2FAB_WITH_NLOPT && SPEC2FAB_WITH_LIB3MF && SPEC2FAB_WITH_TETGEN && SPEC2FAB_WITH_HYPRE) {
+  if (SPEC2FAB_WITH_CERES && SPEC2FAB_WITH_NLOPT && SPEC2FAB_WITH_LIB3MF && SPEC2FAB_WITH_TETGEN && SPEC2FAB_WITH_HYPRE && SPEC2FAB_WITH_PETSC) {
     EXPECT_EQ(accepted + left, std::distance(fs::directory_iterator(kDatasets / "experiments"), fs::directory_iterator()));
     EXPECT_EQ(left, static_cast<int>(kLeftToReleaseBuild.size()));
   } else {
@@ -198,7 +198,7 @@ TEST_F(Cli, OpenMeshIsRejectedWithItsDefect) {
 // docs/parts.md is what the registries declare, regenerated, byte for byte.
 TEST_F(Cli, PartsReferenceInDocsIsCurrent) {
   // docs/parts.md documents the full build.
-  if (!(SPEC2FAB_WITH_CERES && SPEC2FAB_WITH_NLOPT && SPEC2FAB_WITH_LIB3MF && SPEC2FAB_WITH_TETGEN && SPEC2FAB_WITH_HYPRE))
+  if (!(SPEC2FAB_WITH_CERES && SPEC2FAB_WITH_NLOPT && SPEC2FAB_WITH_LIB3MF && SPEC2FAB_WITH_TETGEN && SPEC2FAB_WITH_HYPRE && SPEC2FAB_WITH_PETSC))
     GTEST_SKIP() << "an optional module is off in this build";
   const Result r = run_spec2fab("list --markdown");
   ASSERT_EQ(r.code, 0) << r.out;
@@ -211,7 +211,7 @@ TEST_F(Cli, PartsReferenceInDocsIsCurrent) {
 // The option tables of docs/experiment-format.md are the code's, regenerated
 // on a copy: nothing changes.
 TEST_F(Cli, OptionTablesInExperimentFormatAreCurrent) {
-  if (!(SPEC2FAB_WITH_CERES && SPEC2FAB_WITH_NLOPT && SPEC2FAB_WITH_LIB3MF && SPEC2FAB_WITH_TETGEN && SPEC2FAB_WITH_HYPRE))
+  if (!(SPEC2FAB_WITH_CERES && SPEC2FAB_WITH_NLOPT && SPEC2FAB_WITH_LIB3MF && SPEC2FAB_WITH_TETGEN && SPEC2FAB_WITH_HYPRE && SPEC2FAB_WITH_PETSC))
     GTEST_SKIP() << "an optional module is off in this build";
   const fs::path original = kDatasets / "../docs/experiment-format.md";
   const fs::path copy = dir_ / "experiment-format.md";

@@ -5,8 +5,12 @@
 
 #include "cli_support.h"
 
+#include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <fstream>
 #include <map>
+#include <sstream>
 
 #include <nlohmann/json.hpp>
 
@@ -104,13 +108,90 @@ TEST_F(Cli, MpiRunSplitsTunersAndSlicesAndIsByteIdenticalToOneProcess) {
   }
 }
 
-TEST_F(Cli, UnderMpirunOnlyRunAndExportSplitTheirWork) {
+// Node displacements of a simulate folder's displacements.csv, by node.
+std::vector<double> node_displacements(const fs::path& csv) {
+  std::ifstream in(csv);
+  std::string line;
+  std::getline(in, line);  // header
+  std::vector<double> u;
+  while (std::getline(in, line)) {
+    std::stringstream fields(line);
+    std::string field;
+    for (int column = 0; std::getline(fields, field, ','); ++column)
+      if (column >= 4) u.push_back(std::stod(field));
+  }
+  return u;
+}
+
+double largest_difference(const std::vector<double>& a, const std::vector<double>& b) {
+  double worst = 0;
+  for (size_t i = 0; i < std::min(a.size(), b.size()); ++i) worst = std::max(worst, std::abs(a[i] - b[i]));
+  return worst;
+}
+
+double largest(const std::vector<double>& a) {
+  double worst = 0;
+  for (double v : a) worst = std::max(worst, std::abs(v));
+  return worst;
+}
+
+// mpirun -np N spec2fab simulate fem with the gamg solver: the mesh is split
+// along its nodes' Morton curve and PETSc's CG + GAMG solve across the
+// ranks; the displacements are one process's within 1e-8 of the largest
+// (and CHOLMOD's within 1e-7: the CG stops at a relative residual of 1e-10).
+TEST_F(Cli, MpiSimulateFemSpreadsItsSolveOverTheRanks) {
+  if (!SPEC2FAB_WITH_MPI || !SPEC2FAB_WITH_PETSC || !SPEC2FAB_WITH_TETGEN)
+    GTEST_SKIP() << "needs MPI, PETSc and TetGen in the build";
+  if (run_command("command -v mpirun").code != 0) GTEST_SKIP() << "mpirun not installed";
+  // A rigid beam with a rubber-like middle third (E 2000 : 0.6 MPa,
+  // VeroWhitePlus : TangoBlackPlus), clamped at one end, pulled down and
+  // sideways at the other.
+  auto config = [&](const std::string& solver) {
+    return R"({"materials": ")" + (kDatasets / "materials/polyjet.json").string() + R"(",
+      "printer": ")" + (kDatasets / "printers/objet500_connex_flex.json").string() + R"(",
+      "mesh": ")" + (kDatasets / "meshes/beam_100x10x10.stl").string() + R"(",
+      "subtree": {"type": "plane", "axis": "x", "offset_mm": 40,
+        "below": {"type": "layered", "material": "VeroWhitePlus"},
+        "above": {"type": "plane", "axis": "x", "offset_mm": 70,
+          "below": {"type": "layered", "material": "DM9860"},
+          "above": {"type": "layered", "material": "VeroWhitePlus"}}},
+      "simulator": {"max_tet_volume_mm3": 2, "nonlinear": false, "linear_solver": ")" + solver + R"(",
+        "fixed": [{"min": [0, 0, 0], "max": [0, 10, 10]}],
+        "loads": [{"min": [100, 0, 0], "max": [100, 10, 10], "force_n": [0, 1, -5]}],
+        "probes": [[100, 5, 5]]}})";
+  };
+  const fs::path direct = experiment("direct", config("cholesky")), gamg = experiment("gamg", config("gamg"));
+  ASSERT_EQ(run_spec2fab("simulate fem -q " + direct.string() + " --repeat 1 --out " + (dir_ / "direct").string()).code, 0);
+  const Result one = run_spec2fab("simulate fem -q " + gamg.string() + " --repeat 1 --out " + (dir_ / "one").string());
+  ASSERT_EQ(one.code, 0) << one.out;
+  const std::vector<double> exact = node_displacements(dir_ / "direct" / "displacements.csv");
+  const std::vector<double> serial = node_displacements(dir_ / "one" / "displacements.csv");
+  ASSERT_GT(exact.size(), 3000u);
+  ASSERT_EQ(serial.size(), exact.size());
+  EXPECT_LT(largest_difference(serial, exact), 1e-7 * largest(exact));
+  for (int ranks : {2, 3}) {
+    const fs::path out = dir_ / ("ranks" + std::to_string(ranks));
+    const Result r = run_command(mpirun(ranks) + SPEC2FAB_CLI_PATH + " simulate fem -q " + gamg.string() +
+                                 " --repeat 1 --out " + out.string());
+    ASSERT_EQ(r.code, 0) << r.out;
+    const std::vector<double> spread = node_displacements(out / "displacements.csv");
+    ASSERT_EQ(spread.size(), serial.size());
+    const double difference = largest_difference(spread, serial) / largest(serial);
+    std::printf("%d ranks: largest difference from one process %.2e of the largest displacement\n", ranks, difference);
+    EXPECT_LT(difference, 1e-8) << ranks << " ranks";
+    const auto record = nlohmann::json::parse(read(out / "simulation.json"));
+    EXPECT_EQ(record["solve"]["ranks"], ranks);
+    EXPECT_EQ(record["solve"]["linear_solver"], "gamg");
+  }
+}
+
+TEST_F(Cli, UnderMpirunOnlyRunExportAndSimulateSplitTheirWork) {
   if (!SPEC2FAB_WITH_MPI) GTEST_SKIP() << "built without MPI (SPEC2FAB_WITH_MPI=OFF)";
   if (run_command("command -v mpirun").code != 0) GTEST_SKIP() << "mpirun not installed";
   const fs::path file = experiment("src", valid_body(R"({"type": "layered", "material": "VeroCyan"})"));
   const Result r = run_command(mpirun(2) + SPEC2FAB_CLI_PATH + " validate " + file.string());
   EXPECT_EQ(r.code, 2) << r.out;
-  EXPECT_THAT(r.out, HasSubstr("only 'spec2fab run' and 'spec2fab export' split their work over ranks"));
+  EXPECT_THAT(r.out, HasSubstr("only 'spec2fab run', 'export' and 'simulate' split their work over ranks"));
 }
 
 }  // namespace

@@ -216,7 +216,8 @@ PreparedSimulation prepare_simulation(const fs::path& config_file, const std::st
   prepared.printer = std::make_unique<PrinterProfile>(PrinterProfile::load(config.existing_file("printer")));
   prepared.palette = std::make_unique<MaterialPalette>(*prepared.library, *prepared.printer);
   prepared.cache = std::make_unique<RunCache>();
-  const PartContext context{*prepared.palette, prepared.cache.get()};
+  // Under mpirun every rank prepares and runs the same simulation.
+  const PartContext context{*prepared.palette, prepared.cache.get(), ranks::size() > 1};
   const auto& simulators = SimulatorRegistry::instance();
   if (!simulators.contains(simulator)) {
     throw InputError("simulate: unknown simulator '" + simulator + "'" + did_you_mean(simulator, simulators.names()) +
@@ -254,10 +255,17 @@ int simulate_command(const SimulateArguments& arguments) {
   const auto simulate_start = Clock::now();
   int evaluations = 0;
   const auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - simulate_start).count(); };
+  // Under mpirun the ranks' solves are collective: rank 0's clock decides
+  // for all of them when to stop repeating.
+  const auto again = [&] {
+    if (arguments.repeat > 0) return evaluations < arguments.repeat;
+    const bool mine = evaluations < 100 && elapsed() < 2.0;
+    return ranks::size() > 1 ? ranks::broadcast(mine ? "1" : "0") == "1" : mine;
+  };
   do {
     simulator->simulate(subtree, *observation);
     ++evaluations;
-  } while (arguments.repeat > 0 ? evaluations < arguments.repeat : evaluations < 100 && elapsed() < 2.0);
+  } while (again());
   const double simulate_seconds = elapsed() / evaluations;
   // The config is all the simulator was given: an answer it cannot give is the config's problem.
   for (double v : observation->values()) {
@@ -268,6 +276,8 @@ int simulate_command(const SimulateArguments& arguments) {
     }
   }
 
+  // Every rank holds the same answer; rank 0 writes it.
+  if (!ranks::root()) return 0;
   RunFolder folder(arguments.out);
   nlohmann::json record = {{"simulator", simulator->name()},
                            {"produces", std::string(simulator->produces())},

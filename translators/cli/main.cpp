@@ -210,15 +210,16 @@ int main(int argc, char** argv) {
     return 2;
   }
   // Under mpirun only rank 0 speaks (the ranks do the same work on the same
-  // inputs, so they fail alike), and only run and export split their work.
+  // inputs, so they fail alike), and only run, export and simulate split
+  // their work (simulate: the FEM's gamg solves).
   ranks::start();
   const struct StopRanks {
     ~StopRanks() { ranks::stop(); }
   } stop_ranks;
   configure_logging(quiet || !ranks::root() ? Verbosity::quiet : verbose ? Verbosity::verbose : Verbosity::normal);
-  if (ranks::size() > 1 && !*export_cmd && !*run_cmd) {
+  if (ranks::size() > 1 && !*export_cmd && !*run_cmd && !*simulate_cmd) {
     if (ranks::root())
-      std::cerr << "error: under mpirun only 'spec2fab run' and 'spec2fab export' split their work over ranks ("
+      std::cerr << "error: under mpirun only 'spec2fab run', 'export' and 'simulate' split their work over ranks ("
                 << ranks::size() << " here); run the others as one process\n";
     return 2;
   }

@@ -1,0 +1,78 @@
+#pragma once
+/// Conjugate gradients preconditioned by smoothed-aggregation algebraic
+/// multigrid built for elasticity: PETSc's GAMG (Debian's petsc-dev) with the
+/// six rigid-body modes of the nodes as its near-nullspace. Aggregation that
+/// knows the rigid motions keeps the iteration count at a few dozen where a
+/// scalar AMG needs 150-200 (docs/fem-solver-study.md: 39-42 against 142-203
+/// on the 321k-tet cantilever).
+///
+/// Like AmgSolver (fem/hypre), the system has every node's three rows (free
+/// rows from the stiffness, prescribed rows the identity with right-hand
+/// side 0), so the matrix has a block size of 3 and the modes apply node by
+/// node. Nodes are numbered along a Morton curve inside the solver: the
+/// aggregates, the matrix's bandwidth and the memory traffic of each
+/// product follow space instead of TetGen's order.
+///
+/// Distributed: with `ranks` > 1 (an mpirun of `spec2fab simulate`) every
+/// rank passes the same matrix pattern and takes the rows of a contiguous
+/// run of the Morton order (a space-filling-curve partition of the mesh);
+/// PETSc's MPI matrices and GAMG solve across the ranks, and every rank gets
+/// the whole solution back. Each call is then collective.
+///
+/// PETSc lives in its own target (spec2fab_petsc, CMake option
+/// SPEC2FAB_WITH_PETSC, on by default). The first solver initialises PETSc
+/// (and MPI as a singleton where nobody started it); it is finalised at
+/// exit. PETSc is not thread-safe, so calls from several threads are
+/// serialised. Options of the solver can be changed at run time through
+/// PETSc's options database with the prefix `spec2fab_fem_`, e.g.
+/// PETSC_OPTIONS="-spec2fab_fem_ksp_view" to print what it built.
+
+#include <Eigen/SparseCore>
+
+#include <cstddef>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "geometry/mesh.h"
+
+namespace spec2fab::fem {
+
+class GamgSolver {
+ public:
+  using Matrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
+
+  /// `lower`: the lower triangle (compressed) of the free-free stiffness,
+  /// whose pattern every later matrix shares; `dof_of_free`: the node DOF
+  /// (3·node + axis) of each free row; `nodes`: rest positions (the rigid
+  /// modes and the ordering). `distributed`: solve across the MPI ranks of
+  /// this run (every rank calls with the same arguments). Throws
+  /// std::runtime_error when this build has no PETSc.
+  GamgSolver(const Matrix& lower, std::vector<int> dof_of_free, std::span<const Vec3> nodes, double tolerance,
+             int max_iterations, bool distributed = false);
+  ~GamgSolver();
+  GamgSolver(const GamgSolver&) = delete;
+  GamgSolver& operator=(const GamgSolver&) = delete;
+
+  /// Copies the values of `lower` into PETSc's matrix and builds the
+  /// multigrid hierarchy (the analogue of a numeric factorisation).
+  void setup(const Matrix& lower);
+  /// x = A⁻¹ b to relative residual ‖b − Ax‖ / ‖b‖ ≤ `tolerance`; false
+  /// when CG did not get there in `max_iterations` (or broke down).
+  bool solve(const Eigen::VectorXd& b, Eigen::VectorXd& x);
+
+  int last_iterations() const;
+  double last_relative_residual() const;
+  /// Σ nnz over all levels / nnz of the matrix (GAMG's operator complexity).
+  double operator_complexity() const;
+  /// Ranks the solve is spread over (1 unless distributed under mpirun).
+  int ranks() const;
+
+  static bool available();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace spec2fab::fem
