@@ -31,7 +31,8 @@ double seconds_since(Clock::time_point start) {
 
 struct ElasticSolver::Impl {
   std::vector<TetRest> rest;
-  std::vector<int> dof_index;  // full DOF -> free index, or -1
+  std::vector<int> node_order;  // Morton order of the nodes (tet_mesh.h), which numbers the free DOFs
+  std::vector<int> dof_index;   // full DOF -> free index, or -1
   int free_count = 0;
   // Per tet, for each of its 78 local pairs i <= j (column-major upper
   // triangle; element matrices are symmetric): the position of the global
@@ -157,9 +158,15 @@ ElasticSolver::ElasticSolver(const TetMesh& mesh, const std::vector<char>& fixed
   m.kind = linear_solver;
   const size_t dofs = 3 * mesh.nodes.size();
   if (fixed.size() != dofs) throw std::logic_error("ElasticSolver: fixed flags must be 3 per node");
+  // Free DOFs numbered node by node along the nodes' Morton curve: the
+  // stiffness then has a small bandwidth and its products (the multigrids'
+  // work) read memory in runs. The Cholesky solvers order it their own way.
+  m.node_order = morton_order(mesh.nodes);
   m.dof_index.assign(dofs, -1);
-  for (size_t d = 0; d < dofs; ++d) {
-    if (!fixed[d]) m.dof_index[d] = m.free_count++;
+  for (int v : m.node_order) {
+    for (size_t d = 0; d < 3; ++d) {
+      if (!fixed[3 * static_cast<size_t>(v) + d]) m.dof_index[3 * static_cast<size_t>(v) + d] = m.free_count++;
+    }
   }
   if (m.free_count == static_cast<int>(dofs)) {
     throw InputError("FEM: no node is fixed or has a prescribed displacement, so the equilibrium "
@@ -174,45 +181,65 @@ ElasticSolver::ElasticSolver(const TetMesh& mesh, const std::vector<char>& fixed
       throw std::logic_error("ElasticSolver: tet " + std::to_string(t) + " is not positively oriented");
     }
   }
-  // The pattern straight from the node graph (no triplet list: at 10⁵–10⁶
-  // tets that would be the largest allocation of the whole setup).
-  std::vector<std::vector<int>> neighbours(mesh.nodes.size());
-  for (const Tet& tet : mesh.tets) {
-    for (int a : tet) {
-      for (int b : tet) neighbours[static_cast<size_t>(a)].push_back(b);
+  // The pattern straight from the node graph, in compressed form (no
+  // triplet list: at 10⁵–10⁶ tets that would be the largest allocation of
+  // the whole setup). Each node's neighbours, itself included, sorted:
+  const size_t node_count = mesh.nodes.size();
+  std::vector<int> adjacency_start(node_count + 1, 0), adjacency(16 * mesh.tets.size());
+  for (const Tet& tet : mesh.tets)
+    for (int a : tet) adjacency_start[static_cast<size_t>(a) + 1] += 4;
+  for (size_t v = 0; v < node_count; ++v) adjacency_start[v + 1] += adjacency_start[v];
+  {
+    std::vector<int> cursor(adjacency_start.begin(), adjacency_start.end() - 1);
+    for (const Tet& tet : mesh.tets)
+      for (int a : tet)
+        for (int b : tet) adjacency[static_cast<size_t>(cursor[static_cast<size_t>(a)]++)] = b;
+    int kept = 0;
+    for (size_t v = 0; v < node_count; ++v) {
+      const auto begin = adjacency.begin() + adjacency_start[v], end = adjacency.begin() + adjacency_start[v + 1];
+      std::sort(begin, end);
+      const auto unique_end = std::unique(begin, end);
+      adjacency_start[v] = kept;
+      kept = static_cast<int>(std::copy(begin, unique_end, adjacency.begin() + kept) - adjacency.begin());
     }
+    adjacency_start[node_count] = kept;
+    adjacency.resize(static_cast<size_t>(kept));
+    adjacency.shrink_to_fit();
   }
-  for (auto& list : neighbours) {
-    std::sort(list.begin(), list.end());
-    list.erase(std::unique(list.begin(), list.end()), list.end());
-    list.shrink_to_fit();
-  }
-  m.stiffness.resize(m.free_count, m.free_count);
-  std::vector<int> column_sizes(static_cast<size_t>(m.free_count), 0);
+  // Column c of the lower triangle: the free DOFs of c's node's neighbours
+  // numbered c or above, in order.
+  std::vector<int> column_start(static_cast<size_t>(m.free_count) + 1, 0);
   auto for_each_row = [&](size_t v, int column, auto&& visit) {
-    for (int w : neighbours[v]) {
+    for (int k = adjacency_start[v]; k < adjacency_start[v + 1]; ++k) {
+      const auto w = static_cast<size_t>(adjacency[static_cast<size_t>(k)]);
       for (size_t e = 0; e < 3; ++e) {
-        if (const int row = m.dof_index[3 * static_cast<size_t>(w) + e]; row >= column) visit(row);
+        if (const int row = m.dof_index[3 * w + e]; row >= column) visit(row);
       }
     }
   };
-  for (size_t v = 0; v < mesh.nodes.size(); ++v) {
+  for (size_t v = 0; v < node_count; ++v) {
     for (size_t d = 0; d < 3; ++d) {
       if (const int column = m.dof_index[3 * v + d]; column >= 0) {
-        for_each_row(v, column, [&](int) { ++column_sizes[static_cast<size_t>(column)]; });
+        for_each_row(v, column, [&](int) { ++column_start[static_cast<size_t>(column) + 1]; });
       }
     }
   }
-  m.stiffness.reserve(column_sizes);
-  for (size_t v = 0; v < mesh.nodes.size(); ++v) {
+  for (size_t c = 0; c < static_cast<size_t>(m.free_count); ++c) column_start[c + 1] += column_start[c];
+  m.stiffness.resize(m.free_count, m.free_count);
+  m.stiffness.resizeNonZeros(column_start.back());
+  std::copy(column_start.begin(), column_start.end(), m.stiffness.outerIndexPtr());
+  int* rows = m.stiffness.innerIndexPtr();
+  for (size_t v = 0; v < node_count; ++v) {
     for (size_t d = 0; d < 3; ++d) {
       if (const int column = m.dof_index[3 * v + d]; column >= 0) {
-        for_each_row(v, column, [&](int row) { m.stiffness.insert(row, column) = 0.0; });
+        int* at = rows + column_start[static_cast<size_t>(column)];
+        for_each_row(v, column, [&](int row) { *at++ = row; });
+        std::sort(rows + column_start[static_cast<size_t>(column)], at);
       }
     }
   }
-  m.stiffness.makeCompressed();
-  neighbours = {};
+  std::fill(m.stiffness.valuePtr(), m.stiffness.valuePtr() + m.stiffness.nonZeros(), 0.0);
+  adjacency = {};
 
   const int* outer = m.stiffness.outerIndexPtr();
   const int* inner = m.stiffness.innerIndexPtr();
@@ -248,7 +275,8 @@ ElasticSolver::ElasticSolver(const TetMesh& mesh, const std::vector<char>& fixed
     if (m.kind == LinearSolver::multigrid)
       m.amg = std::make_unique<AmgSolver>(m.stiffness, std::move(dof_of_free), mesh.nodes.size(), 1e-10, 5000);
     else
-      m.gamg = std::make_unique<GamgSolver>(m.stiffness, std::move(dof_of_free), mesh.nodes, 1e-10, 5000, distributed);
+      m.gamg = std::make_unique<GamgSolver>(m.stiffness, dof_of_free, mesh.nodes, m.node_order, 1e-10,
+                                            5000, distributed);
   } else {
     m.cholesky.analyze(m.stiffness);
   }

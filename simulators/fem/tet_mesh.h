@@ -24,6 +24,13 @@ struct TetMesh {
   std::vector<Face> boundary_faces() const;
 };
 
+/// The nodes in the order of a Morton (Z-order) curve through their
+/// positions, ties in their own order: neighbours in space get nearby
+/// numbers, so a matrix numbered this way has a small bandwidth and its
+/// products touch memory in runs (and a contiguous run of it is a compact
+/// piece of the mesh, which is how the distributed solver splits it).
+std::vector<int> morton_order(const std::vector<Vec3>& nodes);
+
 /// Writes the boundary of `mesh`, displaced by `displacement_mm` (3 per node,
 /// may be empty), as a triangle mesh.
 Mesh boundary_surface(const TetMesh& mesh, const std::vector<Face>& faces,

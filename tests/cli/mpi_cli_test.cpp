@@ -171,7 +171,8 @@ TEST_F(Cli, MpiSimulateFemSpreadsItsSolveOverTheRanks) {
   EXPECT_LT(largest_difference(serial, exact), 1e-7 * largest(exact));
   for (int ranks : {2, 3}) {
     const fs::path out = dir_ / ("ranks" + std::to_string(ranks));
-    const Result r = run_command(mpirun(ranks) + SPEC2FAB_CLI_PATH + " simulate fem -q " + gamg.string() +
+    // (timeout: a collective call that one rank skips would hang its ranks)
+    const Result r = run_command(mpirun(ranks) + "timeout 300 " + SPEC2FAB_CLI_PATH + " simulate fem -q " + gamg.string() +
                                  " --repeat 1 --out " + out.string());
     ASSERT_EQ(r.code, 0) << r.out;
     const std::vector<double> spread = node_displacements(out / "displacements.csv");

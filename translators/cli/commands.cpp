@@ -276,8 +276,8 @@ int simulate_command(const SimulateArguments& arguments) {
     }
   }
 
-  // Every rank holds the same answer; rank 0 writes it.
-  if (!ranks::root()) return 0;
+  // Under mpirun every rank holds the same answer; rank 0's folder is the
+  // one kept (RunFolder).
   RunFolder folder(arguments.out);
   nlohmann::json record = {{"simulator", simulator->name()},
                            {"produces", std::string(simulator->produces())},
@@ -294,6 +294,7 @@ int simulate_command(const SimulateArguments& arguments) {
   record["files"] = files;
   folder.write_json("simulation.json", record);
   folder.commit();
+  if (!ranks::root()) return 0;
   std::cout << "wrote " << arguments.out.string() << "/ (simulation.json, " << join(files)
             << "); setup " << format_seconds(setup_seconds) << ", simulate "
             << format_seconds(simulate_seconds) << " per evaluation (mean of " << evaluations

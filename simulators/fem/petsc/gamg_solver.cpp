@@ -73,6 +73,9 @@ struct PetscSession {
     // 1e3-contrast checkerboard: the preconditioner became indefinite).
     set_default("-spec2fab_fem_pc_gamg_esteig_ksp_type", "cg");
     set_default("-spec2fab_fem_pc_gamg_esteig_ksp_max_it", "20");
+    // (The Galerkin products stay PETSc's default, "scalable": "-matptap_via
+    // rap" set up 0.2-0.9 s faster on the 321k-tet cantilever but raised the
+    // process's peak from 612 to 813 MB, benchmarks/RESULTS.md.)
   }
   ~PetscSession() {
     [[maybe_unused]] const IgnoreThirdPartyLeaks ignore;
@@ -86,59 +89,52 @@ void start_petsc() {
   static PetscSession session;
 }
 
-// Nodes along a Morton (Z-order) curve of their positions: ties (equal
-// codes) keep TetGen's order, so the numbering is deterministic.
-std::vector<int> morton_order(std::span<const Vec3> nodes) {
-  Eigen::AlignedBox3d box;
-  for (const Vec3& x : nodes) box.extend(x);
-  const Vec3 extent = box.sizes().cwiseMax(1e-12);
-  constexpr double kCells = 2097151.0;  // 21 bits per axis
-  auto spread = [](std::uint64_t v) {   // bits of v at every third place
-    v &= 0x1fffff;
-    v = (v | v << 32) & 0x1f00000000ffffULL;
-    v = (v | v << 16) & 0x1f0000ff0000ffULL;
-    v = (v | v << 8) & 0x100f00f00f00f00fULL;
-    v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
-    v = (v | v << 2) & 0x1249249249249249ULL;
-    return v;
-  };
-  std::vector<std::uint64_t> code(nodes.size());
-  for (size_t i = 0; i < nodes.size(); ++i) {
-    const Vec3 unit = (nodes[i] - box.min()).cwiseQuotient(extent);
-    std::uint64_t c = 0;
-    for (int axis = 0; axis < 3; ++axis)
-      c |= spread(static_cast<std::uint64_t>(std::clamp(unit[axis], 0.0, 1.0) * kCells)) << axis;
-    code[i] = c;
-  }
-  std::vector<int> order(nodes.size());
-  std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return code[static_cast<size_t>(a)] < code[static_cast<size_t>(b)]; });
-  return order;
-}
-
 }  // namespace
 
 struct GamgSolver::Impl {
   MPI_Comm comm = MPI_COMM_SELF;
   int rank = 0, size = 1;
-  double tolerance = 1e-10;
-  PetscInt rows = 0;                  // every node's three rows
+  PetscInt rows = 0;                    // every node's three rows
   PetscInt first_row = 0, end_row = 0;  // this rank's
-  std::vector<int> dof_of_free;
-  std::vector<PetscInt> row_of_dof;  // node DOF (3·node + axis) -> row in the Morton numbering
-  // Where each entry of the lower triangle goes among this rank's values
-  // (CSR order, as PETSc stores them): `slot` for (row, column) and
-  // `mirror` for (column, row); -1 off this rank or on the diagonal.
-  std::vector<int> slot, mirror;
-  std::vector<int> identity_slots;  // prescribed rows' diagonals
-  std::vector<PetscScalar> values;  // distributed only: this rank's CSR values
+  std::vector<PetscInt> row_of_free;  // free DOF -> row (increasing)
+  // This rank's rows of the full matrix in CSR form. Seq: PETSc's matrix
+  // uses these very arrays (no copy). MPI: PETSc copies them, and `values`
+  // carries each setup's numbers over.
+  std::vector<PetscInt> row_start, columns, cursor;
+  std::vector<PetscScalar> values;
   Mat matrix = nullptr;
   Vec rhs = nullptr, solution = nullptr, gathered = nullptr;
   VecScatter to_all = nullptr;
   KSP ksp = nullptr;
   int iterations = 0;
   double relative_residual = 0;
+  PetscReal complexity = 0;  // of the last setup
   bool set_up = false;
+
+  bool owned(PetscInt row) const { return row >= first_row && row < end_row; }
+
+  // Visits the lower triangle's entries in column order as the full
+  // matrix's (slot, column, index in `lower`) on this rank's rows: column
+  // c's diagonal and the entries below it fill row c in order, and each
+  // entry below the diagonal, mirrored, is the next of its row, whose
+  // earlier columns came first. Rows increase with the free DOFs, so every
+  // row comes out sorted, as PETSc keeps it.
+  template <class Visit>
+  void for_each_entry(const Matrix& lower, Visit&& visit) {
+    const auto local_rows = static_cast<size_t>(end_row - first_row);
+    cursor.assign(row_start.begin(), row_start.begin() + static_cast<long>(local_rows));
+    const int* outer = lower.outerIndexPtr();
+    const int* inner = lower.innerIndexPtr();
+    for (int c = 0; c < static_cast<int>(lower.cols()); ++c) {
+      const PetscInt column = row_of_free[static_cast<size_t>(c)];
+      const bool column_owned = owned(column);
+      for (int k = outer[c]; k < outer[c + 1]; ++k) {
+        const PetscInt row = row_of_free[static_cast<size_t>(inner[k])];
+        if (column_owned) visit(cursor[static_cast<size_t>(column - first_row)]++, row, k);
+        if (inner[k] != c && owned(row)) visit(cursor[static_cast<size_t>(row - first_row)]++, column, k);
+      }
+    }
+  }
 
   ~Impl() {
     [[maybe_unused]] const IgnoreThirdPartyLeaks ignore;
@@ -153,11 +149,12 @@ struct GamgSolver::Impl {
 
 bool GamgSolver::available() { return true; }
 
-GamgSolver::GamgSolver(const Matrix& lower, std::vector<int> dof_of_free, std::span<const Vec3> nodes,
-                       double tolerance, int max_iterations, bool distributed)
+GamgSolver::GamgSolver(const Matrix& lower, const std::vector<int>& dof_of_free, std::span<const Vec3> nodes,
+                       std::span<const int> node_order, double tolerance, int max_iterations, bool distributed)
     : impl_(std::make_unique<Impl>()) {
   if (!lower.isCompressed()) throw std::logic_error("GamgSolver: the matrix must be compressed");
   if (dof_of_free.size() != static_cast<size_t>(lower.cols())) throw std::logic_error("GamgSolver: one DOF per free row");
+  if (node_order.size() != nodes.size()) throw std::logic_error("GamgSolver: one place per node");
   std::lock_guard lock(petsc_mutex());
   start_petsc();
   Impl& m = *impl_;
@@ -168,92 +165,70 @@ GamgSolver::GamgSolver(const Matrix& lower, std::vector<int> dof_of_free, std::s
   }
   MPI_Comm_rank(m.comm, &m.rank);
   MPI_Comm_size(m.comm, &m.size);
-  m.tolerance = tolerance;
-  m.dof_of_free = std::move(dof_of_free);
   const size_t node_count = nodes.size();
   m.rows = static_cast<PetscInt>(3 * node_count);
 
-  const std::vector<int> order = morton_order(nodes);
-  m.row_of_dof.resize(3 * node_count);
+  std::vector<PetscInt> row_of_dof(3 * node_count);
   for (size_t place = 0; place < node_count; ++place)
     for (size_t axis = 0; axis < 3; ++axis)
-      m.row_of_dof[3 * static_cast<size_t>(order[place]) + axis] = static_cast<PetscInt>(3 * place + axis);
+      row_of_dof[3 * static_cast<size_t>(node_order[place]) + axis] = static_cast<PetscInt>(3 * place + axis);
+  m.row_of_free.resize(dof_of_free.size());
+  for (size_t i = 0; i < dof_of_free.size(); ++i) {
+    m.row_of_free[i] = row_of_dof[static_cast<size_t>(dof_of_free[i])];
+    if (i > 0 && m.row_of_free[i] <= m.row_of_free[i - 1])
+      throw std::logic_error("GamgSolver: the free DOFs must be numbered along node_order");
+  }
   // A contiguous run of the curve per rank: a space-filling-curve partition.
   const auto count = static_cast<long long>(node_count);
   const long long first_node = count * m.rank / m.size, end_node = count * (m.rank + 1) / m.size;
   m.first_row = static_cast<PetscInt>(3 * first_node);
   m.end_row = static_cast<PetscInt>(3 * end_node);
   const auto local_rows = static_cast<size_t>(m.end_row - m.first_row);
-  auto owned = [&](PetscInt row) { return row >= m.first_row && row < m.end_row; };
 
-  // This rank's rows of the full symmetric matrix in the new numbering:
-  // sizes, then (column, source) pairs, sorted per row. Source: 2k for
-  // lower entry k as (row, column), 2k + 1 as its mirror, -1 the identity.
-  const int* outer = lower.outerIndexPtr();
-  const int* inner = lower.innerIndexPtr();
-  const auto free_count = static_cast<int>(lower.cols());
-  std::vector<char> prescribed(3 * node_count, 1);
-  for (int dof : m.dof_of_free) prescribed[static_cast<size_t>(dof)] = 0;
-  std::vector<PetscInt> row_start(local_rows + 1, 0);
-  for (size_t dof = 0; dof < prescribed.size(); ++dof)
-    if (prescribed[dof] && owned(m.row_of_dof[dof])) ++row_start[static_cast<size_t>(m.row_of_dof[dof] - m.first_row) + 1];
-  auto row_of_free = [&](int i) { return m.row_of_dof[static_cast<size_t>(m.dof_of_free[static_cast<size_t>(i)])]; };
-  for (int c = 0; c < free_count; ++c) {
-    const PetscInt column = row_of_free(c);
-    for (int k = outer[c]; k < outer[c + 1]; ++k) {
-      const PetscInt row = row_of_free(inner[k]);
-      if (owned(row)) ++row_start[static_cast<size_t>(row - m.first_row) + 1];
-      if (inner[k] != c && owned(column)) ++row_start[static_cast<size_t>(column - m.first_row) + 1];
-    }
-  }
-  std::partial_sum(row_start.begin(), row_start.end(), row_start.begin());
-  const auto entries = static_cast<size_t>(row_start.back());
-  std::vector<std::pair<PetscInt, long long>> cells(entries);
+  // This rank's rows: a prescribed row is its diagonal (the identity);
+  // a free row has its lower column's entries and their mirrors.
+  std::vector<char> prescribed(local_rows, 1);
+  for (PetscInt row : m.row_of_free)
+    if (m.owned(row)) prescribed[static_cast<size_t>(row - m.first_row)] = 0;
+  m.row_start.assign(local_rows + 1, 0);
+  for (size_t r = 0; r < local_rows; ++r) m.row_start[r + 1] = prescribed[r];
   {
-    std::vector<PetscInt> cursor(row_start.begin(), row_start.end() - 1);
-    auto put = [&](PetscInt row, PetscInt column, long long source) {
-      cells[static_cast<size_t>(cursor[static_cast<size_t>(row - m.first_row)]++)] = {column, source};
-    };
-    for (size_t dof = 0; dof < prescribed.size(); ++dof)
-      if (const PetscInt row = m.row_of_dof[dof]; prescribed[dof] && owned(row)) put(row, row, -1);
-    for (int c = 0; c < free_count; ++c) {
-      const PetscInt column = row_of_free(c);
+    const int* outer = lower.outerIndexPtr();
+    const int* inner = lower.innerIndexPtr();
+    for (int c = 0; c < static_cast<int>(lower.cols()); ++c) {
+      const PetscInt column = m.row_of_free[static_cast<size_t>(c)];
       for (int k = outer[c]; k < outer[c + 1]; ++k) {
-        const PetscInt row = row_of_free(inner[k]);
-        if (owned(row)) put(row, column, 2LL * k);
-        if (inner[k] != c && owned(column)) put(column, row, 2LL * k + 1);
+        const PetscInt row = m.row_of_free[static_cast<size_t>(inner[k])];
+        if (m.owned(column)) ++m.row_start[static_cast<size_t>(column - m.first_row) + 1];
+        if (inner[k] != c && m.owned(row)) ++m.row_start[static_cast<size_t>(row - m.first_row) + 1];
       }
     }
   }
-  std::vector<PetscInt> columns(entries);
-  m.slot.assign(static_cast<size_t>(lower.nonZeros()), -1);
-  m.mirror.assign(static_cast<size_t>(lower.nonZeros()), -1);
+  std::partial_sum(m.row_start.begin(), m.row_start.end(), m.row_start.begin());
+  const auto entries = static_cast<size_t>(m.row_start.back());
+  m.columns.resize(entries);
+  m.values.assign(entries, 0.0);
   for (size_t r = 0; r < local_rows; ++r) {
-    const auto begin = cells.begin() + row_start[r], end = cells.begin() + row_start[r + 1];
-    std::sort(begin, end);
-    for (auto it = begin; it != end; ++it) {
-      const auto at = static_cast<size_t>(it - cells.begin());
-      columns[at] = it->first;
-      if (it->second < 0) m.identity_slots.push_back(static_cast<int>(at));
-      else if (it->second % 2 == 0) m.slot[static_cast<size_t>(it->second / 2)] = static_cast<int>(at);
-      else m.mirror[static_cast<size_t>(it->second / 2)] = static_cast<int>(at);
-    }
+    if (!prescribed[r]) continue;
+    m.columns[static_cast<size_t>(m.row_start[r])] = m.first_row + static_cast<PetscInt>(r);
+    m.values[static_cast<size_t>(m.row_start[r])] = 1.0;
   }
-  cells = {};
+  m.for_each_entry(lower, [&](PetscInt slot, PetscInt column, int) { m.columns[static_cast<size_t>(slot)] = column; });
 
   [[maybe_unused]] const IgnoreThirdPartyLeaks ignore;
-  std::vector<PetscScalar> initial(entries, 0.0);
-  for (int s : m.identity_slots) initial[static_cast<size_t>(s)] = 1.0;
   const auto local = static_cast<PetscInt>(local_rows);
-  check(MatCreate(m.comm, &m.matrix), "matrix create");
-  check(MatSetSizes(m.matrix, local, local, m.rows, m.rows), "matrix sizes");
-  check(MatSetBlockSize(m.matrix, 3), "matrix block size");
-  check(MatSetType(m.matrix, m.size > 1 ? MATMPIAIJ : MATSEQAIJ), "matrix type");
   if (m.size > 1) {
-    check(MatMPIAIJSetPreallocationCSR(m.matrix, row_start.data(), columns.data(), initial.data()), "matrix pattern");
-    m.values = std::move(initial);
+    check(MatCreate(m.comm, &m.matrix), "matrix create");
+    check(MatSetSizes(m.matrix, local, local, m.rows, m.rows), "matrix sizes");
+    check(MatSetBlockSize(m.matrix, 3), "matrix block size");
+    check(MatSetType(m.matrix, MATMPIAIJ), "matrix type");
+    check(MatMPIAIJSetPreallocationCSR(m.matrix, m.row_start.data(), m.columns.data(), m.values.data()), "matrix pattern");
+    m.columns = {};  // PETSc has its own copy; `values` stays, for the updates
   } else {
-    check(MatSeqAIJSetPreallocationCSR(m.matrix, row_start.data(), columns.data(), initial.data()), "matrix pattern");
+    check(MatCreateSeqAIJWithArrays(PETSC_COMM_SELF, local, local, m.row_start.data(), m.columns.data(),
+                                    m.values.data(), &m.matrix),
+          "matrix create");
+    check(MatSetBlockSize(m.matrix, 3), "matrix block size");
   }
   check(MatSetOption(m.matrix, MAT_NEW_NONZERO_LOCATION_ERR, PETSC_TRUE), "matrix option");
   check(MatSetOption(m.matrix, MAT_SPD, PETSC_TRUE), "matrix option");
@@ -267,9 +242,10 @@ GamgSolver::GamgSolver(const Matrix& lower, std::vector<int> dof_of_free, std::s
   check(VecSetType(coordinates, m.size > 1 ? VECMPI : VECSEQ), "vector type");
   PetscScalar* xyz = nullptr;
   check(VecGetArray(coordinates, &xyz), "vector access");
-  for (size_t place = static_cast<size_t>(first_node); place < static_cast<size_t>(end_node); ++place)
+  for (auto place = static_cast<size_t>(first_node); place < static_cast<size_t>(end_node); ++place)
     for (size_t axis = 0; axis < 3; ++axis)
-      xyz[3 * (place - static_cast<size_t>(first_node)) + axis] = nodes[static_cast<size_t>(order[place])][static_cast<long>(axis)];
+      xyz[3 * (place - static_cast<size_t>(first_node)) + axis] =
+          nodes[static_cast<size_t>(node_order[place])][static_cast<long>(axis)];
   check(VecRestoreArray(coordinates, &xyz), "vector access");
   MatNullSpace modes = nullptr;
   check(MatNullSpaceCreateRigidBody(coordinates, &modes), "rigid-body modes");
@@ -303,24 +279,26 @@ void GamgSolver::setup(const Matrix& lower) {
   [[maybe_unused]] const IgnoreThirdPartyLeaks ignore;
   Impl& m = *impl_;
   const double* from = lower.valuePtr();
-  auto fill = [&](PetscScalar* to) {
-    for (size_t k = 0; k < m.slot.size(); ++k) {
-      if (m.slot[k] >= 0) to[m.slot[k]] = from[k];
-      if (m.mirror[k] >= 0) to[m.mirror[k]] = from[k];
-    }
-  };
+  PetscScalar* to = m.values.data();
+  m.for_each_entry(lower, [&](PetscInt slot, PetscInt, int k) { to[slot] = from[k]; });
   if (m.size > 1) {
-    fill(m.values.data());
-    check(MatUpdateMPIAIJWithArray(m.matrix, m.values.data()), "matrix values");
+    check(MatUpdateMPIAIJWithArray(m.matrix, to), "matrix values");
   } else {
-    PetscScalar* to = nullptr;
-    check(MatSeqAIJGetArray(m.matrix, &to), "matrix values");
-    fill(to);
-    check(MatSeqAIJRestoreArray(m.matrix, &to), "matrix values");
+    // PETSc's matrix holds `values` itself: tell it that they changed.
+    PetscScalar* same = nullptr;
+    check(MatSeqAIJGetArray(m.matrix, &same), "matrix values");
+    if (same != to) throw std::logic_error("GamgSolver: PETSc copied the matrix");
+    check(MatSeqAIJRestoreArray(m.matrix, &same), "matrix values");
   }
   check(KSPSetOperators(m.ksp, m.matrix, m.matrix), "KSP operators");
   check(KSPSetUp(m.ksp), "multigrid setup");
   m.set_up = true;
+  // Collective (a sum over the ranks): asked here, where every rank is,
+  // not when rank 0 alone writes the report.
+  PC pc = nullptr;
+  PetscReal grid = 0;
+  check(KSPGetPC(m.ksp, &pc), "PC");
+  check(PCMGGetGridComplexity(pc, &grid, &m.complexity), "multigrid complexity");
 }
 
 bool GamgSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
@@ -330,9 +308,8 @@ bool GamgSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   PetscScalar* to = nullptr;
   check(VecSet(m.rhs, 0.0), "vector set");
   check(VecGetArray(m.rhs, &to), "vector access");
-  for (size_t i = 0; i < m.dof_of_free.size(); ++i) {
-    const PetscInt row = m.row_of_dof[static_cast<size_t>(m.dof_of_free[i])];
-    if (row >= m.first_row && row < m.end_row) to[row - m.first_row] = b[static_cast<long>(i)];
+  for (size_t i = 0; i < m.row_of_free.size(); ++i) {
+    if (const PetscInt row = m.row_of_free[i]; m.owned(row)) to[row - m.first_row] = b[static_cast<long>(i)];
   }
   check(VecRestoreArray(m.rhs, &to), "vector access");
   check(VecSet(m.solution, 0.0), "vector set");
@@ -355,9 +332,8 @@ bool GamgSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   }
   const PetscScalar* from = nullptr;
   check(VecGetArrayRead(whole, &from), "vector access");
-  x.resize(static_cast<long>(m.dof_of_free.size()));
-  for (size_t i = 0; i < m.dof_of_free.size(); ++i)
-    x[static_cast<long>(i)] = from[m.row_of_dof[static_cast<size_t>(m.dof_of_free[i])]];
+  x.resize(static_cast<long>(m.row_of_free.size()));
+  for (size_t i = 0; i < m.row_of_free.size(); ++i) x[static_cast<long>(i)] = from[m.row_of_free[i]];
   check(VecRestoreArrayRead(whole, &from), "vector access");
   return reason > 0;
 }
@@ -366,14 +342,7 @@ int GamgSolver::last_iterations() const { return impl_->iterations; }
 double GamgSolver::last_relative_residual() const { return impl_->relative_residual; }
 int GamgSolver::ranks() const { return impl_->size; }
 
-double GamgSolver::operator_complexity() const {
-  std::lock_guard lock(petsc_mutex());
-  if (!impl_->set_up) return 0;
-  PC pc = nullptr;
-  PetscReal grid = 0, op = 0;
-  if (KSPGetPC(impl_->ksp, &pc) || PCMGGetGridComplexity(pc, &grid, &op)) return 0;
-  return op;
-}
+double GamgSolver::operator_complexity() const { return impl_->complexity; }
 
 }  // namespace spec2fab::fem
 
@@ -385,7 +354,8 @@ struct GamgSolver::Impl {};
 
 bool GamgSolver::available() { return false; }
 
-GamgSolver::GamgSolver(const Matrix&, std::vector<int>, std::span<const Vec3>, double, int, bool) {
+GamgSolver::GamgSolver(const Matrix&, const std::vector<int>&, std::span<const Vec3>, std::span<const int>, double, int,
+                       bool) {
   throw std::runtime_error("this build has no PETSc (configure with -DSPEC2FAB_WITH_PETSC=ON)");
 }
 GamgSolver::~GamgSolver() = default;

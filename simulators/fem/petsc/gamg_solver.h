@@ -9,9 +9,10 @@
 /// Like AmgSolver (fem/hypre), the system has every node's three rows (free
 /// rows from the stiffness, prescribed rows the identity with right-hand
 /// side 0), so the matrix has a block size of 3 and the modes apply node by
-/// node. Nodes are numbered along a Morton curve inside the solver: the
-/// aggregates, the matrix's bandwidth and the memory traffic of each
-/// product follow space instead of TetGen's order.
+/// node. The caller numbers the free DOFs node by node in `node_order` (a
+/// Morton curve, tet_mesh.h), and the solver's rows follow the same order,
+/// so that the full matrix's rows are the lower triangle's columns merged
+/// with their transposes, sorted, without a permutation to store.
 ///
 /// Distributed: with `ranks` > 1 (an mpirun of `spec2fab simulate`) every
 /// rank passes the same matrix pattern and takes the rows of a contiguous
@@ -44,12 +45,12 @@ class GamgSolver {
 
   /// `lower`: the lower triangle (compressed) of the free-free stiffness,
   /// whose pattern every later matrix shares; `dof_of_free`: the node DOF
-  /// (3·node + axis) of each free row; `nodes`: rest positions (the rigid
-  /// modes and the ordering). `distributed`: solve across the MPI ranks of
-  /// this run (every rank calls with the same arguments). Throws
-  /// std::runtime_error when this build has no PETSc.
-  GamgSolver(const Matrix& lower, std::vector<int> dof_of_free, std::span<const Vec3> nodes, double tolerance,
-             int max_iterations, bool distributed = false);
+  /// (3·node + axis) of each free row, increasing along `node_order`;
+  /// `nodes`: rest positions (the rigid modes). `distributed`: solve across
+  /// the MPI ranks of this run (every rank calls with the same arguments).
+  /// Throws std::runtime_error when this build has no PETSc.
+  GamgSolver(const Matrix& lower, const std::vector<int>& dof_of_free, std::span<const Vec3> nodes,
+             std::span<const int> node_order, double tolerance, int max_iterations, bool distributed = false);
   ~GamgSolver();
   GamgSolver(const GamgSolver&) = delete;
   GamgSolver& operator=(const GamgSolver&) = delete;
