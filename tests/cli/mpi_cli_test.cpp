@@ -143,8 +143,8 @@ TEST_F(Cli, MpiSimulateFemSpreadsItsSolveOverTheRanks) {
   if (!SPEC2FAB_WITH_MPI || !SPEC2FAB_WITH_PETSC || !SPEC2FAB_WITH_TETGEN)
     GTEST_SKIP() << "needs MPI, PETSc and TetGen in the build";
   if (run_command("command -v mpirun").code != 0) GTEST_SKIP() << "mpirun not installed";
-  // A rigid beam with a rubber-like middle third (E 2000 : 0.6 MPa,
-  // VeroWhitePlus : TangoBlackPlus), clamped at one end, pulled down and
+  // A rigid beam with a rubber-like piece from x = 40 to 70 mm (E 2500 :
+  // 3.6 MPa, VeroWhitePlus : DM9860), clamped at one end, pulled down and
   // sideways at the other.
   auto config = [&](const std::string& solver) {
     return R"({"materials": ")" + (kDatasets / "materials/polyjet.json").string() + R"(",
