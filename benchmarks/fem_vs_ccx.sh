@@ -4,7 +4,7 @@
 #   PART=cantilever (default): a 100 x 10 x 10 mm VeroWhitePlus beam,
 #     clamped at x = 0, 100 N down on the end face (0.0625 mm^3: ~321,000 tets).
 #   PART=voxel: a 40 x 30 x 20 mm block of 10 mm cells, a checkerboard of
-#     VeroWhitePlus and DM9850 (E 2500 : 2.456 MPa, a 1.02e3 contrast, the
+#     VeroWhitePlus and DM9840 (E 2500 : 1.69 MPa, a 1.48e3 contrast, the
 #     rubber at nu 0.49), clamped at z = 0, its top pressed and sheared by
 #     (20, 0, -100) N (0.045 mm^3: ~1.1 M tets).
 #
@@ -43,7 +43,7 @@ case "${PART:-cantilever}" in
     mesh=box_40x30x20.stl
     cells=""
     for k in 0 1; do for j in 0 1 2; do for i in 0 1 2 3; do
-      if [ $(((i + j + k) % 2)) = 0 ]; then m=VeroWhitePlus; else m=DM9850; fi
+      if [ $(((i + j + k) % 2)) = 0 ]; then m=VeroWhitePlus; else m=DM9840; fi
       cells="$cells${cells:+, }{\"type\": \"layered\", \"material\": \"$m\"}"
     done; done; done
     subtree="{\"type\": \"voxel\", \"size_mm\": 10, \"children\": [$cells]}"
