@@ -3,15 +3,12 @@
 #include <stdexcept>
 
 #include "core/build_options.h"
+#include "core/third_party_leaks.h"
 
 #if SPEC2FAB_WITH_HYPRE
 
 #include <algorithm>
 #include <mutex>
-
-#if defined(__SANITIZE_ADDRESS__)
-#include <sanitizer/lsan_interface.h>
-#endif
 
 #include <mpi.h>
 #include <HYPRE.h>
@@ -25,16 +22,6 @@ std::mutex& hypre_mutex() {
   static std::mutex mutex;
   return mutex;
 }
-
-// Open MPI keeps, and at MPI_Finalize drops without freeing, state it
-// allocates in its own plugins; the sanitizer build does not count those
-// allocations as leaks of ours (every allocation of Spec2Fab's still is).
-struct IgnoreThirdPartyLeaks {
-#if defined(__SANITIZE_ADDRESS__)
-  IgnoreThirdPartyLeaks() { __lsan_disable(); }
-  ~IgnoreThirdPartyLeaks() { __lsan_enable(); }
-#endif
-};
 
 // MPI as a singleton (one rank, no mpirun) for the process's lifetime; a
 // program that initialised MPI itself keeps it and finalises it itself.

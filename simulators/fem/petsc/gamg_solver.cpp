@@ -4,20 +4,14 @@
 #include <string>
 
 #include "core/build_options.h"
+#include "core/third_party_leaks.h"
 
 #if SPEC2FAB_WITH_PETSC
 
 #include <algorithm>
-#include <cmath>
-#include <cstdint>
 #include <mutex>
 #include <numeric>
 
-#if defined(__SANITIZE_ADDRESS__)
-#include <sanitizer/lsan_interface.h>
-#endif
-
-#include <Eigen/Geometry>
 #include <petscksp.h>
 
 namespace spec2fab::fem {
@@ -27,16 +21,6 @@ std::mutex& petsc_mutex() {
   static std::mutex mutex;
   return mutex;
 }
-
-// Open MPI and PETSc keep, and at finalisation drop without freeing, state
-// allocated in their own plugins and registries; the sanitizer build does
-// not count those as leaks of ours (every allocation of Spec2Fab's still is).
-struct IgnoreThirdPartyLeaks {
-#if defined(__SANITIZE_ADDRESS__)
-  IgnoreThirdPartyLeaks() { __lsan_disable(); }
-  ~IgnoreThirdPartyLeaks() { __lsan_enable(); }
-#endif
-};
 
 void check(PetscErrorCode code, const char* what) {
   if (code == 0) return;
