@@ -15,6 +15,8 @@ struct IgnoreThirdPartyLeaks {
 #if defined(__SANITIZE_ADDRESS__)
   IgnoreThirdPartyLeaks() { __lsan_disable(); }
   ~IgnoreThirdPartyLeaks() { __lsan_enable(); }
+#else
+  IgnoreThirdPartyLeaks() {}
 #endif
   IgnoreThirdPartyLeaks(const IgnoreThirdPartyLeaks&) = delete;
   IgnoreThirdPartyLeaks& operator=(const IgnoreThirdPartyLeaks&) = delete;

@@ -103,24 +103,18 @@ struct ElasticSolver::Impl {
   bool factorize_and_solve(SolveReport& report) {
     ++report.factorizations;
     auto start = Clock::now();
-    if (kind == LinearSolver::multigrid) {
-      amg->setup(stiffness);
+    // The multigrids (hypre's, PETSc's) alike: set up the hierarchy, then CG.
+    auto multigrid_solve = [&](auto& solver) {
+      solver.setup(stiffness);
       report.factorization_seconds += seconds_since(start);
       start = Clock::now();
-      const bool converged = amg->solve(residual, step);
+      const bool converged = solver.solve(residual, step);
       report.solve_seconds += seconds_since(start);
-      report.cg_iterations += amg->last_iterations();
+      report.cg_iterations += solver.last_iterations();
       return converged && step.allFinite();
-    }
-    if (kind == LinearSolver::elastic_multigrid) {
-      gamg->setup(stiffness);
-      report.factorization_seconds += seconds_since(start);
-      start = Clock::now();
-      const bool converged = gamg->solve(residual, step);
-      report.solve_seconds += seconds_since(start);
-      report.cg_iterations += gamg->last_iterations();
-      return converged && step.allFinite();
-    }
+    };
+    if (kind == LinearSolver::multigrid) return multigrid_solve(*amg);
+    if (kind == LinearSolver::elastic_multigrid) return multigrid_solve(*gamg);
     if (kind == LinearSolver::conjugate_gradient) {
       cg->compute(stiffness);  // the incomplete factor
       report.factorization_seconds += seconds_since(start);
