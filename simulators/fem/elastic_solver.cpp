@@ -401,7 +401,11 @@ SolveReport ElasticSolver::solve(const Constraints& c, const SolveOptions& optio
     for (size_t d = 0; d < dofs; ++d) u[d] = m.dof_index[d] < 0 ? c.prescribed_mm[d] : 0.0;
     double reference = 0;
     residual_norm(u, 1.0, false, true, reference);
-    if (!m.factorize_and_solve(report)) throw std::runtime_error("FEM: the stiffness matrix is singular");
+    if (!m.factorize_and_solve(report)) {
+      throw std::runtime_error(m.kind == LinearSolver::cholesky
+                                   ? "FEM: the stiffness matrix is singular"
+                                   : "FEM: conjugate gradients did not converge (try \"linear_solver\": \"cholesky\")");
+    }
     for (size_t d = 0; d < dofs; ++d) {
       if (const int i = m.dof_index[d]; i >= 0) u[d] += m.step[i];
     }

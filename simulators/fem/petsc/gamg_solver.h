@@ -18,7 +18,11 @@
 /// rank passes the same matrix pattern and takes the rows of a contiguous
 /// run of the Morton order (a space-filling-curve partition of the mesh);
 /// PETSc's MPI matrices and GAMG solve across the ranks, and every rank gets
-/// the whole solution back. Each call is then collective.
+/// the whole solution back. Each call is then collective. PETSc's world is
+/// fixed by the process's first solver: when that one is not distributed
+/// (a `spec2fab run` under mpirun, whose ranks tune different things), PETSc
+/// lives on this process alone, and a later distributed solver solves alone
+/// too (ranks() says 1) rather than wait for ranks that never come.
 ///
 /// PETSc lives in its own target (spec2fab_petsc, CMake option
 /// SPEC2FAB_WITH_PETSC, on by default). The first solver initialises PETSc
