@@ -4,6 +4,7 @@
 #include <atomic>
 #include <limits>
 #include <chrono>
+#include <cstring>
 #include <numeric>
 #include <sstream>
 #include <stdexcept>
@@ -191,11 +192,52 @@ void check_phase_pace(const Phase& phase, long long done, long long total, doubl
 
 // A summary whole, wall times included, for another rank: CBOR keeps every
 // double (NaN too) bit for bit, so records are those of one process.
+// A trace is most of a checkpoint: an exhaustive tuner records each
+// candidate, and earth_deformable's 4,608 texture tuners hold 4.7 M records.
+// As JSON arrays those were 28 M DOM values, 0.9 GB for a moment (the run's
+// peak); as one byte string of fixed-width records (host byte order: a
+// checkpoint is resumed, or gathered over ranks, on the machine that made
+// it) they are 36 bytes each.
+constexpr size_t kTraceRecordBytes = sizeof(int) + sizeof(long long) + 3 * sizeof(double);
+
+nlohmann::json::binary_t packed_trace(const std::vector<IterationRecord>& trace) {
+  std::vector<std::uint8_t> bytes(trace.size() * kTraceRecordBytes);
+  std::uint8_t* at = bytes.data();
+  auto put = [&at](const auto& value) {
+    std::memcpy(at, &value, sizeof(value));
+    at += sizeof(value);
+  };
+  for (const IterationRecord& r : trace) {
+    put(r.iteration);
+    put(r.evaluations);
+    put(r.error);
+    put(r.best_error);
+    put(r.seconds);
+  }
+  return nlohmann::json::binary_t(std::move(bytes));
+}
+
+std::vector<IterationRecord> unpacked_trace(const nlohmann::json::binary_t& bytes) {
+  if (bytes.size() % kTraceRecordBytes != 0) throw InputError("a trace of " + std::to_string(bytes.size()) + " bytes");
+  std::vector<IterationRecord> trace(bytes.size() / kTraceRecordBytes);
+  const std::uint8_t* at = bytes.data();
+  auto get = [&at](auto& value) {
+    std::memcpy(&value, at, sizeof(value));
+    at += sizeof(value);
+  };
+  for (IterationRecord& r : trace) {
+    get(r.iteration);
+    get(r.evaluations);
+    get(r.error);
+    get(r.best_error);
+    get(r.seconds);
+  }
+  return trace;
+}
+
 nlohmann::json summary_state(const Summary& s) {
-  nlohmann::json trace = nlohmann::json::array();
-  for (const IterationRecord& r : s.trace) trace.push_back({r.iteration, r.evaluations, r.error, r.best_error, r.seconds});
   return {s.optimizer, static_cast<int>(s.termination), s.message, s.initial_error, s.final_error, s.initial_x,
-          s.final_x, s.evaluations, s.iterations, s.seconds, trace, s.details};
+          s.final_x, s.evaluations, s.iterations, s.seconds, nlohmann::json::binary(packed_trace(s.trace)), s.details};
 }
 
 Summary summary_from_state(const nlohmann::json& j) {
@@ -213,8 +255,7 @@ Summary summary_from_state(const nlohmann::json& j) {
   s.evaluations = j[7].get<long long>();
   s.iterations = j[8].get<int>();
   s.seconds = j[9].get<double>();
-  for (const auto& r : j[10])
-    s.trace.push_back({r[0].get<int>(), r[1].get<long long>(), number(r[2]), number(r[3]), r[4].get<double>()});
+  s.trace = unpacked_trace(j[10].get_binary());
   s.details = j[11];
   return s;
 }

@@ -14,6 +14,7 @@ struct CholmodFactor::Impl {
   cholmod_dense* x = nullptr;  // solve2's result and workspaces, kept between solves
   cholmod_dense* y = nullptr;
   cholmod_dense* e = nullptr;
+  Eigen::MatrixXd permuted;  // forward_solve's P·B, kept between solves
 
   Impl() {
     cholmod_start(&common);
@@ -117,7 +118,7 @@ bool CholmodFactor::factorize(const Matrix& lower) {
   return impl_->common.status == CHOLMOD_OK && impl_->factor->minor == impl_->factor->n;
 }
 
-const double* CholmodFactor::solve_columns(const double* b, size_t rows, size_t columns) {
+const double* CholmodFactor::solve_columns(int system, const double* b, size_t rows, size_t columns) {
   cholmod_dense rhs{};
   rhs.nrow = rows;
   rhs.ncol = columns;
@@ -128,7 +129,7 @@ const double* CholmodFactor::solve_columns(const double* b, size_t rows, size_t 
   rhs.dtype = CHOLMOD_DOUBLE;
   const std::lock_guard<std::mutex> one_at_a_time(blas_mutex());
   const SerialOpenMp serial;
-  if (!cholmod_solve2(CHOLMOD_A, impl_->factor, &rhs, nullptr, &impl_->x, nullptr, &impl_->y, &impl_->e,
+  if (!cholmod_solve2(system, impl_->factor, &rhs, nullptr, &impl_->x, nullptr, &impl_->y, &impl_->e,
                       &impl_->common)) {
     throw std::runtime_error("CHOLMOD: solve failed");
   }
@@ -136,12 +137,28 @@ const double* CholmodFactor::solve_columns(const double* b, size_t rows, size_t 
 }
 
 void CholmodFactor::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
-  x = Eigen::Map<const Eigen::VectorXd>(solve_columns(b.data(), static_cast<size_t>(b.size()), 1), b.size());
+  x = Eigen::Map<const Eigen::VectorXd>(solve_columns(CHOLMOD_A, b.data(), static_cast<size_t>(b.size()), 1),
+                                        b.size());
 }
 
 void CholmodFactor::solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) {
-  const double* values = solve_columns(b.data(), static_cast<size_t>(b.rows()), static_cast<size_t>(b.cols()));
+  const double* values =
+      solve_columns(CHOLMOD_A, b.data(), static_cast<size_t>(b.rows()), static_cast<size_t>(b.cols()));
   x = Eigen::Map<const Eigen::MatrixXd>(values, b.rows(), b.cols());
+}
+
+void CholmodFactor::forward_solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& y) {
+  // CHOLMOD_L does not permute: P B first (row k of P B is row Perm[k] of B).
+  const cholmod_factor& factor = *impl_->factor;
+  if (factor.is_ll == 0) throw std::logic_error("CholmodFactor::forward_solve: the factor must be LLᵀ");
+  const auto* perm = static_cast<const int*>(factor.Perm);
+  Eigen::MatrixXd& permuted = impl_->permuted;
+  permuted.resize(b.rows(), b.cols());
+  for (Eigen::Index c = 0; c < b.cols(); ++c)
+    for (Eigen::Index k = 0; k < b.rows(); ++k) permuted(k, c) = b(perm ? perm[k] : k, c);
+  const double* values =
+      solve_columns(CHOLMOD_L, permuted.data(), static_cast<size_t>(b.rows()), static_cast<size_t>(b.cols()));
+  y = Eigen::Map<const Eigen::MatrixXd>(values, b.rows(), b.cols());
 }
 
 double CholmodFactor::factor_nonzeros() const { return impl_->common.lnz; }

@@ -34,13 +34,18 @@ class CholmodFactor {
   /// faster per column than k single solves.
   void solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x);
 
+  /// Y = L⁻¹ P B, the forward half of a solve with A = PᵀLLᵀP: then
+  /// bᵢᵀ A⁻¹ b_k = yᵢ · y_k. Half the work of X = A⁻¹ B for callers that
+  /// need only such products (the elastic bound).
+  void forward_solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& y);
+
   double factor_nonzeros() const;  ///< nnz(L) from the analysis
   double factor_flops() const;     ///< flop count of one factorisation
 
  private:
   /// Solves the column-major n × k block at `b`; the result lives in the
   /// kept workspace until the next solve.
-  const double* solve_columns(const double* b, size_t rows, size_t columns);
+  const double* solve_columns(int system, const double* b, size_t rows, size_t columns);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

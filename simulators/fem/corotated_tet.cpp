@@ -105,4 +105,21 @@ double tet_forces(const TetRest& rest, double lambda, double mu, const double* x
   return energy;
 }
 
+void linear_tet_stiffness(const TetRest& rest, double lambda, double mu, Mat12& stiffness) {
+  // Node a ≥ 1's gradient is row a − 1 of the inverse rest edges; node 0's
+  // balances them (the shape functions sum to one).
+  Eigen::Matrix<double, 4, 3> g;
+  g.bottomRows<3>() = rest.inverse_rest_edges;
+  g.row(0) = -g.bottomRows<3>().colwise().sum();
+  const Eigen::Matrix4d dots = g * g.transpose();
+  const double v = rest.volume_mm3;
+  for (int b = 0; b < 4; ++b) {
+    for (int a = 0; a < 4; ++a) {
+      Mat3 block = lambda * g.row(a).transpose() * g.row(b) + mu * g.row(b).transpose() * g.row(a);
+      block.diagonal().array() += mu * dots(a, b);
+      stiffness.block<3, 3>(3 * a, 3 * b) = v * block;
+    }
+  }
+}
+
 }  // namespace spec2fab::fem

@@ -53,4 +53,11 @@ Mat3 deformation_gradient(const TetRest& rest, const double* x);
 double tet_forces(const TetRest& rest, double lambda, double mu, const double* x, bool corotated,
                   Vec12& forces, Mat12* tangent);
 
+/// Small-strain stiffness, ∂f/∂x of tet_forces with `corotated` false, in
+/// closed form from the shape-function gradients gₐ (node a, axes i, j):
+///   K(ai, bj) = V·(λ gₐᵢ g_bj + μ (gₐⱼ g_bᵢ + δᵢⱼ gₐ·g_b)).
+/// The same matrix as that tangent, at a tenth of its cost: linear solves
+/// (the elastic bound assembles two stiffnesses per call) need nothing else.
+void linear_tet_stiffness(const TetRest& rest, double lambda, double mu, Mat12& stiffness);
+
 }  // namespace spec2fab::fem

@@ -95,31 +95,90 @@ ElasticBound::ElasticBound(const Properties& simulator, const PartContext& conte
   }
   tuner.set_values(start);
 
+  // Each value's code: is it, on every element of its variable, the
+  // stiffest (largest λ and μ) or the softest of the choices?
+  const size_t variables = admissible_.size();
+  value_code_.resize(variables);
+  free_stiffest_.assign(variables, kStiffest);
+  free_softest_.assign(variables, kSoftest);
+  for (size_t v = 0; v < variables; ++v) {
+    const size_t values = admissible_[v].size();
+    std::vector<char> stiffest(values, 1), softest(values, 1);
+    bool uniform = true;  // every value gives every element the same λ and μ
+    for (const Element& e : elements_) {
+      if (e.variable != static_cast<int>(v)) continue;
+      const auto [lambda_low, lambda_high] = std::minmax_element(e.lambda.begin(), e.lambda.end());
+      const auto [mu_low, mu_high] = std::minmax_element(e.mu.begin(), e.mu.end());
+      uniform &= *lambda_low == *lambda_high && *mu_low == *mu_high;
+      for (size_t k = 0; k < values; ++k) {
+        stiffest[k] &= e.lambda[k] == *lambda_high && e.mu[k] == *mu_high;
+        softest[k] &= e.lambda[k] == *lambda_low && e.mu[k] == *mu_low;
+      }
+    }
+    if (uniform) free_softest_[v] = kStiffest;
+    for (size_t k = 0; k < values; ++k)
+      value_code_[v].push_back(stiffest[k] ? kStiffest : softest[k] ? kSoftest : static_cast<int>(k));
+  }
+
   // Right-hand sides: the loads, then each probe component's weights.
-  loads_.push_back(constraints_.force_n);
+  std::vector<std::vector<double>> loads{constraints_.force_n};
   for (const ProbeLocation& probe : probes_) {
     for (int d = 0; d < 3; ++d) {
-      std::vector<double>& g = loads_.emplace_back(3 * mesh_->nodes.size(), 0.0);
+      std::vector<double>& g = loads.emplace_back(3 * mesh_->nodes.size(), 0.0);
       for (size_t k = 0; k < 4; ++k) {
         const auto node_index = static_cast<size_t>(mesh_->tets[static_cast<size_t>(probe.tet)][k]);
         g[3 * node_index + static_cast<size_t>(d)] += probe.weights[k];
       }
     }
   }
+  loads_ = solver_->free_rows(loads);
 }
 
 ElasticBound::~ElasticBound() = default;
 
+const std::optional<ElasticSolver::InverseProducts>& ElasticBound::products(const MatrixKey& key,
+                                                                            const std::vector<double>& lambda,
+                                                                            const std::vector<double>& mu) {
+  if (const auto found = products_.find(key); found != products_.end()) return found->second;
+  solver_->set_materials(lambda, mu, active_);
+  ++factorizations_;
+  return products_.emplace(key, solver_->inverse_products(loads_)).first->second;
+}
+
 double ElasticBound::lower_bound(std::span<const double> x, int assigned, const DisplacementsObservation& target) {
   ++calls_;
   const size_t tets = elements_.size();
+  // The elements no variable sets, as the tree has them now; the kept
+  // products hold only while those stay as they were.
   domain_.materials_at(centroids_, current_);
+  bool fixed_changed = false;
   for (size_t t = 0; t < tets; ++t) {
     Element& e = elements_[t];
     if (e.variable >= 0) continue;
-    e.lambda[0] = lame_[current_[t]].first;
-    e.mu[0] = lame_[current_[t]].second;
-    active_[t] = current_[t] != kVoid;
+    const auto [lambda, mu] = lame_[current_[t]];
+    const char active = current_[t] != kVoid;
+    if (e.lambda[0] == lambda && e.mu[0] == mu && active_[t] == active) continue;
+    fixed_changed = true;
+    e.lambda[0] = lambda;
+    e.mu[0] = mu;
+    active_[t] = active;
+  }
+  if (fixed_changed) products_.clear();
+
+  // Each assigned variable's value index, and the two matrices' keys.
+  const size_t variables = admissible_.size();
+  std::vector<size_t> chosen(variables, 0);
+  MatrixKey stiff_key(variables), soft_key(variables);
+  for (size_t v = 0; v < variables; ++v) {
+    if (static_cast<int>(v) < assigned) {
+      const std::vector<double>& values = admissible_[v];
+      chosen[v] = static_cast<size_t>(std::find(values.begin(), values.end(), x[v]) - values.begin());
+      if (chosen[v] == values.size()) throw std::logic_error("ElasticBound: a value that is not admissible");
+      stiff_key[v] = soft_key[v] = value_code_[v][chosen[v]];
+    } else {
+      stiff_key[v] = free_stiffest_[v];
+      soft_key[v] = free_softest_[v];
+    }
   }
   lambda_stiff_.resize(tets);
   mu_stiff_.resize(tets);
@@ -128,10 +187,7 @@ double ElasticBound::lower_bound(std::span<const double> x, int assigned, const 
   for (size_t t = 0; t < tets; ++t) {
     const Element& e = elements_[t];
     if (e.variable >= 0 && e.variable < assigned) {
-      const std::vector<double>& values = admissible_[static_cast<size_t>(e.variable)];
-      const auto k = static_cast<size_t>(
-          std::find(values.begin(), values.end(), x[static_cast<size_t>(e.variable)]) - values.begin());
-      if (k == values.size()) throw std::logic_error("ElasticBound: a value that is not admissible");
+      const size_t k = chosen[static_cast<size_t>(e.variable)];
       lambda_stiff_[t] = lambda_soft_[t] = e.lambda[k];
       mu_stiff_[t] = mu_soft_[t] = e.mu[k];
     } else {
@@ -141,28 +197,26 @@ double ElasticBound::lower_bound(std::span<const double> x, int assigned, const 
       mu_soft_[t] = *std::min_element(e.mu.begin(), e.mu.end());
     }
   }
-  // M(i, k) = loads[i]ᵀ K⁻¹ loads[k]: loads[0] is f, loads[j + 1] probe component j's g.
-  solver_->set_materials(lambda_stiff_, mu_stiff_, active_);
-  const Eigen::MatrixXd stiff = solver_->solve_linear(loads_, loads_);
-  solver_->set_materials(lambda_soft_, mu_soft_, active_);
-  const Eigen::MatrixXd soft = solver_->solve_linear(loads_, loads_);
-  if (stiff.size() == 0) {  // even the stiffest completion is singular: nothing to bound
+  // For v = loads (f, then each probe component's g): vᵢᵀK⁻¹f and vᵢᵀK⁻¹vᵢ.
+  const auto& stiff = products(stiff_key, lambda_stiff_, mu_stiff_);
+  const auto& soft = products(soft_key, lambda_soft_, mu_soft_);
+  if (!stiff) {  // even the stiffest completion is singular: nothing to bound
     history_.push_back({assigned, 0.0});
     return 0;
   }
   // fᵀΔf, ≥ 0 up to rounding; infinite when the softest completion is singular.
   const double spread_f =
-      soft.size() == 0 ? std::numeric_limits<double>::infinity() : std::max(0.0, soft(0, 0) - stiff(0, 0));
+      soft ? std::max(0.0, soft->diagonal(0) - stiff->diagonal(0)) : std::numeric_limits<double>::infinity();
   const std::span<const double> goal = target.probes();
   double sum = 0;
-  for (Eigen::Index j = 1; j < static_cast<Eigen::Index>(loads_.size()); ++j) {
-    const double at_stiff = stiff(j, 0);
+  for (Eigen::Index j = 1; j < loads_.cols(); ++j) {
+    const double at_stiff = stiff->with_first(j);
     double low = at_stiff, high = at_stiff, width = spread_f;
-    if (soft.size() != 0) {
-      const double at_soft = soft(j, 0);
+    if (soft) {
+      const double at_soft = soft->with_first(j);
       low = std::max(at_stiff, at_soft);
       high = std::min(at_stiff, at_soft);
-      width = std::sqrt(spread_f * std::max(0.0, soft(j, j) - stiff(j, j)));
+      width = std::sqrt(spread_f * std::max(0.0, soft->diagonal(j) - stiff->diagonal(j)));
     }
     // Both intervals hold every completion's value: their intersection.
     low -= width;

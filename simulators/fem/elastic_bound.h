@@ -33,10 +33,20 @@
 /// an earlier schedule phase may have changed them (a texture printed into a
 /// shell over the tuned core), and the bound must see the print as it is.
 ///
-/// Cost of one bound: one pass over the elements' materials, two
-/// factorisations and 2(1 + 3·probes) triangular solves on the tuner's mesh.
+/// Cost of one bound: one pass over the elements' materials, and for each
+/// of K⁺ and K⁻ a factorisation and 1 + 3·probes forward triangular
+/// solves (one block) on the tuner's mesh, unless the same matrix was met
+/// before. It usually was: a child that gives the next variable its
+/// stiffest value has its parent's K⁺, one that gives the softest its
+/// parent's K⁻, and a complete assignment has K⁺ = K⁻. So the products are
+/// kept per matrix, named exactly by what each variable contributes (a
+/// value, or its elementwise stiffest or softest), and dropped when the
+/// elements no variable sets change: about half the factorisations of a
+/// search, with the same numbers.
 
+#include <map>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -70,6 +80,9 @@ class ElasticBound {
 
   /// How often the bound was asked.
   long calls() const { return calls_; }
+  /// How many stiffness matrices it factorised (at most two per call; the
+  /// rest were met before).
+  long factorizations() const { return factorizations_; }
   /// Every call in order: how many variables were assigned, and the bound
   /// (on a complete assignment, its error) — the search's progress through
   /// the subtrees, as the paper's Fig. 10 plots it.
@@ -85,6 +98,14 @@ class ElasticBound {
     int variable = -1;                  ///< the search variable that sets its material, or -1
     std::vector<double> lambda, mu;     ///< per admissible value of that variable; one entry when fixed
   };
+  /// What a variable contributes to a stiffness: the index of its value, or
+  /// one of these when that is the elementwise stiffest or softest.
+  static constexpr int kStiffest = -1, kSoftest = -2;
+  using MatrixKey = std::vector<int>;  ///< one code per variable
+  /// K⁻¹'s products for the matrix `key` names, factorised on first need.
+  const std::optional<ElasticSolver::InverseProducts>& products(const MatrixKey& key,
+                                                                const std::vector<double>& lambda,
+                                                                const std::vector<double>& mu);
   FemSettings settings_;
   std::shared_ptr<const ConformedMesh> meshed_;
   const TetMesh* mesh_ = nullptr;
@@ -98,9 +119,14 @@ class ElasticBound {
   std::vector<MaterialId> current_;                 ///< the tree's materials at the centroids, per call
   std::vector<std::pair<double, double>> lame_;  ///< (λ, μ) in MPa per material id; void (0, 0)
   std::vector<double> lambda_stiff_, mu_stiff_, lambda_soft_, mu_soft_;  ///< per call, kept to reuse
-  std::vector<std::vector<double>> loads_;  ///< f, then one g per probe component
+  Eigen::MatrixXd loads_;  ///< free DOFs' rows of f, then of one g per probe component
   std::vector<std::vector<double>> admissible_;  ///< per variable, its values in search order
-  long calls_ = 0;
+  /// Per variable and value: its MatrixKey code (kStiffest, kSoftest or
+  /// the value's index).
+  std::vector<std::vector<int>> value_code_;
+  std::vector<int> free_stiffest_, free_softest_;  ///< per variable: the codes of an undecided one
+  std::map<MatrixKey, std::optional<ElasticSolver::InverseProducts>> products_;
+  long calls_ = 0, factorizations_ = 0;
   std::vector<Call> history_;
 };
 

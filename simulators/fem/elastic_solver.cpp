@@ -54,7 +54,7 @@ struct ElasticSolver::Impl {
 
   // Work buffers, sized once.
   Eigen::VectorXd residual, step;
-  Eigen::MatrixXd block_rhs, block_solution;  // solve_linear's, kept: the elastic bound calls it per subtree
+  Eigen::MatrixXd block_solution;  // inverse_products', kept: the elastic bound calls it per subtree
   std::vector<double> forces, trial, last_converged, previous_converged;
   Eigen::VectorXd saved_residual;
 
@@ -75,29 +75,51 @@ struct ElasticSolver::Impl {
         const auto v = static_cast<size_t>(tet[static_cast<size_t>(a)]);
         for (int d = 0; d < 3; ++d) x[3 * a + d] = mesh.nodes[v][d] + u[3 * v + static_cast<size_t>(d)];
       }
-      energy += tet_forces(rest[t], lambda[t], mu[t], x, corotated, f, tangent ? &k : nullptr);
+      // Small strain: the tangent is the constant stiffness, in closed form.
+      const bool linear_tangent = tangent && !corotated;
+      energy += tet_forces(rest[t], lambda[t], mu[t], x, corotated, f, tangent && !linear_tangent ? &k : nullptr);
       for (int a = 0; a < 4; ++a) {
         const auto v = static_cast<size_t>(tet[static_cast<size_t>(a)]);
         for (int d = 0; d < 3; ++d) forces[3 * v + static_cast<size_t>(d)] += f[3 * a + d];
       }
       if (!tangent) continue;
-      const int* map = &scatter[kPairs * t];
-      for (int j = 0; j < 12; ++j) {
-        for (int i = 0; i <= j; ++i, ++map) {
-          if (*map >= 0) values[*map] += k(i, j);
-        }
-      }
+      if (linear_tangent) linear_tet_stiffness(rest[t], lambda[t], mu[t], k);
+      add_element(t, k, values);
     }
-    if (tangent) {
-      // Nodes no active tet touches: keep them where they are.
-      for (size_t v = 0; v < node_active.size(); ++v) {
-        if (node_active[v]) continue;
-        for (int d = 0; d < 3; ++d) {
-          if (const int i = dof_index[3 * v + static_cast<size_t>(d)]; i >= 0) values[diagonal[static_cast<size_t>(i)]] = 1.0;
-        }
-      }
-    }
+    if (tangent) hold_untouched_nodes(values);
     return energy;
+  }
+
+  // The small-strain stiffness alone (a linear solve needs no forces).
+  void form_linear_stiffness(const TetMesh& mesh) {
+    double* values = stiffness.valuePtr();
+    std::fill(values, values + stiffness.nonZeros(), 0.0);
+    Mat12 k;
+    for (size_t t = 0; t < mesh.tets.size(); ++t) {
+      if (!active[t]) continue;
+      linear_tet_stiffness(rest[t], lambda[t], mu[t], k);
+      add_element(t, k, values);
+    }
+    hold_untouched_nodes(values);
+  }
+
+  void add_element(size_t t, const Mat12& k, double* values) const {
+    const int* map = &scatter[kPairs * t];
+    for (int j = 0; j < 12; ++j) {
+      for (int i = 0; i <= j; ++i, ++map) {
+        if (*map >= 0) values[*map] += k(i, j);
+      }
+    }
+  }
+
+  // Nodes no active tet touches: keep them where they are.
+  void hold_untouched_nodes(double* values) const {
+    for (size_t v = 0; v < node_active.size(); ++v) {
+      if (node_active[v]) continue;
+      for (size_t d = 0; d < 3; ++d) {
+        if (const int i = dof_index[3 * v + d]; i >= 0) values[diagonal[static_cast<size_t>(i)]] = 1.0;
+      }
+    }
   }
 
   bool factorize_and_solve(SolveReport& report) {
@@ -325,40 +347,43 @@ void ElasticSolver::set_materials(std::span<const double> lambda, std::span<cons
   }
 }
 
-Eigen::MatrixXd ElasticSolver::solve_linear(std::span<const std::vector<double>> loads,
-                                            std::span<const std::vector<double>> observers) {
-  Impl& m = *impl_;
+Eigen::MatrixXd ElasticSolver::free_rows(std::span<const std::vector<double>> vectors) const {
+  const Impl& m = *impl_;
   const size_t dofs = 3 * mesh_.nodes.size();
-  std::vector<double> rest(dofs, 0.0);
-  m.form(mesh_, rest, false, true);
-  const auto free = static_cast<Eigen::Index>(m.residual.size());
-  const auto columns = static_cast<Eigen::Index>(loads.size());
-  Eigen::MatrixXd& rhs = m.block_rhs;
-  Eigen::MatrixXd& solution = m.block_solution;
-  rhs.setZero(free, columns);  // no reallocation when the size is the last call's
-  for (Eigen::Index k = 0; k < columns; ++k)
+  Eigen::MatrixXd rows = Eigen::MatrixXd::Zero(m.free_count, static_cast<Eigen::Index>(vectors.size()));
+  for (size_t k = 0; k < vectors.size(); ++k) {
+    if (vectors[k].size() != dofs) throw std::logic_error("ElasticSolver::free_rows: 3 values per node");
     for (size_t d = 0; d < dofs; ++d)
-      if (const int i = m.dof_index[d]; i >= 0) rhs(i, k) = loads[static_cast<size_t>(k)][d];
-  if (m.kind == LinearSolver::cholesky) {  // factorised once, every right-hand side in one block solve
-    if (!m.cholesky.factorize(m.stiffness)) return {};
-    m.cholesky.solve(rhs, solution);
-  } else {  // the iterative solvers set up again for each right-hand side
-    solution.resize(free, columns);
-    SolveReport report;
-    for (Eigen::Index k = 0; k < columns; ++k) {
-      m.residual = rhs.col(k);
-      if (!m.factorize_and_solve(report)) return {};
-      solution.col(k) = m.step;
-    }
+      if (const int i = m.dof_index[d]; i >= 0) rows(i, static_cast<Eigen::Index>(k)) = vectors[k][d];
   }
-  if (!solution.allFinite()) return {};
-  // The observers are sparse (a probe's interpolation weights): dot products
-  // over their non-zero free entries only.
-  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(observers.size()), columns);
-  for (size_t o = 0; o < observers.size(); ++o)
-    for (size_t d = 0; d < dofs; ++d)
-      if (const int i = m.dof_index[d]; i >= 0 && observers[o][d] != 0.0)
-        out.row(static_cast<Eigen::Index>(o)) += observers[o][d] * solution.row(i);
+  return rows;
+}
+
+std::optional<ElasticSolver::InverseProducts> ElasticSolver::inverse_products(const Eigen::MatrixXd& free_vectors) {
+  Impl& m = *impl_;
+  if (free_vectors.rows() != m.free_count || free_vectors.cols() == 0)
+    throw std::logic_error("ElasticSolver::inverse_products: one row per free DOF, at least one column");
+  m.form_linear_stiffness(mesh_);
+  Eigen::MatrixXd& solution = m.block_solution;
+  InverseProducts out;
+  if (m.kind == LinearSolver::cholesky) {  // factorised once, every vector in one forward block solve
+    if (!m.cholesky.factorize(m.stiffness)) return std::nullopt;
+    m.cholesky.forward_solve(free_vectors, solution);
+    if (!solution.allFinite()) return std::nullopt;
+    out.with_first = solution.transpose() * solution.col(0);
+    out.diagonal = solution.colwise().squaredNorm().transpose();
+    return out;
+  }
+  // The iterative solvers set up again for each vector: X = K⁻¹V.
+  solution.resize(free_vectors.rows(), free_vectors.cols());
+  SolveReport report;
+  for (Eigen::Index k = 0; k < free_vectors.cols(); ++k) {
+    m.residual = free_vectors.col(k);
+    if (!m.factorize_and_solve(report) || !m.step.allFinite()) return std::nullopt;
+    solution.col(k) = m.step;
+  }
+  out.with_first = free_vectors.transpose() * solution.col(0);
+  out.diagonal = (free_vectors.array() * solution.array()).colwise().sum().transpose();
   return out;
 }
 

@@ -14,6 +14,7 @@
 /// Units: mm, N, MPa.
 
 #include <memory>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -82,16 +83,24 @@ class ElasticSolver {
   SolveReport solve(const Constraints& constraints, const SolveOptions& options,
                     std::vector<double>& displacement_mm);
 
-  /// Small strain only, for linear functionals of the solution: assembles
-  /// the stiffness K of the free DOFs at rest, factorises it once and
-  /// returns the matrix M with M(i, k) = observers[i]ᵀ K⁻¹ loads[k] (all
-  /// vectors 3 per node; entries on fixed DOFs are ignored). The loads are
-  /// solved as one block, and only the functionals leave the solver: a
-  /// caller that needs a few numbers per solve allocates no displacement
-  /// field. Prescribed displacements play no part. Empty (0 × 0) when K is
-  /// not positive definite.
-  Eigen::MatrixXd solve_linear(std::span<const std::vector<double>> loads,
-                               std::span<const std::vector<double>> observers);
+  /// What the elastic bound needs of K⁻¹ for vectors v₀ … v_m (3 per
+  /// node; entries on fixed DOFs are ignored): vᵢᵀK⁻¹v₀ and vᵢᵀK⁻¹vᵢ.
+  struct InverseProducts {
+    Eigen::VectorXd with_first;  ///< vᵢᵀ K⁻¹ v₀
+    Eigen::VectorXd diagonal;    ///< vᵢᵀ K⁻¹ vᵢ
+  };
+  /// Small strain only: assembles the stiffness K of the free DOFs at rest,
+  /// factorises it once, and returns those products for the columns of
+  /// `free_vectors` (free_rows' block). With the Cholesky factor
+  /// K = PᵀLLᵀP they are dot products of Y = L⁻¹PV, so the vectors go
+  /// through the forward half of a solve only, as one block; the iterative
+  /// solvers solve each vector. Nothing of size n leaves the solver.
+  /// Prescribed displacements play no part. Empty when K is not positive
+  /// definite (or an iterative solve fails).
+  std::optional<InverseProducts> inverse_products(const Eigen::MatrixXd& free_vectors);
+  /// The free DOFs' entries of full vectors (3 per node), one column each:
+  /// what inverse_products takes (made once by a caller that repeats).
+  Eigen::MatrixXd free_rows(std::span<const std::vector<double>> vectors) const;
 
   size_t free_dofs() const;
   double factor_nonzeros() const;  ///< nnz of the Cholesky factor (CHOLMOD's analysis)

@@ -77,6 +77,40 @@ TEST(CorotatedTet, TangentMatchesCentralDifferencesOfForces) {
   }
 }
 
+// The closed-form small-strain stiffness (what the linear solves assemble)
+// against the derivative of the small-strain forces, by differences: the
+// forces are linear in x, so central differences are exact up to rounding.
+TEST(CorotatedTet, ClosedFormLinearStiffnessIsTheDerivativeOfTheSmallStrainForces) {
+  const Corners rest = reference_tet();
+  const TetRest r = tet_rest(rest.x[0], rest.x[1], rest.x[2], rest.x[3]);
+  double x[12];
+  flatten(rest, x);
+  for (const auto& [lambda, mu] : {std::pair{800.0, 150.0}, std::pair{0.0, 1.0}, std::pair{1.0, 0.0}}) {
+    Mat12 k;
+    linear_tet_stiffness(r, lambda, mu, k);
+    const double h = 1e-3;
+    for (int j = 0; j < 12; ++j) {
+      double plus[12], minus[12];
+      std::copy(x, x + 12, plus);
+      std::copy(x, x + 12, minus);
+      plus[j] += h;
+      minus[j] -= h;
+      Vec12 fp, fm;
+      tet_forces(r, lambda, mu, plus, false, fp, nullptr);
+      tet_forces(r, lambda, mu, minus, false, fm, nullptr);
+      const Vec12 numeric = (fp - fm) / (2 * h);
+      EXPECT_LT((numeric - k.col(j)).norm(), 1e-10 * std::max(1.0, k.norm()))
+          << "column " << j << ", lambda " << lambda << ", mu " << mu;
+    }
+    // Rigid translations carry no force.
+    for (int d = 0; d < 3; ++d) {
+      Vec12 shift = Vec12::Zero();
+      for (int a = 0; a < 4; ++a) shift[3 * a + d] = 1;
+      EXPECT_LT((k * shift).norm(), 1e-12 * k.norm());
+    }
+  }
+}
+
 // Patch test: boundary nodes carry the displacement u = A x + b; the interior
 // of an unstructured mesh must reproduce it exactly (constant strain).
 TEST(ElasticSolver, PatchTestReproducesALinearFieldExactly) {

@@ -290,7 +290,8 @@ nlohmann::json ElasticPiece::report(TunerNetwork& network, const ReducerTree& tr
        {{"assignments", exhaustive},
         {"evaluated", summary.details.value("leaves_evaluated", 0.0)},
         {"nodes_pruned", summary.details.value("nodes_pruned", 0.0)},
-        {"bound_calls", bound_->calls()}}}};
+        {"bound_calls", bound_->calls()},
+        {"bound_factorizations", bound_->factorizations()}}}};
   if (options_.reference) {
     int differ = 0;
     for (size_t c = 0; c < assigned.size(); ++c) differ += assigned[c] != (*options_.reference)[c];
