@@ -31,7 +31,6 @@ double seconds_since(Clock::time_point start) {
 
 struct ElasticSolver::Impl {
   std::vector<TetRest> rest;
-  std::vector<int> node_order;  // Morton order of the nodes (tet_mesh.h), which numbers the free DOFs
   std::vector<int> dof_index;   // full DOF -> free index, or -1
   int free_count = 0;
   // Per tet, for each of its 78 local pairs i <= j (column-major upper
@@ -42,6 +41,7 @@ struct ElasticSolver::Impl {
   SparseMatrix stiffness;     // lower triangle of the free-free block
   CholmodFactor cholesky;
   std::unique_ptr<Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower>> ldlt;  // made and analysed on first need
+  bool use_ldlt = false;  // the last prepare() found K indefinite
   LinearSolver kind = LinearSolver::cholesky;
   using Preconditioner = Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>>;
   std::unique_ptr<Eigen::ConjugateGradient<SparseMatrix, Eigen::Lower, Preconditioner>> cg;
@@ -122,49 +122,68 @@ struct ElasticSolver::Impl {
     }
   }
 
-  bool factorize_and_solve(SolveReport& report) {
+  // Sets the linear solver up for the current stiffness: CHOLMOD's
+  // factor (LDLᵀ where K is not positive definite: a compressed, buckling
+  // state), the incomplete factor, or a multigrid hierarchy. False when
+  // that fails.
+  bool prepare(SolveReport& report) {
     ++report.factorizations;
-    auto start = Clock::now();
-    // The multigrids (hypre's, PETSc's) alike: set up the hierarchy, then CG.
-    auto multigrid_solve = [&](auto& solver) {
-      solver.setup(stiffness);
-      report.factorization_seconds += seconds_since(start);
-      start = Clock::now();
-      const bool converged = solver.solve(residual, step);
-      report.solve_seconds += seconds_since(start);
-      report.cg_iterations += solver.last_iterations();
-      return converged && step.allFinite();
-    };
-    if (kind == LinearSolver::multigrid) return multigrid_solve(*amg);
-    if (kind == LinearSolver::elastic_multigrid) return multigrid_solve(*gamg);
-    if (kind == LinearSolver::conjugate_gradient) {
-      cg->compute(stiffness);  // the incomplete factor
-      report.factorization_seconds += seconds_since(start);
-      if (cg->info() != Eigen::Success) return false;
-      start = Clock::now();
-      step = cg->solve(residual);
-      report.solve_seconds += seconds_since(start);
-      report.cg_iterations += cg->iterations();
-      return cg->info() == Eigen::Success && step.allFinite();
+    const auto start = Clock::now();
+    bool ok = true;
+    switch (kind) {
+      case LinearSolver::multigrid: amg->setup(stiffness); break;
+      case LinearSolver::elastic_multigrid: gamg->setup(stiffness); break;
+      case LinearSolver::conjugate_gradient:
+        cg->compute(stiffness);
+        ok = cg->info() == Eigen::Success;
+        break;
+      case LinearSolver::cholesky:
+        use_ldlt = !cholesky.factorize(stiffness);
+        if (use_ldlt) {
+          if (!ldlt) {
+            ldlt = std::make_unique<Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower>>();
+            ldlt->analyzePattern(stiffness);
+          }
+          ldlt->factorize(stiffness);
+          ok = ldlt->info() == Eigen::Success;
+        }
+        break;
     }
-    const bool positive_definite = cholesky.factorize(stiffness);
     report.factorization_seconds += seconds_since(start);
-    if (positive_definite) {
-      start = Clock::now();
-      cholesky.solve(residual, step);
-      report.solve_seconds += seconds_since(start);
-      return step.allFinite();
-    }
-    // Not positive definite (a compressed, buckling state): LDLᵀ.
-    if (!ldlt) {
-      ldlt = std::make_unique<Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower>>();
-      ldlt->analyzePattern(stiffness);
-    }
-    ldlt->factorize(stiffness);
-    if (ldlt->info() != Eigen::Success) return false;
-    step = ldlt->solve(residual);
-    return step.allFinite();
+    return ok;
   }
+
+  // step = K⁻¹ residual with what prepare() set up; any number of times.
+  bool solve_prepared(SolveReport& report) {
+    const auto start = Clock::now();
+    bool converged = true;
+    switch (kind) {
+      case LinearSolver::multigrid:
+        converged = amg->solve(residual, step);
+        report.cg_iterations += amg->last_iterations();
+        break;
+      case LinearSolver::elastic_multigrid:
+        converged = gamg->solve(residual, step);
+        report.cg_iterations += gamg->last_iterations();
+        break;
+      case LinearSolver::conjugate_gradient:
+        step = cg->solve(residual);
+        converged = cg->info() == Eigen::Success;
+        report.cg_iterations += cg->iterations();
+        break;
+      case LinearSolver::cholesky:
+        if (use_ldlt) {
+          step = ldlt->solve(residual);
+        } else {
+          cholesky.solve(residual, step);
+        }
+        break;
+    }
+    report.solve_seconds += seconds_since(start);
+    return converged && step.allFinite();
+  }
+
+  bool factorize_and_solve(SolveReport& report) { return prepare(report) && solve_prepared(report); }
 };
 
 ElasticSolver::ElasticSolver(const TetMesh& mesh, const std::vector<char>& fixed, LinearSolver linear_solver,
@@ -177,9 +196,9 @@ ElasticSolver::ElasticSolver(const TetMesh& mesh, const std::vector<char>& fixed
   // Free DOFs numbered node by node along the nodes' Morton curve: the
   // stiffness then has a small bandwidth and its products (the multigrids'
   // work) read memory in runs. The Cholesky solvers order it their own way.
-  m.node_order = morton_order(mesh.nodes);
+  const std::vector<int> node_order = morton_order(mesh.nodes);
   m.dof_index.assign(dofs, -1);
-  for (int v : m.node_order) {
+  for (int v : node_order) {
     for (size_t d = 0; d < 3; ++d) {
       if (!fixed[3 * static_cast<size_t>(v) + d]) m.dof_index[3 * static_cast<size_t>(v) + d] = m.free_count++;
     }
@@ -291,7 +310,7 @@ ElasticSolver::ElasticSolver(const TetMesh& mesh, const std::vector<char>& fixed
     if (m.kind == LinearSolver::multigrid)
       m.amg = std::make_unique<AmgSolver>(m.stiffness, std::move(dof_of_free), mesh.nodes.size(), 1e-10, 5000);
     else
-      m.gamg = std::make_unique<GamgSolver>(m.stiffness, dof_of_free, mesh.nodes, m.node_order, 1e-10,
+      m.gamg = std::make_unique<GamgSolver>(m.stiffness, dof_of_free, mesh.nodes, node_order, 1e-10,
                                             5000, distributed);
   } else {
     m.cholesky.analyze(m.stiffness);
@@ -374,12 +393,13 @@ std::optional<ElasticSolver::InverseProducts> ElasticSolver::inverse_products(co
     out.diagonal = solution.colwise().squaredNorm().transpose();
     return out;
   }
-  // The iterative solvers set up again for each vector: X = K⁻¹V.
+  // The iterative solvers: set up once, then X = K⁻¹V column by column.
   solution.resize(free_vectors.rows(), free_vectors.cols());
   SolveReport report;
+  if (!m.prepare(report)) return std::nullopt;
   for (Eigen::Index k = 0; k < free_vectors.cols(); ++k) {
     m.residual = free_vectors.col(k);
-    if (!m.factorize_and_solve(report) || !m.step.allFinite()) return std::nullopt;
+    if (!m.solve_prepared(report)) return std::nullopt;
     solution.col(k) = m.step;
   }
   out.with_first = free_vectors.transpose() * solution.col(0);

@@ -107,6 +107,41 @@ TEST(FemReference, MultigridSolvesLikeTheDirectSolver) {
   }
 }
 
+// The elastic bound's products, vᵢᵀK⁻¹f and vᵢᵀK⁻¹vᵢ, for every linear
+// solver (CHOLMOD's forward half-solve, the iterative ones' full solves),
+// against a displacement solve: gᵀK⁻¹f is the tip's deflection, fᵀK⁻¹f the
+// compliance fᵀu.
+TEST(FemReference, InverseProductsAgreeWithASolveForEverySolver) {
+  const Cantilever c = cantilever(0.25, 1.0);
+  std::vector<double> u;
+  ASSERT_TRUE(testing::solve_uniform(c.mesh, c.constraints, kYoungs, kPoisson, false, u, 1).converged);
+  double compliance = 0;
+  for (size_t d = 0; d < u.size(); ++d) compliance += c.constraints.force_n[d] * u[d];
+  const ProbeLocation tip = locate_probes(c.mesh, {Vec3(kLength, kSide / 2, kSide / 2)}, "tip").front();
+  std::vector<double> g(u.size(), 0.0);
+  for (size_t k = 0; k < 4; ++k) g[3 * static_cast<size_t>(c.mesh.tets[static_cast<size_t>(tip.tet)][k]) + 2] = tip.weights[k];
+  const double tip_z = testing::displacement_at(c.mesh, u, Vec3(kLength, kSide / 2, kSide / 2)).z();
+  const std::vector<std::vector<double>> vectors{c.constraints.force_n, g};
+  double cholesky_gg = 0;
+  for (LinearSolver kind : {LinearSolver::cholesky, LinearSolver::conjugate_gradient, LinearSolver::multigrid,
+                            LinearSolver::elastic_multigrid}) {
+    if (kind == LinearSolver::multigrid && !AmgSolver::available()) continue;
+    if (kind == LinearSolver::elastic_multigrid && !GamgSolver::available()) continue;
+    ElasticSolver solver(c.mesh, c.constraints.fixed, kind);
+    const size_t n = c.mesh.tets.size();
+    solver.set_materials(std::vector<double>(n, lame_lambda(kYoungs, kPoisson)),
+                         std::vector<double>(n, lame_mu(kYoungs, kPoisson)), std::vector<char>(n, 1));
+    const auto products = solver.inverse_products(solver.free_rows(vectors));
+    ASSERT_TRUE(products) << to_string(kind);
+    EXPECT_NEAR(products->with_first(0), compliance, 1e-7 * compliance) << to_string(kind);
+    EXPECT_NEAR(products->diagonal(0), products->with_first(0), 1e-12 * compliance) << to_string(kind);
+    EXPECT_NEAR(products->with_first(1), tip_z, 1e-7 * std::abs(tip_z)) << to_string(kind);
+    EXPECT_GT(products->diagonal(1), 0) << to_string(kind);
+    if (kind == LinearSolver::cholesky) cholesky_gg = products->diagonal(1);
+    EXPECT_NEAR(products->diagonal(1), cholesky_gg, 1e-7 * cholesky_gg) << to_string(kind);
+  }
+}
+
 // GAMG's aggregates know the rigid-body modes: on the cantilever it needs a
 // few dozen CG iterations where the scalar AMG needs several times more
 // (docs/fem-solver-study.md). A regression of the near-nullspace (modes
