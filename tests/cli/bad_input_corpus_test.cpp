@@ -433,6 +433,8 @@ TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
 
   // Command lines.
   cases.push_back({"command: unknown subcommand", {}, "frobnicate", "frobnicate"});
+  cases.push_back({"command: unknown subcommand after global flags", {}, "-q -v frobnicate",
+                   "unknown command 'frobnicate'"});
   cases.push_back({"command: threads zero", {{"e.json", good}}, "run {dir}/e.json --threads 0 --out {dir}/out", "threads"});
   cases.push_back({"command: experiment not found", {}, "run {dir}/missing.json --out {dir}/out", "missing.json"});
   cases.push_back({"command: experiment is a folder", {}, "run {dir} --out {dir}/out", "is a folder"});

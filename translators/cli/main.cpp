@@ -187,12 +187,18 @@ int main(int argc, char** argv) {
   list_cmd->add_option("--datasets", datasets,
                        "datasets folder (default $SPEC2FAB_DATASETS or the source tree's)");
 
-  // A first word that is no command: CLI11 would only say one is required.
-  if (argc > 1 && argv[1][0] != '-') {
+  // A first word that is no command, after any global flags (which take no
+  // value): CLI11 would only say that a command is required.
+  int first_word = 1;
+  while (first_word < argc && argv[first_word][0] == '-' &&
+         app.get_option_no_throw(argv[first_word]) != nullptr && argv[first_word] != std::string("--"))
+    ++first_word;
+  if (first_word < argc && argv[first_word][0] != '-') {
+    const std::string word = argv[first_word];
     std::vector<std::string> commands;
     for (const CLI::App* command : app.get_subcommands({})) commands.push_back(command->get_name());
-    if (std::find(commands.begin(), commands.end(), argv[1]) == commands.end()) {
-      std::cerr << "error: unknown command '" << argv[1] << "'" << did_you_mean(argv[1], commands)
+    if (std::find(commands.begin(), commands.end(), word) == commands.end()) {
+      std::cerr << "error: unknown command '" << word << "'" << did_you_mean(word, commands)
                 << " (commands: " << join(commands) << "; see spec2fab --help)\n";
       return 2;
     }
