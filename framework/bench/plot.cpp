@@ -1,4 +1,5 @@
 #include "bench/plot.h"
+#include "core/image_write.h"
 
 #include <algorithm>
 #include <cmath>
@@ -69,8 +70,7 @@ std::string tick_label(double v, bool log) {
 
 void write_png(const cv::Mat& image, const std::filesystem::path& file) {
   std::filesystem::create_directories(file.parent_path());
-  if (!cv::imwrite(file.string(), image))
-    throw std::runtime_error("could not write " + file.string());
+  write_image(file, image);
 }
 
 }  // namespace

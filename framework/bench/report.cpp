@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 
 #include "bench/harness.h"
+#include "core/file_write.h"
 #include "bench/plot.h"
 #include "core/strings.h"
 #include "tuning/problem.h"
@@ -24,11 +25,9 @@ namespace fs = std::filesystem;
 
 constexpr int kLadder = 8;  // targets 1e-1 .. 1e-8 of the start's distance to the optimum
 
-void write_file(const fs::path& file, const std::string& text) {
+void write_report_file(const fs::path& file, const std::string& text) {
   fs::create_directories(file.parent_path());
-  std::ofstream out(file, std::ios::binary);
-  out << text;
-  if (!out) throw std::runtime_error("could not write " + file.string());
+  write_file(file, text);
 }
 
 std::string number(double v) {
@@ -179,7 +178,7 @@ void write_ioh(const BenchResult& result, const std::vector<std::vector<const Be
     }
     if (runs.empty()) continue;
     const fs::path folder = root / file_name(entrant.label);
-    write_file(folder / dat, rows);
+    write_report_file(folder / dat, rows);
     std::string info;
     for (const auto& [key, value] : entrant.optimizer.items())
       info += (info.empty() ? "" : " ") + key + "=" +
@@ -193,7 +192,7 @@ void write_ioh(const BenchResult& result, const std::vector<std::vector<const Be
         {"algorithm", {{"name", entrant.label}, {"info", ioh_text(info)}}},
         {"attributes", {"evaluations", "raw_y"}},
         {"scenarios", {{{"dimension", problem.facts.dimension}, {"path", dat}, {"runs", runs}}}}};
-    write_file(folder / ("IOHprofiler_" + stem + ".json"), index.dump(1, '\t') + "\n");
+    write_report_file(folder / ("IOHprofiler_" + stem + ".json"), index.dump(1, '\t') + "\n");
   }
 }
 
@@ -509,8 +508,8 @@ void write_bench_report(const BenchResult& result, const fs::path& folder) {
     plot::write_heat_map("win rate of row against column", labels, table,
                          folder / "plots" / "fight.png");
   report["fights"] = {{"entrants", labels}, {"win_rate", table}};
-  write_file(folder / "report.md", md.str());
-  write_file(folder / "report.json", report.dump(1) + "\n");
+  write_report_file(folder / "report.md", md.str());
+  write_report_file(folder / "report.json", report.dump(1) + "\n");
 
   // Wall and simulator seconds: these vary with the machine and the load.
   nlohmann::json timing = {{"threads", result.threads},
@@ -535,8 +534,8 @@ void write_bench_report(const BenchResult& result, const fs::path& folder) {
                          best, run.seconds[e], run.simulator_seconds_at[e]);
     }
   }
-  write_file(folder / "timing" / "timing.json", timing.dump(1) + "\n");
-  write_file(folder / "timing" / "runs.csv", csv);
+  write_report_file(folder / "timing" / "timing.json", timing.dump(1) + "\n");
+  write_report_file(folder / "timing" / "runs.csv", csv);
 }
 
 }  // namespace spec2fab

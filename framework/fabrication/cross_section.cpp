@@ -1,4 +1,5 @@
 #include "fabrication/cross_section.h"
+#include "core/image_write.h"
 
 #include <cmath>
 #include <stdexcept>
@@ -44,7 +45,7 @@ void write_cross_section_png(const ReducerTree& tree, int axis, double position_
                                                 : colours[id];
     }
   });
-  if (!cv::imwrite(file.string(), image)) throw std::runtime_error("cannot write " + file.string());
+  write_image(file, image);
 }
 
 }  // namespace spec2fab

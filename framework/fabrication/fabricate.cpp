@@ -57,10 +57,14 @@ std::string material_file_name(const std::string& material) {
   return name.empty() ? "material" : name;
 }
 
-void check_fabrication(const ReducerTree& tree, const PrinterProfile& printer,
-                       const FabricationOptions& options) {
-  if (!options.any()) return;
-  Fabricator(tree, printer).check(options.max_voxels, FabricationOptions::kMaxVoxelsOption);
+long long check_fabrication(const ReducerTree& tree, const PrinterProfile& printer,
+                            const FabricationOptions& options) {
+  if (!options.any()) return 0;
+  const Fabricator fabricator(tree, printer);
+  fabricator.check(options.max_voxels, FabricationOptions::kMaxVoxelsOption);
+  // The estimate is the slice stack's (the bulk); meshes and the render
+  // are left to the checked writes.
+  return options.writes("slices") ? fabricator.plan().estimated_bytes : 0;
 }
 
 namespace {

@@ -100,8 +100,10 @@ struct FabricationReport {
 
 /// Throws InputError when the plan exceeds options.max_voxels or the object
 /// does not fit the printer; call it before any work (e.g. at validate time).
-void check_fabrication(const ReducerTree& tree, const PrinterProfile& printer,
-                       const FabricationOptions& options);
+/// Returns the plan's estimate of the bytes the slice stack takes (0 when
+/// no slices are written), for a check of the disk before the work.
+long long check_fabrication(const ReducerTree& tree, const PrinterProfile& printer,
+                            const FabricationOptions& options);
 
 /// Fabricates `tree` (bound) for `printer` into `folder`. The tree's palette
 /// must be the printer's. Does nothing but report when no writer is enabled.

@@ -1,4 +1,5 @@
 #include "fabrication/preview_renderer.h"
+#include "core/image_write.h"
 
 #include "fabrication/fabricate.h"
 #include "fabrication/print_writer.h"
@@ -137,7 +138,7 @@ cv::Mat trace(const Scene& s, const Bounds& bounds, int pixels, const HitColour&
 
 void write_atomically(const cv::Mat& image, const fs::path& file) {
   const fs::path partial = partial_name(file);
-  if (!cv::imwrite(partial.string(), image)) throw std::runtime_error("cannot write " + partial.string());
+  write_image(partial, image);
   fs::rename(partial, file);
 }
 

@@ -1,4 +1,5 @@
 #include "fabrication/slice_stack_writer.h"
+#include "core/file_write.h"
 
 #include "fabrication/fabricate.h"
 #include "fabrication/print_writer.h"
@@ -26,18 +27,31 @@ struct PngPalette {
 
 // libpng reports errors by longjmp; nothing with a destructor lives in this
 // function's frame across setjmp, so the jump is safe.
-bool write_indexed_png(const char* file, int width, int height, const png_byte* const* rows,
+// libpng writes through these: its bytes into a CheckedFile (a refused
+// write is the system's reason, named by write_file's rules), its own
+// errors (out of memory) into the message thrown, never onto stderr.
+void png_write_bytes(png_structp png, png_bytep data, png_size_t size) {
+  static_cast<CheckedFile*>(png_get_io_ptr(png))->write(data, size);
+}
+void png_flush_nothing(png_structp) {}
+void png_error_to_exception(png_structp png, png_const_charp message) {
+  *static_cast<std::string*>(png_get_error_ptr(png)) = message;
+  png_longjmp(png, 1);
+}
+void png_warning_ignored(png_structp, png_const_charp) {}
+
+void write_indexed_png(const fs::path& file, int width, int height, const png_byte* const* rows,
                        const PngPalette& palette, int level) {
-  FILE* out = std::fopen(file, "wb");
-  if (!out) return false;
-  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  CheckedFile out(file);
+  std::string error;
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &error, png_error_to_exception,
+                                            png_warning_ignored);
   png_infop info = png ? png_create_info_struct(png) : nullptr;
   if (!info || setjmp(png_jmpbuf(png))) {
     png_destroy_write_struct(&png, &info);
-    std::fclose(out);
-    return false;
+    throw std::runtime_error("libpng cannot write " + file.string() + ": " + (error.empty() ? "out of memory" : error));
   }
-  png_init_io(png, out);
+  png_set_write_fn(png, &out, png_write_bytes, png_flush_nothing);
   png_set_compression_level(png, level);
   // Palette images compress best unfiltered (the PNG spec's advice).
   png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_NONE);
@@ -50,7 +64,7 @@ bool write_indexed_png(const char* file, int width, int height, const png_byte* 
   png_write_image(png, const_cast<png_bytepp>(rows));
   png_write_end(png, nullptr);
   png_destroy_write_struct(&png, &info);
-  return std::fclose(out) == 0;
+  out.close();
 }
 
 png_byte to_byte(double c) {
@@ -93,10 +107,7 @@ void SliceStackWriter::consume(int z, const MaterialId* ids) {
   }
   const fs::path file = folder_ / slice_name(z);
   const fs::path partial = fs::path(file).concat(".partial");
-  if (!write_indexed_png(partial.c_str(), width, height, rows.data(), png_palette,
-                         compression_level_)) {
-    throw std::runtime_error("cannot write " + partial.string());
-  }
+  write_indexed_png(partial, width, height, rows.data(), png_palette, compression_level_);
   fs::rename(partial, file);
 }
 
@@ -126,11 +137,7 @@ void SliceStackWriter::finish() {
       {"files", slice_name(0).replace(6, 5, "NNNNN") + " (layer 0 = bottom)"},
       {"palette", materials}};
   const fs::path file = folder_ / "manifest.json", partial = folder_ / "manifest.json.partial";
-  {
-    std::ofstream out(partial, std::ios::binary);
-    out << manifest.dump(2) << "\n";
-    if (!out) throw std::runtime_error("cannot write " + partial.string());
-  }
+  write_file(partial, manifest.dump(2) + "\n");
   fs::rename(partial, file);
 }
 

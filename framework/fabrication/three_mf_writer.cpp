@@ -1,8 +1,12 @@
 #include "fabrication/three_mf_writer.h"
+#include "core/file_write.h"
 
 #include "fabrication/fabricate.h"
 #include "fabrication/print_writer.h"
 
+#include <cerrno>
+#include <cstdint>
+#include <cstdio>
 #include <cmath>
 #include <stdexcept>
 
@@ -15,6 +19,19 @@ namespace fs = std::filesystem;
 using namespace NMR;
 
 namespace {
+
+// lib3mf's stream callbacks (ExportStream_WriteCallbackType and
+// ExportStream_SeekCallbackType in its headers): 0 is success.
+std::uint32_t write_to_file(std::uint8_t* data, std::uint32_t bytes, void* file) {
+  static_cast<CheckedFile*>(file)->write(data, bytes);
+  return 0;
+}
+std::uint32_t seek_in_file(std::uint64_t position, void* file) {
+  auto* out = static_cast<CheckedFile*>(file);
+  errno = 0;
+  if (fseeko(out->get(), static_cast<off_t>(position), SEEK_SET) != 0) out->note_failure(errno);
+  return 0;
+}
 
 // lib3mf 1.8's C API hands out reference-counted handles; this owns one.
 class Handle {
@@ -100,8 +117,17 @@ void write_three_mf(const std::vector<Mesh>& meshes, const MaterialPalette& pale
   check(lib3mf_model_setbuilduuidutf8(model.get(), fixed_uuid(3, 0).c_str()), "set uuid", file);
   Handle writer;
   check(lib3mf_model_querywriter(model.get(), "3mf", writer.out()), "query writer", file);
+  // Through callbacks into a CheckedFile that tells lib3mf every write
+  // went well: a refused one is reported by close() as the system's reason
+  // (core/file_write.h). lib3mf's own file stream, meeting a full disk,
+  // threw from where nothing could catch it ("Could not deflate data",
+  // then std::terminate).
   const fs::path partial = fs::path(file).concat(".partial");
-  check(lib3mf_writer_writetofileutf8(writer.get(), partial.c_str()), "write", partial);
+  CheckedFile out(partial);
+  check(lib3mf_writer_writetocallback(writer.get(), reinterpret_cast<void*>(&write_to_file),
+                                      reinterpret_cast<void*>(&seek_in_file), &out),
+        "write", partial);
+  out.close();
   fs::rename(partial, file);
 }
 

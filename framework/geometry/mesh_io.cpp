@@ -1,4 +1,5 @@
 #include "geometry/mesh_io.h"
+#include "core/file_write.h"
 
 #include <algorithm>
 #include <bit>
@@ -463,9 +464,12 @@ void save_mesh(const Mesh& mesh, const std::filesystem::path& file) {
   scene.mRootNode->mNumMeshes = 1;
   scene.mRootNode->mMeshes = new unsigned[1]{0};
 
+  // Into memory, then written here: a refused write is the system's reason
+  // (core/file_write.h), not a failure Assimp's stream would not report.
   Assimp::Exporter exporter;
-  if (exporter.Export(&scene, format, file.string()) != aiReturn_SUCCESS)
-    fail(file, "write", one_line(exporter.GetErrorString()));
+  const aiExportDataBlob* blob = exporter.ExportToBlob(&scene, format);
+  if (blob == nullptr || blob->next != nullptr) fail(file, "write", one_line(exporter.GetErrorString()));
+  write_file(file, std::string_view(static_cast<const char*>(blob->data), blob->size));
 }
 
 }  // namespace spec2fab

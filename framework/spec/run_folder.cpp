@@ -1,4 +1,5 @@
 #include "spec/run_folder.h"
+#include "core/file_write.h"
 
 #include <signal.h>
 #include <unistd.h>
@@ -143,9 +144,7 @@ fs::path RunFolder::shared_path(const fs::path& relative) const {
 }
 
 void RunFolder::write_text(const fs::path& relative, const std::string& text) const {
-  std::ofstream out(path(relative), std::ios::binary);
-  out << text;
-  if (!out) throw std::runtime_error("cannot write " + (destination_ / relative).string());
+  write_file(path(relative), text);
 }
 
 void RunFolder::write_json(const fs::path& relative, const nlohmann::json& value) const {
@@ -174,11 +173,7 @@ void RunFolder::write_checkpoint(const std::string& name, const std::vector<std:
   if (shared_) return;
   interrupt::wait_if_stopping();
   const fs::path file = checkpoint_path(name), temporary = fs::path(file).concat(".partial");
-  {
-    std::ofstream out(temporary, std::ios::binary);
-    out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-    if (!out) throw std::runtime_error("cannot write " + temporary.string());
-  }
+  write_file(temporary, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
   fs::rename(temporary, file);
 }
 
@@ -186,6 +181,14 @@ std::vector<std::uint8_t> RunFolder::read_checkpoint(const std::string& name) co
   std::ifstream in(staging_ / kCheckpointFolder / name, std::ios::binary);
   if (!in) return {};
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+std::string RunFolder::as_destination(const std::string& message) const {
+  std::string shown = message;
+  const std::string staged = staging_.string(), destination = destination_.string();
+  for (size_t at; !staged.empty() && (at = shown.find(staged)) != std::string::npos;)
+    shown.replace(at, staged.size(), destination);
+  return shown;
 }
 
 void RunFolder::commit() {

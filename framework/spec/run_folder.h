@@ -52,6 +52,9 @@ class RunFolder {
   /// mpirun every rank writes into rank 0's folder (the constructor and
   /// commit() are collective): commit waits for all, and rank 0 moves it.
   void commit();
+  /// A WriteError's message with the hidden staging folder's name replaced
+  /// by the destination's: the user knows the folder they asked for.
+  std::string as_destination(const std::string& message) const;
 
  private:
   std::filesystem::path destination_, staging_;

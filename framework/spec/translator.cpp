@@ -1,4 +1,5 @@
 #include "spec/translator.h"
+#include "core/file_write.h"
 
 #include <chrono>
 #include <fstream>
@@ -118,6 +119,7 @@ std::filesystem::path run_experiment(const std::filesystem::path& file, const Ru
       options.out.empty() ? std::filesystem::path("out") / experiment.name() : options.out;
   if (options.resume && ranks::size() > 1)
     throw InputError("--resume: a run under mpirun cannot be resumed; run it in one process");
+  require_free_space(out, prepared.translator->estimated_output_bytes(), "the run's files");
   RunFolder folder(out, options.resume);
 
   // result.json holds only what the inputs determine, so that a rerun with any
@@ -134,10 +136,13 @@ std::filesystem::path run_experiment(const std::filesystem::path& file, const Ru
   RunContext context{experiment, folder, threads, options.seed.value_or(experiment.seed()), result, &timing,
                      ranks::root() ? &checkpoint : nullptr};
   spdlog::info("running '{}' ({}) on {} thread(s)", experiment.name(), experiment.translator(), threads);
-  prepared.translator->run(context);
-
-  folder.write_json("tree.json", prepared.translator->tree().to_json());
-  folder.write_json("result.json", result);
+  try {
+    prepared.translator->run(context);
+    folder.write_json("tree.json", prepared.translator->tree().to_json());
+    folder.write_json("result.json", result);
+  } catch (const WriteError& e) {
+    throw WriteError(folder.as_destination(e.what()));
+  }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   timing["wall_seconds"] = seconds;
   if (ranks::size() > 1) {

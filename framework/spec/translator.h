@@ -51,6 +51,10 @@ class Translator {
   /// evaluations: `validate` then refuses it too. Returns what it counted,
   /// for validate to show (empty: nothing).
   virtual std::string check_limits() { return {}; }
+  /// What its files will take on disk, as far as it can tell before the
+  /// work (the print's estimate); `run` refuses a destination with less
+  /// free space before any work. 0: nothing worth checking.
+  virtual long long estimated_output_bytes() const { return 0; }
 };
 
 using TranslatorRegistry = Registry<Translator, const Experiment&>;

@@ -39,7 +39,7 @@ TreeOutputOptions TreeOutputOptions::read(const Properties& goal, const Experime
   const auto output = experiment.output();
   if (output) options.section_pixels = read_options<OutputKeys>(*output).section_pixels;
   options.fabrication = FabricationOptions::from_properties(output);
-  check_fabrication(tree, experiment.printer(), options.fabrication);
+  options.estimated_bytes = check_fabrication(tree, experiment.printer(), options.fabrication);
   return options;
 }
 

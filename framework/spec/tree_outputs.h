@@ -15,6 +15,7 @@ struct TreeOutputOptions {
   double census_voxel_mm = 1;
   int section_pixels = 512;
   FabricationOptions fabrication;
+  long long estimated_bytes = 0;  ///< the print's files, as its plan estimates them (0: none written)
 
   /// Its keys in the goal and in the output section (fabrication's aside).
   struct GoalKeys {

@@ -23,6 +23,7 @@ class TuningTranslator : public Translator {
   const ReducerTree& tree() const final { return *tree_; }
   void run(RunContext& context) final;
   std::string check_limits() final;
+  long long estimated_output_bytes() const final { return outputs_.estimated_bytes; }
 
  protected:
   /// Takes the tree, binds it to the experiment's solid and reads the

@@ -1,4 +1,5 @@
 #include "tuning/convergence_plot.h"
+#include "core/image_write.h"
 
 #include <algorithm>
 #include <cmath>
@@ -63,7 +64,7 @@ void write_convergence_plot(const RunRecord& record, size_t tuner_count,
               {kWidth - kRight - 170, kHeight - kBottom + 25}, font, 0.45, axis, 1, cv::LINE_AA);
   cv::putText(image, fmt::format("final {:.4g}", total), {kLeft + 10, kHeight - 15}, font, 0.5,
               line, 1, cv::LINE_AA);
-  if (!cv::imwrite(file.string(), image)) throw std::runtime_error("cannot write " + file.string());
+  write_image(file, image);
 }
 
 void write_optimizer_comparison_plot(const std::vector<LabelledRun>& runs, const std::filesystem::path& file) {
@@ -109,7 +110,7 @@ void write_optimizer_comparison_plot(const std::vector<LabelledRun>& runs, const
               cv::LINE_AA);
   cv::putText(image, fmt::format("{:.0f} evaluations", max_evaluations), {kWidth - kRight - 170, kHeight - kBottom + 25},
               font, 0.45, axis, 1, cv::LINE_AA);
-  if (!cv::imwrite(file.string(), image)) throw std::runtime_error("cannot write " + file.string());
+  write_image(file, image);
 }
 
 }  // namespace spec2fab

@@ -3,6 +3,8 @@
 // albedos (plus an sRGB swatch), values.csv for anything else.
 
 #include "tuning/observation.h"
+#include "core/file_write.h"
+#include "core/image_write.h"
 
 #include <algorithm>
 #include <cmath>
@@ -20,14 +22,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-void write_text(const fs::path& file, const std::string& text) {
-  std::ofstream out(file, std::ios::binary);
-  out << text;
-  if (!out) throw std::runtime_error("cannot write " + file.string());
-}
+void write_text(const fs::path& file, const std::string& text) { write_file(file, text); }
 
 void write_png(const fs::path& file, const cv::Mat& image) {
-  if (!cv::imwrite(file.string(), image)) throw std::runtime_error("cannot write " + file.string());
+  write_image(file, image);
 }
 
 /// Linear values in [0, 1] to an 8-bit sRGB image (1 channel: grey; 3: RGB).

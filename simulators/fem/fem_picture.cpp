@@ -1,4 +1,5 @@
 #include "fem/fem_picture.h"
+#include "core/image_write.h"
 
 #include <algorithm>
 #include <cmath>
@@ -125,7 +126,7 @@ void write_deformation_picture(const TetMesh& mesh, const std::vector<Face>& bou
   text("0", 2 * kPanel + 8, kPanel - 24);
   text("mm", 2 * kPanel + 8, kPanel - 8);
   const std::filesystem::path temporary = file.string() + ".tmp.png";
-  cv::imwrite(temporary.string(), image);
+  write_image(temporary, image);
   std::filesystem::rename(temporary, file);
 }
 

@@ -16,6 +16,7 @@
 #include <spdlog/spdlog.h>
 
 #include "core/error.h"
+#include "core/file_write.h"
 #include "fem/calculix_deck.h"
 #include "fem/elastic_solver.h"
 #include "fem/fem_picture.h"
@@ -153,14 +154,13 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
     const size_t probes = static_cast<size_t>(out.probe_count);
     std::vector<double> u(out.xyz_mm.begin() + static_cast<long>(3 * probes), out.xyz_mm.end());
     {
-      std::ofstream csv(folder / "displacements.csv");
-      csv << "node,x_mm,y_mm,z_mm,ux_mm,uy_mm,uz_mm\n";
+      std::string csv = "node,x_mm,y_mm,z_mm,ux_mm,uy_mm,uz_mm\n";
       for (size_t v = 0; v < mesh_->nodes.size(); ++v) {
         const Vec3& x = mesh_->nodes[v];
-        csv << fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}\n", v, x.x(), x.y(), x.z(), u[3 * v],
+        csv += fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}\n", v, x.x(), x.y(), x.z(), u[3 * v],
                            u[3 * v + 1], u[3 * v + 2]);
       }
-      if (!csv) throw std::runtime_error("cannot write " + (folder / "displacements.csv").string());
+      write_file(folder / "displacements.csv", csv);
     }
     save_mesh(boundary_surface(*mesh_, boundary_, u), folder / "deformed.stl");
     {

@@ -1,4 +1,5 @@
 #include "fem/vtu_writer.h"
+#include "core/file_write.h"
 
 #include <algorithm>
 #include <bit>
@@ -165,27 +166,26 @@ void write_vtu(const fs::path& path, const TetMesh& mesh, const std::vector<int>
       << "</Piece>\n</UnstructuredGrid>\n<AppendedData encoding=\"raw\">\n_";
 
   const fs::path partial = fs::path(path).concat(".partial");
-  const auto fail = [&](const std::string& why) {
-    std::error_code ignored;
-    fs::remove(partial, ignored);
-    throw std::runtime_error("cannot write " + path.string() + ": " + why);
-  };
-  {
-    std::ofstream out(partial, std::ios::binary | std::ios::trunc);
-    if (!out) fail("cannot open " + partial.string());
-    out << xml.str();
+  try {
+    CheckedFile out(partial);
+    const std::string head = xml.str();
+    out.write(head.data(), head.size());
     for (auto a = arrays.rbegin(); a != arrays.rend(); ++a) {
-      out.write(reinterpret_cast<const char*>(&a->bytes), sizeof a->bytes);
-      out.write(static_cast<const char*>(a->data), static_cast<std::streamsize>(a->bytes));
+      out.write(&a->bytes, sizeof a->bytes);
+      out.write(a->data, a->bytes);
     }
     // The newline ends the raw bytes for readers (meshio) that look for it.
-    out << "\n</AppendedData>\n</VTKFile>\n";
-    out.close();  // flushes: a full disk shows here, not at write()
-    if (!out) fail("writing " + partial.string() + " failed (disk full?)");
+    const std::string tail = "\n</AppendedData>\n</VTKFile>\n";
+    out.write(tail.data(), tail.size());
+    out.close();
+  } catch (const WriteError&) {
+    std::error_code ignored;
+    fs::remove(partial, ignored);
+    throw;
   }
   std::error_code error;
   fs::rename(partial, path, error);
-  if (error) fail("cannot rename " + partial.string() + ": " + error.message());
+  if (error) throw WriteError("cannot write " + path.string() + ": cannot rename " + partial.string() + ": " + error.message());
 }
 
 }  // namespace spec2fab::fem

@@ -1,4 +1,5 @@
 #include "caustic_translation.h"
+#include "core/image_write.h"
 
 #include <algorithm>
 #include <cmath>
@@ -292,7 +293,7 @@ void write_caustic_panels(const std::vector<std::span<const double>>& images, in
       for (int col = 0; col < width; ++col)
         image.at<unsigned char>(row, p * (width + gap) + col) =
             linear_to_srgb8(std::min(1.0, images[static_cast<size_t>(p)][static_cast<size_t>(row * width + col)] / peak));
-  if (!cv::imwrite(file.string(), image)) throw std::runtime_error("cannot write " + file.string());
+  write_image(file, image);
 }
 
 void write_height_map(std::span<const double> heights, int nx, int ny, const std::filesystem::path& file) {
@@ -310,7 +311,7 @@ void write_height_map(std::span<const double> heights, int nx, int ny, const std
   cv::applyColorMap(scaled, coloured, cv::COLORMAP_VIRIDIS);
   cv::putText(coloured, fmt::format("relief {:.3f} mm", span), {6, 16}, cv::FONT_HERSHEY_SIMPLEX, 0.45,
               {255, 255, 255}, 1, cv::LINE_AA);
-  if (!cv::imwrite(file.string(), coloured)) throw std::runtime_error("cannot write " + file.string());
+  write_image(file, coloured);
 }
 
 nlohmann::json caustic_image_errors(std::span<const double> image, const ImageObservation& goal) {

@@ -1,4 +1,5 @@
 #include "commands.h"
+#include "core/file_write.h"
 
 #include <algorithm>
 #include <cstdio>
@@ -170,10 +171,16 @@ int export_command(const ExportArguments& arguments) {
   FabricationOptions options;
   if (arguments.max_voxels > 0) options.max_voxels = static_cast<long long>(arguments.max_voxels);
   options.mesh_voxel_mm = arguments.mesh_voxel_mm;
-  check_fabrication(tree, printer, options);
+  require_free_space(arguments.out, check_fabrication(tree, printer, options), "the print's files");
 
   RunFolder folder(arguments.out);
-  const FabricationReport report = fabricate(tree, printer, options, folder);
+  const FabricationReport report = [&] {
+    try {
+      return fabricate(tree, printer, options, folder);
+    } catch (const WriteError& e) {
+      throw WriteError(folder.as_destination(e.what()));
+    }
+  }();
   if (!ranks::root()) {  // its slices are in; rank 0 writes the record
     folder.commit();
     return 0;

@@ -1,8 +1,10 @@
 // spec2fab: run, validate and inspect Spec2Fab experiments.
-// Exit codes: 0 success, 2 bad input (one line saying what and where), 1 internal error,
+// Exit codes: 0 success, 2 bad input (one line saying what and where), 3 a write the system
+// refused (full disk, quota, file-size limit: core/file_write.h), 1 internal error,
 // 130 / 143 stopped by SIGINT / SIGTERM (core/interrupt.h).
 
 #include <algorithm>
+#include <csignal>
 #include <cstdlib>
 #include <iostream>
 #include <string>
@@ -14,6 +16,7 @@
 #include "commands.h"
 #include "core/build_options.h"
 #include "core/error.h"
+#include "core/file_write.h"
 #include "core/interrupt.h"
 #include "core/limits.h"
 #include "core/ranks.h"
@@ -33,6 +36,9 @@ std::filesystem::path default_datasets() {
 int main(int argc, char** argv) {
   using namespace spec2fab;
   interrupt::exit_cleanly_on_signals();  // before any thread starts: they inherit the blocked signals
+  // Past a file-size limit (ulimit -f) a write fails with EFBIG, which is
+  // reported (exit code 3) and cleaned up, instead of the signal's core dump.
+  std::signal(SIGXFSZ, SIG_IGN);
   CLI::App app{
       "spec2fab: turns a functional specification into a multi-material 3D print.\n"
       "An experiment file (JSON) names a translator and its five inputs: geometry, goal,\n"
@@ -251,6 +257,12 @@ int main(int argc, char** argv) {
     // Every rank read the same inputs and stopped at the same point.
     if (ranks::root()) std::cerr << "error: " << e.what() << "\n";
     return 2;
+  } catch (const WriteError& e) {
+    // The system refused a write (a full disk, a quota, a file-size limit):
+    // the rank that met it says so; the run folder is already removed.
+    std::cerr << "error: " << e.what() << "\n";
+    ranks::abort_all(3);
+    return 3;
   } catch (const std::exception& e) {
     std::cerr << "internal error: " << e.what() << "\n";
     ranks::abort_all(1);

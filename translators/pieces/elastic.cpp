@@ -1,4 +1,5 @@
 #include "elastic.h"
+#include "core/image_write.h"
 
 #include <algorithm>
 #include <cmath>
@@ -66,7 +67,7 @@ void write_search_plot(const std::vector<fem::ElasticBound::Call>& calls, size_t
               {10, 44}, font, 0.5, axis, 1, cv::LINE_AA);
   cv::putText(image, "subtrees explored (bound calls, in order)", {kWidth - 380, kHeight - 15}, font, 0.5, axis, 1,
               cv::LINE_AA);
-  if (!cv::imwrite(file.string(), image)) throw std::runtime_error("cannot write " + file.string());
+  write_image(file, image);
 }
 
 /// The probes seen from the side (x right, z up): rest (grey), goal (green
@@ -109,7 +110,7 @@ void write_probe_picture(std::span<const double> rest, std::span<const double> g
               {10, 22}, font, 0.45, axis, 1, cv::LINE_AA);
   cv::putText(image, fmt::format("clamped (dark box), loaded (blue box): {:.3g} N", load.force_n.norm()),
               {10, kHeight - 20}, font, 0.45, axis, 1, cv::LINE_AA);
-  if (!cv::imwrite(file.string(), image)) throw std::runtime_error("cannot write " + file.string());
+  write_image(file, image);
 }
 
 nlohmann::json box_json(const Eigen::AlignedBox3d& box) {

@@ -1,4 +1,5 @@
 #include "texture.h"
+#include "core/image_write.h"
 
 #include <algorithm>
 #include <numeric>
@@ -187,7 +188,7 @@ void write_colour_panels(const std::vector<const std::vector<Rgb>*>& panels, int
         image.at<cv::Vec3b>(y, p * (w + gap) + x) = cv::Vec3b(linear_to_srgb8(c[2]), linear_to_srgb8(c[1]), linear_to_srgb8(c[0]));
       }
   }
-  if (!cv::imwrite(file.string(), image)) throw std::runtime_error("cannot write " + file.string());
+  write_image(file, image);
 }
 
 TextureOptions::TextureOptions(TextureKeys renamed, std::vector<std::string> inks_by_default)

@@ -18,6 +18,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/colour.h"
+#include "core/image_write.h"
 #include "core/distance.h"
 #include "reducer/reducer_tree.h"
 #include "spec/surface_columns.h"
@@ -295,7 +296,7 @@ class SubsurfaceTranslator final : public TuningTranslator {
       cv::putText(image, "log10 R(r) r (1/mm)", {x0 + kLeft + 8, kTop + 18}, font, 0.4, {40, 40, 40}, 1,
                   cv::LINE_AA);
     }
-    if (!cv::imwrite(file.string(), image)) throw std::runtime_error("cannot write " + file.string());
+    write_image(file, image);
   }
 
   /// The board as the eye sees it from afar: each column's total diffuse
@@ -319,7 +320,7 @@ class SubsurfaceTranslator final : public TuningTranslator {
         }
       }
     }
-    if (!cv::imwrite(file.string(), image)) throw std::runtime_error("cannot write " + file.string());
+    write_image(file, image);
   }
 
   std::array<int, 2> columns_{10, 10}, squares_{10, 10};
