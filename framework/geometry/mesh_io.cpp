@@ -135,6 +135,7 @@ void check_ply_header(const std::filesystem::path& file) {
   std::string format;
   double needed_bytes = 0;  // at least, for the elements declared
   double element_count = -1, element_bytes = 0;
+  std::vector<std::pair<std::string, double>> elements;  // name, count: an ASCII file holds one line each
   const auto close_element = [&] {
     if (element_count >= 0) needed_bytes += element_count * (format == "ascii" ? 2.0 : std::max(element_bytes, 1.0));
   };
@@ -158,6 +159,7 @@ void check_ply_header(const std::filesystem::path& file) {
       close_element();
       element_count = std::stod(count);
       element_bytes = 0;
+      elements.emplace_back(name, element_count);
     } else if (keyword == "property") {
       if (element_count < 0) bad(number, "a property before any element");
       std::string type;
@@ -181,6 +183,17 @@ void check_ply_header(const std::filesystem::path& file) {
       if (needed_bytes > left)
         fail(file, "read", "the PLY header declares elements that need at least " + std::to_string(static_cast<long long>(needed_bytes)) +
                                " bytes, and the file has " + std::to_string(static_cast<long long>(left)) + " after it (truncated?)");
+      if (format == "ascii") {  // one line per element: the counts must be there
+        double lines = 0;
+        for (std::string row; std::getline(in, row);)
+          if (row.find_first_not_of(" \t\r") != std::string::npos) ++lines;
+        for (const auto& [name, count] : elements) {
+          if (count > lines)
+            fail(file, "read", fmt::format("the PLY header says {:.0f} {} elements, the file holds {:.0f}", count, name,
+                                           lines));
+          lines -= count;
+        }
+      }
       return;
     } else {
       bad(number, "unknown keyword '" + keyword + "'");
@@ -188,6 +201,103 @@ void check_ply_header(const std::filesystem::path& file) {
     if (number > 10000) bad(number, "no end_header");
   }
   fail(file, "read", "malformed PLY header: no end_header");
+}
+
+std::string lowercase_extension(const std::filesystem::path& file) {
+  std::string extension = file.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return extension;
+}
+
+/// An ASCII OFF file's grammar, before Assimp (which reports a short face
+/// list as its own validation failure): the counts, each vertex's three
+/// coordinates, each face's corner count (at least 3) and its corners.
+void check_off(const std::filesystem::path& file) {
+  if (lowercase_extension(file) != ".off") return;
+  std::ifstream in(file, std::ios::binary);
+  std::vector<std::string> rows;  // lines without comments, blank ones dropped
+  for (std::string line; std::getline(in, line) && rows.size() < 50'000'000;) {
+    if (const size_t hash = line.find('#'); hash != std::string::npos) line.erase(hash);
+    if (line.find_first_not_of(" \t\r") != std::string::npos) rows.push_back(std::move(line));
+  }
+  const auto bad = [&](const std::string& what) { fail(file, "read", "malformed OFF: " + what); };
+  // A line quoted in a message: at most 60 characters, bytes outside
+  // printable ASCII as '?' (the user's terminal gets one clean line).
+  const auto quoted = [](const std::string& line) {
+    std::string shown = line.substr(0, 60);
+    for (char& c : shown)
+      if (static_cast<unsigned char>(c) < 32 || static_cast<unsigned char>(c) > 126) c = '?';
+    return shown + (line.size() > 60 ? "..." : "");
+  };
+  if (rows.empty()) bad("the file is empty");
+  std::istringstream head(rows[0]);
+  std::string keyword;
+  head >> keyword;
+  if (keyword.size() < 3 || keyword.compare(keyword.size() - 3, 3, "OFF") != 0)
+    bad("the first line is '" + quoted(rows[0]) + "', not OFF");
+  if (rows[0].find("BINARY") != std::string::npos) return;  // binary OFF: its reader decides
+  // The counts follow the keyword on its line, or make the next one.
+  std::string rest;
+  std::getline(head, rest);
+  size_t row = 1;
+  if (rest.find_first_not_of(" \t\r") == std::string::npos) rest = row < rows.size() ? rows[row++] : std::string();
+  std::istringstream count_line(rest);
+  long long vertices = -1, faces = -1;
+  count_line >> vertices >> faces;
+  if (!count_line || vertices < 0 || faces < 0) bad("no vertex and face counts after the OFF line");
+  if (static_cast<long long>(rows.size() - row) < vertices)
+    bad(fmt::format("the header says {} vertices, the file holds {}", vertices, rows.size() - row));
+  for (long long v = 0; v < vertices; ++v, ++row) {
+    std::istringstream coordinates(rows[row]);
+    double x, y, z;
+    if (!(coordinates >> x >> y >> z)) bad(fmt::format("vertex {} has not three coordinates: '{}'", v, quoted(rows[row])));
+  }
+  if (static_cast<long long>(rows.size() - row) < faces)
+    bad(fmt::format("the header says {} faces, the file holds {}", faces, rows.size() - row));
+  for (long long f = 0; f < faces; ++f, ++row) {
+    std::istringstream corners(rows[row]);
+    long long count = -1;
+    corners >> count;
+    if (!corners || count < 3) bad(fmt::format("face {} has {} corners: '{}'", f, std::max(count, 0LL), quoted(rows[row])));
+    for (long long k = 0; k < count; ++k) {
+      long long index = -1;
+      if (!(corners >> index)) bad(fmt::format("face {} says {} corners and lists fewer: '{}'", f, count, quoted(rows[row])));
+      if (index < 0 || index >= vertices)
+        bad(fmt::format("face {} refers to vertex {}, and there are {}", f, index, vertices));
+    }
+  }
+}
+
+/// A binary STL's triangle count against its size, before Assimp (which,
+/// when the 80-byte header starts with "solid", takes the file for ASCII
+/// and reports "no vertices"): 84 + 50 bytes per triangle.
+void check_binary_stl(const std::filesystem::path& file) {
+  if (lowercase_extension(file) != ".stl") return;
+  std::ifstream in(file, std::ios::binary);
+  char head[84] = {};
+  in.read(head, sizeof head);
+  const std::streamsize got = in.gcount();
+  const std::uintmax_t size = std::filesystem::file_size(file);
+  // ASCII: "solid" then text only (no control bytes) in its first 4 kB.
+  if (got >= 5 && std::string_view(head, 5) == "solid") {
+    std::ifstream again(file, std::ios::binary);
+    std::string start(4096, '\0');
+    again.read(start.data(), static_cast<std::streamsize>(start.size()));
+    start.resize(static_cast<size_t>(again.gcount()));
+    const bool text = std::all_of(start.begin(), start.end(), [](char c) {
+      const auto u = static_cast<unsigned char>(c);
+      return u >= 32 || c == '\n' || c == '\r' || c == '\t';
+    });
+    if (text) return;
+  }
+  if (got < 84) fail(file, "read", fmt::format("a binary STL has an 84-byte header; the file has {} bytes", size));
+  std::uint32_t triangles = 0;
+  std::memcpy(&triangles, head + 80, sizeof triangles);  // little-endian, as the format and this machine are
+  const double needed = 84.0 + 50.0 * triangles;
+  if (static_cast<double>(size) < needed)
+    fail(file, "read", fmt::format("the binary STL header says {} triangles ({:.0f} bytes), the file has {} bytes "
+                                   "(truncated, or not an STL)", triangles, needed, size));
 }
 
 void check_face_indices(const std::filesystem::path& file, const aiScene& scene) {
@@ -218,11 +328,23 @@ Mesh import_with_assimp(const std::filesystem::path& file, double scale_to_mm) {
   // Read without post-processing first: Assimp's steps (triangulation
   // included) abort the process on faces that point past the vertices,
   // which its readers pass through from a malformed file.
+  // Assimp's own text (its validation's internals, e.g. "aiMesh::mFaces[0]
+  // .mNumIndices is 0") is not the user's: the formats with a grammar of
+  // their own are checked before (check_ply_header, check_off,
+  // check_binary_stl); what is left is said in our words.
+  const std::string format = lowercase_extension(file);
+  const auto unreadable = [&] {
+    fail(file, "read",
+         "not a valid " + (format.empty() ? std::string("mesh") : format.substr(1)) +
+             " file (the reader found no mesh in it: malformed, truncated or another format)");
+  };
+  if (!importer.IsExtensionSupported(format))
+    fail(file, "read", "unknown mesh format '" + format + "'; give .obj, .stl, .ply or .off");
   const aiScene* scene = importer.ReadFile(file.string(), 0);
-  if (scene == nullptr) fail(file, "read", one_line(importer.GetErrorString()));
+  if (scene == nullptr) unreadable();
   check_face_indices(file, *scene);
   scene = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_ValidateDataStructure);
-  if (scene == nullptr) fail(file, "read", one_line(importer.GetErrorString()));
+  if (scene == nullptr) unreadable();
   if (scene->mRootNode == nullptr || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE))
     fail(file, "read", "no triangles");
 
@@ -344,6 +466,8 @@ Mesh load_mesh(const std::filesystem::path& file, double scale_to_mm, double rea
   if (!std::filesystem::is_regular_file(file, error)) fail(file, "read", "not a regular file");
   if (!(scale_to_mm > 0)) fail(file, "read", "scale to mm must be positive");
   check_ply_header(file);
+  check_off(file);
+  check_binary_stl(file);
   // Open MPI forbids fork() in its processes: under mpirun Assimp runs here.
   if (std::getenv("OMPI_COMM_WORLD_SIZE") != nullptr) return import_with_assimp(file, scale_to_mm);
   return import_isolated(file, scale_to_mm, reader_seconds > 0 ? reader_seconds : limits::get("mesh_read_seconds"));
