@@ -25,6 +25,19 @@ void flatten(const Corners& c, double* out) {
   }
 }
 
+// ∂f/∂x_j by central differences of tet_forces, step h.
+Vec12 force_difference(const TetRest& r, double lambda, double mu, const double* x, bool corotated, int j, double h) {
+  double plus[12], minus[12];
+  std::copy(x, x + 12, plus);
+  std::copy(x, x + 12, minus);
+  plus[j] += h;
+  minus[j] -= h;
+  Vec12 fp, fm;
+  tet_forces(r, lambda, mu, plus, corotated, fp, nullptr);
+  tet_forces(r, lambda, mu, minus, corotated, fm, nullptr);
+  return (fp - fm) / (2 * h);
+}
+
 TEST(CorotatedTet, RigidRotationOf90DegreesCarriesNoForce) {
   const Corners rest = reference_tet();
   const TetRest r = tet_rest(rest.x[0], rest.x[1], rest.x[2], rest.x[3]);
@@ -58,17 +71,8 @@ TEST(CorotatedTet, TangentMatchesCentralDifferencesOfForces) {
       Vec12 f;
       Mat12 k;
       tet_forces(r, 800.0, 150.0, x, corotated, f, &k);
-      const double h = 1e-6;
       for (int j = 0; j < 12; ++j) {
-        double plus[12], minus[12];
-        std::copy(x, x + 12, plus);
-        std::copy(x, x + 12, minus);
-        plus[j] += h;
-        minus[j] -= h;
-        Vec12 fp, fm;
-        tet_forces(r, 800.0, 150.0, plus, corotated, fp, nullptr);
-        tet_forces(r, 800.0, 150.0, minus, corotated, fm, nullptr);
-        const Vec12 numeric = (fp - fm) / (2 * h);
+        const Vec12 numeric = force_difference(r, 800.0, 150.0, x, corotated, j, 1e-6);
         EXPECT_LT((numeric - k.col(j)).norm(), 1e-6 * std::max(1.0, k.norm()))
             << "column " << j << (corotated ? " (co-rotated)" : " (linear)");
       }
@@ -88,17 +92,8 @@ TEST(CorotatedTet, ClosedFormLinearStiffnessIsTheDerivativeOfTheSmallStrainForce
   for (const auto& [lambda, mu] : {std::pair{800.0, 150.0}, std::pair{0.0, 1.0}, std::pair{1.0, 0.0}}) {
     Mat12 k;
     linear_tet_stiffness(r, lambda, mu, k);
-    const double h = 1e-3;
     for (int j = 0; j < 12; ++j) {
-      double plus[12], minus[12];
-      std::copy(x, x + 12, plus);
-      std::copy(x, x + 12, minus);
-      plus[j] += h;
-      minus[j] -= h;
-      Vec12 fp, fm;
-      tet_forces(r, lambda, mu, plus, false, fp, nullptr);
-      tet_forces(r, lambda, mu, minus, false, fm, nullptr);
-      const Vec12 numeric = (fp - fm) / (2 * h);
+      const Vec12 numeric = force_difference(r, lambda, mu, x, false, j, 1e-3);
       EXPECT_LT((numeric - k.col(j)).norm(), 1e-10 * std::max(1.0, k.norm()))
           << "column " << j << ", lambda " << lambda << ", mu " << mu;
     }
