@@ -188,6 +188,7 @@ std::string RunFolder::as_destination(const std::string& message) const {
   const std::string staged = staging_.string(), destination = destination_.string();
   for (size_t at; !staged.empty() && (at = shown.find(staged)) != std::string::npos;)
     shown.replace(at, staged.size(), destination);
+  for (size_t at; (at = shown.find("/./")) != std::string::npos;) shown.erase(at + 1, 2);  // folder.path(".")
   return shown;
 }
 

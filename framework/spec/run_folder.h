@@ -11,6 +11,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/file_write.h"
+
 namespace spec2fab {
 
 class RunFolder {
@@ -55,6 +57,16 @@ class RunFolder {
   /// A WriteError's message with the hidden staging folder's name replaced
   /// by the destination's: the user knows the folder they asked for.
   std::string as_destination(const std::string& message) const;
+  /// Runs `write` (work that writes into this folder) and returns what it
+  /// returns; a WriteError it throws names the destination (as_destination).
+  template <class Write>
+  decltype(auto) writing(Write&& write) const {
+    try {
+      return write();
+    } catch (const WriteError& e) {
+      throw WriteError(as_destination(e.what()));
+    }
+  }
 
  private:
   std::filesystem::path destination_, staging_;

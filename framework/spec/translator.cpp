@@ -136,13 +136,11 @@ std::filesystem::path run_experiment(const std::filesystem::path& file, const Ru
   RunContext context{experiment, folder, threads, options.seed.value_or(experiment.seed()), result, &timing,
                      ranks::root() ? &checkpoint : nullptr};
   spdlog::info("running '{}' ({}) on {} thread(s)", experiment.name(), experiment.translator(), threads);
-  try {
+  folder.writing([&] {
     prepared.translator->run(context);
     folder.write_json("tree.json", prepared.translator->tree().to_json());
     folder.write_json("result.json", result);
-  } catch (const WriteError& e) {
-    throw WriteError(folder.as_destination(e.what()));
-  }
+  });
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   timing["wall_seconds"] = seconds;
   if (ranks::size() > 1) {
@@ -153,7 +151,7 @@ std::filesystem::path run_experiment(const std::filesystem::path& file, const Ru
     timing["ranks"] = ranks::size();
     timing["tuner_runs_per_rank"] = runs;
   }
-  folder.write_json("timing.json", timing);
+  folder.writing([&] { folder.write_json("timing.json", timing); });
   folder.commit();
   return out;
 }

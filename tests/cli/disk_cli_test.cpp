@@ -94,5 +94,18 @@ TEST_F(DiskFaults, AFileSizeLimitIsAWriteErrorForRunAndExport) {
   EXPECT_FALSE(fs::exists(exported));
 }
 
+TEST_F(DiskFaults, AFileSizeLimitIsAWriteErrorForBench) {
+  const fs::path out = dir_ / "bench";
+  // 2 kB per file: the first plot goes past it.
+  const Result r = run_command("ulimit -f 2; " + std::string(SPEC2FAB_CLI_PATH) + " bench -q --out " + out.string() +
+                               " --problems albedo_column --optimizers exhaustive --seeds 1");
+  EXPECT_EQ(r.code, 3) << r.out;
+  EXPECT_THAT(single_line(r.out), HasSubstr("error: cannot write " + out.string() + "/"));
+  EXPECT_THAT(r.out, HasSubstr(": File too large"));
+  EXPECT_FALSE(fs::exists(out));
+  for (const std::string& name : entries(dir_))
+    EXPECT_EQ(name.find(".bench.partial"), std::string::npos) << "left behind: " << name;
+}
+
 }  // namespace
 }  // namespace spec2fab_cli_test

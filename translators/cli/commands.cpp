@@ -97,7 +97,7 @@ int bench_command(BenchArguments arguments) {
   RunCache cache;
   const BenchResult result = run_bench(options, BenchmarkContext{arguments.datasets, &cache});
   RunFolder folder(arguments.out);
-  write_bench_report(result, folder.path("."));
+  folder.writing([&] { write_bench_report(result, folder.path(".")); });
   folder.commit();
   size_t ran = 0, incompatible = 0;
   for (const BenchPair& pair : result.pairs) (pair.missing.empty() ? ran : incompatible) += 1;
@@ -174,13 +174,7 @@ int export_command(const ExportArguments& arguments) {
   require_free_space(arguments.out, check_fabrication(tree, printer, options), "the print's files");
 
   RunFolder folder(arguments.out);
-  const FabricationReport report = [&] {
-    try {
-      return fabricate(tree, printer, options, folder);
-    } catch (const WriteError& e) {
-      throw WriteError(folder.as_destination(e.what()));
-    }
-  }();
+  const FabricationReport report = folder.writing([&] { return fabricate(tree, printer, options, folder); });
   if (!ranks::root()) {  // its slices are in; rank 0 writes the record
     folder.commit();
     return 0;
@@ -294,12 +288,15 @@ int simulate_command(const SimulateArguments& arguments) {
                            {"setup_seconds", setup_seconds},
                            {"simulate_seconds", simulate_seconds},
                            {"evaluations", evaluations}};
-  const std::vector<std::string> files = simulator->write_report(*observation, folder.path("."), record);
-  if (!record.contains("values")) {
-    record["values"] = std::vector<double>(observation->values().begin(), observation->values().end());
-  }
-  record["files"] = files;
-  folder.write_json("simulation.json", record);
+  const std::vector<std::string> files = folder.writing([&] {
+    std::vector<std::string> written = simulator->write_report(*observation, folder.path("."), record);
+    if (!record.contains("values")) {
+      record["values"] = std::vector<double>(observation->values().begin(), observation->values().end());
+    }
+    record["files"] = written;
+    folder.write_json("simulation.json", record);
+    return written;
+  });
   folder.commit();
   if (!ranks::root()) return 0;
   std::cout << "wrote " << arguments.out.string() << "/ (simulation.json, " << join(files)
