@@ -25,8 +25,6 @@ struct PngPalette {
   std::vector<png_byte> alpha;
 };
 
-// libpng reports errors by longjmp; nothing with a destructor lives in this
-// function's frame across setjmp, so the jump is safe.
 // libpng writes through these: its bytes into a CheckedFile (a refused
 // write is the system's reason, named by write_file's rules), its own
 // errors (out of memory) into the message thrown, never onto stderr.
@@ -40,6 +38,9 @@ void png_error_to_exception(png_structp png, png_const_charp message) {
 }
 void png_warning_ignored(png_structp, png_const_charp) {}
 
+// libpng reports errors by longjmp back into this frame: it skips only
+// libpng's own (C) frames; `out` and `error` were made before setjmp and are
+// still alive after the jump (`error` is written through its address).
 void write_indexed_png(const fs::path& file, int width, int height, const png_byte* const* rows,
                        const PngPalette& palette, int level) {
   CheckedFile out(file);

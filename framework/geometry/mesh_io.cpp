@@ -213,14 +213,17 @@ std::string lowercase_extension(const std::filesystem::path& file) {
 /// An ASCII OFF file's grammar, before Assimp (which reports a short face
 /// list as its own validation failure): the counts, each vertex's three
 /// coordinates, each face's corner count (at least 3) and its corners.
+/// Read line by line; comments (#) and blank lines are skipped.
 void check_off(const std::filesystem::path& file) {
   if (lowercase_extension(file) != ".off") return;
   std::ifstream in(file, std::ios::binary);
-  std::vector<std::string> rows;  // lines without comments, blank ones dropped
-  for (std::string line; std::getline(in, line) && rows.size() < 50'000'000;) {
-    if (const size_t hash = line.find('#'); hash != std::string::npos) line.erase(hash);
-    if (line.find_first_not_of(" \t\r") != std::string::npos) rows.push_back(std::move(line));
-  }
+  const auto next_row = [&in](std::string& row) {
+    while (std::getline(in, row)) {
+      if (const size_t hash = row.find('#'); hash != std::string::npos) row.erase(hash);
+      if (row.find_first_not_of(" \t\r") != std::string::npos) return true;
+    }
+    return false;
+  };
   const auto bad = [&](const std::string& what) { fail(file, "read", "malformed OFF: " + what); };
   // A line quoted in a message: at most 60 characters, bytes outside
   // printable ASCII as '?' (the user's terminal gets one clean line).
@@ -230,39 +233,37 @@ void check_off(const std::filesystem::path& file) {
       if (static_cast<unsigned char>(c) < 32 || static_cast<unsigned char>(c) > 126) c = '?';
     return shown + (line.size() > 60 ? "..." : "");
   };
-  if (rows.empty()) bad("the file is empty");
-  std::istringstream head(rows[0]);
+  std::string row;
+  if (!next_row(row)) bad("the file is empty");
+  std::istringstream head(row);
   std::string keyword;
   head >> keyword;
   if (keyword.size() < 3 || keyword.compare(keyword.size() - 3, 3, "OFF") != 0)
-    bad("the first line is '" + quoted(rows[0]) + "', not OFF");
-  if (rows[0].find("BINARY") != std::string::npos) return;  // binary OFF: its reader decides
+    bad("the first line is '" + quoted(row) + "', not OFF");
+  if (row.find("BINARY") != std::string::npos) return;  // binary OFF: its reader decides
   // The counts follow the keyword on its line, or make the next one.
-  std::string rest;
-  std::getline(head, rest);
-  size_t row = 1;
-  if (rest.find_first_not_of(" \t\r") == std::string::npos) rest = row < rows.size() ? rows[row++] : std::string();
-  std::istringstream count_line(rest);
+  std::string counts;
+  std::getline(head, counts);
+  if (counts.find_first_not_of(" \t\r") == std::string::npos && !next_row(counts)) counts.clear();
+  std::istringstream count_line(counts);
   long long vertices = -1, faces = -1;
   count_line >> vertices >> faces;
   if (!count_line || vertices < 0 || faces < 0) bad("no vertex and face counts after the OFF line");
-  if (static_cast<long long>(rows.size() - row) < vertices)
-    bad(fmt::format("the header says {} vertices, the file holds {}", vertices, rows.size() - row));
-  for (long long v = 0; v < vertices; ++v, ++row) {
-    std::istringstream coordinates(rows[row]);
+  for (long long v = 0; v < vertices; ++v) {
+    if (!next_row(row)) bad(fmt::format("the header says {} vertices, the file holds {}", vertices, v));
+    std::istringstream coordinates(row);
     double x, y, z;
-    if (!(coordinates >> x >> y >> z)) bad(fmt::format("vertex {} has not three coordinates: '{}'", v, quoted(rows[row])));
+    if (!(coordinates >> x >> y >> z)) bad(fmt::format("vertex {} has not three coordinates: '{}'", v, quoted(row)));
   }
-  if (static_cast<long long>(rows.size() - row) < faces)
-    bad(fmt::format("the header says {} faces, the file holds {}", faces, rows.size() - row));
-  for (long long f = 0; f < faces; ++f, ++row) {
-    std::istringstream corners(rows[row]);
+  for (long long f = 0; f < faces; ++f) {
+    if (!next_row(row)) bad(fmt::format("the header says {} faces, the file holds {}", faces, f));
+    std::istringstream corners(row);
     long long count = -1;
     corners >> count;
-    if (!corners || count < 3) bad(fmt::format("face {} has {} corners: '{}'", f, std::max(count, 0LL), quoted(rows[row])));
+    if (!corners || count < 3) bad(fmt::format("face {} has {} corners: '{}'", f, std::max(count, 0LL), quoted(row)));
     for (long long k = 0; k < count; ++k) {
       long long index = -1;
-      if (!(corners >> index)) bad(fmt::format("face {} says {} corners and lists fewer: '{}'", f, count, quoted(rows[row])));
+      if (!(corners >> index)) bad(fmt::format("face {} says {} corners and lists fewer: '{}'", f, count, quoted(row)));
       if (index < 0 || index >= vertices)
         bad(fmt::format("face {} refers to vertex {}, and there are {}", f, index, vertices));
     }
@@ -274,26 +275,19 @@ void check_off(const std::filesystem::path& file) {
 /// and reports "no vertices"): 84 + 50 bytes per triangle.
 void check_binary_stl(const std::filesystem::path& file) {
   if (lowercase_extension(file) != ".stl") return;
-  std::ifstream in(file, std::ios::binary);
-  char head[84] = {};
-  in.read(head, sizeof head);
-  const std::streamsize got = in.gcount();
   const std::uintmax_t size = std::filesystem::file_size(file);
+  std::ifstream in(file, std::ios::binary);
+  std::string start(4096, '\0');  // the header, and enough to tell text from binary
+  in.read(start.data(), static_cast<std::streamsize>(start.size()));
+  start.resize(static_cast<size_t>(in.gcount()));
   // ASCII: "solid" then text only (no control bytes) in its first 4 kB.
-  if (got >= 5 && std::string_view(head, 5) == "solid") {
-    std::ifstream again(file, std::ios::binary);
-    std::string start(4096, '\0');
-    again.read(start.data(), static_cast<std::streamsize>(start.size()));
-    start.resize(static_cast<size_t>(again.gcount()));
-    const bool text = std::all_of(start.begin(), start.end(), [](char c) {
-      const auto u = static_cast<unsigned char>(c);
-      return u >= 32 || c == '\n' || c == '\r' || c == '\t';
-    });
-    if (text) return;
-  }
-  if (got < 84) fail(file, "read", fmt::format("a binary STL has an 84-byte header; the file has {} bytes", size));
+  const bool text = std::all_of(start.begin(), start.end(), [](char c) {
+    return static_cast<unsigned char>(c) >= 32 || c == '\n' || c == '\r' || c == '\t';
+  });
+  if (start.rfind("solid", 0) == 0 && text) return;
+  if (start.size() < 84) fail(file, "read", fmt::format("a binary STL has an 84-byte header; the file has {} bytes", size));
   std::uint32_t triangles = 0;
-  std::memcpy(&triangles, head + 80, sizeof triangles);  // little-endian, as the format and this machine are
+  std::memcpy(&triangles, start.data() + 80, sizeof triangles);  // little-endian, as the format and this machine are
   const double needed = 84.0 + 50.0 * triangles;
   if (static_cast<double>(size) < needed)
     fail(file, "read", fmt::format("the binary STL header says {} triangles ({:.0f} bytes), the file has {} bytes "
@@ -325,9 +319,6 @@ namespace {
 Mesh import_with_assimp(const std::filesystem::path& file, double scale_to_mm) {
   // No DefaultLogger is created, so Assimp stays silent (its NullLogger).
   Assimp::Importer importer;
-  // Read without post-processing first: Assimp's steps (triangulation
-  // included) abort the process on faces that point past the vertices,
-  // which its readers pass through from a malformed file.
   // Assimp's own text (its validation's internals, e.g. "aiMesh::mFaces[0]
   // .mNumIndices is 0") is not the user's: the formats with a grammar of
   // their own are checked before (check_ply_header, check_off,
@@ -340,6 +331,9 @@ Mesh import_with_assimp(const std::filesystem::path& file, double scale_to_mm) {
   };
   if (!importer.IsExtensionSupported(format))
     fail(file, "read", "unknown mesh format '" + format + "'; give .obj, .stl, .ply or .off");
+  // Read without post-processing first: Assimp's steps (triangulation
+  // included) abort the process on faces that point past the vertices,
+  // which its readers pass through from a malformed file.
   const aiScene* scene = importer.ReadFile(file.string(), 0);
   if (scene == nullptr) unreadable();
   check_face_indices(file, *scene);
@@ -566,9 +560,7 @@ std::unique_ptr<aiMesh> make_facet_mesh(const Mesh& mesh) {
 }  // namespace
 
 void save_mesh(const Mesh& mesh, const std::filesystem::path& file) {
-  std::string extension = file.extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  const std::string extension = lowercase_extension(file);
   const char* format = extension == ".obj"   ? "objnomtl"
                        : extension == ".stl" ? "stlb"
                        : extension == ".ply" ? "ply"

@@ -140,18 +140,18 @@ std::filesystem::path run_experiment(const std::filesystem::path& file, const Ru
     prepared.translator->run(context);
     folder.write_json("tree.json", prepared.translator->tree().to_json());
     folder.write_json("result.json", result);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    timing["wall_seconds"] = seconds;
+    if (ranks::size() > 1) {
+      // Which rank tuned how much: the parallel phases' split.
+      std::vector<long long> runs(static_cast<size_t>(ranks::size()), 0);
+      runs[static_cast<size_t>(ranks::rank())] = tuner_runs_in_this_process();
+      ranks::sum(runs);
+      timing["ranks"] = ranks::size();
+      timing["tuner_runs_per_rank"] = runs;
+    }
+    folder.write_json("timing.json", timing);
   });
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  timing["wall_seconds"] = seconds;
-  if (ranks::size() > 1) {
-    // Which rank tuned how much: the parallel phases' split.
-    std::vector<long long> runs(static_cast<size_t>(ranks::size()), 0);
-    runs[static_cast<size_t>(ranks::rank())] = tuner_runs_in_this_process();
-    ranks::sum(runs);
-    timing["ranks"] = ranks::size();
-    timing["tuner_runs_per_rank"] = runs;
-  }
-  folder.writing([&] { folder.write_json("timing.json", timing); });
   folder.commit();
   return out;
 }

@@ -22,12 +22,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-void write_text(const fs::path& file, const std::string& text) { write_file(file, text); }
-
-void write_png(const fs::path& file, const cv::Mat& image) {
-  write_image(file, image);
-}
-
 /// Linear values in [0, 1] to an 8-bit sRGB image (1 channel: grey; 3: RGB).
 cv::Mat to_png_image(int width, int height, int channels, std::span<const double> linear) {
   cv::Mat image(height, width, channels == 1 ? CV_8UC1 : CV_8UC3);
@@ -59,7 +53,7 @@ std::vector<std::string> ImageObservation::write_files(const fs::path& folder) c
   std::vector<double> shown(pixels);
   if (peak > 1)
     for (double& v : shown) v /= peak;
-  write_png(folder / "image.png", to_png_image(width, height, channels, shown));
+  write_image(folder / "image.png", to_png_image(width, height, channels, shown));
   return {"image.png"};
 }
 
@@ -71,7 +65,7 @@ std::vector<std::string> RadialProfileObservation::write_files(const fs::path& f
   for (size_t i = 0; i < radii.size(); ++i) {
     csv += fmt::format("{:.6g},{:.9g},{:.9g},{:.9g}\n", radii[i], rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2]);
   }
-  write_text(folder / "profile.csv", csv);
+  write_file(folder / "profile.csv", csv);
   return {"profile.csv"};
 }
 
@@ -83,7 +77,7 @@ std::vector<std::string> DisplacementsObservation::write_files(const fs::path& f
     csv += fmt::format("{},{},{:.9g},{:.9g},{:.9g}\n", probe ? i : i - static_cast<size_t>(probe_count),
                        probe ? "probe" : "node", xyz_mm[3 * i], xyz_mm[3 * i + 1], xyz_mm[3 * i + 2]);
   }
-  write_text(folder / "observation.csv", csv);
+  write_file(folder / "observation.csv", csv);
   return {"observation.csv"};
 }
 
@@ -91,10 +85,10 @@ std::vector<std::string> AlbedoObservation::write_files(const fs::path& folder) 
   std::string csv = "channel,linear,srgb_8bit\n";
   static const char* names[] = {"r", "g", "b"};
   for (int c = 0; c < 3; ++c) csv += fmt::format("{},{:.9g},{}\n", names[c], rgb[c], linear_to_srgb8(rgb[c]));
-  write_text(folder / "albedo.csv", csv);
+  write_file(folder / "albedo.csv", csv);
   std::vector<double> swatch;
   for (int i = 0; i < 64 * 64; ++i) swatch.insert(swatch.end(), rgb.begin(), rgb.end());
-  write_png(folder / "albedo.png", to_png_image(64, 64, 3, swatch));
+  write_image(folder / "albedo.png", to_png_image(64, 64, 3, swatch));
   return {"albedo.csv", "albedo.png"};
 }
 
@@ -102,7 +96,7 @@ std::vector<std::string> Observation::write_files(const fs::path& folder) const 
   std::string csv = "index,value\n";
   const auto numbers = values();
   for (size_t i = 0; i < numbers.size(); ++i) csv += fmt::format("{},{:.9g}\n", i, numbers[i]);
-  write_text(folder / "values.csv", csv);
+  write_file(folder / "values.csv", csv);
   return {"values.csv"};
 }
 

@@ -190,14 +190,12 @@ void check_phase_pace(const Phase& phase, long long done, long long total, doubl
                                limits::how_to_change("tuning_hours")));
 }
 
-// A summary whole, wall times included, for another rank: CBOR keeps every
-// double (NaN too) bit for bit, so records are those of one process.
 // A trace is most of a checkpoint: an exhaustive tuner records each
-// candidate, and earth_deformable's 4,608 texture tuners hold 4.7 M records.
-// As JSON arrays those were 28 M DOM values, 0.9 GB for a moment (the run's
-// peak); as one byte string of fixed-width records (host byte order: a
-// checkpoint is resumed, or gathered over ranks, on the machine that made
-// it) they are 36 bytes each.
+// candidate, and earth_deformable's 4,608 texture tuners hold 3.0 M records.
+// As arrays of JSON numbers they took 0.9 GB for a moment, the run's peak
+// (heaptrack: 24 M JSON values copied); as one byte string of fixed-width
+// records (host byte order: a checkpoint is resumed, or gathered over
+// ranks, on the machine that made it) they are 36 bytes each.
 constexpr size_t kTraceRecordBytes = sizeof(int) + sizeof(long long) + 3 * sizeof(double);
 
 nlohmann::json::binary_t packed_trace(const std::vector<IterationRecord>& trace) {
@@ -235,6 +233,8 @@ std::vector<IterationRecord> unpacked_trace(const nlohmann::json::binary_t& byte
   return trace;
 }
 
+// A summary whole, wall times included, for another rank: CBOR keeps every
+// double (NaN too) bit for bit, so records are those of one process.
 nlohmann::json summary_state(const Summary& s) {
   return {s.optimizer, static_cast<int>(s.termination), s.message, s.initial_error, s.final_error, s.initial_x,
           s.final_x, s.evaluations, s.iterations, s.seconds, nlohmann::json::binary(packed_trace(s.trace)), s.details};

@@ -136,11 +136,27 @@ ElasticBound::ElasticBound(const Properties& simulator, const PartContext& conte
 
 ElasticBound::~ElasticBound() = default;
 
-const std::optional<ElasticSolver::InverseProducts>& ElasticBound::products(const MatrixKey& key,
-                                                                            const std::vector<double>& lambda,
-                                                                            const std::vector<double>& mu) {
+const std::optional<ElasticSolver::InverseProducts>& ElasticBound::products(const MatrixKey& key) {
   if (const auto found = products_.find(key); found != products_.end()) return found->second;
-  solver_->set_materials(lambda, mu, active_);
+  // The matrix is made from its key alone, so a kept one is the same matrix.
+  const size_t tets = elements_.size();
+  lambda_.resize(tets);
+  mu_.resize(tets);
+  for (size_t t = 0; t < tets; ++t) {
+    const Element& e = elements_[t];
+    const int code = e.variable < 0 ? 0 : key[static_cast<size_t>(e.variable)];
+    if (code == kStiffest) {
+      lambda_[t] = *std::max_element(e.lambda.begin(), e.lambda.end());
+      mu_[t] = *std::max_element(e.mu.begin(), e.mu.end());
+    } else if (code == kSoftest) {
+      lambda_[t] = *std::min_element(e.lambda.begin(), e.lambda.end());
+      mu_[t] = *std::min_element(e.mu.begin(), e.mu.end());
+    } else {
+      lambda_[t] = e.lambda[static_cast<size_t>(code)];
+      mu_[t] = e.mu[static_cast<size_t>(code)];
+    }
+  }
+  solver_->set_materials(lambda_, mu_, active_);
   ++factorizations_;
   return products_.emplace(key, solver_->inverse_products(loads_)).first->second;
 }
@@ -165,41 +181,23 @@ double ElasticBound::lower_bound(std::span<const double> x, int assigned, const 
   }
   if (fixed_changed) products_.clear();
 
-  // Each assigned variable's value index, and the two matrices' keys.
+  // The two matrices, named by what each variable contributes.
   const size_t variables = admissible_.size();
-  std::vector<size_t> chosen(variables, 0);
   MatrixKey stiff_key(variables), soft_key(variables);
   for (size_t v = 0; v < variables; ++v) {
     if (static_cast<int>(v) < assigned) {
       const std::vector<double>& values = admissible_[v];
-      chosen[v] = static_cast<size_t>(std::find(values.begin(), values.end(), x[v]) - values.begin());
-      if (chosen[v] == values.size()) throw std::logic_error("ElasticBound: a value that is not admissible");
-      stiff_key[v] = soft_key[v] = value_code_[v][chosen[v]];
+      const auto k = static_cast<size_t>(std::find(values.begin(), values.end(), x[v]) - values.begin());
+      if (k == values.size()) throw std::logic_error("ElasticBound: a value that is not admissible");
+      stiff_key[v] = soft_key[v] = value_code_[v][k];
     } else {
       stiff_key[v] = free_stiffest_[v];
       soft_key[v] = free_softest_[v];
     }
   }
-  lambda_stiff_.resize(tets);
-  mu_stiff_.resize(tets);
-  lambda_soft_.resize(tets);
-  mu_soft_.resize(tets);
-  for (size_t t = 0; t < tets; ++t) {
-    const Element& e = elements_[t];
-    if (e.variable >= 0 && e.variable < assigned) {
-      const size_t k = chosen[static_cast<size_t>(e.variable)];
-      lambda_stiff_[t] = lambda_soft_[t] = e.lambda[k];
-      mu_stiff_[t] = mu_soft_[t] = e.mu[k];
-    } else {
-      lambda_stiff_[t] = *std::max_element(e.lambda.begin(), e.lambda.end());
-      mu_stiff_[t] = *std::max_element(e.mu.begin(), e.mu.end());
-      lambda_soft_[t] = *std::min_element(e.lambda.begin(), e.lambda.end());
-      mu_soft_[t] = *std::min_element(e.mu.begin(), e.mu.end());
-    }
-  }
   // For v = loads (f, then each probe component's g): vᵢᵀK⁻¹f and vᵢᵀK⁻¹vᵢ.
-  const auto& stiff = products(stiff_key, lambda_stiff_, mu_stiff_);
-  const auto& soft = products(soft_key, lambda_soft_, mu_soft_);
+  const auto& stiff = products(stiff_key);
+  const auto& soft = products(soft_key);
   if (!stiff) {  // even the stiffest completion is singular: nothing to bound
     history_.push_back({assigned, 0.0});
     return 0;

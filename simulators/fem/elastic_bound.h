@@ -41,8 +41,9 @@
 /// parent's K⁻, and a complete assignment has K⁺ = K⁻. So the products are
 /// kept per matrix, named exactly by what each variable contributes (a
 /// value, or its elementwise stiffest or softest), and dropped when the
-/// elements no variable sets change: about half the factorisations of a
-/// search, with the same numbers.
+/// elements no variable sets change: a search factorises once per call or
+/// less instead of twice (earth_deformable: 118 times in 177 calls), with
+/// the same numbers.
 
 #include <map>
 #include <memory>
@@ -102,10 +103,9 @@ class ElasticBound {
   /// one of these when that is the elementwise stiffest or softest.
   static constexpr int kStiffest = -1, kSoftest = -2;
   using MatrixKey = std::vector<int>;  ///< one code per variable
-  /// K⁻¹'s products for the matrix `key` names, factorised on first need.
-  const std::optional<ElasticSolver::InverseProducts>& products(const MatrixKey& key,
-                                                                const std::vector<double>& lambda,
-                                                                const std::vector<double>& mu);
+  /// K⁻¹'s products for the matrix `key` names: assembled from the key and
+  /// factorised on first need, kept after.
+  const std::optional<ElasticSolver::InverseProducts>& products(const MatrixKey& key);
   FemSettings settings_;
   std::shared_ptr<const ConformedMesh> meshed_;
   const TetMesh* mesh_ = nullptr;
@@ -118,7 +118,7 @@ class ElasticBound {
   std::vector<Vec3> centroids_;
   std::vector<MaterialId> current_;                 ///< the tree's materials at the centroids, per call
   std::vector<std::pair<double, double>> lame_;  ///< (λ, μ) in MPa per material id; void (0, 0)
-  std::vector<double> lambda_stiff_, mu_stiff_, lambda_soft_, mu_soft_;  ///< per call, kept to reuse
+  std::vector<double> lambda_, mu_;  ///< the matrix products() assembles, kept to reuse
   Eigen::MatrixXd loads_;  ///< free DOFs' rows of f, then of one g per probe component
   std::vector<std::vector<double>> admissible_;  ///< per variable, its values in search order
   /// Per variable and value: its MatrixKey code (kStiffest, kSoftest or

@@ -68,6 +68,8 @@ struct ElasticSolver::Impl {
     Vec12 f;
     Mat12 k;
     double x[12];
+    // Small strain: the tangent is the constant stiffness, in closed form.
+    const bool linear_tangent = tangent && !corotated;
     for (size_t t = 0; t < mesh.tets.size(); ++t) {
       if (!active[t]) continue;
       const Tet& tet = mesh.tets[t];
@@ -75,8 +77,6 @@ struct ElasticSolver::Impl {
         const auto v = static_cast<size_t>(tet[static_cast<size_t>(a)]);
         for (int d = 0; d < 3; ++d) x[3 * a + d] = mesh.nodes[v][d] + u[3 * v + static_cast<size_t>(d)];
       }
-      // Small strain: the tangent is the constant stiffness, in closed form.
-      const bool linear_tangent = tangent && !corotated;
       energy += tet_forces(rest[t], lambda[t], mu[t], x, corotated, f, tangent && !linear_tangent ? &k : nullptr);
       for (int a = 0; a < 4; ++a) {
         const auto v = static_cast<size_t>(tet[static_cast<size_t>(a)]);
