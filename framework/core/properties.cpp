@@ -334,11 +334,16 @@ std::filesystem::path Properties::existing_file(std::string_view key) const {
   const std::filesystem::path given = get<std::string>(key);
   const std::filesystem::path resolved =
       given.is_absolute() ? given : document_->base_directory / given;
-  if (std::filesystem::is_directory(resolved)) fail(key, "is a folder, not a file: " + resolved.lexically_normal().string());
-  if (!std::filesystem::is_regular_file(resolved)) {
-    fail(key, "file not found: " + resolved.lexically_normal().string());
-  }
-  return resolved.lexically_normal();
+  // The error-code form: a name the system refuses (too long, a file where a
+  // folder should be) is the user's input, not a thrown filesystem_error.
+  std::error_code error;
+  const auto type = std::filesystem::status(resolved, error).type();
+  const std::string shown = resolved.lexically_normal().string();
+  if (type == std::filesystem::file_type::directory) fail(key, "is a folder, not a file: " + shown);
+  if (type == std::filesystem::file_type::regular) return resolved.lexically_normal();
+  if (error && error != std::errc::no_such_file_or_directory)
+    fail(key, "cannot open " + shown + ": " + error.message());
+  fail(key, "file not found: " + shown);
 }
 
 void Properties::check_all_read() const {

@@ -19,6 +19,7 @@
 #include <sstream>
 #include <memory>
 #include <unordered_map>
+#include <vector>
 
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -120,6 +121,26 @@ int ply_type_size(const std::string& type) {
   return found == sizes.end() ? 0 : found->second;
 }
 
+/// A text format's bytes from `offset` on: tabs, line ends and printable
+/// characters only. Assimp's text readers take a NUL for the end of the
+/// buffer, and its PLY reader a header line ended by another control byte
+/// for no end at all: both have crashed it (fuzz_mesh).
+void check_text(const std::filesystem::path& file, const char* format, std::uintmax_t offset = 0) {
+  std::ifstream in(file, std::ios::binary);
+  in.seekg(static_cast<std::streamoff>(offset));
+  std::vector<char> chunk(1 << 16);
+  for (std::uintmax_t at = offset; in;) {
+    in.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
+    const auto got = static_cast<size_t>(in.gcount());
+    for (size_t i = 0; i < got; ++i) {
+      const auto c = static_cast<unsigned char>(chunk[i]);
+      if (c < 32 && c != '\t' && c != '\n' && c != '\r')
+        fail(file, "read", fmt::format("byte {} is a control character (0x{:02x}), and {} is text", at + i, c, format));
+    }
+    at += got;
+  }
+}
+
 /// Assimp's PLY reader loops forever on some malformed headers and trusts
 /// element counts when it allocates, so a PLY file's header is read first:
 /// its grammar, and counts that the bytes after it can hold (each element
@@ -141,6 +162,10 @@ void check_ply_header(const std::filesystem::path& file) {
   };
   for (int number = 2; std::getline(in, line); ++number) {
     if (!line.empty() && line.back() == '\r') line.pop_back();
+    for (const char c : line)
+      if (static_cast<unsigned char>(c) < 32 && c != '\t')
+        bad(number, fmt::format("a control character (0x{:02x}); words are separated by spaces or tabs",
+                                static_cast<unsigned char>(c)));
     std::istringstream words(line);
     std::string keyword;
     words >> keyword;
@@ -183,7 +208,8 @@ void check_ply_header(const std::filesystem::path& file) {
       if (needed_bytes > left)
         fail(file, "read", "the PLY header declares elements that need at least " + std::to_string(static_cast<long long>(needed_bytes)) +
                                " bytes, and the file has " + std::to_string(static_cast<long long>(left)) + " after it (truncated?)");
-      if (format == "ascii") {  // one line per element: the counts must be there
+      if (format == "ascii") {  // text, and one line per element: the counts must be there
+        check_text(file, "an ASCII PLY file", static_cast<std::uintmax_t>(in.tellg()));
         double lines = 0;
         for (std::string row; std::getline(in, row);)
           if (row.find_first_not_of(" \t\r") != std::string::npos) ++lines;
@@ -241,6 +267,7 @@ void check_off(const std::filesystem::path& file) {
   if (keyword.size() < 3 || keyword.compare(keyword.size() - 3, 3, "OFF") != 0)
     bad("the first line is '" + quoted(row) + "', not OFF");
   if (row.find("BINARY") != std::string::npos) return;  // binary OFF: its reader decides
+  check_text(file, "an OFF file");
   // The counts follow the keyword on its line, or make the next one.
   std::string counts;
   std::getline(head, counts);
@@ -284,7 +311,7 @@ void check_binary_stl(const std::filesystem::path& file) {
   const bool text = std::all_of(start.begin(), start.end(), [](char c) {
     return static_cast<unsigned char>(c) >= 32 || c == '\n' || c == '\r' || c == '\t';
   });
-  if (start.rfind("solid", 0) == 0 && text) return;
+  if (start.rfind("solid", 0) == 0 && text) return check_text(file, "an ASCII STL file");
   if (start.size() < 84) fail(file, "read", fmt::format("a binary STL has an 84-byte header; the file has {} bytes", size));
   std::uint32_t triangles = 0;
   std::memcpy(&triangles, start.data() + 80, sizeof triangles);  // little-endian, as the format and this machine are
@@ -454,7 +481,7 @@ Mesh import_isolated(const std::filesystem::path& file, double scale_to_mm, doub
 
 }  // namespace
 
-Mesh load_mesh(const std::filesystem::path& file, double scale_to_mm, double reader_seconds) {
+Mesh load_mesh(const std::filesystem::path& file, double scale_to_mm, double reader_seconds, MeshReaderProcess process) {
   std::error_code error;
   if (!std::filesystem::exists(file, error)) fail(file, "read", "file not found");
   if (!std::filesystem::is_regular_file(file, error)) fail(file, "read", "not a regular file");
@@ -462,8 +489,10 @@ Mesh load_mesh(const std::filesystem::path& file, double scale_to_mm, double rea
   check_ply_header(file);
   check_off(file);
   check_binary_stl(file);
+  if (lowercase_extension(file) == ".obj") check_text(file, "an OBJ file");
   // Open MPI forbids fork() in its processes: under mpirun Assimp runs here.
-  if (std::getenv("OMPI_COMM_WORLD_SIZE") != nullptr) return import_with_assimp(file, scale_to_mm);
+  if (process == MeshReaderProcess::this_one || std::getenv("OMPI_COMM_WORLD_SIZE") != nullptr)
+    return import_with_assimp(file, scale_to_mm);
   return import_isolated(file, scale_to_mm, reader_seconds > 0 ? reader_seconds : limits::get("mesh_read_seconds"));
 }
 

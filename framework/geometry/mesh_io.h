@@ -15,11 +15,18 @@ namespace spec2fab {
 /// missing, unreadable or holds no triangles. Does not check topology: see
 /// mesh_check.h.
 ///
-/// Assimp's readers crash or hang on some malformed files, so they run in a
-/// child process (not under mpirun, whose processes must not fork): a reader
-/// that dies, or takes longer than `reader_seconds` (0: the limit
-/// "mesh_read_seconds", 60 s by default), is a refusal naming the file. A PLY header is checked before any reader sees it.
-Mesh load_mesh(const std::filesystem::path& file, double scale_to_mm = 1.0, double reader_seconds = 0);
+/// Each format's own grammar (OFF and PLY counts, a binary STL's size) is
+/// checked before Assimp sees the file. Assimp's readers have crashed or
+/// hung on malformed files these checks now refuse, so by default they still
+/// run in a child process: a reader that dies, or takes longer than
+/// `reader_seconds` (0: the limit "mesh_read_seconds", 60 s by default), is
+/// a refusal naming the file.
+enum class MeshReaderProcess {
+  automatic,  ///< a child process; this one under mpirun, whose processes must not fork
+  this_one,   ///< this process (the fuzz harness: no fork per input, and a crash the checks let through is seen)
+};
+Mesh load_mesh(const std::filesystem::path& file, double scale_to_mm = 1.0, double reader_seconds = 0,
+               MeshReaderProcess process = MeshReaderProcess::automatic);
 
 /// Writes a mesh (format from the extension: .obj, .stl, .ply) — used to make
 /// datasets and test fixtures.

@@ -332,6 +332,20 @@ TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
             "v 0 0 10\nf 1 3 2\nf 1 2 4\nf 1 2 3\n4 2 3 2 3 4\n0 10\n3 0 2 1 1\n3 0 1 3\n3 0 3 2\n"
             "3 1 2 3\n\n", 301),
             "crash.off: cannot read mesh: malformed OFF: face 0 says 3 corners and lists fewer: '3 0?2 1'");
+  // Found by fuzz_mesh in this process (as under mpirun): a header line ended
+  // by a vertical tab sends Assimp's PLY reader past the end of the file
+  // (SIGSEGV; a hang without the NULs), and its text readers take a NUL for
+  // the end of the buffer.
+  mesh_case("PLY header line ended by a control character", "vt.ply",
+            std::string("ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+                        "element face 4\nproperty list uchar int vertex_indices\nend_header\x0b0 0 0\n10 0 0\n0 10 0\n"
+                        "0 0 10\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"),
+            "vt.ply: cannot read mesh: malformed PLY header, line 10: a control character (0x0b)");
+  mesh_case("ASCII PLY with a NUL byte", "nul.ply",
+            ply_head + std::string("0 0 0\n10 0 0\n0 10 0\n0 0 10\n3 0 2 1\n3 0 1\0 3\n3 0 3 2\n3 1 2 3\n", 60),
+            "nul.ply: cannot read mesh: byte 194 is a control character (0x00), and an ASCII PLY file is text");
+  mesh_case("OBJ with a NUL byte", "nul.obj", "v 0 0 0\nv 10 0 0\nv 0 10 0\nv 0 0 10\n" + std::string(1, '\0') + tetrahedron_faces,
+            "nul.obj: cannot read mesh: byte 35 is a control character (0x00), and an OBJ file is text");
 
   // Images: texture goals (albedo) and caustic goals.
   const auto image_case = [&](const std::string& name, const std::string& file, const std::string& bytes,
@@ -451,6 +465,12 @@ TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
                 R"({"materials": "/nonexistent.json", "printer": ")" + printer() +
                     R"(", "subtree": {"type": "layered", "material": "VeroCyan"}})",
                 "file not found");
+  // Found by fuzz_simulate: a name longer than the system takes was a
+  // filesystem_error escaping as an internal error.
+  simulate_case("printer name too long", "subsurface",
+                R"({"materials": ")" + library() + R"(", "printer": "../pri)" + std::string(5000, '[') +
+                    R"(", "subtree": {"type": "layered", "material": "VeroCyan"}})",
+                "/printer: cannot open ");
 
   // Command lines.
   cases.push_back({"command: unknown subcommand", {}, "frobnicate", "frobnicate"});

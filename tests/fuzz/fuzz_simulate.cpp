@@ -1,7 +1,9 @@
 // `spec2fab simulate` configs: materials, printer, an optional mesh, the
 // subtree and the simulator's options, every part built and every key
 // checked (prepare_simulation), for every registered simulator in turn.
-// Nothing is simulated.
+// Nothing is simulated. One session cache keeps what the unchanged dataset
+// files make (library, printer, palette, solid, the parts' tables): read
+// once, not once per input and simulator.
 #include "commands.h"
 #include "fuzz_support.h"
 
@@ -14,7 +16,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   using namespace spec2fab;
   // Beside the experiments, so that "../materials/…" resolves as in datasets/simulations.
   const auto file = fuzz::input_file(data, size, "experiments/simulate.json");
+  static auto session = std::make_shared<RunCache>();
+  // Bounded: mutated options key new tables (a radial basis per size and
+  // radius), which a cache kept for the whole run would gather by the million.
+  if (session->size() > 256) session = std::make_shared<RunCache>();
   for (const std::string& simulator : SimulatorRegistry::instance().names())
-    fuzz::accept_or_refuse([&] { cli::prepare_simulation(file, simulator); });
+    fuzz::accept_or_refuse([&] { cli::prepare_simulation(file, simulator, session); });
   return 0;
 }

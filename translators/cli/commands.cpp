@@ -210,13 +210,36 @@ int validate_command(const fs::path& experiment) {
   return 0;
 }
 
-PreparedSimulation prepare_simulation(const fs::path& config_file, const std::string& simulator) {
+namespace {
+
+/// A file as it is now (absolute path, size, modification time): what a
+/// session cache keys the values made from it by, so that an edited file is
+/// read again.
+std::string file_key(const fs::path& file) {
+  std::error_code error;
+  const auto path = fs::absolute(file, error).lexically_normal();
+  const auto size = fs::file_size(file, error);
+  const auto modified = fs::last_write_time(file, error).time_since_epoch().count();
+  return path.string() + "|" + std::to_string(error ? 0 : size) + "|" + std::to_string(error ? 0 : modified);
+}
+
+}  // namespace
+
+PreparedSimulation prepare_simulation(const fs::path& config_file, const std::string& simulator,
+                                      const std::shared_ptr<RunCache>& session) {
   PreparedSimulation prepared;
   const Properties config = Properties::load(config_file);
-  prepared.library = std::make_unique<MaterialLibrary>(MaterialLibrary::load(config.existing_file("materials")));
-  prepared.printer = std::make_unique<PrinterProfile>(PrinterProfile::load(config.existing_file("printer")));
-  prepared.palette = std::make_unique<MaterialPalette>(*prepared.library, *prepared.printer);
-  prepared.cache = std::make_unique<RunCache>();
+  prepared.cache = session ? session : std::make_shared<RunCache>();
+  RunCache& cache = *prepared.cache;
+  const fs::path materials_file = config.existing_file("materials"), printer_file = config.existing_file("printer");
+  prepared.library = cache.get<const MaterialLibrary>(
+      file_key(materials_file), [&] { return std::make_shared<const MaterialLibrary>(MaterialLibrary::load(materials_file)); });
+  prepared.printer = cache.get<const PrinterProfile>(
+      file_key(printer_file), [&] { return std::make_shared<const PrinterProfile>(PrinterProfile::load(printer_file)); });
+  // The palette refers to both; the cache keeps them alive beside it.
+  prepared.palette = cache.get<const MaterialPalette>(file_key(materials_file) + "|" + file_key(printer_file), [&] {
+    return std::make_shared<const MaterialPalette>(*prepared.library, *prepared.printer);
+  });
   // Under mpirun every rank prepares and runs the same simulation.
   const PartContext context{*prepared.palette, prepared.cache.get(), ranks::size() > 1};
   const auto& simulators = SimulatorRegistry::instance();
@@ -227,7 +250,9 @@ PreparedSimulation prepare_simulation(const fs::path& config_file, const std::st
   // With a "mesh", the subtree becomes the root of a tree bound to that solid
   // (volumetric simulators need one); without, it is simulated on its own.
   if (config.has("mesh")) {
-    prepared.solid = std::make_unique<Solid>(load_mesh(config.existing_file("mesh")), UvSource::planar);
+    const fs::path mesh_file = config.existing_file("mesh");
+    prepared.solid = cache.get<const Solid>(
+        file_key(mesh_file), [&] { return std::make_shared<const Solid>(load_mesh(mesh_file), UvSource::planar); });
   }
   prepared.tree = std::make_unique<ReducerTree>(config.object("subtree"), *prepared.palette);
   prepared.subtree_location = config.where("subtree");

@@ -59,16 +59,22 @@ struct BenchArguments {
 /// every key checked (InputError otherwise). Members refer to each other:
 /// held by pointer so that their addresses stay put.
 struct PreparedSimulation {
-  std::unique_ptr<MaterialLibrary> library;
-  std::unique_ptr<PrinterProfile> printer;
-  std::unique_ptr<MaterialPalette> palette;
-  std::unique_ptr<RunCache> cache;
-  std::unique_ptr<Solid> solid;  ///< null without a "mesh"
+  std::shared_ptr<const MaterialLibrary> library;
+  std::shared_ptr<const PrinterProfile> printer;
+  std::shared_ptr<const MaterialPalette> palette;
+  std::shared_ptr<RunCache> cache;
+  std::shared_ptr<const Solid> solid;  ///< null without a "mesh"
   std::unique_ptr<ReducerTree> tree;
   std::unique_ptr<Simulator> simulator;
   std::string subtree_location;  ///< "config.json: /subtree", for what the simulator makes of it
 };
-PreparedSimulation prepare_simulation(const std::filesystem::path& config, const std::string& simulator);
+/// `session`: a cache kept across preparations by a process that prepares
+/// many (the fuzz harness; later the Python module). It keeps the library,
+/// printer, palette and solid made from each file as the file is now (its
+/// path, size and modification time) and the parts' shared tables; without
+/// one, everything is made afresh and lives as long as the simulation.
+PreparedSimulation prepare_simulation(const std::filesystem::path& config, const std::string& simulator,
+                                      const std::shared_ptr<RunCache>& session = nullptr);
 
 int run_command(const RunArguments& arguments);
 /// Runs the optimizer x problem matrix and writes its report (docs/benchmarking.md).
