@@ -9,6 +9,7 @@
 #include <set>
 #include <sstream>
 
+#include "core/file_read.h"
 #include "core/strings.h"
 
 namespace spec2fab {
@@ -154,14 +155,10 @@ Properties::Properties(std::shared_ptr<Document> document, const json* object, s
     : document_(std::move(document)), object_(object), pointer_(std::move(pointer)) {}
 
 Properties Properties::load(const std::filesystem::path& file) {
-  if (std::filesystem::is_directory(file)) throw InputError(file.string() + ": is a folder, not a file");
-  if (std::filesystem::exists(file) && !std::filesystem::is_regular_file(file))
-    throw InputError(file.string() + ": not a regular file");  // a FIFO or device would never end
+  if (const std::string why = unreadable_file_reason(file); !why.empty())
+    throw InputError(file.string() + ": cannot open: " + why);
   std::ifstream in(file, std::ios::binary);
-  if (!in) {
-    throw InputError(file.string() + ": cannot open: " +
-                     (std::filesystem::exists(file) ? "not readable" : "file not found"));
-  }
+  if (!in) throw InputError(file.string() + ": cannot open: not readable");
   std::stringstream text;
   text << in.rdbuf();
   return parse(text.str(), file.string(), file.parent_path().empty() ? "." : file.parent_path());
@@ -334,16 +331,9 @@ std::filesystem::path Properties::existing_file(std::string_view key) const {
   const std::filesystem::path given = get<std::string>(key);
   const std::filesystem::path resolved =
       given.is_absolute() ? given : document_->base_directory / given;
-  // The error-code form: a name the system refuses (too long, a file where a
-  // folder should be) is the user's input, not a thrown filesystem_error.
-  std::error_code error;
-  const auto type = std::filesystem::status(resolved, error).type();
-  const std::string shown = resolved.lexically_normal().string();
-  if (type == std::filesystem::file_type::directory) fail(key, "is a folder, not a file: " + shown);
-  if (type == std::filesystem::file_type::regular) return resolved.lexically_normal();
-  if (error && error != std::errc::no_such_file_or_directory)
-    fail(key, "cannot open " + shown + ": " + error.message());
-  fail(key, "file not found: " + shown);
+  if (const std::string why = unreadable_file_reason(resolved); !why.empty())
+    fail(key, why + ": " + resolved.lexically_normal().string());
+  return resolved.lexically_normal();
 }
 
 void Properties::check_all_read() const {

@@ -1,5 +1,6 @@
 #include "tuning/image_file.h"
 
+#include "core/file_read.h"
 #include "core/limits.h"
 
 #include <unistd.h>
@@ -106,7 +107,7 @@ cv::Mat read_image(const std::filesystem::path& file, const std::string& where, 
   std::string limit;  // built piecewise: g++ 12 warns falsely (-Wrestrict) on " " + std::string&&
   if (!(max_pixels > 0)) limit.append(" ").append(limits::how_to_change("image_pixels"));
   if (!(max_pixels > 0)) max_pixels = limits::get("image_pixels");
-  if (std::filesystem::is_directory(file)) throw InputError(named + ": is a folder, not an image");
+  if (const std::string why = unreadable_file_reason(file); !why.empty()) throw InputError(named + ": " + why);
   if (const auto size = png_size(file); size && static_cast<double>(size->width) * static_cast<double>(size->height) > max_pixels) {
     throw InputError(fmt::format("{}: the image is {} x {} pixels, more than the {:.3g} read at most{}", named,
                                  size->width, size->height, max_pixels, limit));

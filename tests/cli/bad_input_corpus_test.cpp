@@ -470,7 +470,7 @@ TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
   simulate_case("printer name too long", "subsurface",
                 R"({"materials": ")" + library() + R"(", "printer": "../pri)" + std::string(5000, '[') +
                     R"(", "subtree": {"type": "layered", "material": "VeroCyan"}})",
-                "/printer: cannot open ");
+                "/printer: File name too long: ");
 
   // Command lines.
   cases.push_back({"command: unknown subcommand", {}, "frobnicate", "frobnicate"});

@@ -1,4 +1,5 @@
 #include "commands.h"
+#include "core/file_read.h"
 #include "core/file_write.h"
 
 #include <algorithm>
@@ -116,11 +117,8 @@ namespace {
 // was started in (tried from here).
 fs::path recorded_file(const Properties& record, const std::string& key) {
   const fs::path file = record.get<std::string>(key);
-  if (fs::is_directory(file)) record.fail(key, "is a folder, not a file: " + file.string());
-  if (!fs::is_regular_file(file)) {
-    record.fail(key, "file not found: " + file.string() +
-                         " (relative paths are read from the folder the run was started in)");
-  }
+  if (const std::string why = unreadable_file_reason(file); !why.empty())
+    record.fail(key, why + ": " + file.string() + " (relative paths are read from the folder the run was started in)");
   return file;
 }
 
