@@ -1,4 +1,5 @@
 #include "core/properties.h"
+#include "core/file_read.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -102,6 +103,20 @@ TEST(Properties, MissingFiles) {
   const Properties p = Properties::parse(R"({"mesh": "nope.obj"})", "exp.json", dir);
   EXPECT_EQ(error_of([&] { p.existing_file("mesh"); }),
             "exp.json: /mesh: file not found: " + (dir / "nope.obj").string());
+}
+
+// Found by fuzz_simulate: a name the system refuses threw filesystem_error
+// (an internal error); it is the input's problem, named in one line.
+TEST(Properties, NamesTheSystemRefusesAreTheInputsProblem) {
+  const auto dir = std::filesystem::temp_directory_path();
+  const std::string long_name(5000, 'x');
+  const Properties p = Properties::parse(R"({"mesh": ")" + long_name + R"(", "folder": "."})",
+                                         "exp.json", dir);
+  EXPECT_THAT(error_of([&] { p.existing_file("mesh"); }), HasSubstr("exp.json: /mesh: File name too long: "));
+  EXPECT_THAT(error_of([&] { p.existing_file("folder"); }), HasSubstr("exp.json: /folder: is a folder, not a file: "));
+  EXPECT_THAT(error_of([&] { Properties::load(dir / long_name); }), HasSubstr(": cannot open: File name too long"));
+  EXPECT_EQ(unreadable_file_reason("/dev/null"), "not a regular file");
+  EXPECT_EQ(unreadable_file_reason(dir / "no such file here"), "file not found");
 }
 
 TEST(Properties, RangeCheck) {
