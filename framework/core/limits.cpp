@@ -52,7 +52,9 @@ std::string beyond_ceiling(std::string_view name, double value) {
 const std::vector<LimitDoc>& docs() {
   static const std::vector<LimitDoc> all = {
       {"tree_depth", 100, "levels of nesting in a reducer tree (the paper's trees are 5 deep; at most 1000)"},
-      {"image_pixels", 64e6, "pixels of a goal image, read from its header before decoding"},
+      {"image_pixels", 64e6, "pixels of an image: a goal image (read from its header before decoding), or one a simulator makes"},
+      {"caustic_rays", 2e7, "rays a caustics simulator traces per evaluation (about 72 bytes each)"},
+      {"caustic_vertices", 4e6, "top-surface vertices of a caustics simulator's slab (a few hundred bytes each, with Embree's BVH)"},
       {"field_band_voxels", 5e7, "voxels of the surface field's band (about 20 bytes each)"},
       {"census_voxels", 1e9, "voxels of the material census (goal.census_voxel_mm)"},
       {"column_cells", 1e6, "cells of one column node, each a subtree of nodes"},

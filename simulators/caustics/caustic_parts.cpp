@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include <Eigen/SparseCholesky>
+#include <fmt/format.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -19,6 +20,7 @@
 #include "core/colour.h"
 #include "core/distance.h"
 #include "core/error.h"
+#include "core/limits.h"
 #include "core/parameter.h"
 #include "core/properties.h"
 #include "tuning/image_file.h"
@@ -93,6 +95,17 @@ CausticSlabConfig CausticSlabConfig::read(const Properties& properties) {
                 : o.estimator == "smooth" ? CausticSetup::Estimator::smooth
                                           : CausticSetup::Estimator::rays;
   s.seed = static_cast<unsigned>(o.seed);
+  // Sizes that set the simulator's memory, checked before it allocates (a
+  // fuzzed [120, 312540] image asked for 150 million rays: 4.3 GB).
+  const auto check_size = [&](const char* key, const char* what, double count, const char* limit) {
+    if (const double most = limits::get(limit); count > most)
+      throw InputError(fmt::format("{}: {:.4g} {}, more than the {:.4g} allowed {}", properties.where(key), count, what,
+                                   most, limits::how_to_change(limit)));
+  };
+  check_size("vertices", "top-surface vertices", double(s.vertices_x) * s.vertices_y, "caustic_vertices");
+  check_size("image", "pixels", double(s.image_width) * s.image_height, "image_pixels");
+  check_size(rays_given ? "rays" : "image", rays_given ? "rays" : "rays (2 x image in each direction)",
+             double(s.rays_x) * s.rays_y, "caustic_rays");
   return config;
 }
 

@@ -465,6 +465,12 @@ TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
                 R"({"materials": "/nonexistent.json", "printer": ")" + printer() +
                     R"(", "subtree": {"type": "layered", "material": "VeroCyan"}})",
                 "file not found");
+  // Found by fuzz_simulate: a caustics image of 120 x 312540 asked for 150
+  // million rays (4.3 GB) when the simulator was made.
+  simulate_case("caustics image beyond the rays limit", "caustics",
+                simulate_head + R"(, "subtree": {"type": "layered", "material": "VeroClear"}, )"
+                                R"("simulator": {"size_mm": [30, 30], "image": [120, 312540]}})",
+                "/simulator/image: 1.5e+08 rays (2 x image in each direction), more than the 2e+07 allowed");
   // Found by fuzz_simulate: a name longer than the system takes was a
   // filesystem_error escaping as an internal error.
   simulate_case("printer name too long", "subsurface",
