@@ -7,12 +7,14 @@
 #include <unistd.h>
 
 #include <cstddef>
+#include <cstdlib>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <string>
 
 #include <spdlog/spdlog.h>
+#include <tbb/global_control.h>
 
 #include "core/error.h"
 
@@ -51,7 +53,15 @@ int accept_or_refuse(Read&& read) {
   return 0;
 }
 
-/// Quiet: a harness runs its reader millions of times.
-inline void quiet_logging() { spdlog::set_level(spdlog::level::off); }
+/// Quiet: a harness runs its reader millions of times. With
+/// SPEC2FAB_FUZZ_THREADS=N in the environment, TBB runs at most N threads
+/// (1: a finding that goes away is a race).
+inline void quiet_logging() {
+  spdlog::set_level(spdlog::level::off);
+  if (const char* threads = std::getenv("SPEC2FAB_FUZZ_THREADS"); threads != nullptr && std::atoi(threads) > 0) {
+    static const tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
+                                           static_cast<size_t>(std::atoi(threads)));
+  }
+}
 
 }  // namespace spec2fab::fuzz
