@@ -8,6 +8,7 @@
 #include <cstring>
 #include <chrono>
 #include <csignal>
+#include <cmath>
 #include <cstdlib>
 #include <string_view>
 
@@ -141,6 +142,48 @@ void check_text(const std::filesystem::path& file, const char* format, std::uint
   }
 }
 
+/// An ASCII PLY body against its header: one line per element, each
+/// scalar property a number, each list a count its type can hold and that
+/// many numbers (Assimp allocates what a list count says before it reads).
+template <class Element>
+void check_ply_ascii_body(const std::filesystem::path& file, std::istream& in, const std::vector<Element>& elements) {
+  check_text(file, "an ASCII PLY file", static_cast<std::uintmax_t>(in.tellg()));
+  const auto is_number = [](const std::string& word) {
+    char* end = nullptr;
+    std::strtod(word.c_str(), &end);
+    return !word.empty() && end == word.c_str() + word.size();
+  };
+  size_t e = 0;
+  double held = 0;  // lines of elements[e] so far
+  const auto skip_full = [&] {
+    while (e < elements.size() && held >= elements[e].count) ++e, held = 0;
+  };
+  skip_full();
+  for (std::string row; e < elements.size() && std::getline(in, row);) {
+    if (row.find_first_not_of(" \t\r") == std::string::npos) continue;
+    const Element& element = elements[e];
+    const auto bad = [&](const std::string& what) {
+      fail(file, "read", fmt::format("malformed PLY: {} element {}: {}", element.name, held, what));
+    };
+    std::istringstream words(row);
+    std::string word;
+    for (const double list_most : element.properties) {
+      if (!(words >> word) || !is_number(word)) bad("a property is missing or not a number");
+      if (list_most < 0) continue;
+      const double count = std::strtod(word.c_str(), nullptr);
+      if (count < 0 || count > list_most || count != std::floor(count))
+        bad(fmt::format("a list count of {}, where its type holds whole numbers up to {:.0f}", word, list_most));
+      for (double k = 0; k < count; ++k)
+        if (!(words >> word) || !is_number(word)) bad(fmt::format("the list says {:.0f} items and holds fewer", count));
+    }
+    ++held;
+    skip_full();
+  }
+  if (e < elements.size())
+    fail(file, "read", fmt::format("the PLY header says {:.0f} {} elements, the file holds {:.0f}", elements[e].count,
+                                   elements[e].name, held));
+}
+
 /// Assimp's PLY reader loops forever on some malformed headers and trusts
 /// element counts when it allocates, so a PLY file's header is read first:
 /// its grammar, and counts that the bytes after it can hold (each element
@@ -156,7 +199,14 @@ void check_ply_header(const std::filesystem::path& file) {
   std::string format;
   double needed_bytes = 0;  // at least, for the elements declared
   double element_count = -1, element_bytes = 0;
-  std::vector<std::pair<std::string, double>> elements;  // name, count: an ASCII file holds one line each
+  // Each element's name, count (an ASCII file holds one line each) and
+  // properties: -1 for a scalar, a list's largest count for a list.
+  struct Element {
+    std::string name;
+    double count;
+    std::vector<double> properties;
+  };
+  std::vector<Element> elements;
   const auto close_element = [&] {
     if (element_count >= 0) needed_bytes += element_count * (format == "ascii" ? 2.0 : std::max(element_bytes, 1.0));
   };
@@ -170,11 +220,15 @@ void check_ply_header(const std::filesystem::path& file) {
     std::string keyword;
     words >> keyword;
     if (keyword == "comment" || keyword == "obj_info" || keyword.empty()) continue;
+    for (const char c : line)
+      if (static_cast<unsigned char>(c) > 126) bad(number, "a byte outside ASCII in '" + keyword + "' line");
     if (keyword == "format") {
+      if (!format.empty()) bad(number, "a second format line");
       std::string version;
       words >> format >> version;
       if (format != "ascii" && format != "binary_little_endian" && format != "binary_big_endian")
         bad(number, "unknown format '" + format + "'");
+      if (version != "1.0") bad(number, "version '" + version + "', where PLY has only 1.0");
     } else if (keyword == "element") {
       std::string name, count;
       words >> name >> count;
@@ -184,7 +238,7 @@ void check_ply_header(const std::filesystem::path& file) {
       close_element();
       element_count = std::stod(count);
       element_bytes = 0;
-      elements.emplace_back(name, element_count);
+      elements.push_back({name, element_count, {}});
     } else if (keyword == "property") {
       if (element_count < 0) bad(number, "a property before any element");
       std::string type;
@@ -195,12 +249,15 @@ void check_ply_header(const std::filesystem::path& file) {
         if (ply_type_size(count_type) == 0 || ply_type_size(item_type) == 0 || name.empty())
           bad(number, "'property list' needs a count type, an item type and a name, got '" + line + "'");
         element_bytes += ply_type_size(count_type);
+        const int count_size = ply_type_size(count_type);
+        elements.back().properties.push_back(count_size >= 4 ? 2147483647.0 : std::pow(2.0, 8 * count_size) - 1);
       } else {
         std::string name;
         words >> name;
         if (ply_type_size(type) == 0 || name.empty())
           bad(number, "'property' needs a type and a name, got '" + line + "'");
         element_bytes += ply_type_size(type);
+        elements.back().properties.push_back(-1);
       }
     } else if (keyword == "end_header") {
       close_element();
@@ -208,18 +265,12 @@ void check_ply_header(const std::filesystem::path& file) {
       if (needed_bytes > left)
         fail(file, "read", "the PLY header declares elements that need at least " + std::to_string(static_cast<long long>(needed_bytes)) +
                                " bytes, and the file has " + std::to_string(static_cast<long long>(left)) + " after it (truncated?)");
-      if (format == "ascii") {  // text, and one line per element: the counts must be there
-        check_text(file, "an ASCII PLY file", static_cast<std::uintmax_t>(in.tellg()));
-        double lines = 0;
-        for (std::string row; std::getline(in, row);)
-          if (row.find_first_not_of(" \t\r") != std::string::npos) ++lines;
-        for (const auto& [name, count] : elements) {
-          if (count > lines)
-            fail(file, "read", fmt::format("the PLY header says {:.0f} {} elements, the file holds {:.0f}", count, name,
-                                           lines));
-          lines -= count;
-        }
-      }
+      const auto named = [&](const char* name) {
+        return std::any_of(elements.begin(), elements.end(), [&](const Element& e) { return e.name == name; });
+      };
+      if (!named("vertex")) bad(number, "no vertex element before end_header");
+      if (!named("face") && !named("tristrips")) bad(number, "no face element before end_header");
+      if (format == "ascii") check_ply_ascii_body(file, in, elements);
       return;
     } else {
       bad(number, "unknown keyword '" + keyword + "'");

@@ -347,6 +347,23 @@ TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
   mesh_case("ASCII PLY with a NUL byte", "nul.ply",
             ply_head + std::string("0 0 0\n10 0 0\n0 10 0\n0 0 10\n3 0 2 1\n3 0 1\0 3\n3 0 3 2\n3 1 2 3\n", 60),
             "nul.ply: cannot read mesh: byte 194 is a control character (0x00), and an ASCII PLY file is text");
+  // Found by fuzz_mesh in this process: a header of two format lines and no
+  // elements hung Assimp's PLY reader; a list count of 3333... made it
+  // allocate 4 GB before reading the items.
+  mesh_case("PLY header with two format lines", "formats.ply",
+            "ply\nformat ascii 1.0\nformat ascii 1.0\nelement vertex 0\nproperty float x\nelement face 0\n"
+            "property list uchar int vertex_indices\nend_header\n",
+            "formats.ply: cannot read mesh: malformed PLY header, line 3: a second format line");
+  mesh_case("PLY header with no face element", "points.ply",
+            "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n1\n",
+            "points.ply: cannot read mesh: malformed PLY header, line 5: no face element before end_header");
+  mesh_case("ASCII PLY list count beyond its type", "listcount.ply",
+            ply_head + "0 0 0\n10 0 0\n0 10 0\n0 0 10\n3 0 2 1\n3 0 1 3\n3333333333 1 2 3\n3 1 2 3\n",
+            "listcount.ply: cannot read mesh: malformed PLY: face element 2: a list count of 3333333333, where its type "
+            "holds whole numbers up to 255");
+  mesh_case("ASCII PLY list shorter than its count", "list.ply",
+            ply_head + "0 0 0\n10 0 0\n0 10 0\n0 0 10\n3 0 2 1\n3 0 1\n3 0 3 2\n3 1 2 3\n",
+            "list.ply: cannot read mesh: malformed PLY: face element 1: the list says 3 items and holds fewer");
   mesh_case("OBJ with a NUL byte", "nul.obj", "v 0 0 0\nv 10 0 0\nv 0 10 0\nv 0 0 10\n" + std::string(1, '\0') + tetrahedron_faces,
             "nul.obj: cannot read mesh: byte 35 is a control character (0x00), and an OBJ file is text");
 
