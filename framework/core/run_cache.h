@@ -21,6 +21,11 @@ namespace spec2fab {
 
 class RunCache {
  public:
+  /// Unbounded: a run's cache keeps every value for the run's lifetime.
+  RunCache() = default;
+  /// At most `capacity` values (at least 1), least recently asked for dropped first.
+  explicit RunCache(size_t capacity) : capacity_(capacity < 1 ? 1 : capacity) {}
+
   /// The value of type T stored under `key`, made by `make()` (returning a
   /// std::shared_ptr<T>) on the first request. T may be const; a value that
   /// fills itself in lazily (and is thread-safe doing so) is asked for as
@@ -31,8 +36,12 @@ class RunCache {
   std::shared_ptr<T> get(const std::string& key, Make&& make) {
     std::lock_guard lock(mutex_);
     auto& entry = entries_[{std::type_index(typeid(T)), key}];
-    if (!entry) entry = std::const_pointer_cast<std::remove_const_t<T>>(std::shared_ptr<T>(make()));
-    return std::static_pointer_cast<T>(entry);
+    entry.last_asked = ++asked_;
+    if (!entry.value) {
+      entry.value = std::const_pointer_cast<std::remove_const_t<T>>(std::shared_ptr<T>(make()));
+      if (entries_.size() > capacity_) drop_least_recent();
+    }
+    return std::static_pointer_cast<T>(entry.value);
   }
 
   /// Values held (for tests and logs).
@@ -42,8 +51,22 @@ class RunCache {
   }
 
  private:
+  struct Entry {
+    std::shared_ptr<void> value;
+    unsigned long long last_asked = 0;
+  };
+  // The entry asked for longest ago (never the one just made: it was asked last).
+  void drop_least_recent() {
+    auto oldest = entries_.begin();
+    for (auto it = entries_.begin(); it != entries_.end(); ++it)
+      if (it->second.last_asked < oldest->second.last_asked) oldest = it;
+    entries_.erase(oldest);
+  }
+
   mutable std::mutex mutex_;
-  std::map<std::pair<std::type_index, std::string>, std::shared_ptr<void>> entries_;
+  size_t capacity_ = static_cast<size_t>(-1);
+  unsigned long long asked_ = 0;
+  std::map<std::pair<std::type_index, std::string>, Entry> entries_;
 };
 
 /// `cache->get<T>(key, make)`, or make() alone when there is no cache (a

@@ -8,7 +8,7 @@
 #include "fuzz_support.h"
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  spec2fab::fuzz::quiet_logging();
+  spec2fab::fuzz::configure_harness();
   return 0;
 }
 
@@ -16,10 +16,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   using namespace spec2fab;
   // Beside the experiments, so that "../materials/…" resolves as in datasets/simulations.
   const auto file = fuzz::input_file(data, size, "experiments/simulate.json");
-  static auto session = std::make_shared<RunCache>();
   // Bounded: mutated options key new tables (a radial basis per size and
-  // radius), which a cache kept for the whole run would gather by the million.
-  if (session->size() > 256) session = std::make_shared<RunCache>();
+  // radius), which an unbounded cache would gather by the million; the
+  // dataset files' values are asked for by every input and stay.
+  static const auto session = std::make_shared<RunCache>(256);
   for (const std::string& simulator : SimulatorRegistry::instance().names())
     fuzz::accept_or_refuse([&] { cli::prepare_simulation(file, simulator, session); });
   return 0;
