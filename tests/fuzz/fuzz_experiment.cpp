@@ -5,7 +5,7 @@
 #include "spec/translator.h"
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  spec2fab::fuzz::quiet_logging();
+  spec2fab::fuzz::configure_harness();
   return 0;
 }
 

@@ -6,7 +6,7 @@
 #include "tuning/image_file.h"
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  spec2fab::fuzz::quiet_logging();
+  spec2fab::fuzz::configure_harness();
   return 0;
 }
 

@@ -10,7 +10,7 @@
 #include "materials/printer_profile.h"
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  spec2fab::fuzz::quiet_logging();
+  spec2fab::fuzz::configure_harness();
   return 0;
 }
 

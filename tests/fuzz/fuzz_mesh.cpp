@@ -22,7 +22,7 @@ const char* extension_for(const std::uint8_t* data, std::size_t size) {
 }  // namespace
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  spec2fab::fuzz::quiet_logging();
+  spec2fab::fuzz::configure_harness();
   return 0;
 }
 

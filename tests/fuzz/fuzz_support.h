@@ -53,10 +53,11 @@ int accept_or_refuse(Read&& read) {
   return 0;
 }
 
-/// Quiet: a harness runs its reader millions of times. With
-/// SPEC2FAB_FUZZ_THREADS=N in the environment, TBB runs at most N threads
-/// (1: a finding that goes away is a race).
-inline void quiet_logging() {
+/// What every harness sets once, at its first input: no logging (a harness
+/// runs its reader millions of times), and with SPEC2FAB_FUZZ_THREADS=N in
+/// the environment at most N TBB threads (1: a finding that goes away is a
+/// race).
+inline void configure_harness() {
   spdlog::set_level(spdlog::level::off);
   if (const char* threads = std::getenv("SPEC2FAB_FUZZ_THREADS"); threads != nullptr && std::atoi(threads) > 0) {
     static const tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
