@@ -213,12 +213,20 @@ namespace {
 /// A file as it is now (absolute path, size, modification time): what a
 /// session cache keys the values made from it by, so that an edited file is
 /// read again.
+// A file's identity for the session cache: where it is, how long, when it
+// last changed. A file that cannot be examined keys as size 0 and no time
+// (its reader then says what is wrong with it).
 std::string file_key(const fs::path& file) {
   std::error_code error;
   const auto path = fs::absolute(file, error).lexically_normal();
+  std::string key = path.string();
+  const fs::file_status status = fs::status(file, error);
+  if (error || !fs::is_regular_file(status)) return key + "|0|0";
   const auto size = fs::file_size(file, error);
-  const auto modified = fs::last_write_time(file, error).time_since_epoch().count();
-  return path.string() + "|" + std::to_string(error ? 0 : size) + "|" + std::to_string(error ? 0 : modified);
+  if (error) return key + "|0|0";
+  const auto modified = fs::last_write_time(file, error);
+  if (error) return key + "|" + std::to_string(size) + "|0";
+  return key + "|" + std::to_string(size) + "|" + std::to_string(modified.time_since_epoch().count());
 }
 
 }  // namespace
