@@ -142,9 +142,12 @@ void check_text(const std::filesystem::path& file, const char* format, std::uint
   }
 }
 
-/// An ASCII PLY body against its header: one line per element, each
-/// scalar property a number, each list a count its type can hold and that
-/// many numbers (Assimp allocates what a list count says before it reads).
+/// An ASCII PLY body against its header: one line per element (LF or CRLF
+/// ends it; a lone CR is refused, as Assimp would start a new line there
+/// and read the rest against the wrong element), each scalar property a
+/// number, each list a count its type can hold and that many numbers
+/// (Assimp allocates what a list count says before it reads), nothing
+/// more on the line, and a face's vertex indices within the vertex count.
 template <class Element>
 void check_ply_ascii_body(const std::filesystem::path& file, std::istream& in, const std::vector<Element>& elements) {
   check_text(file, "an ASCII PLY file", static_cast<std::uintmax_t>(in.tellg()));
@@ -153,6 +156,9 @@ void check_ply_ascii_body(const std::filesystem::path& file, std::istream& in, c
     std::strtod(word.c_str(), &end);
     return !word.empty() && end == word.c_str() + word.size();
   };
+  double vertices = 0;
+  for (const Element& element : elements)
+    if (element.name == "vertex") vertices = element.count;
   size_t e = 0;
   double held = 0;  // lines of elements[e] so far
   const auto skip_full = [&] {
@@ -160,22 +166,34 @@ void check_ply_ascii_body(const std::filesystem::path& file, std::istream& in, c
   };
   skip_full();
   for (std::string row; e < elements.size() && std::getline(in, row);) {
-    if (row.find_first_not_of(" \t\r") == std::string::npos) continue;
+    if (!row.empty() && row.back() == '\r') row.pop_back();
+    if (row.find_first_not_of(" \t") == std::string::npos) continue;
     const Element& element = elements[e];
     const auto bad = [&](const std::string& what) {
       fail(file, "read", fmt::format("malformed PLY: {} element {}: {}", element.name, held, what));
     };
+    if (row.find('\r') != std::string::npos) bad("a carriage return inside the line (PLY lines end with LF or CRLF)");
     std::istringstream words(row);
     std::string word;
-    for (const double list_most : element.properties) {
+    for (size_t p = 0; p < element.properties.size(); ++p) {
+      const double list_most = element.properties[p];
       if (!(words >> word) || !is_number(word)) bad("a property is missing or not a number");
       if (list_most < 0) continue;
       const double count = std::strtod(word.c_str(), nullptr);
       if (count < 0 || count > list_most || count != std::floor(count))
         bad(fmt::format("a list count of {}, where its type holds whole numbers up to {:.0f}", word, list_most));
-      for (double k = 0; k < count; ++k)
+      const bool vertex_indices = element.name == "face" && (element.names[p] == "vertex_indices" || element.names[p] == "vertex_index");
+      for (double k = 0; k < count; ++k) {
         if (!(words >> word) || !is_number(word)) bad(fmt::format("the list says {:.0f} items and holds fewer", count));
+        if (!vertex_indices) continue;
+        const double index = std::strtod(word.c_str(), nullptr);
+        if (index < 0 || index >= vertices || index != std::floor(index))
+          bad(fmt::format("vertex index {}, where the file has {:.0f} vertices (0 to {:.0f})", word.substr(0, 24), vertices,
+                          vertices - 1));
+      }
     }
+    if (words >> word)
+      bad(fmt::format("more values than its {} propert{}", element.properties.size(), element.properties.size() == 1 ? "y" : "ies"));
     ++held;
     skip_full();
   }
@@ -205,6 +223,7 @@ void check_ply_header(const std::filesystem::path& file) {
     std::string name;
     double count;
     std::vector<double> properties;
+    std::vector<std::string> names;  // each property's
   };
   std::vector<Element> elements;
   const auto close_element = [&] {
@@ -238,7 +257,7 @@ void check_ply_header(const std::filesystem::path& file) {
       close_element();
       element_count = std::stod(count);
       element_bytes = 0;
-      elements.push_back({name, element_count, {}});
+      elements.push_back({name, element_count, {}, {}});
     } else if (keyword == "property") {
       if (element_count < 0) bad(number, "a property before any element");
       std::string type;
@@ -251,6 +270,7 @@ void check_ply_header(const std::filesystem::path& file) {
         element_bytes += ply_type_size(count_type);
         const int count_size = ply_type_size(count_type);
         elements.back().properties.push_back(count_size >= 4 ? 2147483647.0 : std::pow(2.0, 8 * count_size) - 1);
+        elements.back().names.push_back(name);
       } else {
         std::string name;
         words >> name;
@@ -258,6 +278,7 @@ void check_ply_header(const std::filesystem::path& file) {
           bad(number, "'property' needs a type and a name, got '" + line + "'");
         element_bytes += ply_type_size(type);
         elements.back().properties.push_back(-1);
+        elements.back().names.push_back(name);
       }
     } else if (keyword == "end_header") {
       close_element();

@@ -326,7 +326,8 @@ TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
   mesh_case("PLY with a property before any element", "early.ply", "ply\nformat ascii 1.0\nproperty float x\nend_header\n",
             "a property before any element");
   mesh_case("PLY face past the vertices", "past.ply",
-            ply_head + "0 0 0\n10 0 0\n0 10 0\n0 0 10\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 9\n", "past.ply");
+            ply_head + "0 0 0\n10 0 0\n0 10 0\n0 0 10\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 9\n",
+            "past.ply: cannot read mesh: malformed PLY: face element 3: vertex index 9, where the file has 4 vertices (0 to 3)");
   // (Now refused by the OFF checks before Assimp sees it: a control byte.)
   mesh_case("OFF that crashes Assimp's reader", "crash.off",
             std::string("OFF\n4 4 0\n0 0 0\n10 0 0\n0 10 0\n5 0 10\n3 0\xc8" "2 1\n3 0 v 2 0 0\nv OFF\n4 4 0\n"
@@ -364,6 +365,16 @@ TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
   mesh_case("ASCII PLY list shorter than its count", "list.ply",
             ply_head + "0 0 0\n10 0 0\n0 10 0\n0 0 10\n3 0 2 1\n3 0 1\n3 0 3 2\n3 1 2 3\n",
             "list.ply: cannot read mesh: malformed PLY: face element 1: the list says 3 items and holds fewer");
+  // Found by fuzz_mesh with one TBB thread: a lone CR inside a face line,
+  // where Assimp starts a new line and reads "666666666666666" as the next
+  // face's list count, allocating without end (12 GB when stopped).
+  mesh_case("ASCII PLY with a CR inside a line", "cr.ply",
+            ply_head + "0 0 0\n10 0 0\n0 10 0\n0 0 10\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 6666\r666666666666666\n",
+            "cr.ply: cannot read mesh: malformed PLY: face element 3: a carriage return inside the line (PLY lines end "
+            "with LF or CRLF)");
+  mesh_case("ASCII PLY with more values than properties", "extra.ply",
+            ply_head + "0 0 0\n10 0 0\n0 10 0\n0 0 10 7\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n",
+            "extra.ply: cannot read mesh: malformed PLY: vertex element 3: more values than its 3 properties");
   mesh_case("OBJ with a NUL byte", "nul.obj", "v 0 0 0\nv 10 0 0\nv 0 10 0\nv 0 0 10\n" + std::string(1, '\0') + tetrahedron_faces,
             "nul.obj: cannot read mesh: byte 35 is a control character (0x00), and an OBJ file is text");
 
