@@ -8,6 +8,7 @@
 
 #if SPEC2FAB_WITH_MPI
 #include <mpi.h>
+#include <spdlog/spdlog.h>
 #endif
 
 namespace spec2fab::ranks {
@@ -21,13 +22,22 @@ int my_rank = 0, rank_count = 1;
 void check(int code, const char* what) {
   if (code != MPI_SUCCESS) throw std::runtime_error(std::string("MPI: ") + what + " failed");
 }
+
+// MPI_THREAD_MULTIPLE, or what this MPI offers below it, said once.
+void init_threaded() {
+  int provided = 0;
+  check(MPI_Init_thread(nullptr, nullptr, MPI_THREAD_MULTIPLE, &provided), "init");
+  if (provided < MPI_THREAD_MULTIPLE)
+    spdlog::warn("MPI offers thread level {} below MPI_THREAD_MULTIPLE ({}): FEM solves on several threads at once "
+                 "are not safe with this MPI (run with --threads 1)",
+                 provided, MPI_THREAD_MULTIPLE);
+}
 }  // namespace
 
 void start() {
   // Open MPI's and MPICH's launchers set these; a plain run stays single.
   if (!std::getenv("OMPI_COMM_WORLD_SIZE") && !std::getenv("PMI_SIZE")) return;
-  int provided = 0;
-  check(MPI_Init_thread(nullptr, nullptr, MPI_THREAD_FUNNELED, &provided), "init");
+  init_threaded();
   started = true;
   MPI_Comm_rank(MPI_COMM_WORLD, &my_rank);
   MPI_Comm_size(MPI_COMM_WORLD, &rank_count);
@@ -39,6 +49,24 @@ void stop() {
   MPI_Finalized(&finalized);
   if (!finalized) MPI_Finalize();
   started = false;
+}
+
+void ensure_mpi() {
+  static const bool once = [] {
+    int initialized = 0;
+    MPI_Initialized(&initialized);
+    if (initialized) return true;  // start() (mpirun), or a program embedding Spec2Fab that started MPI itself
+    init_threaded();
+    // atexit runs after the destructors of statics made after this point:
+    // the libraries' sessions end before MPI does.
+    std::atexit([] {
+      int finalized = 0;
+      MPI_Finalized(&finalized);
+      if (!finalized) MPI_Finalize();
+    });
+    return true;
+  }();
+  (void)once;
 }
 
 void abort_all(int code) {
@@ -121,6 +149,7 @@ std::vector<std::uint8_t> receive(int from) {
 
 void start() {}
 void stop() {}
+void ensure_mpi() {}
 void abort_all(int) {}
 int rank() { return 0; }
 int size() { return 1; }

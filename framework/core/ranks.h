@@ -17,6 +17,14 @@ namespace spec2fab::ranks {
 void start();
 /// Finalises MPI if start() started it.
 void stop();
+/// MPI for a library that needs it even in one process (hypre, PETSc):
+/// nothing when start() started it (mpirun); otherwise started here, once,
+/// as a single rank, and finalised at exit after every library session
+/// made after this call has ended. With start() the one place that
+/// initialises the process's MPI, both at MPI_THREAD_MULTIPLE: each solver
+/// library serialises its own calls, but a hypre solve on one thread and a
+/// PETSc solve on another may call MPI at the same time.
+void ensure_mpi();
 /// Ends every rank with `code` (MPI_Abort), or returns when there is one.
 void abort_all(int code);
 

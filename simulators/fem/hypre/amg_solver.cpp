@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "core/build_options.h"
+#include "core/ranks.h"
 #include "core/third_party_leaks.h"
 
 #if SPEC2FAB_WITH_HYPRE
@@ -23,32 +24,22 @@ std::mutex& hypre_mutex() {
   return mutex;
 }
 
-// MPI as a singleton (one rank, no mpirun) for the process's lifetime; a
-// program that initialised MPI itself keeps it and finalises it itself.
-struct MpiSession {
-  bool owned = false;
-  MpiSession() {
+// hypre for the process's lifetime, on the process's MPI (ranks::ensure_mpi:
+// a single rank without mpirun).
+struct HypreSession {
+  HypreSession() {
+    ranks::ensure_mpi();
     [[maybe_unused]] const IgnoreThirdPartyLeaks ignore;
-    int initialized = 0;
-    MPI_Initialized(&initialized);
-    if (!initialized) {
-      int provided = 0;
-      MPI_Init_thread(nullptr, nullptr, MPI_THREAD_SERIALIZED, &provided);
-      owned = true;
-    }
     HYPRE_Init();
   }
-  ~MpiSession() {
+  ~HypreSession() {
     [[maybe_unused]] const IgnoreThirdPartyLeaks ignore;
     HYPRE_Finalize();
-    int finalized = 0;
-    MPI_Finalized(&finalized);
-    if (owned && !finalized) MPI_Finalize();
   }
 };
 
-void start_mpi() {
-  static MpiSession session;
+void start_hypre() {
+  static HypreSession session;
 }
 
 void check(HYPRE_Int code, const char* what) {
@@ -133,7 +124,7 @@ AmgSolver::AmgSolver(const Matrix& lower, std::vector<int> dof_of_free, size_t n
   if (!lower.isCompressed()) throw std::logic_error("AmgSolver: the matrix must be compressed");
   if (dof_of_free.size() != static_cast<size_t>(lower.cols())) throw std::logic_error("AmgSolver: one DOF per free row");
   std::lock_guard lock(hypre_mutex());
-  start_mpi();
+  start_hypre();
   Impl& m = *impl_;
   m.n = static_cast<HYPRE_Int>(3 * node_count);
   m.tolerance = tolerance;

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "core/build_options.h"
+#include "core/ranks.h"
 #include "core/third_party_leaks.h"
 
 #if SPEC2FAB_WITH_PETSC
@@ -37,9 +38,9 @@ void set_default(const char* name, const char* value) {
   if (!set) check(PetscOptionsSetValue(nullptr, name, value), "options");
 }
 
-// PETSc for the process's lifetime. It initialises MPI as a singleton when
-// nobody has (a plain run, no mpirun) and then finalises it too; under
-// mpirun (ranks::start) or beside hypre it uses the MPI that is there.
+// PETSc for the process's lifetime, on the process's MPI
+// (ranks::ensure_mpi: a single rank without mpirun), which it leaves to
+// its owner to finalise.
 // PetscInitialize and PetscFinalize are collective on PETSC_COMM_WORLD: it
 // is MPI_COMM_WORLD only when the first solver solves across the ranks
 // (simulate under mpirun, where every rank makes the same solvers), and
@@ -47,10 +48,9 @@ void set_default(const char* name, const char* value) {
 // tuners, so only some ranks may ever start PETSc).
 struct PetscSession {
   explicit PetscSession(bool across_ranks) {
+    ranks::ensure_mpi();
     [[maybe_unused]] const IgnoreThirdPartyLeaks ignore;
-    int initialized = 0;
-    MPI_Initialized(&initialized);
-    if (initialized) PETSC_COMM_WORLD = across_ranks ? MPI_COMM_WORLD : MPI_COMM_SELF;
+    PETSC_COMM_WORLD = across_ranks ? MPI_COMM_WORLD : MPI_COMM_SELF;
     // Spec2Fab handles signals itself (Ctrl-C stops a run cleanly; the
     // sanitizers report faults); PETSc's handlers would take them over.
     PetscOptionsSetValue(nullptr, "-no_signal_handler", nullptr);
