@@ -81,6 +81,26 @@ struct Converter<int> {
     return std::nullopt;
   }
 };
+// Seeds: any integer from 0 to 2^64 - 1, exactly. A number written with a
+// fraction or exponent is taken only while a double holds it exactly (below
+// 2^53): 18446744073709551615 read as a double would round silently.
+template <>
+struct Converter<std::uint64_t> {
+  static constexpr const char* expected = "a whole number from 0 to 18446744073709551615";
+  static std::optional<std::uint64_t> convert(const json& v) {
+    if (v.is_number_unsigned()) return v.get<std::uint64_t>();
+    if (v.is_number_integer()) {
+      const auto x = v.get<std::int64_t>();
+      if (x < 0) return std::nullopt;
+      return static_cast<std::uint64_t>(x);
+    }
+    if (v.is_number_float()) {
+      const double x = v.get<double>();
+      if (std::isfinite(x) && x >= 0 && x == std::floor(x) && x <= 0x1p53) return static_cast<std::uint64_t>(x);
+    }
+    return std::nullopt;
+  }
+};
 template <>
 struct Converter<bool> {
   static constexpr const char* expected = "true or false";
@@ -268,6 +288,7 @@ T Properties::get(std::string_view key) const {
 
 template bool Properties::get<bool>(std::string_view) const;
 template int Properties::get<int>(std::string_view) const;
+template std::uint64_t Properties::get<std::uint64_t>(std::string_view) const;
 template double Properties::get<double>(std::string_view) const;
 template std::string Properties::get<std::string>(std::string_view) const;
 template std::vector<double> Properties::get<std::vector<double>>(std::string_view) const;

@@ -51,7 +51,8 @@ class Properties {
   bool has(std::string_view key) const;
 
   /// Required value; throws naming the key when missing or of the wrong type.
-  /// T: bool, int, double, std::string, std::vector<double|int|std::string>,
+  /// T: bool, int, std::uint64_t (seeds: exact to 2^64 - 1), double,
+  /// std::string, std::vector<double|int|std::string>,
   /// std::array<double|int, N>.
   template <class T>
   T get(std::string_view key) const;

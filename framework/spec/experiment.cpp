@@ -30,12 +30,6 @@ std::string default_name(const std::filesystem::path& file) { return file.stem()
 
 }  // namespace
 
-bool ExperimentKeys::check(std::string* why) const {
-  if (seed == static_cast<double>(static_cast<std::uint64_t>(seed))) return true;
-  *why = "seed: expected a non-negative integer";
-  return false;
-}
-
 std::vector<PropertyDoc> ExperimentKeys::docs() {
   std::vector<PropertyDoc> rows = option_docs<ExperimentKeys>();
   rows.insert(rows.begin() + 2, {{"geometry", "object", "required", "the shape (below)"},
@@ -63,7 +57,7 @@ Experiment Experiment::load(const std::filesystem::path& file) {
     }
   }
   experiment.translator_ = keys.translator;
-  experiment.seed_ = static_cast<std::uint64_t>(keys.seed);
+  experiment.seed_ = keys.seed;
   experiment.library_ = std::make_shared<MaterialLibrary>(MaterialLibrary::load(keys.materials));
   experiment.printer_ = std::make_shared<PrinterProfile>(PrinterProfile::load(keys.printer));
   experiment.palette_ = std::make_shared<MaterialPalette>(*experiment.library_, *experiment.printer_);

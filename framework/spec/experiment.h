@@ -32,20 +32,20 @@ namespace spec2fab {
 struct ExperimentKeys {
   std::string name;
   std::string translator;
-  double seed = 1;
+  std::uint64_t seed = 1;
   std::filesystem::path materials, printer;
   template <class Declare, class Self>
   static void declare(Declare& d, Self& o) {
     d.value(o.name, "name", "names the run folder out/<name>/; letters, digits, _ - .",
             Default{"file name without .json"});
     d.required(o.translator, "translator", "a registered translator (`spec2fab list translator`)");
-    d.number(o.seed, "seed", Range::closed(0, 1.8e19), "random seed, a whole number (`run --seed` overrides it)");
+    d.number(o.seed, "seed", Range::at_least(0),
+             "random seed, a whole number from 0 to 2^64 - 1, exact (`run --seed` overrides it)");
     d.file(o.materials, "materials",
            "a material library (datasets/materials/*.json, format in datasets/materials/README.md)");
     d.file(o.printer, "printer",
            "a printer profile (datasets/printers/*.json); a run may use only the model materials it holds, and void");
   }
-  bool check(std::string* why) const;
   /// These rows and the sections', for docs/experiment-format.md.
   static std::vector<PropertyDoc> docs();
 };

@@ -267,6 +267,20 @@ TEST_F(Cli, RunWritesFolderIdenticalForAnyThreadCount) {
   }
 }
 
+TEST_F(Cli, SeedsAreExactWholeNumbersUpTo2To64) {
+  // 2^53 + 1 and 2^64 - 1: a seed read as a double (as it was) rounds both.
+  for (const char* seed : {"9007199254740993", "18446744073709551615"}) {
+    const fs::path file = experiment("seed", valid_body(kTree, std::string(R"(, "seed": )") + seed));
+    const fs::path out = dir_ / (std::string("seed_") + seed);
+    const Result run = run_spec2fab("run -q " + file.string() + " --out " + out.string());
+    ASSERT_EQ(run.code, 0) << run.out;
+    EXPECT_THAT(read(out / "result.json"), HasSubstr(std::string("\"seed\": ") + seed));
+  }
+  const fs::path rounded = experiment("rounded", valid_body(kTree, R"(, "seed": 1e19)"));
+  EXPECT_THAT(single_line(run_spec2fab("validate " + rounded.string()).out),
+              HasSubstr("/seed: expected a whole number from 0 to 18446744073709551615, got 1e+19"));
+}
+
 TEST_F(Cli, TreeJsonRunsAgainAsAGoal) {
   // tree.json is a tree in the experiment format: feeding it back gives the same tree.
   const fs::path first = experiment("first", valid_body(kTree));

@@ -55,6 +55,21 @@ TEST(Properties, NumbersBeyondTheirTypeAreRefusedNamingTheValue) {
             "exp.json: malformed JSON: number overflow parsing '1e999'");
 }
 
+TEST(Properties, SeedsAreWholeNumbersExactTo2To64) {
+  const Properties p = Properties::parse(
+      R"({"top": 18446744073709551615, "odd": 9007199254740993, "small": 7, "written": 3.0, "float": 1e19,
+          "negative": -1, "fraction": 2.5})",
+      "exp.json");
+  EXPECT_EQ(p.get<std::uint64_t>("top"), 18446744073709551615ULL);
+  EXPECT_EQ(p.get<std::uint64_t>("odd"), 9007199254740993ULL) << "2^53 + 1: a double would make it 2^53";
+  EXPECT_EQ(p.get<std::uint64_t>("small"), 7u);
+  EXPECT_EQ(p.get<std::uint64_t>("written"), 3u);
+  const std::string whole = "expected a whole number from 0 to 18446744073709551615, got ";
+  EXPECT_EQ(error_of([&] { p.get<std::uint64_t>("float"); }), "exp.json: /float: " + whole + "1e+19");
+  EXPECT_EQ(error_of([&] { p.get<std::uint64_t>("negative"); }), "exp.json: /negative: " + whole + "-1");
+  EXPECT_EQ(error_of([&] { p.get<std::uint64_t>("fraction"); }), "exp.json: /fraction: " + whole + "2.5");
+}
+
 TEST(Properties, MissingRequiredKey) {
   const Properties p = Properties::parse(R"({"goal": {}})", "exp.json");
   EXPECT_EQ(error_of([&] { p.object("goal").object("tree"); }),
