@@ -23,7 +23,7 @@
 #include "core/properties.h"
 #include "materials/printer_profile.h"
 #include "reducer/reducer_tree.h"
-#include "spec/run_folder.h"
+#include "core/run_folder.h"
 
 namespace spec2fab {
 

@@ -18,7 +18,7 @@
 
 #include "core/registry.h"
 #include "materials/printer_profile.h"
-#include "spec/run_folder.h"
+#include "core/run_folder.h"
 
 namespace spec2fab {
 

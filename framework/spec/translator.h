@@ -17,7 +17,7 @@
 
 #include "core/registry.h"
 #include "spec/experiment.h"
-#include "spec/run_folder.h"
+#include "core/run_folder.h"
 
 namespace spec2fab {
 

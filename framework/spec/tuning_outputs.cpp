@@ -1,6 +1,6 @@
 #include "spec/tuning_outputs.h"
 
-#include "spec/run_folder.h"
+#include "core/run_folder.h"
 #include "tuning/convergence_plot.h"
 
 namespace spec2fab {

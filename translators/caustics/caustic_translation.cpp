@@ -21,7 +21,7 @@
 #include "fabrication/material_surfaces.h"
 #include "geometry/mesh_io.h"
 #include "spec/experiment.h"
-#include "spec/run_folder.h"
+#include "core/run_folder.h"
 #include "tuning/parts.h"
 #include "tuning/tuner.h"
 

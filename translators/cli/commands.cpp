@@ -28,7 +28,7 @@
 #include "reducer/node.h"
 #include "reducer/reducer_tree.h"
 #include "spec/experiment.h"
-#include "spec/run_folder.h"
+#include "core/run_folder.h"
 #include "spec/translator.h"
 #include "spec/tree_outputs.h"
 #include "tuning/optimizer.h"

@@ -1,4 +1,4 @@
-#include "spec/run_folder.h"
+#include "core/run_folder.h"
 #include "core/file_write.h"
 
 #include <signal.h>
