@@ -145,7 +145,7 @@ std::filesystem::path run_experiment(const std::filesystem::path& file, const Ru
     if (ranks::size() > 1) {
       // Which rank tuned how much: the parallel phases' split.
       std::vector<long long> runs(static_cast<size_t>(ranks::size()), 0);
-      runs[static_cast<size_t>(ranks::rank())] = tuner_runs_in_this_process();
+      runs[static_cast<size_t>(ranks::rank())] = context.tuner_runs_here;
       ranks::sum(runs);
       timing["ranks"] = ranks::size();
       timing["tuner_runs_per_rank"] = runs;

@@ -36,6 +36,10 @@ struct RunContext {
   /// Where a tuning schedule saves its state after each phase and finds what
   /// a killed run saved (Schedule::run); null: no checkpoints.
   PhaseCheckpoint* checkpoint = nullptr;
+  /// Tuner runs this process made in the run's schedules (RunRecord::
+  /// tuner_runs_here, added up by whoever runs one): timing.json's split
+  /// over the ranks.
+  long long tuner_runs_here = 0;
 };
 
 class Translator {

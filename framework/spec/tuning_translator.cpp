@@ -33,6 +33,7 @@ void TuningTranslator::run(RunContext& context) {
     RunRecord record;
     if (network_.size() > 0) {
       record = schedule_.run(network_, context.seed, context.checkpoint);
+      context.tuner_runs_here += record.tuner_runs_here;
       tree_->evaluate();
       write_tuning_outputs(record, network_, context);
     }

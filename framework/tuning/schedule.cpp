@@ -1,7 +1,6 @@
 #include "tuning/schedule.h"
 
 #include <algorithm>
-#include <atomic>
 #include <limits>
 #include <chrono>
 #include <cstring>
@@ -130,8 +129,6 @@ Schedule& Schedule::add(Phase phase) {
 }
 
 namespace {
-
-std::atomic<long long> tuner_runs_here{0};
 
 // What the phases from `first` on ask for, counted before they start: tuner
 // runs (sweeps × tuners) and error evaluations (each run's optimizer plan;
@@ -362,8 +359,6 @@ std::string progress_detail(int sweep, double error_sum, size_t runs) {
 
 }  // namespace
 
-long long tuner_runs_in_this_process() { return tuner_runs_here; }
-
 std::vector<size_t> Phase::members(size_t network_size) const {
   if (!tuners.empty()) return tuners;
   std::vector<size_t> all(network_size);
@@ -438,7 +433,7 @@ RunRecord Schedule::run(TunerNetwork& network, std::uint64_t seed, PhaseCheckpoi
           // Under mpirun each rank tunes its share of the class.
           const auto [begin, end] = ranks::share(static_cast<long long>(colour.size()), ranks::rank(), ranks::size());
           tbb::parallel_for(static_cast<size_t>(begin), static_cast<size_t>(end), [&](size_t i) { tune_one(colour[i]); });
-          tuner_runs_here += end - begin;
+          record.tuner_runs_here += end - begin;
           if (ranks::size() > 1) share_colour_tunings(network, colour, static_cast<size_t>(begin), static_cast<size_t>(end), summaries);
           for (size_t t : colour) {
             tuned[t] = true;
@@ -453,7 +448,7 @@ RunRecord Schedule::run(TunerNetwork& network, std::uint64_t seed, PhaseCheckpoi
       } else {
         for (size_t t : tuners) {
           tune_one(t);
-          ++tuner_runs_here;
+          ++record.tuner_runs_here;
           tuned[t] = true;
           if (phase.coupling) phase.coupling->after_tune(network, t, tuned);
           sweep_error += summaries[t].final_error;

@@ -176,6 +176,11 @@ struct RunRecord {
   std::vector<double> phase_seconds;  ///< wall time per phase (not deterministic)
   /// Per phase: tuner runs made and evaluations spent, recorded or not.
   std::vector<long long> phase_tuner_runs, phase_evaluations;
+  /// Of those, the runs this process made: under mpirun a parallel phase's
+  /// colour classes are split over the ranks (each tunes its share, then
+  /// takes up the others' results), so this is the rank's share. Phases a
+  /// resumed run took from its checkpoint count none.
+  long long tuner_runs_here = 0;
 
   /// Per-run summaries and per-phase totals, without wall times.
   nlohmann::json to_json(TunerNetwork& network) const;
@@ -211,11 +216,6 @@ class Schedule {
 /// inside the other's subtree — or nullopt. Tuners that run in parallel
 /// must not overlap: both would set the same parameters at once.
 std::optional<std::pair<size_t, size_t>> overlapping_tuners(TunerNetwork& network, const std::vector<size_t>& tuners);
-
-/// Tuner runs this process has made, in every schedule so far. Under mpirun
-/// a parallel phase's colour classes are split over the ranks (each tunes its
-/// share, then takes up the others' results), so this is the rank's share.
-long long tuner_runs_in_this_process();
 
 /// The seed of one tuner run (SplitMix64 of the inputs).
 std::uint64_t tuner_seed(std::uint64_t run_seed, size_t phase, int sweep, size_t tuner);
