@@ -1,6 +1,8 @@
 #include "core/limits.h"
 
+#include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <map>
 #include <mutex>
 
@@ -28,8 +30,14 @@ std::mutex& guard() {
   return m;
 }
 
+std::vector<LimitDoc>& declared() {
+  static std::vector<LimitDoc> all;
+  return all;
+}
+
+// Declarations end before main starts; after that the list only is read.
 const LimitDoc* find(std::string_view name) {
-  for (const LimitDoc& doc : docs())
+  for (const LimitDoc& doc : declared())
     if (doc.name == name) return &doc;
   return nullptr;
 }
@@ -40,30 +48,33 @@ std::vector<std::string> names() {
   return out;
 }
 
-// Some limits guard the process itself, not only its time and memory.
+// A value above the limit's ceiling: why it cannot be set, else "".
 std::string beyond_ceiling(std::string_view name, double value) {
-  if (name == "tree_depth" && value > 1000)
-    return "at most 1000: every walk over a tree recurses, and deeper trees would overflow the stack";
-  return {};
+  const LimitDoc* doc = find(name);
+  if (doc == nullptr || doc->ceiling <= 0 || value <= doc->ceiling) return {};
+  return fmt::format("at most {:g}: {}", doc->ceiling, doc->ceiling_reason);
 }
 
 }  // namespace
 
-const std::vector<LimitDoc>& docs() {
-  static const std::vector<LimitDoc> all = {
-      {"tree_depth", 100, "levels of nesting in a reducer tree (the paper's trees are 5 deep; at most 1000)"},
-      {"image_pixels", 64e6, "pixels of an image: a goal image (read from its header before decoding), or one a simulator makes"},
-      {"caustic_rays", 2e7, "rays a caustics simulator traces per evaluation (about 72 bytes each)"},
-      {"caustic_vertices", 4e6, "top-surface vertices of a caustics simulator's slab (a few hundred bytes each, with Embree's BVH)"},
-      {"field_band_voxels", 5e7, "voxels of the surface field's band (about 20 bytes each)"},
-      {"census_voxels", 1e9, "voxels of the material census (goal.census_voxel_mm)"},
-      {"column_cells", 1e6, "cells of one column node, each a subtree of nodes"},
-      {"tets", 1e7, "tetrahedra TetGen would make for the FEM (about 4.6 kB and 42 us of one solve each)"},
-      {"tuner_runs", 1e8, "tuner runs a schedule asks for (sweeps times tuners, summed over its phases)"},
-      {"evaluations", 1e12, "error evaluations a schedule plans (each tuner run's optimizer's, summed over its phases)"},
-      {"tuning_hours", 72, "hours of tuning a schedule may take, projected from the pace of each phase's first runs"},
-      {"mesh_read_seconds", 60, "seconds a mesh file's reader may take before the file is refused"},
-  };
+bool declare(std::string name, double default_value, std::string meaning, double ceiling, std::string ceiling_reason) {
+  LimitDoc doc{std::move(name), default_value, std::move(meaning), ceiling, std::move(ceiling_reason)};
+  const std::lock_guard lock(guard());
+  std::vector<LimitDoc>& all = declared();
+  for (const LimitDoc& other : all)
+    if (other.name == doc.name) throw std::logic_error("limits: '" + doc.name + "' is declared twice");
+  all.push_back(std::move(doc));
+  return true;
+}
+
+std::vector<LimitDoc> docs() {
+  std::vector<LimitDoc> all;
+  {
+    const std::lock_guard lock(guard());
+    all = declared();
+  }
+  // Static initialisation declares them in no fixed order.
+  std::sort(all.begin(), all.end(), [](const LimitDoc& a, const LimitDoc& b) { return a.name < b.name; });
   return all;
 }
 

@@ -5,6 +5,8 @@
 /// "limits" object sets them for its runs, and `--limit NAME=VALUE` on the
 /// command line (run, validate, simulate, export) wins over both.
 /// Process-wide: a command runs one experiment.
+/// Each limit is declared beside the part it guards:
+///     SPEC2FAB_LIMIT("tets", 1e7, "tetrahedra TetGen would make for the FEM");
 
 #include <string>
 #include <string_view>
@@ -18,12 +20,21 @@ struct LimitDoc {
   std::string name;
   double default_value;
   std::string meaning;
+  /// Above this no value may be set, whatever the user asks, and why (a
+  /// limit that guards the process itself, not only its time and memory).
+  double ceiling = 0;  // 0: none
+  std::string ceiling_reason;
 };
 
 namespace limits {
 
-/// Every limit, its default and what it bounds.
-const std::vector<LimitDoc>& docs();
+/// Every limit the program links, by name: each is declared beside the part
+/// it guards (SPEC2FAB_LIMIT), so core names none of them.
+std::vector<LimitDoc> docs();
+/// Adds a limit (static initialisation, through SPEC2FAB_LIMIT); a second
+/// limit of the same name is a programming error (std::logic_error).
+bool declare(std::string name, double default_value, std::string meaning, double ceiling = 0,
+             std::string ceiling_reason = {});
 /// The limit in force (the command line's, else the experiment's, else the default).
 double get(std::string_view name);
 /// "NAME=VALUE" from the command line; InputError for an unknown name or a
@@ -38,3 +49,14 @@ std::string how_to_change(std::string_view name);
 
 }  // namespace limits
 }  // namespace spec2fab
+
+#define SPEC2FAB_LIMIT_CONCAT_INNER(a, b) a##b
+#define SPEC2FAB_LIMIT_CONCAT(a, b) SPEC2FAB_LIMIT_CONCAT_INNER(a, b)
+/// Declares a limit beside the part it guards:
+///
+///     SPEC2FAB_LIMIT("tets", 1e7, "tetrahedra TetGen would make for the FEM");
+#define SPEC2FAB_LIMIT(...)                                                          \
+  namespace {                                                                        \
+  [[maybe_unused]] const bool SPEC2FAB_LIMIT_CONCAT(limit_declared_, __LINE__) =    \
+      ::spec2fab::limits::declare(__VA_ARGS__);                                        \
+  }

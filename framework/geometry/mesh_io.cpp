@@ -35,6 +35,10 @@
 
 namespace spec2fab {
 
+
+// Resource limits this part enforces (core/limits.h).
+SPEC2FAB_LIMIT("mesh_read_seconds", 60, "seconds a mesh file's reader may take before the file is refused");
+
 namespace {
 
 // Hashes the exact bits of a position (with -0 folded onto +0) so that welding

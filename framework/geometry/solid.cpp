@@ -21,6 +21,10 @@
 
 namespace spec2fab {
 
+
+// Resource limits this part enforces (core/limits.h).
+SPEC2FAB_LIMIT("field_band_voxels", 5e7, "voxels of the surface field's band (about 20 bytes each)");
+
 namespace {
 
 // One Embree device for the process: creating one starts its thread pool.

@@ -23,6 +23,12 @@
 
 namespace spec2fab {
 
+
+// Resource limits this part enforces (core/limits.h).
+SPEC2FAB_LIMIT("tuner_runs", 1e8, "tuner runs a schedule asks for (sweeps times tuners, summed over its phases)");
+SPEC2FAB_LIMIT("evaluations", 1e12, "error evaluations a schedule plans (each tuner run's optimizer's, summed over its phases)");
+SPEC2FAB_LIMIT("tuning_hours", 72, "hours of tuning a schedule may take, projected from the pace of each phase's first runs");
+
 std::uint64_t tuner_seed(std::uint64_t run_seed, size_t phase, int sweep, size_t tuner) {
   return mix_seed(mix_seed(mix_seed(mix_seed(run_seed) ^ phase) ^ static_cast<std::uint64_t>(sweep)) ^ tuner);
 }

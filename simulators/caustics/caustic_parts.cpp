@@ -28,6 +28,12 @@
 
 namespace spec2fab {
 
+
+// Resource limits this part enforces (core/limits.h).
+SPEC2FAB_LIMIT("caustic_rays", 2e7, "rays a caustics simulator traces per evaluation (about 72 bytes each)");
+SPEC2FAB_LIMIT("caustic_vertices", 4e6,
+                "top-surface vertices of a caustics simulator's slab (a few hundred bytes each, with Embree's BVH)");
+
 double image_ssim(std::span<const double> image, std::span<const double> reference, int width,
                   int height) {
   if (image.size() != reference.size() ||

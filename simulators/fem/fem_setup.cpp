@@ -17,6 +17,10 @@
 #include "fem/petsc/gamg_solver.h"
 
 namespace spec2fab::fem {
+
+// Resource limits this part enforces (core/limits.h).
+SPEC2FAB_LIMIT("tets", 1e7, "tetrahedra TetGen would make for the FEM (about 4.6 kB and 42 us of one solve each)");
+
 namespace {
 
 // The simulator's properties, declared once (core/options.h): reading,

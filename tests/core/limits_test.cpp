@@ -4,7 +4,12 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <functional>
+#include <iterator>
+#include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "core/error.h"
 #include "core/limits.h"
@@ -52,6 +57,18 @@ TEST_F(LimitsTest, WhatCannotBeALimitIsRefused) {
   EXPECT_THAT(refusal([] { limits::set_from_experiment(Properties::parse(R"({"tets": 0})", "e.json", ".")); }),
               HasSubstr("e.json: /tets: must be a positive number"));
   EXPECT_EQ(limits::get("tets"), 1e7);  // nothing refused was kept
+}
+
+// Each part declares its limits (SPEC2FAB_LIMIT): the program lists them by
+// name, each once, and each is in docs/robustness.md's table.
+TEST_F(LimitsTest, EveryLimitIsDeclaredOnceListedByNameAndDocumented) {
+  const std::vector<LimitDoc> all = limits::docs();
+  ASSERT_GE(all.size(), 12u);
+  for (size_t i = 1; i < all.size(); ++i) EXPECT_LT(all[i - 1].name, all[i].name);
+  std::ifstream in(SPEC2FAB_DATASETS_DIR "/../docs/robustness.md");
+  const std::string markdown((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (const LimitDoc& doc : all) EXPECT_THAT(markdown, HasSubstr("| `" + doc.name + "` |")) << doc.name;
+  EXPECT_THROW(limits::declare("tets", 5, "again"), std::logic_error);
 }
 
 }  // namespace
