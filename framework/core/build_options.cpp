@@ -3,14 +3,9 @@
 namespace spec2fab {
 
 const std::vector<OptionalModule>& optional_modules() {
+  // Declared by each module's CMake (spec2fab_optional_module), not here.
   static const std::vector<OptionalModule> modules{
-      {"SPEC2FAB_WITH_CERES", "Ceres Solver", SPEC2FAB_WITH_CERES, {{"optimizer", "ceres"}}},
-      {"SPEC2FAB_WITH_NLOPT", "NLopt", SPEC2FAB_WITH_NLOPT, {{"optimizer", "nlopt"}}},
-      {"SPEC2FAB_WITH_LIB3MF", "lib3mf", SPEC2FAB_WITH_LIB3MF, {{"print writer", "3mf"}}},
-      {"SPEC2FAB_WITH_TETGEN", "TetGen", SPEC2FAB_WITH_TETGEN, {{"mesher", "tetgen"}}},
-      {"SPEC2FAB_WITH_HYPRE", "hypre", SPEC2FAB_WITH_HYPRE, {{"linear solver", "amg"}}},
-      {"SPEC2FAB_WITH_PETSC", "PETSc", SPEC2FAB_WITH_PETSC, {{"linear solver", "gamg"}}},
-      {"SPEC2FAB_WITH_MPI", "Open MPI", SPEC2FAB_WITH_MPI, {}},
+#include "core/optional_modules.inc"
   };
   return modules;
 }
