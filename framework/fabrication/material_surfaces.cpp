@@ -386,7 +386,8 @@ class StlFiles final : public PrintWriter {
     return {"print/<material>.stl: one closed surface per material (binary STL, mm), as the paper sent "
             "to its printer: the iso-surface of the material's fraction in each mesh cell, at the level "
             "that makes the mesh's volume the material's voxel count (within 0.5 %), so that layers "
-            "thinner than a cell keep their volume.",
+            "thinner than a cell keep their volume. The caustics translators' print/surface.stl (the "
+            "tuned slab) follows the same switch.",
             output_option_docs({"mesh_voxel_mm", "mesh_adaptivity"}),
             R"({"output": {"stl": true}})"};
   }

@@ -652,7 +652,7 @@ TEST_F(Cli, SmoothCausticsTunesTheSurfaceAndReportsImageErrors) {
                    "control": [6, 6], "image_size": [48, 48], "rays": [96, 96], "distance_mm": 60},
           "optimizer": {"type": "nlopt", "algorithm": "LD_LBFGS", "max_evaluations": 15},
           "compare_optimizers": [{"type": "spsa", "iterations": 5, "c": 0.01, "seed": 3}],
-          "output": {"slices": false, "stl": false, "3mf": false, "render": false},
+          "output": {"slices": false, "stl": true, "3mf": false, "render": false},
           "materials": ")" + (kDatasets / "materials/polyjet.json").string() + R"(",
           "printer": ")" + (dir_ / "clear_printer.json").string() + R"("})";
   write_clear_printer(dir_ / "clear_printer.json");
@@ -731,7 +731,7 @@ TEST_F(Cli, SmoothCausticsUnderAPointLight) {
           "goal": {"image": ")" + (kDatasets / "images/caustic_ring_120.png").string() + R"(",
                    "image_size": [48, 48], "distance_mm": 60, "light_distance_mm": 300)" + extra + R"(},
           "optimizer": {"type": "nlopt", "algorithm": "LD_LBFGS", "max_evaluations": 15},
-          "output": {"slices": false, "stl": false, "3mf": false, "render": false},
+          "output": {"slices": false, "stl": true, "3mf": false, "render": false},
           "materials": ")" + (kDatasets / "materials/polyjet.json").string() + R"(",
           "printer": ")" + (dir_ / "clear_printer.json").string() + R"("})";
   };
@@ -765,7 +765,7 @@ TEST_F(Cli, SmoothCausticsHoldTheSurfaceToMaxSlope) {
           "goal": {"image": ")" + (kDatasets / "images/caustic_ring_120.png").string() + R"(",
                    "control": [12, 12], "image_size": [48, 48], "distance_mm": 200, "max_slope": 0.02},
           "optimizer": {"type": "nlopt", "algorithm": "LD_LBFGS", "max_evaluations": 15},
-          "output": {"slices": false, "stl": false, "3mf": false, "render": false},
+          "output": {"slices": false, "stl": true, "3mf": false, "render": false},
           "materials": ")" + (kDatasets / "materials/polyjet.json").string() + R"(",
           "printer": ")" + (dir_ / "clear_printer.json").string() + R"("})";
   const Result r = run_spec2fab("run -q " + experiment("gentle", body).string() + " --out " + (dir_ / "run").string());
@@ -796,6 +796,29 @@ TEST_F(Cli, SmoothCausticsHoldTheSurfaceToMaxSlope) {
   EXPECT_GT(tops, 1000);
   EXPECT_LE(steepest, 0.02 + 1e-4);
   EXPECT_GT(steepest, 0.005);  // the surface is shaped, not flat
+}
+
+TEST_F(Cli, NoStlWritesNoSurfaceStlEither) {
+  SPEC2FAB_SKIP_UNLESS(SPEC2FAB_WITH_NLOPT);
+  // print/surface.stl is a print file like the materials' STLs: "stl": false
+  // leaves it out too (it was written whatever the switch said).
+  write_clear_printer(dir_ / "clear_printer.json");
+  const std::string body =
+      R"({"name": "nostl", "translator": "smooth_caustics",
+          "geometry": {"mesh": ")" + (kDatasets / "meshes/board_60x60x8.stl").string() + R"(", "uv": "planar"},
+          "goal": {"image": ")" + (kDatasets / "images/caustic_ring_120.png").string() + R"(",
+                   "control": [8, 8], "image_size": [32, 32], "distance_mm": 200},
+          "optimizer": {"type": "nlopt", "algorithm": "LD_LBFGS", "max_evaluations": 3},
+          "output": {"slices": false, "stl": false, "3mf": false, "render": false},
+          "materials": ")" + (kDatasets / "materials/polyjet.json").string() + R"(",
+          "printer": ")" + (dir_ / "clear_printer.json").string() + R"("})";
+  const Result r = run_spec2fab("run -q " + experiment("nostl", body).string() + " --out " + (dir_ / "run").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_FALSE(fs::exists(dir_ / "run/print/surface.stl"));
+  EXPECT_FALSE(fs::exists(dir_ / "run/preview/surface_stl_traced.png"));
+  const auto result = nlohmann::json::parse(read(dir_ / "run" / "result.json"));
+  EXPECT_EQ(result["caustics"]["surface_stl"], "not written (output.stl is false)");
+  EXPECT_FALSE(result["files"].contains("surface"));
 }
 
 TEST_F(Cli, CausticCheckSeesAFlatBoardPassTheBeamUnchanged) {
@@ -883,7 +906,7 @@ TEST_F(Cli, FacetCausticsAimsEveryFacetAtItsKernelAndLensesSpreadItLikeTheKernel
                      "min_height_mm": 2, "start_height_mm": 5, "assignment_sweeps": 20},
             "swap_optimizer": {"type": "annealing", "iterations": 5, "schedule_iterations": 100,
                                "swap_probability": 1, "initial_temperature": 1, "cooling": 0.95},
-            "output": {"slices": false, "stl": false, "3mf": false, "render": false},
+            "output": {"slices": false, "stl": true, "3mf": false, "render": false},
             "materials": ")" + (kDatasets / "materials/polyjet.json").string() + R"(",
             "printer": ")" + (dir_ / "clear_printer.json").string() + R"("})";
     const Result r = run_spec2fab("run -q " + experiment(facet, body).string() + " --out " + (dir_ / facet).string());
@@ -947,7 +970,7 @@ TEST_F(Cli, CausticsTextureTunesTheTextureThenTheBottomFaceThroughItsShadow) {
                      "distance_mm": 60, "min_thickness_mm": 2, "start_thickness_mm": 6,
                      "compensate_texture": )" + (compensate ? "true" : "false") + R"(},
             "optimizer": {"type": "nlopt", "algorithm": "LD_LBFGS", "max_evaluations": 15},
-            "output": {"slices": false, "stl": false, "3mf": false, "render": false},
+            "output": {"slices": false, "stl": true, "3mf": false, "render": false},
             "materials": ")" + (kDatasets / "materials/polyjet.json").string() + R"(",
             "printer": ")" + (dir_ / "ink_printer.json").string() + R"("})";
     const Result r = run_spec2fab("run -q " + experiment(name, body).string() + " --out " + (dir_ / name).string());

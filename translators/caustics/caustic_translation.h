@@ -126,6 +126,10 @@ struct CausticSurfaceSettings {
                       const std::string& material) const;
 };
 
+/// result.json's caustics.surface_stl where "output": {"stl": false} left
+/// print/surface.stl out.
+inline constexpr const char* kSurfaceStlOff = "not written (output.stl is false)";
+
 /// print/surface.stl: the tuned slab as one smooth closed mesh — the
 /// surface meshed on `print_vertices` — for printers that take a surface (the
 /// per-material STLs come from print voxels, whose 27 µm terraces would

@@ -262,8 +262,13 @@ class FacetCausticsTranslator final : public TuningTranslator {
       centre_heights.push_back(plane(k).surface_height(0.5 * facet_mm_[0], 0.5 * facet_mm_[1]));
     write_height_map(centre_heights, facets_[0], facets_[1], context.folder.path("preview/height_map.png"));
     context.result["files"] = {
-        {"previews", {"preview/convergence.png", "preview/goal_vs_simulated.png", "preview/height_map.png"}},
-        {"surface", "print/surface.stl"}};
+        {"previews", {"preview/convergence.png", "preview/goal_vs_simulated.png", "preview/height_map.png"}}};
+    // print/surface.stl is an STL like the materials': "stl": false turns it off too.
+    if (!outputs_.fabrication.writes("stl")) {
+      context.result["caustics"]["surface_stl"] = kSurfaceStlOff;
+      return;
+    }
+    context.result["files"]["surface"] = "print/surface.stl";
     write_stl(slab, context.folder.path("print/surface.stl"));
   }
 
