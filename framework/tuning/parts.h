@@ -75,6 +75,14 @@ class Simulator {
     return out.write_files(folder);
   }
 
+  /// Whether simulate() reads the tree beyond `subtree`: a volumetric
+  /// simulator asks the whole tree which material is where, so it sees
+  /// whatever the other tuners hold at that moment. Such a tuner may not
+  /// share a parallel phase's colour class with another (its result would
+  /// depend on their timing, and differ between threads and ranks): the
+  /// schedule refuses it.
+  virtual bool reads_beyond_subtree() const { return false; }
+
   /// Inputs that come from outside the subtree — state an earlier schedule
   /// phase hands over by name through Tuner::set_simulator_input (a coupling
   /// does it; see TextureShadow). None by default.

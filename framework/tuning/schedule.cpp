@@ -69,6 +69,27 @@ std::optional<std::pair<size_t, size_t>> overlapping_tuners(TunerNetwork& networ
   return std::nullopt;
 }
 
+std::optional<std::pair<size_t, size_t>> tuner_reading_a_neighbour(TunerNetwork& network,
+                                                                   const std::vector<std::vector<size_t>>& classes) {
+  for (const std::vector<size_t>& together : classes) {
+    if (together.size() < 2) continue;
+    for (size_t t : together) {
+      if (!network.tuner(t).reads_beyond_its_node()) continue;
+      for (size_t other : together)
+        if (other != t) return std::pair{t, other};
+    }
+  }
+  return std::nullopt;
+}
+
+std::string reading_a_neighbour_problem(TunerNetwork& network, std::pair<size_t, size_t> pair) {
+  const Tuner& reader = network.tuner(pair.first);
+  return "tuners '" + reader.name() + "' and '" + network.tuner(pair.second).name() +
+         "' cannot run in parallel: the " + reader.simulator_name() + " simulator of '" + reader.name() +
+         "' reads the whole tree, so it would see the trial values of '" + network.tuner(pair.second).name() +
+         "' as they change and its result would depend on timing; make the phase serial";
+}
+
 void ErrorDiffusion::begin_sweep(TunerNetwork& network, const std::vector<size_t>& tuners) {
   for (size_t t : tuners) network.tuner(t).reset_target();
 }
@@ -414,6 +435,8 @@ RunRecord Schedule::run(TunerNetwork& network, std::uint64_t seed, PhaseCheckpoi
     record.phase_names.push_back(phase.name);
     const auto start = std::chrono::steady_clock::now();
     const auto classes = parallel ? network.colour_classes(tuners) : std::vector<std::vector<size_t>>{};
+    if (const auto reading = tuner_reading_a_neighbour(network, classes))
+      throw std::invalid_argument("schedule: phase '" + phase.name + "': " + reading_a_neighbour_problem(network, *reading));
     std::vector<std::unique_ptr<Optimizer>> own_optimizers;
     if (!phase.optimizer.is_null()) {
       const Properties properties = Properties::wrap(phase.optimizer, "schedule phase '" + phase.name + "' optimizer");

@@ -216,6 +216,15 @@ class Schedule {
 /// inside the other's subtree — or nullopt. Tuners that run in parallel
 /// must not overlap: both would set the same parameters at once.
 std::optional<std::pair<size_t, size_t>> overlapping_tuners(TunerNetwork& network, const std::vector<size_t>& tuners);
+/// Within one of `classes` (the tuners a parallel phase runs together), a
+/// tuner whose simulator reads the tree beyond its node and another tuner
+/// beside it, or nullopt: the first would see the second's trial values,
+/// so its result would depend on timing (and differ between threads and
+/// ranks).
+std::optional<std::pair<size_t, size_t>> tuner_reading_a_neighbour(TunerNetwork& network,
+                                                                   const std::vector<std::vector<size_t>>& classes);
+/// The sentence that refuses such a pair.
+std::string reading_a_neighbour_problem(TunerNetwork& network, std::pair<size_t, size_t> pair);
 
 /// The seed of one tuner run (SplitMix64 of the inputs).
 std::uint64_t tuner_seed(std::uint64_t run_seed, size_t phase, int sweep, size_t tuner);

@@ -110,6 +110,9 @@ class Tuner {
   void set_simulator_input(std::string_view name, GridField value) { simulator_->set_input(name, std::move(value)); }
   /// The simulator's inputs, for couplings that check what they hand over.
   std::vector<SimulatorInput> simulator_inputs() const { return simulator_->inputs(); }
+  /// Whether its simulator reads the tree beyond this tuner's node (Simulator::reads_beyond_subtree).
+  bool reads_beyond_its_node() const { return simulator_->reads_beyond_subtree(); }
+  std::string simulator_name() const { return simulator_->name(); }
   Optimizer& optimizer() { return *optimizer_; }
   /// Puts `optimizer` in place of the tuner's own and returns the one it had
   /// (a schedule phase may tune with another optimizer; Phase::optimizer).

@@ -74,6 +74,9 @@ std::unique_ptr<TuningPlan> build_tuning_plan(const Properties& goal, ReducerTre
                               "' cannot run in parallel: their subtrees overlap (they would set the same "
                               "parameters at once); make the phase serial");
       }
+      const std::vector<size_t> members = phase.members(plan->network.size());
+      if (const auto reading = tuner_reading_a_neighbour(plan->network, plan->network.colour_classes(members)))
+        spec.fail("mode", reading_a_neighbour_problem(plan->network, *reading));
     }
     phase.fix_after = keys.fix_after;
     plan->schedule.add(std::move(phase));

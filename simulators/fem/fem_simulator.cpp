@@ -39,6 +39,8 @@ double seconds_since(Clock::time_point start) {
 
 class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
  public:
+  // Every tet's material comes from the whole tree, not only the tuned subtree.
+  bool reads_beyond_subtree() const override { return true; }
   FemSimulator(const Properties& properties, const PartContext& context)
       : settings_(FemSettings::read(properties)),
         where_(properties.where()),
