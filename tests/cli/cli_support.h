@@ -44,6 +44,37 @@ inline Result run_spec2fab(const std::string& arguments) {
 
 const fs::path kDatasets = SPEC2FAB_DATASETS_DIR;
 
+// An experiment of two FEM tuners on the 100 x 10 x 10 mm beam (clamped at
+// x = 0, 1 N down on the end face): a plane at x = 50, each half's material
+// VeroWhitePlus or DM9860 tuned by exhaustive search to a goal tip
+// deflection, both in one phase of `mode` (serial or parallel), on the FEM's
+// `linear_solver`. `output` is the experiment's output section, or "".
+inline std::string two_fem_tuners_body(const std::string& mode, const std::string& linear_solver,
+                                       const std::string& output) {
+  auto tuner = [&](const std::string& name, const std::string& node) {
+    return R"({"name": ")" + name + R"(", "node": ")" + node + R"(",
+        "simulator": {"type": "fem", "max_tet_volume_mm3": 5, "nonlinear": false, "linear_solver": ")" +
+           linear_solver + R"(",
+                      "fixed": [{"min": [0, 0, 0], "max": [0, 10, 10]}],
+                      "loads": [{"min": [100, 0, 0], "max": [100, 10, 10], "force_n": [0, 0, -1]}],
+                      "probes": [[100, 5, 5]]},
+        "metric": {"type": "shape_mse"},
+        "goal": {"type": "deformed_shape", "points": [[100, 5, 5]], "targets": [[100, 5, 3]]},
+        "optimizer": {"type": "exhaustive"}})";
+  };
+  const std::string choice =
+      R"({"type": "layered", "material": {"value": "VeroWhitePlus", "choices": ["VeroWhitePlus", "DM9860"]}})";
+  return R"({"name": "two_fem_tuners", "translator": "tree",
+          "geometry": {"mesh": ")" + (kDatasets / "meshes/beam_100x10x10.stl").string() + R"(", "uv": "planar"},
+          "goal": {"tree": {"type": "plane", "axis": "x", "offset_mm": 50, "below": )" + choice + R"(, "above": )" +
+         choice + R"(},
+                   "tuners": [)" + tuner("near", "below") + ", " + tuner("far", "above") + R"(],
+                   "schedule": [{"name": "both", "mode": ")" + mode + R"("}]},)" +
+         (output.empty() ? std::string() : R"("output": )" + output + ",") + R"(
+          "materials": ")" + (kDatasets / "materials/polyjet.json").string() + R"(",
+          "printer": ")" + (kDatasets / "printers/objet500_connex_flex.json").string() + R"(", "seed": 1})";
+}
+
 inline std::string read(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
   std::stringstream s;

@@ -465,28 +465,7 @@ TEST_F(Cli, FemTunersMayNotRunInParallel) {
   // An FEM tuner's simulator reads every tet's material from the whole tree,
   // so beside another tuner of a parallel phase it would see that tuner's
   // trial values as they change: its result would depend on timing.
-  auto tuner = [](const std::string& name, const std::string& node) {
-    return R"({"name": ")" + name + R"(", "node": ")" + node + R"(",
-        "simulator": {"type": "fem", "max_tet_volume_mm3": 5, "nonlinear": false,
-                      "fixed": [{"min": [0, 0, 0], "max": [0, 10, 10]}],
-                      "loads": [{"min": [100, 0, 0], "max": [100, 10, 10], "force_n": [0, 0, -1]}],
-                      "probes": [[100, 5, 5]]},
-        "metric": {"type": "shape_mse"},
-        "goal": {"type": "deformed_shape", "points": [[100, 5, 5]], "targets": [[100, 5, 3]]},
-        "optimizer": {"type": "exhaustive"}})";
-  };
-  const std::string choice =
-      R"({"type": "layered", "material": {"value": "VeroWhitePlus", "choices": ["VeroWhitePlus", "DM9860"]}})";
-  auto body = [&](const char* mode) {
-    return R"({"name": "two_fem_tuners", "translator": "tree",
-          "geometry": {"mesh": ")" + (kDatasets / "meshes/beam_100x10x10.stl").string() + R"(", "uv": "planar"},
-          "goal": {"tree": {"type": "plane", "axis": "x", "offset_mm": 50, "below": )" + choice + R"(, "above": )" +
-           choice + R"(},
-                   "tuners": [)" + tuner("near", "below") + ", " + tuner("far", "above") + R"(],
-                   "schedule": [{"name": "both", "mode": ")" + mode + R"("}]},
-          "materials": ")" + (kDatasets / "materials/polyjet.json").string() + R"(",
-          "printer": ")" + (kDatasets / "printers/objet500_connex_flex.json").string() + R"("})";
-  };
+  auto body = [](const char* mode) { return two_fem_tuners_body(mode, "cholesky", ""); };
   const Result parallel = run_spec2fab("-q validate " + experiment("parallel", body("parallel")).string());
   EXPECT_EQ(parallel.code, 2) << parallel.out;
   EXPECT_THAT(single_line(parallel.out),
