@@ -612,6 +612,20 @@ static void write_clear_printer(const fs::path& file) {
       "source": "test"})";
 }
 
+// A smooth-caustics experiment on the 60 x 60 x 8 mm board casting the ring
+// image, on the clear printer at `printer`: `goal_keys` follow the image in
+// the goal, L-BFGS for `evaluations`, and the print's switches `output`.
+static std::string board_caustics_body(const std::string& name, const std::string& goal_keys, int evaluations,
+                                       const std::string& output, const fs::path& printer) {
+  return R"({"name": ")" + name + R"(", "translator": "smooth_caustics",
+          "geometry": {"mesh": ")" + (kDatasets / "meshes/board_60x60x8.stl").string() + R"(", "uv": "planar"},
+          "goal": {"image": ")" + (kDatasets / "images/caustic_ring_120.png").string() + R"(", )" + goal_keys + R"(},
+          "optimizer": {"type": "nlopt", "algorithm": "LD_LBFGS", "max_evaluations": )" + std::to_string(evaluations) + R"(},
+          "output": )" + output + R"(,
+          "materials": ")" + (kDatasets / "materials/polyjet.json").string() + R"(",
+          "printer": ")" + printer.string() + R"("})";
+}
+
 // A PNG's width and height, from its IHDR chunk (bytes 16–23, big-endian).
 static std::array<int, 2> png_size(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
@@ -773,15 +787,9 @@ TEST_F(Cli, SmoothCausticsUnderAPointLight) {
 TEST_F(Cli, SmoothCausticsHoldTheSurfaceToMaxSlope) {
   SPEC2FAB_SKIP_UNLESS(SPEC2FAB_WITH_NLOPT);
   write_clear_printer(dir_ / "clear_printer.json");
-  const std::string body =
-      R"({"name": "gentle", "translator": "smooth_caustics",
-          "geometry": {"mesh": ")" + (kDatasets / "meshes/board_60x60x8.stl").string() + R"(", "uv": "planar"},
-          "goal": {"image": ")" + (kDatasets / "images/caustic_ring_120.png").string() + R"(",
-                   "control": [12, 12], "image_size": [48, 48], "distance_mm": 200, "max_slope": 0.02},
-          "optimizer": {"type": "nlopt", "algorithm": "LD_LBFGS", "max_evaluations": 15},
-          "output": {"slices": false, "stl": true, "3mf": false, "render": false},
-          "materials": ")" + (kDatasets / "materials/polyjet.json").string() + R"(",
-          "printer": ")" + (dir_ / "clear_printer.json").string() + R"("})";
+  const std::string body = board_caustics_body(
+      "gentle", R"("control": [12, 12], "image_size": [48, 48], "distance_mm": 200, "max_slope": 0.02)", 15,
+      R"({"slices": false, "stl": true, "3mf": false, "render": false})", dir_ / "clear_printer.json");
   const Result r = run_spec2fab("run -q " + experiment("gentle", body).string() + " --out " + (dir_ / "run").string());
   ASSERT_EQ(r.code, 0) << r.out;
   const auto limit = nlohmann::json::parse(read(dir_ / "run" / "result.json"))["caustics"]["slope_limit"];
@@ -817,15 +825,9 @@ TEST_F(Cli, NoStlWritesNoSurfaceStlEither) {
   // print/surface.stl is a print file like the materials' STLs: "stl": false
   // leaves it out too (it was written whatever the switch said).
   write_clear_printer(dir_ / "clear_printer.json");
-  const std::string body =
-      R"({"name": "nostl", "translator": "smooth_caustics",
-          "geometry": {"mesh": ")" + (kDatasets / "meshes/board_60x60x8.stl").string() + R"(", "uv": "planar"},
-          "goal": {"image": ")" + (kDatasets / "images/caustic_ring_120.png").string() + R"(",
-                   "control": [8, 8], "image_size": [32, 32], "distance_mm": 200},
-          "optimizer": {"type": "nlopt", "algorithm": "LD_LBFGS", "max_evaluations": 3},
-          "output": {"slices": false, "stl": false, "3mf": false, "render": false},
-          "materials": ")" + (kDatasets / "materials/polyjet.json").string() + R"(",
-          "printer": ")" + (dir_ / "clear_printer.json").string() + R"("})";
+  const std::string body = board_caustics_body(
+      "nostl", R"("control": [8, 8], "image_size": [32, 32], "distance_mm": 200)", 3,
+      R"({"slices": false, "stl": false, "3mf": false, "render": false})", dir_ / "clear_printer.json");
   const Result r = run_spec2fab("run -q " + experiment("nostl", body).string() + " --out " + (dir_ / "run").string());
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_FALSE(fs::exists(dir_ / "run/print/surface.stl"));
