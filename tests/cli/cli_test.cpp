@@ -462,6 +462,7 @@ TEST_F(Cli, TunedRunRecordsEverySummaryAndFindsAReachableColour) {
 }
 
 TEST_F(Cli, FemTunersMayNotRunInParallel) {
+  SPEC2FAB_SKIP_UNLESS(SPEC2FAB_WITH_TETGEN);  // validate meshes the beam
   // An FEM tuner's simulator reads every tet's material from the whole tree,
   // so beside another tuner of a parallel phase it would see that tuner's
   // trial values as they change: its result would depend on timing.
