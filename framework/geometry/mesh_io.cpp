@@ -35,8 +35,7 @@
 
 namespace spec2fab {
 
-
-// Resource limits this part enforces (core/limits.h).
+// The resource limits this part enforces (core/limits.h).
 SPEC2FAB_LIMIT("mesh_read_seconds", 60, "seconds a mesh file's reader may take before the file is refused");
 
 namespace {
@@ -179,17 +178,15 @@ void check_ply_ascii_body(const std::filesystem::path& file, std::istream& in, c
     if (row.find('\r') != std::string::npos) bad("a carriage return inside the line (PLY lines end with LF or CRLF)");
     std::istringstream words(row);
     std::string word;
-    for (size_t p = 0; p < element.properties.size(); ++p) {
-      const double list_most = element.properties[p];
+    for (const auto& property : element.properties) {
       if (!(words >> word) || !is_number(word)) bad("a property is missing or not a number");
-      if (list_most < 0) continue;
+      if (property.list_most < 0) continue;
       const double count = std::strtod(word.c_str(), nullptr);
-      if (count < 0 || count > list_most || count != std::floor(count))
-        bad(fmt::format("a list count of {}, where its type holds whole numbers up to {:.0f}", word, list_most));
-      const bool vertex_indices = element.name == "face" && (element.names[p] == "vertex_indices" || element.names[p] == "vertex_index");
+      if (count < 0 || count > property.list_most || count != std::floor(count))
+        bad(fmt::format("a list count of {}, where its type holds whole numbers up to {:.0f}", word, property.list_most));
       for (double k = 0; k < count; ++k) {
         if (!(words >> word) || !is_number(word)) bad(fmt::format("the list says {:.0f} items and holds fewer", count));
-        if (!vertex_indices) continue;
+        if (!property.vertex_indices) continue;
         const double index = std::strtod(word.c_str(), nullptr);
         if (index < 0 || index >= vertices || index != std::floor(index))
           bad(fmt::format("vertex index {}, where the file has {:.0f} vertices (0 to {:.0f})", word.substr(0, 24), vertices,
@@ -222,12 +219,15 @@ void check_ply_header(const std::filesystem::path& file) {
   double needed_bytes = 0;  // at least, for the elements declared
   double element_count = -1, element_bytes = 0;
   // Each element's name, count (an ASCII file holds one line each) and
-  // properties: -1 for a scalar, a list's largest count for a list.
+  // properties.
+  struct Property {
+    double list_most = -1;        // -1 for a scalar, a list's largest count for a list
+    bool vertex_indices = false;  // a face's list of vertex indices
+  };
   struct Element {
     std::string name;
     double count;
-    std::vector<double> properties;
-    std::vector<std::string> names;  // each property's
+    std::vector<Property> properties;
   };
   std::vector<Element> elements;
   const auto close_element = [&] {
@@ -261,7 +261,7 @@ void check_ply_header(const std::filesystem::path& file) {
       close_element();
       element_count = std::stod(count);
       element_bytes = 0;
-      elements.push_back({name, element_count, {}, {}});
+      elements.push_back({name, element_count, {}});
     } else if (keyword == "property") {
       if (element_count < 0) bad(number, "a property before any element");
       std::string type;
@@ -273,16 +273,16 @@ void check_ply_header(const std::filesystem::path& file) {
           bad(number, "'property list' needs a count type, an item type and a name, got '" + line + "'");
         element_bytes += ply_type_size(count_type);
         const int count_size = ply_type_size(count_type);
-        elements.back().properties.push_back(count_size >= 4 ? 2147483647.0 : std::pow(2.0, 8 * count_size) - 1);
-        elements.back().names.push_back(name);
+        elements.back().properties.push_back(
+            {count_size >= 4 ? 2147483647.0 : std::pow(2.0, 8 * count_size) - 1,
+             elements.back().name == "face" && (name == "vertex_indices" || name == "vertex_index")});
       } else {
         std::string name;
         words >> name;
         if (ply_type_size(type) == 0 || name.empty())
           bad(number, "'property' needs a type and a name, got '" + line + "'");
         element_bytes += ply_type_size(type);
-        elements.back().properties.push_back(-1);
-        elements.back().names.push_back(name);
+        elements.back().properties.push_back({});
       }
     } else if (keyword == "end_header") {
       close_element();

@@ -21,8 +21,7 @@
 
 namespace spec2fab {
 
-
-// Resource limits this part enforces (core/limits.h).
+// The resource limits this part enforces (core/limits.h).
 SPEC2FAB_LIMIT("field_band_voxels", 5e7, "voxels of the surface field's band (about 20 bytes each)");
 
 namespace {

@@ -10,8 +10,7 @@
 
 namespace spec2fab {
 
-
-// Resource limits this part enforces (core/limits.h).
+// The resource limits this part enforces (core/limits.h).
 SPEC2FAB_LIMIT("tree_depth", 100, "levels of nesting in a reducer tree (the paper's trees are 5 deep; at most 1000)", 1000,
                 "every walk over a tree recurses, and deeper trees would overflow the stack");
 SPEC2FAB_LIMIT("column_cells", 1e6, "cells of one column node, each a subtree of nodes");

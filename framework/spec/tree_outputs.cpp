@@ -14,8 +14,7 @@
 
 namespace spec2fab {
 
-
-// Resource limits this part enforces (core/limits.h).
+// The resource limits this part enforces (core/limits.h).
 SPEC2FAB_LIMIT("census_voxels", 1e9, "voxels of the material census (goal.census_voxel_mm)");
 
 TreeOutputOptions TreeOutputOptions::read(const Properties& goal, const Experiment& experiment,

@@ -21,8 +21,7 @@
 
 namespace spec2fab {
 
-
-// Resource limits this part enforces (core/limits.h).
+// The resource limits this part enforces (core/limits.h).
 SPEC2FAB_LIMIT("image_pixels", 64e6,
                 "pixels of an image: a goal image (read from its header before decoding), or one a simulator makes");
 

@@ -23,8 +23,7 @@
 
 namespace spec2fab {
 
-
-// Resource limits this part enforces (core/limits.h).
+// The resource limits this part enforces (core/limits.h).
 SPEC2FAB_LIMIT("tuner_runs", 1e8, "tuner runs a schedule asks for (sweeps times tuners, summed over its phases)");
 SPEC2FAB_LIMIT("evaluations", 1e12, "error evaluations a schedule plans (each tuner run's optimizer's, summed over its phases)");
 SPEC2FAB_LIMIT("tuning_hours", 72, "hours of tuning a schedule may take, projected from the pace of each phase's first runs");

@@ -28,8 +28,7 @@
 
 namespace spec2fab {
 
-
-// Resource limits this part enforces (core/limits.h).
+// The resource limits this part enforces (core/limits.h).
 SPEC2FAB_LIMIT("caustic_rays", 2e7, "rays a caustics simulator traces per evaluation (about 72 bytes each)");
 // ~340 bytes per vertex of peak memory with Embree's BVH: 0.21 GB at 500²
 // vertices, 0.87 GB at 1500² (simulate caustics, 64² image), so ~1.4 GB at

@@ -18,7 +18,7 @@
 
 namespace spec2fab::fem {
 
-// Resource limits this part enforces (core/limits.h).
+// The resource limits this part enforces (core/limits.h).
 SPEC2FAB_LIMIT("tets", 1e7, "tetrahedra TetGen would make for the FEM (about 4.6 kB and 42 us of one solve each)");
 
 namespace {

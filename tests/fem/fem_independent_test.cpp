@@ -211,8 +211,8 @@ TEST_P(FemIndependent, AgreesWithCalculixOnATetgenMeshOfTheSameDensityWithin3Per
 //    0.625 -> 0.3125 mm bricks moved its worst probe by 0.4 %;
 //  * the checkerboard's stiff cells meet only along edges, and there no
 //    discretisation here converges: from 0.625 to 0.5 to 0.3125 mm bricks
-//    its probes soften by 2.5 % and 4.9 % more (|u| grows as log(1/h), with
-//    the slope the simulator's tets show from 0.025 to 0.00625 mm³). Its
+//    its probes soften by 2.5 % and 4.9 % more (|u| grows as log(1/h); the
+//    simulator's tets grow at a similar slope from 0.025 to 0.00625 mm³). Its
 //    bound is what was measured at 0.025 mm³ against 0.625 mm bricks
 //    (docs/fem.md); the same-density C3D4 check above is its real test.
 // About 20-90 s per case: left to the Release build, the long ones to

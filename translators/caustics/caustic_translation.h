@@ -17,6 +17,7 @@
 
 #include "core/options.h"
 #include "core/registry.h"
+#include "fabrication/fabricate.h"
 #include "geometry/mesh.h"
 #include "tuning/observation.h"
 
@@ -126,9 +127,14 @@ struct CausticSurfaceSettings {
                       const std::string& material) const;
 };
 
-/// result.json's caustics.surface_stl where "output": {"stl": false} left
-/// print/surface.stl out.
-inline constexpr const char* kSurfaceStlOff = "not written (output.stl is false)";
+/// Whether print/surface.stl is to be written: it is an STL like the
+/// materials', so "output": {"stl": false} leaves it out too, and then
+/// `caustics_report["surface_stl"]` says so.
+inline bool surface_stl_wanted(const FabricationOptions& fabrication, nlohmann::json& caustics_report) {
+  if (fabrication.writes("stl")) return true;
+  caustics_report["surface_stl"] = "not written (output.stl is false)";
+  return false;
+}
 
 /// print/surface.stl: the tuned slab as one smooth closed mesh — the
 /// surface meshed on `print_vertices` — for printers that take a surface (the

@@ -259,11 +259,7 @@ class CausticsTextureTranslator final : public TuningTranslator {
       for (Vec3& v : mesh.vertices) v.z() = cut_z_ - v.z();
       for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
     };
-    // print/surface.stl is an STL like the materials': "stl": false turns it off too.
-    if (!outputs_.fabrication.writes("stl")) {
-      context.result["caustics"]["surface_stl"] = kSurfaceStlOff;
-      return;
-    }
+    if (!surface_stl_wanted(outputs_.fabrication, context.result["caustics"])) return;
     const SurfaceStl stl = write_caustic_surface_stl(
         slab_, surface_.print_vertices(), dynamic_cast<const HeightSurface&>(tree_->node("below")), cast.pixels, target, mirror, &shadow,
         context.folder);

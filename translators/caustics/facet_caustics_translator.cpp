@@ -263,11 +263,7 @@ class FacetCausticsTranslator final : public TuningTranslator {
     write_height_map(centre_heights, facets_[0], facets_[1], context.folder.path("preview/height_map.png"));
     context.result["files"] = {
         {"previews", {"preview/convergence.png", "preview/goal_vs_simulated.png", "preview/height_map.png"}}};
-    // print/surface.stl is an STL like the materials': "stl": false turns it off too.
-    if (!outputs_.fabrication.writes("stl")) {
-      context.result["caustics"]["surface_stl"] = kSurfaceStlOff;
-      return;
-    }
+    if (!surface_stl_wanted(outputs_.fabrication, context.result["caustics"])) return;
     context.result["files"]["surface"] = "print/surface.stl";
     write_stl(slab, context.folder.path("print/surface.stl"));
   }

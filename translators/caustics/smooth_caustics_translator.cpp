@@ -163,11 +163,7 @@ class SmoothCausticsTranslator final : public TuningTranslator {
     context.result["files"] = {
         {"previews", {"preview/convergence.png", "preview/goal_vs_simulated.png", "preview/height_map.png"}}};
     if (!compared_runs_.empty()) context.result["files"]["previews"].push_back("preview/optimizer_comparison.png");
-    // print/surface.stl is an STL like the materials': "stl": false turns it off too.
-    if (!outputs_.fabrication.writes("stl")) {
-      context.result["caustics"]["surface_stl"] = kSurfaceStlOff;
-      return;
-    }
+    if (!surface_stl_wanted(outputs_.fabrication, context.result["caustics"])) return;
     context.result["caustics"]["surface_stl"] =
         write_caustic_surface_stl(slab_, surface_.print_vertices(), dynamic_cast<const HeightSurface&>(tree_->root()), achieved.pixels, target,
                                   {}, nullptr, context.folder)
