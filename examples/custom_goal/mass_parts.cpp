@@ -21,18 +21,11 @@ using namespace spec2fab;
 
 class MassSimulator final : public SimulatorFor<MassObservation> {
  public:
-  // Each option once: reading, range checks and the docs come from here.
-  struct Options {
-    std::array<double, 3> cell_mm{1, 1, 0.05};
-    template <class Declare, class Self>
-    static void declare(Declare& d, Self& o) {
-      d.number(o.cell_mm, "cell_mm", Range::closed(1e-3, 100),
-               "cell size (x, y, z); fine along the direction a cut moves");
-    }
-  };
+  using Options = MassSimulatorOptions;
 
   MassSimulator(const Properties& properties, const PartContext& context)
-      : cell_mm_(read_options<Options>(properties).cell_mm) {
+      : MassSimulator(read_options<Options>(properties), context) {}
+  MassSimulator(const Options& options, const PartContext& context) : cell_mm_(options.cell_mm) {
     // g/mm³ per material id: kg/m³ × 1e-6.
     for (MaterialId id = 0; id < context.palette.size(); ++id)
       grams_per_mm3_.push_back(id == kVoid ? 0.0 : context.palette.material(id).density_kg_m3.value * 1e-6);
@@ -80,6 +73,7 @@ class MassSimulator final : public SimulatorFor<MassObservation> {
 /// ((m − m*) / m*)²: a 1 % miss costs 1e-4 whatever the print weighs.
 class RelativeMassError final : public MetricFor<MassObservation> {
  public:
+  RelativeMassError() = default;
   RelativeMassError(const Properties& /*properties*/, const PartContext& /*context*/) {}
   static TypeDoc doc() {
     return {"Squared relative difference of two masses, ((m - m*) / m*)^2.", {}, R"({"type": "relative_mass_error"})"};
@@ -102,9 +96,9 @@ class MassGoal final : public GoalFor<MassObservation> {
     }
   };
 
-  MassGoal(const Properties& properties, const PartContext& /*context*/) {
-    target_.grams = read_options<Options>(properties).grams;
-  }
+  explicit MassGoal(double grams) { target_.grams = grams; }
+  MassGoal(const Properties& properties, const PartContext& /*context*/)
+      : MassGoal(read_options<Options>(properties).grams) {}
   static TypeDoc doc() {
     return {"A print of a given mass.", option_docs<Options>(),
             R"({"type": "mass", "grams": 20})"};
@@ -117,6 +111,16 @@ class MassGoal final : public GoalFor<MassObservation> {
 };
 
 }  // namespace
+
+std::unique_ptr<SimulatorFor<MassObservation>> make_mass_simulator(const MassSimulatorOptions& options,
+                                                                   const PartContext& context) {
+  return std::make_unique<MassSimulator>(require_valid(options, "mass"), context);
+}
+
+std::unique_ptr<MetricFor<MassObservation>> make_relative_mass_error() { return std::make_unique<RelativeMassError>(); }
+
+std::unique_ptr<GoalFor<MassObservation>> make_mass_goal(double grams) { return std::make_unique<MassGoal>(grams); }
+
 }  // namespace custom_goal
 
 SPEC2FAB_REGISTER(spec2fab::SimulatorRegistry, custom_goal::MassSimulator, "mass")

@@ -15,8 +15,10 @@
 #include <fmt/format.h>
 
 #include "mass_parts.h"
+#include "reducer/nodes/nodes.h"
 #include "reducer/reducer_tree.h"
 #include "spec/tuning_translator.h"
+#include "tuning/tuner.h"
 
 namespace custom_goal {
 namespace {
@@ -48,29 +50,26 @@ class TargetMassTranslator final : public TuningTranslator {
     wall_mm_ = options.wall_mm;
     require_in(goal, "wall_mm", wall_mm_, Range::closed(0.1, 0.5 * box.size().minCoeff()));
     const double step = options.step_mm;
-    const nlohmann::json tree = {
-        {"type", "plane"},
-        {"axis", "z"},
-        {"offset_mm",
-         {{"value", box.lower.z() + 0.5 * box.size().z()},
-          {"min", box.lower.z()},
-          {"max", box.upper.z()},
-          {"step", step}}},
-        {"below", {{"type", "layered"}, {"material", material_}}},
-        {"above",
-         {{"type", "stratum"},
-          {"depth_mm", wall_mm_},
-          {"shell", {{"type", "layered"}, {"material", material_}}},
-          {"core", {{"type", "layered"}, {"material", "void"}}}}}};
-    set_tree(tree, "target mass tree", goal, experiment);
+    // The tree, composed from the nodes' typed options (reducer/nodes/nodes.h):
+    // a misspelt option does not compile.
+    const MaterialPalette& palette = experiment.palette();
+    const Parameter solid = fixed_material(palette, material_, goal.where("material"));
+    StratumOptions hollow;
+    hollow.depth_mm = fixed_number(wall_mm_, hollow.depth_mm);
+    hollow.shell.node = make_solid_material(solid);
+    hollow.core.node = make_solid_material(fixed_material(palette, "void", goal.where()));
+    PlaneOptions cut;
+    cut.cut.axis = "z";
+    cut.offset_mm = free_steps(box.lower.z() + 0.5 * box.size().z(), box.lower.z(), box.upper.z(), step);
+    cut.cut.below.node = make_solid_material(solid);
+    cut.cut.above.node = make_stratum(std::move(hollow));
+    set_tree(make_plane(std::move(cut)), goal, experiment);
 
-    const nlohmann::json parts = {
-        {"simulator", {{"type", "mass"}, {"cell_mm", {1.0, 1.0, step}}}},
-        {"metric", {{"type", "relative_mass_error"}}},
-        {"goal", {{"type", "mass"}, {"grams", grams_}}},
-        {"optimizer", experiment.optimizer_or({{"type", "exhaustive"}})}};
-    auto tuner = build_tuner(Properties::wrap(parts, experiment.file().string() + " (tuner)"), "cut",
-                             PartContext{experiment.palette(), &experiment.cache()});
+    // The tuner, from the parts' factories; the optimizer is the
+    // experiment's "optimizer", or exhaustive search.
+    const OptimizerChoice optimizer(experiment.root(), "optimizer", {{"type", "exhaustive"}});
+    auto tuner = make_tuner("cut", make_mass_simulator({.cell_mm = {1.0, 1.0, step}}, PartContext{palette, &experiment.cache()}),
+                            make_relative_mass_error(), make_mass_goal(grams_), optimizer.build());
     tuner->set_node(*tree_, tree_->root());
     network_.add(std::move(tuner));
     schedule_.add(Phase{.name = "cut"});

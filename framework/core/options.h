@@ -42,7 +42,9 @@
 #include <filesystem>
 #include <limits>
 #include <optional>
+#include <stdexcept>
 #include <string>
+#include <string_view>
 #include <type_traits>
 #include <vector>
 
@@ -222,7 +224,7 @@ inline std::string parameter_type_text(const char* name, Range limits) {
 
 /// A check()'s "key: problem" fails at that key's JSON path when the object
 /// holds the key; any other message, at the object.
-inline void fail_at_key(const Properties& properties, const std::string& why) {
+[[noreturn]] inline void fail_at_key(const Properties& properties, const std::string& why) {
   const size_t colon = why.find(": ");
   if (colon != std::string::npos && colon > 0) {
     const std::string key = why.substr(0, colon);
@@ -436,6 +438,18 @@ bool options_valid(const O& options, std::string* why) {
   if (checker.problem.empty()) return true;
   if (why) *why = checker.problem;
   return false;
+}
+
+/// Options a translator composes in C++ (typed parts, not JSON) must hold
+/// what their declaration says; when they do not, the translator has a bug —
+/// std::logic_error naming `part` and the option — never an error in the
+/// user's input. Returns the options, for use in a constructor's initialiser.
+template <class O>
+const O& require_valid(const O& options, std::string_view part) {
+  std::string why;
+  if (!options_valid(options, &why))
+    throw std::logic_error(std::string(part) + ": options built in C++ do not hold: " + why);
+  return options;
 }
 
 /// The defaults, overridden by what `properties` holds; throws InputError at

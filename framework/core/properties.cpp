@@ -340,6 +340,16 @@ std::vector<Properties> Properties::objects(std::string_view key) const {
   return out;
 }
 
+Properties Properties::element_object(std::string_view key, size_t index) const {
+  const json& value = lookup(key);
+  const std::string pointer = child_pointer(key) + "/" + std::to_string(index);
+  if (!value.is_array() || index >= value.size())
+    throw InputError(document_->origin + ": " + pointer + ": expected an array element");
+  if (!value[index].is_object())
+    throw InputError(document_->origin + ": " + pointer + ": expected an object, got " + type_name(value[index]));
+  return Properties(document_, &value[index], pointer);
+}
+
 const json& Properties::peek(std::string_view key) const { return lookup(key); }
 
 const json& Properties::raw(std::string_view key) const {

@@ -69,6 +69,10 @@ class Properties {
   std::optional<Properties> optional_object(std::string_view key) const;
   /// An array of objects.
   std::vector<Properties> objects(std::string_view key) const;
+  /// Element `index` of the array at `key`, which must be an object: for an
+  /// array whose elements take several forms (a name or an object), after
+  /// peek() showed this one is an object.
+  Properties element_object(std::string_view key, size_t index) const;
   /// The raw JSON value of a key without marking its contents read (to look
   /// at its type before reading it with get/object).
   const nlohmann::json& peek(std::string_view key) const;

@@ -1,6 +1,8 @@
 #include "reducer/node.h"
+#include "reducer/nodes/nodes.h"
 
 #include <algorithm>
+#include <stdexcept>
 
 #include <fmt/format.h>
 
@@ -43,14 +45,61 @@ LocalFrame frame_along_path(const ReducerNode& root, std::span<const size_t> pat
   return frame;
 }
 
+namespace {
+
+Parameter choice_over(const MaterialPalette& palette, const std::vector<std::string>& names, const std::string& value,
+                      const std::string& where, bool free) {
+  std::vector<double> ids;
+  for (const std::string& name : names) ids.push_back(palette.id(name, where));
+  return Parameter::choice(palette.id(value, where), std::move(ids), names, free);
+}
+
+}  // namespace
+
+Parameter fixed_number(double value, const Parameter& declared) {
+  if (!(value >= declared.lower() && value <= declared.upper()))
+    throw std::logic_error(
+        fmt::format("fixed_number: {} lies outside [{}, {}]", value, declared.lower(), declared.upper()));
+  return Parameter::continuous(value, declared.lower(), declared.upper());
+}
+
+Parameter free_number(double value, double min, double max) {
+  if (!(min <= value && value <= max))
+    throw std::logic_error(fmt::format("free_number: {} lies outside [{}, {}]", value, min, max));
+  return Parameter::continuous(value, min, max, true);
+}
+
+Parameter free_steps(double value, double min, double max, double step) {
+  if (!(min <= value && value <= max && step > 0))
+    throw std::logic_error(fmt::format("free_steps: {} in [{}, {}] by {}", value, min, max, step));
+  return Parameter::discrete(value, min, max, step, true);
+}
+
+Parameter number_choice(double value, const std::vector<double>& choices) {
+  if (std::find(choices.begin(), choices.end(), value) == choices.end())
+    throw std::logic_error(fmt::format("number_choice: {} is not among the choices", value));
+  std::vector<std::string> labels;
+  for (double c : choices) labels.push_back(fmt::format("{:g}", c));  // as read_numeric_parameter labels them
+  return Parameter::choice(value, choices, std::move(labels), true);
+}
+
+Parameter fixed_material(const MaterialPalette& palette, const std::string& name, const std::string& where) {
+  return choice_over(palette, {name}, name, where, false);
+}
+
+Parameter material_choice(const MaterialPalette& palette, const std::string& value,
+                          const std::vector<std::string>& names, const std::string& where) {
+  if (std::find(names.begin(), names.end(), value) == names.end())
+    throw std::logic_error("material_choice: '" + value + "' is not among the choices (" + join(names) + ")");
+  return choice_over(palette, names, value, where, true);
+}
+
 Parameter read_material_parameter(const Properties& properties, const std::string& key,
                                   const NodeContext& context) {
   const MaterialPalette& palette = context.palette;
   auto choice_over = [&](const std::vector<std::string>& names, const std::string& value,
                          const std::string& where, bool free) {
-    std::vector<double> ids;
-    for (const std::string& name : names) ids.push_back(palette.id(name, where));
-    return Parameter::choice(palette.id(value, where), std::move(ids), names, free);
+    return spec2fab::choice_over(palette, names, value, where, free);
   };
   if (!properties.peek(key).is_object()) {
     const std::string name = properties.get<std::string>(key);

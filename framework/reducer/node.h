@@ -28,6 +28,7 @@
 
 namespace spec2fab {
 
+class HeightSurface;
 class ReducerNode;
 class Solid;
 using NodePtr = std::unique_ptr<ReducerNode>;
@@ -105,6 +106,10 @@ class ReducerNode {
   /// (ReducerTree::Query::material_row). False by default, which is always
   /// safe.
   virtual bool decided_by_interfaces() const { return false; }
+  /// Capabilities a node offers are declared, not discovered by casts: the
+  /// height surface a cutting node (Plane, Paraboloid, BSpline) cuts along,
+  /// which the caustics simulators mesh directly; null for any other node.
+  virtual const HeightSurface* height_surface() const { return nullptr; }
   /// The node as JSON, in the form build_node reads (parameters at their
   /// current values, materials by name).
   virtual nlohmann::json to_json(const MaterialPalette& palette) const = 0;

@@ -96,18 +96,8 @@ class Experiment {
   const Properties& root() const { return root_; }
   Properties goal() const { return root_.object("goal"); }
   std::optional<Properties> optimizer() const { return root_.optional_object("optimizer"); }
-  /// What a translator hands its tuners: the "optimizer" section as JSON —
-  /// its keys are checked where the tuner is built (build_tuner), so they
-  /// are marked read here — or `fallback` when there is none.
-  nlohmann::json optimizer_or(nlohmann::json fallback) const { return section_or("optimizer", std::move(fallback)); }
-  /// The same for any top-level section that a translator hands to a part
-  /// (caustics_texture's "texture_optimizer").
-  nlohmann::json section_or(std::string_view key, nlohmann::json fallback) const {
-    const auto section = root_.optional_object(key);
-    if (!section) return fallback;
-    for (const std::string& k : section->keys()) section->raw(k);
-    return section->value();
-  }
+  // A translator's tuners take the "optimizer" section, or its default,
+  // through OptimizerChoice (tuning/optimizer.h).
   std::optional<Properties> output() const { return root_.optional_object("output"); }
 
   const Solid& solid() const { return *solid_; }

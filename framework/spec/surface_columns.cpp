@@ -2,13 +2,19 @@
 
 namespace spec2fab {
 
-nlohmann::json surface_column_tree(double shell_mm, std::array<int, 2> columns, nlohmann::json layers,
-                                   const std::string& backing) {
-  layers.push_back({{"material", backing}});
-  return {{"type", "stratum"},
-          {"depth_mm", shell_mm},
-          {"shell", {{"type", "column"}, {"count", columns}, {"child", {{"type", "layered"}, {"layers", layers}}}}},
-          {"core", {{"type", "layered"}, {"material", backing}}}};
+NodePtr surface_column_tree(double shell_mm, std::array<int, 2> columns, std::vector<LayeredOptions::Layer> layers,
+                            const Parameter& backing, NodePtr core) {
+  LayeredOptions stack;
+  stack.layers = std::move(layers);
+  stack.layers.emplace_back().material.parameter = backing;
+  ColumnOptions grid;
+  grid.count = columns;
+  grid.cells.child.node = make_layered(std::move(stack));
+  StratumOptions stratum;
+  stratum.depth_mm = fixed_number(shell_mm, stratum.depth_mm);
+  stratum.shell.node = make_column(std::move(grid));
+  stratum.core.node = core ? std::move(core) : make_solid_material(backing);
+  return make_stratum(std::move(stratum));
 }
 
 }  // namespace spec2fab

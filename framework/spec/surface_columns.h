@@ -7,16 +7,17 @@
 /// layers — the paper's point that one tree serves two goals.
 
 #include <array>
-#include <string>
+#include <vector>
 
-#include <nlohmann/json.hpp>
+#include "reducer/nodes/nodes.h"
 
 namespace spec2fab {
 
-/// The tree as JSON (TuningTranslator::set_tree builds and binds it).
-/// `layers`: the Layered node's "layers" array without the backing (added
-/// last). Column i + nu·j is node "shell/<i + nu·j>".
-nlohmann::json surface_column_tree(double shell_mm, std::array<int, 2> columns, nlohmann::json layers,
-                                   const std::string& backing);
+/// The tree's root (TuningTranslator::set_tree binds it). `layers`: the
+/// Layered node's layers without the backing (added last). Column i + nu·j
+/// is node "shell/<i + nu·j>". `core`: what fills the core instead of the
+/// backing (the deformable texture's cells).
+NodePtr surface_column_tree(double shell_mm, std::array<int, 2> columns, std::vector<LayeredOptions::Layer> layers,
+                            const Parameter& backing, NodePtr core = nullptr);
 
 }  // namespace spec2fab

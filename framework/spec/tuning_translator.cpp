@@ -16,11 +16,8 @@ void TuningTranslator::set_tree(std::unique_ptr<ReducerTree> tree, const Propert
   outputs_ = TreeOutputOptions::read(goal, experiment, *tree_);
 }
 
-void TuningTranslator::set_tree(const nlohmann::json& tree, const std::string& what, const Properties& goal,
-                                const Experiment& experiment) {
-  set_tree(std::make_unique<ReducerTree>(Properties::wrap(tree, experiment.file().string() + " (" + what + ")"),
-                                         experiment.palette()),
-           goal, experiment);
+void TuningTranslator::set_tree(NodePtr root, const Properties& goal, const Experiment& experiment) {
+  set_tree(std::make_unique<ReducerTree>(std::move(root), experiment.palette()), goal, experiment);
 }
 
 std::string TuningTranslator::check_limits() {

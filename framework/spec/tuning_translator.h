@@ -12,6 +12,7 @@
 
 #include <memory>
 
+#include "reducer/node.h"
 #include "spec/translator.h"
 #include "spec/tree_outputs.h"
 #include "tuning/schedule.h"
@@ -29,9 +30,8 @@ class TuningTranslator : public Translator {
   /// Takes the tree, binds it to the experiment's solid and reads the
   /// outputs' options (refusing an oversized print now).
   void set_tree(std::unique_ptr<ReducerTree> tree, const Properties& goal, const Experiment& experiment);
-  /// set_tree for a tree written as JSON (`what` names it in errors).
-  void set_tree(const nlohmann::json& tree, const std::string& what, const Properties& goal,
-                const Experiment& experiment);
+  /// set_tree for a tree the translator composed (reducer/nodes/nodes.h).
+  void set_tree(NodePtr root, const Properties& goal, const Experiment& experiment);
 
   /// Before the schedule runs: what the report compares with (the start).
   virtual void prepare(RunContext& /*context*/) {}

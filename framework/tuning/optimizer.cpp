@@ -6,6 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/error.h"
 #include "core/seed.h"
 
 namespace spec2fab {
@@ -198,6 +199,27 @@ nlohmann::json Summary::to_json() const {
 
 std::unique_ptr<Optimizer> build_optimizer(const Properties& properties) {
   return OptimizerRegistry::instance().create(properties, "optimizer");
+}
+
+OptimizerChoice::OptimizerChoice(const Properties& parent, std::string_view key, nlohmann::json fallback)
+    : section_(parent.optional_object(key)), spec_(section_ ? section_->value() : std::move(fallback)),
+      where_(parent.where(key)) {
+  build();
+}
+
+std::unique_ptr<Optimizer> OptimizerChoice::build() const {
+  if (section_) return build_optimizer(*section_);
+  const std::string type = spec_.value("type", std::string());
+  if (const std::string left_out = left_out_of_build("optimizer", type); !left_out.empty())
+    throw InputError(where_ + ": not given, and the default, " + left_out + "; or give one");
+  try {
+    const Properties fallback = Properties::wrap(spec_, where_ + " (default)");
+    auto optimizer = build_optimizer(fallback);
+    fallback.check_all_read();  // a misspelt key of a default is no less a bug
+    return optimizer;
+  } catch (const InputError& e) {
+    throw std::logic_error(where_ + ": the translator's default does not build: " + std::string(e.what()));
+  }
 }
 
 }  // namespace spec2fab

@@ -12,9 +12,11 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <limits>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -154,5 +156,31 @@ using OptimizerRegistry = Registry<Optimizer>;
 
 /// Builds the optimizer described by `properties` (its "type" names it).
 std::unique_ptr<Optimizer> build_optimizer(const Properties& properties);
+
+/// Which optimizer a translator's tuners use, built as often as asked (one
+/// per tuner): the experiment's own section, read where the user wrote it,
+/// or else the translator's documented default. A default is written as a
+/// user would write one because it may name an optional module's optimizer
+/// (NLopt): a build without it must say which option left it out, which a
+/// typed reference could not. Anything else wrong with a default is the
+/// translator's bug (std::logic_error), never the user's input; the tests
+/// validate every shipped experiment, which builds every default.
+class OptimizerChoice {
+ public:
+  /// `parent`'s object at `key` when it has one ("optimizer" of the
+  /// experiment), else `fallback`.
+  OptimizerChoice(const Properties& parent, std::string_view key, nlohmann::json fallback);
+  /// Checks the choice by building it once (a malformed section is reported
+  /// before any work) and returns a new optimizer each call after.
+  std::unique_ptr<Optimizer> build() const;
+  /// The choice as JSON, the user's section or the default: what a schedule
+  /// phase builds (Phase::optimizer) and what labels name.
+  const nlohmann::json& spec() const { return spec_; }
+
+ private:
+  std::optional<Properties> section_;
+  nlohmann::json spec_;
+  std::string where_;  ///< the key's JSON path, given or not
+};
 
 }  // namespace spec2fab

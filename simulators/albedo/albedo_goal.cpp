@@ -1,5 +1,7 @@
 // A constant colour as an albedo goal.
 
+#include "albedo/albedo_parts.h"
+
 #include "core/colour.h"
 #include "core/options.h"
 #include "tuning/parts.h"
@@ -24,6 +26,7 @@ class AlbedoGoal final : public GoalFor<AlbedoObservation> {
     }
   };
 
+  explicit AlbedoGoal(const std::array<double, 3>& linear_rgb) { target_.rgb = linear_rgb; }
   AlbedoGoal(const Properties& properties, const PartContext& /*context*/) {
     const Options options = read_options<Options>(properties);
     const bool encoded = options.srgb[0] >= 0;
@@ -42,6 +45,11 @@ class AlbedoGoal final : public GoalFor<AlbedoObservation> {
 };
 
 }  // namespace
+
+std::unique_ptr<GoalFor<AlbedoObservation>> make_albedo_goal(const std::array<double, 3>& linear_rgb) {
+  return std::make_unique<AlbedoGoal>(linear_rgb);
+}
+
 }  // namespace spec2fab
 
 SPEC2FAB_REGISTER(spec2fab::GoalRegistry, spec2fab::AlbedoGoal, "albedo")

@@ -16,15 +16,15 @@
 #include <memory>
 #include <vector>
 
+#include "albedo/albedo_parts.h"
 #include "core/colour.h"
 #include "geometry/triangle_projection.h"
 #include "materials/material.h"
 
 namespace spec2fab {
 
-/// How a goal colour is compared with a stack's: ΔE00 (searched in CIELAB)
-/// or squared distance in linear RGB.
-enum class ColourMetric { ciede2000, rgb_mse };
+// ColourMetric (albedo_parts.h): ΔE00, searched in CIELAB, or squared
+// distance in linear RGB.
 
 class AlbedoLookup {
  public:

@@ -18,6 +18,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include "albedo/albedo_parts.h"
 #include "albedo/kubelka_munk.h"
 #include "core/options.h"
 #include "tuning/parts.h"
@@ -44,26 +45,12 @@ void collect_free_parameters(Node& node, std::vector<P*>& out) {
 
 class AlbedoSimulator final : public SimulatorFor<AlbedoObservation> {
  public:
-  struct Options {
-    double depth_mm = 3, step_mm = 0.005;
-    std::array<double, 2> at{0, 0};
-    int max_table = 1'000'000;
-
-    template <class Declare, class Self>
-    static void declare(Declare& d, Self& o) {
-      d.number(o.depth_mm, "depth_mm", Range::closed(1e-3, 1e3),
-               "depth sampled; what lies below counts as infinitely thick");
-      d.number(o.step_mm, "step_mm", Range::at_least(1e-5),
-               "sampling step along the depth axis (finer than any layer), at most depth_mm");
-      d.value(o.at, "at", "lateral position (a, b) in the subtree's frame");
-      d.number(o.max_table, "max_table", Range::closed(0, 1e8), "largest table to build; 0 never tabulates");
-    }
-    bool check(std::string* why) const { return at_most(step_mm, "step_mm", depth_mm, "depth_mm", why); }
-  };
+  using Options = AlbedoSimulatorOptions;
 
   AlbedoSimulator(const Properties& properties, const PartContext& context)
+      : AlbedoSimulator(read_options<Options>(properties), context) {}
+  AlbedoSimulator(const Options& options, const PartContext& context)
       : palette_(&context.palette), cache_(context.cache) {
-    const Options options = read_options<Options>(properties);
     depth_mm_ = options.depth_mm;
     step_mm_ = options.step_mm;
     lateral_a_ = options.at[0];
@@ -178,6 +165,12 @@ class AlbedoSimulator final : public SimulatorFor<AlbedoObservation> {
 };
 
 }  // namespace
+
+std::unique_ptr<SimulatorFor<AlbedoObservation>> make_albedo_simulator(const AlbedoSimulatorOptions& options,
+                                                                       const PartContext& context) {
+  return std::make_unique<AlbedoSimulator>(require_valid(options, "albedo"), context);
+}
+
 }  // namespace spec2fab
 
 SPEC2FAB_REGISTER(spec2fab::SimulatorRegistry, spec2fab::AlbedoSimulator, "albedo")

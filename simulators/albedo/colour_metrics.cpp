@@ -1,5 +1,7 @@
 // Colour error metrics on albedo observations (linear RGB).
 
+#include "albedo/albedo_parts.h"
+
 #include "core/colour.h"
 #include "tuning/parts.h"
 
@@ -9,6 +11,7 @@ namespace {
 /// Mean squared difference of the linear RGB channels.
 class RgbMse final : public MetricFor<AlbedoObservation> {
  public:
+  RgbMse() = default;
   RgbMse(const Properties& /*properties*/, const PartContext& /*context*/) {}
   std::string name() const override { return "rgb_mse"; }
   using MetricFor::error;
@@ -26,6 +29,7 @@ class RgbMse final : public MetricFor<AlbedoObservation> {
 /// CIEDE2000 between the two albedos seen as sRGB colours under D65.
 class Ciede2000 final : public MetricFor<AlbedoObservation> {
  public:
+  Ciede2000() = default;
   Ciede2000(const Properties& /*properties*/, const PartContext& /*context*/) {}
   std::string name() const override { return "ciede2000"; }
   using MetricFor::error;
@@ -41,6 +45,12 @@ class Ciede2000 final : public MetricFor<AlbedoObservation> {
 };
 
 }  // namespace
+
+std::unique_ptr<MetricFor<AlbedoObservation>> make_colour_metric(ColourMetric metric) {
+  if (metric == ColourMetric::rgb_mse) return std::make_unique<RgbMse>();
+  return std::make_unique<Ciede2000>();
+}
+
 }  // namespace spec2fab
 
 SPEC2FAB_REGISTER(spec2fab::MetricRegistry, spec2fab::RgbMse, "rgb_mse")

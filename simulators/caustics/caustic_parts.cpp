@@ -73,6 +73,14 @@ double image_psnr(std::span<const double> image, std::span<const double> referen
 
 CausticSlabConfig CausticSlabConfig::read(const Properties& properties) {
   const Options o = read_options<Options>(properties);
+  try {
+    return from(o);
+  } catch (const InputError& e) {
+    options_detail::fail_at_key(properties, e.what());
+  }
+}
+
+CausticSlabConfig CausticSlabConfig::from(const Options& o) {
   CausticSlabConfig config;
   CausticSetup& s = config.setup;
   s.width_mm = o.size_mm[0];
@@ -107,7 +115,7 @@ CausticSlabConfig CausticSlabConfig::read(const Properties& properties) {
   // fuzzed [120, 312540] image asked for 150 million rays: 4.3 GB).
   const auto check_size = [&](const char* key, const char* what, double count, const char* limit) {
     if (const double most = limits::get(limit); count > most)
-      throw InputError(fmt::format("{}: {:.4g} {}, more than the {:.4g} allowed {}", properties.where(key), count, what,
+      throw InputError(fmt::format("{}: {:.4g} {}, more than the {:.4g} allowed {}", key, count, what,
                                    most, limits::how_to_change(limit)));
   };
   check_size("vertices", "top-surface vertices", double(s.vertices_x) * s.vertices_y, "caustic_vertices");
@@ -426,31 +434,36 @@ namespace {
 /// carries `flux_mm2` — the light the slab lets through — over the receiver.
 class CausticImageGoal final : public GoalFor<ImageObservation> {
  public:
-  struct Options {
-    std::filesystem::path image;
-    std::array<int, 2> size{240, 240};
-    std::array<double, 2> receiver_mm{};
-    double flux_mm2 = 0;
-
-    template <class Declare, class Self>
-    static void declare(Declare& d, Self& o) {
-      d.file(o.image, "image", "the picture (any format OpenCV reads)");
-      d.number(o.size, "size", Range::at_least(1), "the simulator's image size (width, height)");
-      d.required(o.receiver_mm, "receiver_mm", Range::above(0), "the receiver's extent (x, y)");
-      d.required(o.flux_mm2, "flux_mm2", Range::above(0),
-                 "light to distribute: incident irradiance x area");
-    }
-    bool check(std::string* why) const {
-      if (static_cast<long long>(size[0]) * size[1] <= 64'000'000) return true;
-      *why = "size: more than 64 million pixels";
-      return false;
-    }
-  };
+  using Options = CausticImageGoalOptions;
 
   CausticImageGoal(const Properties& properties, const PartContext& /*context*/) {
     const Options options = read_options<Options>(properties);
+    try {
+      read(options);
+    } catch (const InputError& e) {
+      options_detail::fail_at_key(properties, e.what());
+    }
+  }
+  /// InputErrors say "image: problem", for the caller to place.
+  explicit CausticImageGoal(const Options& options) { read(options); }
+
+  std::string name() const override { return "caustic_image"; }
+  const ImageObservation& typed_target() const override { return target_; }
+
+  static TypeDoc doc() {
+    return {
+        "A picture read as the irradiance a caustic should cast: grey levels decoded from "
+        "sRGB, then resized to the simulator's image (averaging light, not codes), scaled to carry "
+        "flux_mm2 over "
+        "the receiver.",
+        option_docs<Options>(),
+        R"({"type": "caustic_image", "image": "ring.png", "receiver_mm": [60, 60], "flux_mm2": 3600})"};
+  }
+
+ private:
+  void read(const Options& options) {
     const std::filesystem::path& file = options.image;
-    const cv::Mat picture = read_image(file, properties.where("image"), cv::IMREAD_GRAYSCALE);
+    const cv::Mat picture = read_image(file, "image", cv::IMREAD_GRAYSCALE);
     const std::array<int, 2>& size = options.size;
     const std::array<double, 2>& receiver = options.receiver_mm;
     const double flux = options.flux_mm2;
@@ -472,32 +485,17 @@ class CausticImageGoal final : public GoalFor<ImageObservation> {
         target_.pixels[static_cast<size_t>(row * size[0] + col)] =
             std::max(0.0, resized.at<double>(row, col));
     const double total = std::accumulate(target_.pixels.begin(), target_.pixels.end(), 0.0);
-    if (!(total > 0))
-      throw InputError(properties.where("image") +
-                       ": the goal image is black: it asks for no light");
+    if (!(total > 0)) throw InputError("image: the goal image is black: it asks for no light");
     const double pixel_area = receiver[0] / size[0] * receiver[1] / size[1];
     for (double& v : target_.pixels) v *= flux / (total * pixel_area);
   }
 
-  std::string name() const override { return "caustic_image"; }
-  const ImageObservation& typed_target() const override { return target_; }
-
-  static TypeDoc doc() {
-    return {
-        "A picture read as the irradiance a caustic should cast: grey levels decoded from "
-        "sRGB, then resized to the simulator's image (averaging light, not codes), scaled to carry "
-        "flux_mm2 over "
-        "the receiver.",
-        option_docs<Options>(),
-        R"({"type": "caustic_image", "image": "ring.png", "receiver_mm": [60, 60], "flux_mm2": 3600})"};
-  }
-
- private:
   ImageObservation target_;
 };
 
 class ImageMse final : public MetricFor<ImageObservation> {
  public:
+  ImageMse() = default;
   ImageMse(const Properties& /*properties*/, const PartContext& /*context*/) {}
   std::string name() const override { return "image_mse"; }
   double error(const ImageObservation& simulated, const ImageObservation& target) const override {
@@ -542,6 +540,13 @@ class ImageMse final : public MetricFor<ImageObservation> {
 };
 
 }  // namespace
+
+std::unique_ptr<GoalFor<ImageObservation>> make_caustic_image_goal(const CausticImageGoalOptions& options) {
+  return std::make_unique<CausticImageGoal>(require_valid(options, "caustic_image"));
+}
+
+std::unique_ptr<MetricFor<ImageObservation>> make_image_mse() { return std::make_unique<ImageMse>(); }
+
 }  // namespace spec2fab
 
 SPEC2FAB_REGISTER(spec2fab::GoalRegistry, spec2fab::CausticImageGoal, "caustic_image")

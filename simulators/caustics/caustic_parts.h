@@ -4,6 +4,9 @@
 /// (RMSE: core/distance.h).
 
 #include <array>
+#include <filesystem>
+#include <memory>
+#include <string>
 #include <span>
 #include <vector>
 
@@ -15,6 +18,7 @@
 #include "core/search_space.h"
 #include "geometry/mesh.h"
 #include "reducer/height_surface.h"
+#include "tuning/parts.h"
 
 namespace spec2fab {
 
@@ -87,8 +91,47 @@ struct CausticSlabConfig {
       d.number(o.seed, "seed", Range::closed(0, 4294967295.0), "jitter pattern (an integer)");
     }
   };
+  /// Reads the properties; every error names its key's JSON path.
   static CausticSlabConfig read(const Properties& properties);
+  /// The same from options built in C++ (a translator's); a size past its
+  /// resource limit is an InputError "key: problem", which the caller
+  /// places (options_detail::fail_at_key).
+  static CausticSlabConfig from(const Options& options);
 };
+
+/// The "caustic_image" goal's options: a picture read as the irradiance a
+/// caustic should cast.
+struct CausticImageGoalOptions {
+  std::filesystem::path image;
+  std::array<int, 2> size{240, 240};
+  std::array<double, 2> receiver_mm{};
+  double flux_mm2 = 0;
+
+  template <class Declare, class Self>
+  static void declare(Declare& d, Self& o) {
+    d.file(o.image, "image", "the picture (any format OpenCV reads)");
+    d.number(o.size, "size", Range::at_least(1), "the simulator's image size (width, height)");
+    d.required(o.receiver_mm, "receiver_mm", Range::above(0), "the receiver's extent (x, y)");
+    d.required(o.flux_mm2, "flux_mm2", Range::above(0), "light to distribute: incident irradiance x area");
+  }
+  bool check(std::string* why) const {
+    if (static_cast<long long>(size[0]) * size[1] <= 64'000'000) return true;
+    *why = "size: more than 64 million pixels";
+    return false;
+  }
+};
+
+// The caustic parts composed in C++ (a translator's tuners). Options are the
+// caller's to get right (require_valid); an InputError the inputs cause (an
+// unreadable or black image, a size past its limit) reads "key: problem",
+// for the caller to place at its own key (options_detail::fail_at_key).
+
+/// The "caustics" simulator of a slab.
+std::unique_ptr<SimulatorFor<ImageObservation>> make_caustic_simulator(const CausticSlabConfig& config);
+/// The "caustic_image" goal.
+std::unique_ptr<GoalFor<ImageObservation>> make_caustic_image_goal(const CausticImageGoalOptions& options);
+/// The "image_mse" metric.
+std::unique_ptr<MetricFor<ImageObservation>> make_image_mse();
 
 /// Where the tracer's frame (footprint centred on the origin, bottom at
 /// z = 0) sits in the subtree's coordinates when the slab's bottom corner is

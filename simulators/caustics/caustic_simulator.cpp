@@ -21,8 +21,9 @@ namespace {
 
 class CausticSimulator final : public SimulatorFor<ImageObservation> {
  public:
-  CausticSimulator(const Properties& properties, const PartContext& /*context*/) {
-    const CausticSlabConfig config = CausticSlabConfig::read(properties);
+  CausticSimulator(const Properties& properties, const PartContext& /*context*/)
+      : CausticSimulator(CausticSlabConfig::read(properties)) {}
+  explicit CausticSimulator(const CausticSlabConfig& config) {
     thickness_mm_ = config.thickness_mm;
     origin_ = config.origin_mm;
     tracer_ = std::make_unique<CausticTracer>(config.setup);
@@ -48,7 +49,7 @@ class CausticSimulator final : public SimulatorFor<ImageObservation> {
   // Derivatives need the heights as functions of parameters: a Plane or
   // B-spline root cutting along w.
   bool differentiable(const ReducerNode& subtree) const override {
-    const auto* surface = dynamic_cast<const HeightSurface*>(&subtree);
+    const HeightSurface* surface = subtree.height_surface();
     return surface != nullptr && surface->height_axis() == 2;
   }
 
@@ -97,7 +98,7 @@ class CausticSimulator final : public SimulatorFor<ImageObservation> {
   }
 
   void read_heights(const ReducerNode& subtree) {
-    const auto* surface = dynamic_cast<const HeightSurface*>(&subtree);
+    const HeightSurface* surface = subtree.height_surface();
     const bool direct = surface != nullptr && surface->height_axis() == 2;
     for_each_slab_vertex(tracer_->setup(), origin_, [&](size_t k, double a, double b) {
       heights_[k] = (direct ? surface->surface_height(a, b) : search_height(subtree, a, b)) - origin_.z();
@@ -115,7 +116,7 @@ class CausticSimulator final : public SimulatorFor<ImageObservation> {
     if (cached) return jacobian_;
     jacobian_parameters_.clear();
     for (const SearchSpace::Entry& e : entries) jacobian_parameters_.push_back(e.parameter);
-    jacobian_ = slab_height_jacobian(tracer_->setup(), origin_, dynamic_cast<const HeightSurface&>(subtree), space);
+    jacobian_ = slab_height_jacobian(tracer_->setup(), origin_, *subtree.height_surface(), space);
     jacobian_subtree_ = &subtree;
     return jacobian_;
   }
@@ -147,6 +148,10 @@ class CausticSimulator final : public SimulatorFor<ImageObservation> {
 };
 
 }  // namespace
+
+std::unique_ptr<SimulatorFor<ImageObservation>> make_caustic_simulator(const CausticSlabConfig& config) {
+  return std::make_unique<CausticSimulator>(config);
+}
 
 }  // namespace spec2fab
 

@@ -16,6 +16,8 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "caustics/facet_beam_simulator.h"
+
 #include "caustics/caustic_tracer.h"
 #include "core/error.h"
 #include "core/options.h"
@@ -28,37 +30,11 @@ namespace {
 
 class FacetBeamSimulator final : public SimulatorFor<VectorObservation> {
  public:
-  struct Options {
-    std::array<double, 2> facet_mm{};
-    std::array<double, 2> facet_origin_mm{0, 0};
-    double bottom_mm = 0, refractive_index = 1.5, distance_mm = 100;
-    std::array<double, 3> light{0, 0, -1};
-    bool spread = false;
-    int rays = 8;
+  using Options = FacetBeamOptions;
 
-    template <class Declare, class Self>
-    static void declare(Declare& d, Self& o) {
-      d.required(o.facet_mm, "facet_mm", Range::above(0), "the facet's size (its column)");
-      d.number(o.facet_origin_mm, "facet_origin_mm", Range::any(),
-               "world position (x, y) of the facet's (a, b) = (0, 0) corner");
-      d.number(o.bottom_mm, "bottom_mm", Range::any(), "world height of the slab's flat bottom");
-      d.number(o.refractive_index, "refractive_index", Range::closed(1, 4), "of the slab's material");
-      d.number(o.light, "light", Range::any(), "direction (x, y, z) the light travels, z < 0");
-      d.number(o.distance_mm, "distance_mm", Range::closed(1e-3, 1e6), "receiver plane below the slab's bottom");
-      d.value(o.spread, "spread",
-               "also the spot's spread: observe [x, y, S_xx, S_xy, S_yx, S_yy], S the square root of the "
-               "landing points' covariance (mm), from rays × rays rays over the facet");
-      d.number(o.rays, "rays", Range::closed(2, 64), "rays along each side of the facet, with spread");
-    }
-    bool check(std::string* why) const {
-      if (light[2] < 0) return true;
-      *why = "light: the light must travel downwards (z < 0)";
-      return false;
-    }
-  };
-
-  FacetBeamSimulator(const Properties& properties, const PartContext& /*context*/) {
-    const Options options = read_options<Options>(properties);
+  FacetBeamSimulator(const Properties& properties, const PartContext& /*context*/)
+      : FacetBeamSimulator(read_options<Options>(properties)) {}
+  explicit FacetBeamSimulator(const Options& options) {
     size_ = {options.facet_mm[0], options.facet_mm[1]};
     origin_ = {options.facet_origin_mm[0], options.facet_origin_mm[1]};
     bottom_ = options.bottom_mm;
@@ -140,11 +116,11 @@ class FacetBeamSimulator final : public SimulatorFor<VectorObservation> {
     return slab_receiver_point(start, light_, xy, heights, eta_, -distance_);
   }
 
-  // The subtree as a height surface; the cast is remembered, since the swap
-  // phase simulates millions of times.
+  // The subtree as a height surface, remembered: the swap phase simulates
+  // millions of times.
   const HeightSurface& surface_of(const ReducerNode& subtree) {
     if (&subtree != node_) {
-      const auto* surface = dynamic_cast<const HeightSurface*>(&subtree);
+      const HeightSurface* surface = subtree.height_surface();
       if (surface == nullptr || surface->height_axis() != 2)
         throw InputError("facet_beam: the tuned subtree must be a Plane or B-spline cutting along w (a facet)");
       node_ = &subtree;
@@ -163,6 +139,11 @@ class FacetBeamSimulator final : public SimulatorFor<VectorObservation> {
 };
 
 }  // namespace
+
+std::unique_ptr<SimulatorFor<VectorObservation>> make_facet_beam_simulator(const FacetBeamOptions& options) {
+  return std::make_unique<FacetBeamSimulator>(require_valid(options, "facet_beam"));
+}
+
 }  // namespace spec2fab
 
 SPEC2FAB_REGISTER(spec2fab::SimulatorRegistry, spec2fab::FacetBeamSimulator, "facet_beam")

@@ -15,8 +15,11 @@ namespace spec2fab::fem {
 
 ElasticBound::ElasticBound(const Properties& simulator, const PartContext& context, ReducerTree& tree,
                            ReducerNode& node, Tuner& tuner)
-    : settings_(FemSettings::read(simulator)) {
-  const std::string where = simulator.where();
+    : ElasticBound(FemSettings::read(simulator), simulator.where(), context, tree, node, tuner) {}
+
+ElasticBound::ElasticBound(FemSettings settings, const std::string& where, const PartContext& context,
+                           ReducerTree& tree, ReducerNode& node, Tuner& tuner)
+    : settings_(std::move(settings)) {
   if (settings_.solve.nonlinear)
     throw InputError(where + ": the elastic bound holds for small strain only; set \"nonlinear\": false");
   for (const BoxRegion& box : settings_.displacements)

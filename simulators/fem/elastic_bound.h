@@ -74,6 +74,9 @@ class ElasticBound {
   /// `node` of `tree` (its parameters are tried, then set back).
   ElasticBound(const Properties& simulator, const PartContext& context, ReducerTree& tree, ReducerNode& node,
                Tuner& tuner);
+  /// The same for the tuner's settings built in C++; `where` names them in errors.
+  ElasticBound(FemSettings settings, const std::string& where, const PartContext& context, ReducerTree& tree,
+               ReducerNode& node, Tuner& tuner);
   ~ElasticBound();
 
   /// Variables 0..assigned-1 take x[0..assigned); the rest are free.

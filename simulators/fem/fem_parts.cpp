@@ -7,8 +7,11 @@
 #include <fstream>
 #include <optional>
 #include <sstream>
+#include <stdexcept>
 
 #include <fmt/format.h>
+
+#include "fem/fem_parts.h"
 
 #include "core/error.h"
 #include "core/options.h"
@@ -22,6 +25,7 @@ namespace {
 /// probe points: (1/n) Σ ‖(p + u_sim) − target‖².
 class ShapeMse final : public MetricFor<DisplacementsObservation> {
  public:
+  ShapeMse() = default;
   ShapeMse(const Properties& /*properties*/, const PartContext& /*context*/) {}
   std::string name() const override { return "shape_mse"; }
 
@@ -148,16 +152,14 @@ class DeformedShapeGoal final : public GoalFor<DisplacementsObservation> {
       rest = rest_mesh.vertices;
       goal = goal_mesh.vertices;
     }
-    if (rest.empty()) p.fail("points", "no points");
-    target_.probe_count = static_cast<int>(rest.size());
-    for (size_t i = 0; i < rest.size(); ++i) {
-      for (int d = 0; d < 3; ++d) {
-        if (!std::isfinite(rest[i][d]) || !std::isfinite(goal[i][d])) p.fail("points", "coordinates must be finite");
-        target_.probe_rest_mm.push_back(rest[i][d]);
-        target_.xyz_mm.push_back(goal[i][d] - rest[i][d]);
-      }
+    try {
+      set(rest, goal);
+    } catch (const InputError& e) {
+      options_detail::fail_at_key(p, e.what());
     }
   }
+  /// InputErrors read "points: problem".
+  DeformedShapeGoal(const std::vector<Vec3>& rest, const std::vector<Vec3>& goal) { set(rest, goal); }
 
   std::string name() const override { return "deformed_shape"; }
   const DisplacementsObservation& typed_target() const override { return target_; }
@@ -170,10 +172,31 @@ class DeformedShapeGoal final : public GoalFor<DisplacementsObservation> {
   }
 
  private:
+  void set(const std::vector<Vec3>& rest, const std::vector<Vec3>& goal) {
+    if (rest.empty()) throw InputError("points: no points");
+    if (goal.size() != rest.size()) throw std::logic_error("deformed_shape: as many targets as points");
+    target_.probe_count = static_cast<int>(rest.size());
+    for (size_t i = 0; i < rest.size(); ++i) {
+      for (int d = 0; d < 3; ++d) {
+        if (!std::isfinite(rest[i][d]) || !std::isfinite(goal[i][d])) throw InputError("points: coordinates must be finite");
+        target_.probe_rest_mm.push_back(rest[i][d]);
+        target_.xyz_mm.push_back(goal[i][d] - rest[i][d]);
+      }
+    }
+  }
+
   DisplacementsObservation target_;
 };
 
 }  // namespace
+
+std::unique_ptr<MetricFor<DisplacementsObservation>> make_shape_mse() { return std::make_unique<ShapeMse>(); }
+
+std::unique_ptr<GoalFor<DisplacementsObservation>> make_deformed_shape_goal(const std::vector<Vec3>& rest,
+                                                                           const std::vector<Vec3>& targets) {
+  return std::make_unique<DeformedShapeGoal>(rest, targets);
+}
+
 }  // namespace spec2fab::fem
 
 SPEC2FAB_REGISTER(spec2fab::MetricRegistry, spec2fab::fem::ShapeMse, "shape_mse")

@@ -152,8 +152,9 @@ double tolerance_of(const TetMesh& mesh) {
 
 }  // namespace
 
-FemSettings FemSettings::read(const Properties& p) {
-  const FemOptions o = read_options<FemOptions>(p);
+namespace {
+
+FemSettings settings_from(const FemOptions& o) {
   FemSettings s;
   s.mesh.max_volume_mm3 = o.max_tet_volume_mm3;
   s.mesh.radius_edge = o.radius_edge;
@@ -175,6 +176,12 @@ FemSettings FemSettings::read(const Properties& p) {
                                   [&](LinearSolver k) { return o.linear_solver == to_string(k); });
   return s;
 }
+
+}  // namespace
+
+FemSettings FemSettings::read(const Properties& p) { return settings_from(read_options<FemOptions>(p)); }
+
+FemSettings FemSettings::defaults() { return settings_from(FemOptions{}); }
 
 const char* to_string(LinearSolver solver) {
   switch (solver) {

@@ -40,6 +40,9 @@ struct FemSettings {
   bool write_calculix_deck = false;  ///< write_report also writes calculix.inp
 
   static FemSettings read(const Properties& properties);
+  /// The documented defaults, with no regions and no probes: what a
+  /// translator composing the simulator in C++ starts from.
+  static FemSettings defaults();
   static std::vector<PropertyDoc> docs();
 };
 

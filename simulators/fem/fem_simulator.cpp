@@ -20,6 +20,7 @@
 #include "fem/calculix_deck.h"
 #include "fem/elastic_solver.h"
 #include "fem/fem_picture.h"
+#include "fem/fem_parts.h"
 #include "fem/fem_setup.h"
 #include "fem/interface_conformer.h"
 #include "fem/mesh_cache.h"
@@ -42,8 +43,10 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
   // Every tet's material comes from the whole tree, not only the tuned subtree.
   bool reads_beyond_subtree() const override { return true; }
   FemSimulator(const Properties& properties, const PartContext& context)
-      : settings_(FemSettings::read(properties)),
-        where_(properties.where()),
+      : FemSimulator(FemSettings::read(properties), context, properties.where()) {}
+  FemSimulator(FemSettings settings, const PartContext& context, std::string where)
+      : settings_(std::move(settings)),
+        where_(std::move(where)),
         palette_(&context.palette),
         cache_(context.cache),
         across_ranks_(context.solve_across_ranks) {
@@ -281,6 +284,15 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
 };
 
 }  // namespace
+
+std::unique_ptr<SimulatorFor<DisplacementsObservation>> make_fem_simulator(FemSettings settings,
+                                                                          const PartContext& context,
+                                                                          std::string where) {
+  if (settings.fixed.empty() && settings.displacements.empty())
+    throw std::logic_error("fem: built in C++ with nothing fixed");
+  return std::make_unique<FemSimulator>(std::move(settings), context, std::move(where));
+}
+
 }  // namespace spec2fab::fem
 
 SPEC2FAB_REGISTER(spec2fab::SimulatorRegistry, spec2fab::fem::FemSimulator, "fem")

@@ -41,19 +41,18 @@ const std::vector<MeasuredMedium>& jensen2001_media() {
   return media;
 }
 
-MeasuredMedium read_medium(const Properties& properties, const std::string& key) {
-  if (properties.peek(key).is_string()) {
-    const std::string name = properties.get<std::string>(key);
-    std::vector<std::string> names;
-    for (const MeasuredMedium& m : jensen2001_media()) {
-      if (m.name == name) return m;
-      names.push_back(m.name);
-    }
-    properties.fail(key, "unknown medium '" + name + "'" + did_you_mean(name, names) +
-                             " (known: " + join(names) + ")");
+MeasuredMedium medium_named(const std::string& name, const std::string& where) {
+  std::vector<std::string> names;
+  for (const MeasuredMedium& m : jensen2001_media()) {
+    if (m.name == name) return m;
+    names.push_back(m.name);
   }
-  const Properties spec = properties.object(key);
-  MeasuredMedium m{spec.get<std::string>("name", key), {}, spec.get_in_range("refractive_index", 1.3, 1.0, 3.0)};
+  throw InputError(where + ": unknown medium '" + name + "'" + did_you_mean(name, names) + " (known: " + join(names) +
+                   ")");
+}
+
+MeasuredMedium read_medium_coefficients(const Properties& spec, const std::string& fallback_name) {
+  MeasuredMedium m{spec.get<std::string>("name", fallback_name), {}, spec.get_in_range("refractive_index", 1.3, 1.0, 3.0)};
   const auto absorption = spec.get<std::array<double, 3>>("absorption_per_mm");
   const auto scattering = spec.get<std::array<double, 3>>("reduced_scattering_per_mm");
   for (size_t c = 0; c < 3; ++c) {
@@ -64,6 +63,11 @@ MeasuredMedium read_medium(const Properties& properties, const std::string& key)
     m.rgb[c] = {absorption[c], scattering[c]};
   }
   return m;
+}
+
+MeasuredMedium read_medium(const Properties& properties, const std::string& key) {
+  if (properties.peek(key).is_string()) return medium_named(properties.get<std::string>(key), properties.where(key));
+  return read_medium_coefficients(properties.object(key), key);
 }
 
 std::vector<double> dipole_profile_coefficients(const MeasuredMedium& medium, const RadialBasis& basis) {
@@ -100,6 +104,7 @@ class RadialProfileGoal final : public GoalFor<RadialProfileObservation> {
     }
   };
 
+  RadialProfileGoal(const MeasuredMedium& medium, const ProfileGrid& grid, RunCache* cache) { set(medium, grid, cache); }
   RadialProfileGoal(const Properties& properties, const PartContext& context) {
     const Options o = read_options<Options>(properties);
     MeasuredMedium medium;
@@ -113,8 +118,7 @@ class RadialProfileGoal final : public GoalFor<RadialProfileObservation> {
         medium.rgb[c] = {m.absorption_per_mm.value[c], m.reduced_scattering_per_mm.value[c]};
       }
     }
-    target_.reset(o.grid.basis(context.cache));
-    target_.coefficients = dipole_profile_coefficients(medium, *target_.basis);
+    set(medium, o.grid, context.cache);
   }
   std::string name() const override { return "radial_profile"; }
   const RadialProfileObservation& typed_target() const override { return target_; }
@@ -127,6 +131,11 @@ class RadialProfileGoal final : public GoalFor<RadialProfileObservation> {
   }
 
  private:
+  void set(const MeasuredMedium& medium, const ProfileGrid& grid, RunCache* cache) {
+    target_.reset(grid.basis(cache));
+    target_.coefficients = dipole_profile_coefficients(medium, *target_.basis);
+  }
+
   RadialProfileObservation target_;
 };
 
@@ -134,6 +143,7 @@ class RadialProfileGoal final : public GoalFor<RadialProfileObservation> {
 /// coefficient distance in the orthonormal basis.
 class ProfileL2 final : public MetricFor<RadialProfileObservation> {
  public:
+  ProfileL2() = default;
   ProfileL2(const Properties& /*properties*/, const PartContext& /*context*/) {}
   std::string name() const override { return "profile_l2"; }
   using MetricFor::error;
@@ -166,6 +176,14 @@ class ProfileL2 final : public MetricFor<RadialProfileObservation> {
 };
 
 }  // namespace
+
+std::unique_ptr<GoalFor<RadialProfileObservation>> make_radial_profile_goal(const MeasuredMedium& medium,
+                                                                           const ProfileGrid& grid, RunCache* cache) {
+  return std::make_unique<RadialProfileGoal>(medium, require_valid(grid, "radial_profile"), cache);
+}
+
+std::unique_ptr<MetricFor<RadialProfileObservation>> make_profile_l2() { return std::make_unique<ProfileL2>(); }
+
 }  // namespace spec2fab
 
 SPEC2FAB_REGISTER(spec2fab::GoalRegistry, spec2fab::RadialProfileGoal, "radial_profile")

@@ -17,25 +17,11 @@ namespace {
 
 class SubsurfaceSimulator final : public SimulatorFor<RadialProfileObservation> {
  public:
-  struct Options {
-    ProfileGrid grid;
-    double depth_mm = 4, step_mm = 0.027;
-    std::array<double, 2> at{0, 0};
+  using Options = SubsurfaceSimulatorOptions;
 
-    template <class Declare, class Self>
-    static void declare(Declare& d, Self& o) {
-      ProfileGrid::declare(d, o.grid);
-      d.number(o.depth_mm, "depth_mm", Range::closed(1e-3, 1e3),
-               "depth sampled; below it, the last material is semi-infinite");
-      d.number(o.step_mm, "step_mm", Range::at_least(1e-4),
-               "depth sampling step, at most depth_mm; layer thicknesses are multiples of it");
-      d.value(o.at, "at", "lateral position (a, b) in the subtree's frame");
-    }
-    bool check(std::string* why) const { return at_most(step_mm, "step_mm", depth_mm, "depth_mm", why); }
-  };
-
-  SubsurfaceSimulator(const Properties& properties, const PartContext& context) {
-    const Options options = read_options<Options>(properties);
+  SubsurfaceSimulator(const Properties& properties, const PartContext& context)
+      : SubsurfaceSimulator(read_options<Options>(properties), context) {}
+  SubsurfaceSimulator(const Options& options, const PartContext& context) {
     depth_mm_ = options.depth_mm;
     step_mm_ = options.step_mm;
     lateral_a_ = options.at[0];
@@ -97,6 +83,12 @@ class SubsurfaceSimulator final : public SimulatorFor<RadialProfileObservation> 
 };
 
 }  // namespace
+
+std::unique_ptr<SimulatorFor<RadialProfileObservation>> make_subsurface_simulator(
+    const SubsurfaceSimulatorOptions& options, const PartContext& context) {
+  return std::make_unique<SubsurfaceSimulator>(require_valid(options, "subsurface"), context);
+}
+
 }  // namespace spec2fab
 
 SPEC2FAB_REGISTER(spec2fab::SimulatorRegistry, spec2fab::SubsurfaceSimulator, "subsurface")

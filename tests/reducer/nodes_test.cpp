@@ -79,7 +79,9 @@ TEST_F(NodesInBox, ParaboloidHeightDerivativesMatchSteps) {
   auto tree = bound(R"({"type": "paraboloid", "offset_mm": 1, "slope_a": 0.5, "slope_b": -0.25,
       "curvature_aa": 0.1, "curvature_ab": 0.04, "curvature_bb": -0.06,
       "below": {"type": "layered", "material": "A"}, "above": {"type": "layered", "material": "C"}})");
-  auto& surface = dynamic_cast<HeightSurface&>(tree->root());
+  ASSERT_NE(tree->root().height_surface(), nullptr) << "a paraboloid declares its height surface";
+  EXPECT_EQ(tree->root().child(0).height_surface(), nullptr) << "a layered node has none";
+  const HeightSurface& surface = *tree->root().height_surface();
   const double a = 3.5, b = -2;
   std::map<const Parameter*, double> reported;
   surface.visit_height_derivatives(a, b, [&](const Parameter& p, double d) { reported[&p] += d; });

@@ -625,7 +625,7 @@ TEST_F(CausticSimulatorTest, ExportedSlabStlCastsTheSimulatedImage) {
   const ImageObservation simulated = simulate(*spline, options);
 
   const CausticSlabConfig config = CausticSlabConfig::read(Properties::parse(options, "options.json"));
-  const auto& surface = dynamic_cast<const HeightSurface&>(*spline);
+  const HeightSurface& surface = *spline->height_surface();
   const Mesh slab = caustic_slab_mesh(config.setup, surface, config.origin_mm);
   // In the subtree's coordinates: bottom at w = 1, footprint from (10, 20).
   EXPECT_NEAR(slab.bounds().lower.z(), 1.0, 1e-12);

@@ -80,5 +80,29 @@ TEST(Layering, FrameworkFoldersIncludeWithoutLoops) {
                                         << graph.at("core").begin()->second;
 }
 
+// Translators compose typed parts (issue 36): no part is described as JSON
+// and wrapped as if it came from the user's file, and no node is found by
+// its path and cast back; what a part offers is declared (height_surface()).
+// The spec2fab program (translators/cli) reads files, so it may wrap.
+TEST(Layering, TranslatorsComposeTypedPartsNotJsonOrCasts) {
+  const fs::path translators = fs::path(SPEC2FAB_DATASETS_DIR) / ".." / "translators";
+  const std::regex forbidden(R"(Properties::wrap|dynamic_cast|build_tuner\(|build_node\(|optimizer_or\()");
+  int files = 0;
+  for (const auto& entry : fs::recursive_directory_iterator(translators)) {
+    const fs::path relative = fs::relative(entry.path(), translators);
+    if (!entry.is_regular_file() || *relative.begin() == "cli") continue;
+    const std::string extension = entry.path().extension().string();
+    if (extension != ".h" && extension != ".cpp") continue;
+    ++files;
+    std::ifstream in(entry.path());
+    int number = 0;
+    for (std::string line; std::getline(in, line);) {
+      ++number;
+      EXPECT_FALSE(std::regex_search(line, forbidden)) << relative.string() << ":" << number << ": " << line;
+    }
+  }
+  EXPECT_GE(files, 15) << "the translators' sources were not found";
+}
+
 }  // namespace
 }  // namespace spec2fab

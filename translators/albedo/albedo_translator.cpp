@@ -49,14 +49,18 @@ class AlbedoTranslator final : public TuningTranslator {
     const Properties goal = experiment.goal();
     // The shell holds the thickest stack and one step of backing under it.
     const double shell = texture_.ink_mm() + texture_.step_mm();
+    const MaterialPalette& palette = experiment.palette();
+    const Parameter backing = fixed_material(palette, backing_, goal.where("backing"));
     if (texture_.lookup()) {
-      set_tree(nlohmann::json{{"type", "stratum"},
-                              {"depth_mm", shell},
-                              {"shell", texture_.stack_grid(backing_)},
-                              {"core", {{"type", "layered"}, {"material", backing_}}}},
-               "albedo tree", goal, experiment);
+      StratumOptions stratum;
+      stratum.depth_mm = fixed_number(shell, stratum.depth_mm);
+      auto grid = texture_.stack_grid(palette, backing_);
+      stack_grid_ = grid.get();  // the lookup sets its cells
+      stratum.shell.node = std::move(grid);
+      stratum.core.node = make_solid_material(backing);
+      set_tree(make_stratum(std::move(stratum)), goal, experiment);
     } else {
-      set_tree(surface_column_tree(shell, texture_.columns(), texture_.ink_layers(), backing_), "albedo tree", goal,
+      set_tree(surface_column_tree(shell, texture_.columns(), texture_.ink_layers(palette), backing), goal,
                experiment);
       schedule_.add(texture_.add_tuners(
           network_, *tree_, [this](int k) -> ReducerNode& { return tree_->node("shell/" + std::to_string(k)); },
@@ -113,7 +117,7 @@ class AlbedoTranslator final : public TuningTranslator {
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
     spdlog::info("  looked up in {:.1f} s", seconds);
     if (context.timing) (*context.timing)["texture_lookup_seconds"] = seconds;
-    dynamic_cast<StackGridNode&>(tree_->node("shell")).set_cells(stacks_);
+    stack_grid_->set_cells(stacks_);
     tree_->evaluate();
   }
 
@@ -166,6 +170,7 @@ class AlbedoTranslator final : public TuningTranslator {
   TexturePiece texture_;
   const Solid& solid_;
   std::vector<std::uint32_t> stacks_;  ///< each column's stack (lookup)
+  StackGridNode* stack_grid_ = nullptr;  ///< the tree's shell (lookup), owned by tree_
 };
 
 }  // namespace

@@ -20,6 +20,7 @@
 #include "core/search_space.h"
 #include "fabrication/material_surfaces.h"
 #include "geometry/mesh_io.h"
+#include "reducer/nodes/nodes.h"
 #include "spec/experiment.h"
 #include "core/run_folder.h"
 #include "tuning/parts.h"
@@ -37,21 +38,33 @@ CausticGoalSettings CausticGoalSettings::read(const Properties& goal, const Expe
   return s;
 }
 
-nlohmann::json CausticGoalSettings::simulator(std::array<int, 2> vertices) const {
+CausticSlabConfig::Options CausticGoalSettings::slab_options(std::array<int, 2> vertices) const {
   const Vec3 size = slab.size();
-  nlohmann::json out = {{"type", "caustics"},
-          {"size_mm", {size.x(), size.y()}},
-          {"origin_mm", {slab.lower.x(), slab.lower.y(), slab.lower.z()}},
-          {"thickness_mm", size.z()},
-          {"vertices", vertices},
-          {"refractive_index", refractive_index},
-          {"distance_mm", distance_mm},
-          {"receiver_mm", receiver_mm},
-          {"image", image},
-          {"rays", rays},
-          {"aperture", aperture}};
-  if (point_light()) out["light_position_mm"] = {0.0, 0.0, size.z() + light_distance_mm};
-  return out;
+  CausticSlabConfig::Options o;
+  o.size_mm = {size.x(), size.y()};
+  o.origin_mm = {slab.lower.x(), slab.lower.y(), slab.lower.z()};
+  o.thickness_mm = size.z();
+  o.vertices = vertices;
+  o.refractive_index = refractive_index;
+  o.distance_mm = distance_mm;
+  o.receiver_mm = receiver_mm;
+  o.image = image;
+  o.rays = rays;
+  o.aperture = aperture;
+  if (point_light()) o.light_position_mm = {0.0, 0.0, size.z() + light_distance_mm};
+  return o;
+}
+
+CausticSlabConfig CausticGoalSettings::slab_config(const Properties& goal, const CausticSlabConfig::Options& o) {
+  require_valid(o, "caustics");
+  try {
+    return CausticSlabConfig::from(o);
+  } catch (const InputError& e) {
+    // The slab's "image" is the goal's "image_size"; "vertices" has no goal key.
+    std::string why = e.what();
+    if (why.starts_with("image: ")) why = "image_size: " + why.substr(7);
+    options_detail::fail_at_key(goal, why);
+  }
 }
 
 double CausticGoalSettings::flux_mm2() const {
@@ -74,12 +87,17 @@ double CausticGoalSettings::flux_mm2() const {
   return sum * area / (static_cast<double>(kSteps) * kSteps);
 }
 
-nlohmann::json CausticGoalSettings::image_goal() const {
-  return {{"type", "caustic_image"},
-          {"image", image_file.string()},
-          {"size", image},
-          {"receiver_mm", receiver_mm},
-          {"flux_mm2", flux_mm2()}};
+std::unique_ptr<GoalFor<ImageObservation>> CausticGoalSettings::image_goal(const Properties& goal) const {
+  CausticImageGoalOptions o;
+  o.image = image_file;
+  o.size = image;
+  o.receiver_mm = receiver_mm;
+  o.flux_mm2 = flux_mm2();
+  try {
+    return make_caustic_image_goal(o);
+  } catch (const InputError& e) {
+    options_detail::fail_at_key(goal, e.what());
+  }
 }
 
 nlohmann::json CausticGoalSettings::image_report(std::span<const double> achieved, std::span<const double> initial,
@@ -192,15 +210,17 @@ std::array<int, 2> CausticSurfaceSettings::print_vertices() const {
   return {per_span * (control[0] - 1) + 1, per_span * (control[1] - 1) + 1};
 }
 
-nlohmann::json CausticSurfaceSettings::node(const std::string& axis, const std::array<double, 3>& heights_mm,
-                                            const Bounds& footprint, const std::string& material) const {
-  return {{"type", "bspline"},
-          {"axis", axis},
-          {"control", control},
-          {"heights_mm", {{"value", heights_mm[0]}, {"min", heights_mm[1]}, {"max", heights_mm[2]}}},
-          {"domain", {footprint.lower.x(), footprint.lower.y(), footprint.upper.x(), footprint.upper.y()}},
-          {"below", {{"type", "layered"}, {"material", material}}},
-          {"above", {{"type", "layered"}, {"material", "void"}}}};
+NodePtr CausticSurfaceSettings::node(const std::string& axis, const std::array<double, 3>& heights_mm,
+                                     const Bounds& footprint, const Parameter& material,
+                                     const MaterialPalette& palette) const {
+  BSplineOptions o;
+  o.cut.axis = axis;
+  o.control = control;
+  o.heights_mm.common = free_number(heights_mm[0], heights_mm[1], heights_mm[2]);
+  o.domain = {footprint.lower.x(), footprint.lower.y(), footprint.upper.x(), footprint.upper.y()};
+  o.cut.below.node = make_solid_material(material);
+  o.cut.above.node = make_solid_material(fixed_material(palette, "void", "void"));
+  return make_bspline(std::move(o));
 }
 
 SurfaceStl write_caustic_surface_stl(const CausticSlabConfig& slab, std::array<int, 2> print_vertices,

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <string>
 #include <span>
 #include <vector>
@@ -19,7 +20,10 @@
 #include "core/registry.h"
 #include "fabrication/fabricate.h"
 #include "geometry/mesh.h"
+#include "reducer/node.h"
+#include "caustics/caustic_parts.h"
 #include "tuning/observation.h"
+#include "tuning/parts.h"
 
 namespace spec2fab {
 
@@ -28,7 +32,6 @@ class HeightSurface;
 class Tuner;
 class Properties;
 class RunFolder;
-struct CausticSlabConfig;
 struct GridField;
 
 /// The goal keys both read: image, material, distance, receiver, image size,
@@ -63,15 +66,18 @@ struct CausticGoalSettings {
   static CausticGoalSettings read(const Properties& goal, const Experiment& experiment);
   /// The rows as goal keys, for a translator's TypeDoc.
   static std::vector<PropertyDoc> docs() { return prefixed(option_docs<CausticGoalSettings>(), "goal."); }
-  /// The "caustics" simulator's properties for this slab, its top meshed
-  /// with `vertices`.
-  nlohmann::json simulator(std::array<int, 2> vertices) const;
+  /// The caustics simulator's options for this slab, its top meshed with
+  /// `vertices` (a translator may change what its tree asks for, such as
+  /// the estimator or the slab's origin in its subtree's frame).
+  CausticSlabConfig::Options slab_options(std::array<int, 2> vertices) const;
+  /// The slab the options describe; a size past its limit fails at `goal`.
+  static CausticSlabConfig slab_config(const Properties& goal, const CausticSlabConfig::Options& options);
   /// The light the aperture lets through, in units of incident irradiance × mm².
   double flux_mm2() const;
   bool point_light() const { return !std::isnan(light_distance_mm); }
   /// The "caustic_image" goal: the picture carrying the light the slab's
-  /// aperture lets through.
-  nlohmann::json image_goal() const;
+  /// aperture lets through (a black one fails at `goal`'s "image").
+  std::unique_ptr<GoalFor<ImageObservation>> image_goal(const Properties& goal) const;
   /// result.json "caustics": caustic_image_errors of the achieved image,
   /// initial_rmse / initial_ssim of the start's, and the receiver's setup.
   nlohmann::json image_report(std::span<const double> achieved, std::span<const double> initial,
@@ -123,8 +129,8 @@ struct CausticSurfaceSettings {
   std::array<int, 2> print_vertices() const;
   /// The B-spline node: along `axis` ("z", or "w" under a cut), heights
   /// {value, min, max} in mm, `material` below and void above.
-  nlohmann::json node(const std::string& axis, const std::array<double, 3>& heights_mm, const Bounds& footprint,
-                      const std::string& material) const;
+  NodePtr node(const std::string& axis, const std::array<double, 3>& heights_mm, const Bounds& footprint,
+               const Parameter& material, const MaterialPalette& palette) const;
 };
 
 /// Whether print/surface.stl is to be written: it is an STL like the

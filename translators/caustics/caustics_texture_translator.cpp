@@ -41,6 +41,7 @@
 #include "../pieces/texture_shadow.h"
 #include "caustic_translation.h"
 #include "caustics/caustic_parts.h"
+#include "reducer/nodes/nodes.h"
 #include "reducer/reducer_tree.h"
 #include "spec/tuning_translator.h"
 
@@ -100,24 +101,7 @@ class CausticsTextureTranslator final : public TuningTranslator {
     require_in(goal, "start_thickness_mm", start, Range::closed(thinnest, size.z()));
     cut_z_ = bounds.upper.z() - texture_mm_;
 
-    nlohmann::json layers = texture_.ink_layers();
-    layers.push_back({{"material", settings_.material}});
-    const nlohmann::json tree = {
-        {"type", "plane"},
-        {"axis", "z"},
-        {"offset_mm", cut_z_},
-        {"above",
-         {{"type", "column"},
-          {"count", texture_.columns()},
-          {"domain", {bounds.lower.x(), bounds.lower.y(), bounds.upper.x(), bounds.upper.y()}},
-          {"child",
-           {{"type", "plane"},
-            {"axis", "w"},
-            {"offset_mm", texture_mm_},
-            {"below", {{"type", "layered"}, {"layers", layers}}},
-            {"above", {{"type", "layered"}, {"material", "void"}}}}}}},
-        {"below", surface_.node("w", {start - texture_mm_, thinnest - texture_mm_, body}, bounds, settings_.material)}};
-    set_tree(tree, "caustics + texture tree", goal, experiment);
+    set_tree(tree(goal, experiment.palette(), start, thinnest, body), goal, experiment);
 
     // Texture tuners, 0 … columns − 1: the texture piece over a dark ground
     // (the clear slab under the inks reflects nothing back).
@@ -132,20 +116,17 @@ class CausticsTextureTranslator final : public TuningTranslator {
     // The caustic tuner: the B-spline subtree's frame is (x, y, depth under
     // the cut), so the tracer's flat face (its w = 0) is the top face at
     // depth −t, and its light travels towards the top face.
-    nlohmann::json simulator = settings_.simulator(surface_.vertices());
-    simulator["origin_mm"] = {bounds.lower.x(), bounds.lower.y(), -texture_mm_};
-    simulator["thickness_mm"] = size.z();
-    simulator["image_from_behind"] = true;  // the wall as the room sees it (see the top)
-    slab_ = CausticSlabConfig::read(Properties::wrap(simulator, experiment.file().string() + " (simulator)"));
-    const nlohmann::json optimizer =
-        experiment.optimizer_or({{"type", "nlopt"}, {"algorithm", "LD_LBFGS"}, {"max_evaluations", 1000}});
-    optimizer_label_ = optimizer_label(optimizer);
-    const nlohmann::json parts = {{"simulator", simulator},
-                                  {"metric", {{"type", "image_mse"}}},
-                                  {"goal", settings_.image_goal()},
-                                  {"optimizer", optimizer}};
-    auto caustic = build_tuner(Properties::wrap(parts, experiment.file().string() + " (caustic tuner)"), "surface",
-                               PartContext{experiment.palette(), &experiment.cache()});
+    CausticSlabConfig::Options slab = settings_.slab_options(surface_.vertices());
+    slab.origin_mm = {bounds.lower.x(), bounds.lower.y(), -texture_mm_};
+    slab.thickness_mm = size.z();
+    slab.image_from_behind = true;  // the wall as the room sees it (see the top)
+    slab_ = CausticGoalSettings::slab_config(goal, slab);
+    const OptimizerChoice optimizer(experiment.root(), "optimizer",
+                                    {{"type", "nlopt"}, {"algorithm", "LD_LBFGS"}, {"max_evaluations", 1000}});
+    optimizer_label_ = optimizer_label(optimizer.spec());
+    auto caustic = make_tuner("surface", make_caustic_simulator(slab_), make_image_mse(), settings_.image_goal(goal),
+                              optimizer.build());
+    caustic->set_origin(goal.where());
     caustic->set_node(*tree_, tree_->node("below"));
     caustic_tuner_ = network_.add(std::move(caustic));
 
@@ -200,12 +181,40 @@ class CausticsTextureTranslator final : public TuningTranslator {
   }
 
  private:
+  /// Plane (z, t under the top) → above: Column (the texture's columns) →
+  /// Plane (w, t) with the ink layers over the clear material below it and
+  /// void above; below: the B-spline bottom face, heights within the body.
+  NodePtr tree(const Properties& goal, const MaterialPalette& palette, double start, double thinnest,
+               double body) const {
+    const Bounds& bounds = settings_.slab;
+    const Parameter clear = fixed_material(palette, settings_.material, goal.where("material"));
+    const Parameter empty = fixed_material(palette, "void", goal.where());
+    LayeredOptions inks;
+    inks.layers = texture_.ink_layers(palette);
+    inks.layers.emplace_back().material.parameter = clear;
+    PlaneOptions texture;
+    texture.cut.axis = "w";
+    texture.offset_mm = fixed_number(texture_mm_, texture.offset_mm);
+    texture.cut.below.node = make_layered(std::move(inks));
+    texture.cut.above.node = make_solid_material(empty);
+    ColumnOptions columns;
+    columns.count = texture_.columns();
+    columns.domain = {bounds.lower.x(), bounds.lower.y(), bounds.upper.x(), bounds.upper.y()};
+    columns.cells.child.node = make_plane(std::move(texture));
+    PlaneOptions cut;
+    cut.cut.axis = "z";
+    cut.offset_mm = fixed_number(cut_z_, cut.offset_mm);
+    cut.cut.above.node = make_column(std::move(columns));
+    cut.cut.below.node = surface_.node("w", {start - texture_mm_, thinnest - texture_mm_, body}, bounds, clear, palette);
+    return make_plane(std::move(cut));
+  }
+
   ReducerNode& texture_stack(int column) { return tree_->node("above/" + std::to_string(column) + "/below"); }
 
   void prepare(RunContext& context) override {
     Tuner& caustic = network_.tuner(caustic_tuner_);
     if (transport_start_)
-      start_report_ = start_caustic_from_transport(caustic, slab_, dynamic_cast<const HeightSurface&>(tree_->node("below")),
+      start_report_ = start_caustic_from_transport(caustic, slab_, *tree_->node("below").height_surface(),
                                                    context.timing);
     slope_limit_["start"] = surface_.limit_slopes(caustic, settings_.slab);
     caustic.set_penalty(surface_.slope_penalty(settings_.slab, caustic.error()));
@@ -261,7 +270,7 @@ class CausticsTextureTranslator final : public TuningTranslator {
     };
     if (!surface_stl_wanted(outputs_.fabrication, context.result["caustics"])) return;
     const SurfaceStl stl = write_caustic_surface_stl(
-        slab_, surface_.print_vertices(), dynamic_cast<const HeightSurface&>(tree_->node("below")), cast.pixels, target, mirror, &shadow,
+        slab_, surface_.print_vertices(), *tree_->node("below").height_surface(), cast.pixels, target, mirror, &shadow,
         context.folder);
     context.result["caustics"]["surface_stl"] = stl.report;
     context.result["caustics"]["surface_stl"]["z_range_mm"] = {stl.bounds.lower.z(), stl.bounds.upper.z()};

@@ -42,12 +42,15 @@
 
 #include "caustic_translation.h"
 #include "caustics/caustic_parts.h"
+#include "caustics/facet_beam_simulator.h"
 #include "caustics/gaussian_kernels.h"
 #include "core/distance.h"
 #include "fabrication/material_surfaces.h"
 #include "reducer/height_surface.h"
+#include "reducer/nodes/nodes.h"
 #include "reducer/reducer_tree.h"
 #include "spec/tuning_translator.h"
+#include "tuning/vector_parts.h"
 
 namespace spec2fab {
 namespace {
@@ -91,128 +94,26 @@ class FacetCausticsTranslator final : public TuningTranslator {
 
   FacetCausticsTranslator(const Properties& root, const Experiment& experiment) {
     const Properties goal = experiment.goal();
-    const MaterialPalette& palette = experiment.palette();
     settings_ = CausticGoalSettings::read(goal, experiment);
-    // Each facet takes one equal-flux kernel: that needs equal light on every facet.
-    if (settings_.aperture != "rectangle")
-      goal.fail("aperture", "facet caustics give every facet an equal share of the light, so the light must cover "
-                            "the whole footprint ('rectangle'); a disc aperture suits smooth_caustics");
-    if (settings_.point_light())
-      goal.fail("light_distance_mm", "facet caustics give every facet an equal share of the light, which only "
-                                     "collimated light does; a point light suits smooth_caustics");
-    const Options options = read_options<Options>(goal);
-    const Vec3 size = settings_.slab.size();
-    facets_ = options.facets;
-    lens_ = options.facet == "lens";
-    subdivisions_ = lens_ ? options.lens_subdivisions : 1;
-    low_mm_ = std::isnan(options.min_height_mm) ? 0.25 * size.z() : options.min_height_mm;
-    require_in(goal, "min_height_mm", low_mm_, Range::closed(1e-3, size.z()));
-    start_mm_ = std::isnan(options.start_height_mm) ? 0.75 * size.z() : options.start_height_mm;
-    require_in(goal, "start_height_mm", start_mm_, Range::closed(low_mm_, size.z()));
-    max_slope_ = options.max_slope;
-    facet_mm_ = {size.x() / facets_[0], size.y() / facets_[1]};
-    if (max_slope_ * (facet_mm_[0] + facet_mm_[1]) > size.z() - low_mm_)
-      goal.fail("max_slope", fmt::format("a facet {:.3g} x {:.3g} mm at slope {:g} rises more than the {:.3g} mm "
-                                         "between min_height_mm and the top",
-                                         facet_mm_[0], facet_mm_[1], max_slope_, size.z() - low_mm_));
-    const int kernel_iterations = options.kernel_iterations;
-    sweeps_ = options.assignment_sweeps;
-    // The caustics simulator's slab and light (the top's vertex grid unused:
+    read_goal(goal);
+    // The caustics simulator's slab and light (its top's vertex grid unused:
     // the faceted slab is meshed exactly).
-    setup_ = CausticSlabConfig::read(
-                 Properties::wrap(settings_.simulator({2, 2}), experiment.file().string() + " (simulator)"))
-                 .setup;
+    setup_ = CausticGoalSettings::slab_config(goal, settings_.slab_options({2, 2})).setup;
     setup_.validate();
-
-    // The goal as irradiance, then as kernels.
-    image_goal_ = GoalRegistry::instance().create(
-        Properties::wrap(settings_.image_goal(), experiment.file().string() + " (goal image)"), "goal",
-        PartContext{palette, &experiment.cache()});
-    raster_.width = settings_.image[0];
-    raster_.height = settings_.image[1];
-    raster_.size_mm = {settings_.receiver_mm[0], settings_.receiver_mm[1]};
-    raster_.centre_mm = slab().center().head<2>();
-    kernels_ = fit_equal_mass_kernels(target().pixels, raster_, facets_[0], facets_[1], kernel_iterations);
-
-    const nlohmann::json slope = {{"value", 0.0}, {"min", -max_slope_}, {"max", max_slope_}};
-    nlohmann::json facet = {{"type", lens_ ? "paraboloid" : "plane"},
-                            {"axis", "z"},
-                            {"offset_mm", slab().lower.z() + start_mm_},
-                            {"slope_a", slope},
-                            {"slope_b", slope},
-                            {"below", {{"type", "layered"}, {"material", settings_.material}}},
-                            {"above", {{"type", "layered"}, {"material", "void"}}}};
-    if (lens_) {
-      // Bent no further than the steepest slope over half a facet.
-      const double most = 2 * max_slope_ / std::min(facet_mm_[0], facet_mm_[1]);
-      const nlohmann::json curvature = {{"value", 0.0}, {"min", -most}, {"max", most}};
-      facet["curvature_aa"] = facet["curvature_ab"] = facet["curvature_bb"] = curvature;
-    }
-    const nlohmann::json tree = {
-        {"type", "column"},
-        {"count", facets_},
-        {"domain", {slab().lower.x(), slab().lower.y(), slab().upper.x(), slab().upper.y()}},
-        {"child", facet}};
-    set_tree(tree, "facet caustics tree", goal, experiment);
-
-    const nlohmann::json aim = experiment.optimizer_or(
-        {{"type", "nlopt"}, {"algorithm", "LN_BOBYQA"}, {"max_evaluations", 200}, {"xtol_rel", 1e-10}});
-    // Built once here so that a malformed one is reported before the run.
-    nlohmann::json swap_optimizer;
-    if (root.has("swap_optimizer")) {
-      const Properties swap = root.object("swap_optimizer");
-      build_optimizer(swap);
-      swap_optimizer = swap.value();
-    } else {
-      swap_optimizer = {{"type", "annealing"},      {"iterations", 10},           {"schedule_iterations", 2000},
-                         {"swap_probability", 1.0}, {"initial_temperature", 1.0}, {"cooling", 0.9966}};
-    }
-    for (int j = 0; j < facets_[1]; ++j) {
-      for (int i = 0; i < facets_[0]; ++i) {
-        const size_t k = facet_index(i, j);
-        centres_.push_back(facet_centre(i, j));
-        // A lens matches its spot's centroid and spread (the square root of
-        // its covariance) to the kernel's; a plane its centroid alone.
-        const double sigma = kernels_[k].sigma_mm;
-        const nlohmann::json target =
-            lens_ ? nlohmann::json{kernels_[k].centre_mm.x(), kernels_[k].centre_mm.y(), sigma, 0.0, 0.0, sigma}
-                  : nlohmann::json{kernels_[k].centre_mm.x(), kernels_[k].centre_mm.y()};
-        const nlohmann::json parts = {
-            {"simulator",
-             {{"type", "facet_beam"},
-              {"facet_mm", facet_mm_},
-              {"facet_origin_mm", {slab().lower.x() + i * facet_mm_[0], slab().lower.y() + j * facet_mm_[1]}},
-              {"bottom_mm", slab().lower.z()},
-              {"refractive_index", settings_.refractive_index},
-              {"distance_mm", settings_.distance_mm},
-              {"spread", lens_},
-              {"rays", options.lens_rays}}},
-            {"metric", {{"type", "squared_distance"}}},
-            {"goal", {{"type", "values"}, {"values", target}}},
-            {"optimizer", aim}};
-        auto tuner = build_tuner(Properties::wrap(parts, experiment.file().string() + " (facet tuner)"),
-                                 fmt::format("facet_{}_{}", i, j), PartContext{palette, &experiment.cache()});
-        tuner->set_node(*tree_, tree_->root().child(k));
-        network_.add(std::move(tuner));
-      }
-    }
-    network_.connect_grid(facets_[0], facets_[1], 4);
-
-    swaps_ = std::make_shared<NeighbourSwaps>(
-        [this](TunerNetwork& network, size_t a, size_t b) { return swap_delta(network, a, b); },
-        [this](TunerNetwork& network) { return roughness(network); });
-    Phase assign;
-    assign.name = "assign";
-    assign.sweeps = sweeps_;
-    assign.coupling = swaps_;
-    assign.optimizer = swap_optimizer;
-    assign.record_every_sweep = false;
-    Phase orient;
-    orient.name = "aim";
-    orient.mode = Phase::Mode::parallel;
-    if (sweeps_ > 0) schedule_.add(std::move(assign));
-    schedule_.add(std::move(orient));
-    aim_label_ = optimizer_label(aim);
+    fit_kernels(goal);
+    set_tree(facet_tree(goal, experiment.palette()), goal, experiment);
+    const OptimizerChoice aim(root, "optimizer",
+                              {{"type", "nlopt"}, {"algorithm", "LN_BOBYQA"}, {"max_evaluations", 200}, {"xtol_rel", 1e-10}});
+    add_facet_tuners(aim);
+    const OptimizerChoice swap(root, "swap_optimizer",
+                               {{"type", "annealing"},
+                                {"iterations", 10},
+                                {"schedule_iterations", 2000},
+                                {"swap_probability", 1.0},
+                                {"initial_temperature", 1.0},
+                                {"cooling", 0.9966}});
+    add_phases(swap);
+    aim_label_ = optimizer_label(aim.spec());
   }
 
   std::string summary() const override {
@@ -297,13 +198,132 @@ class FacetCausticsTranslator final : public TuningTranslator {
     int lowered = 0;
   };
 
+  /// The translator's own goal keys (facets, their shape, heights, slope).
+  void read_goal(const Properties& goal) {
+    // Each facet takes one equal-flux kernel: that needs equal light on every facet.
+    if (settings_.aperture != "rectangle")
+      goal.fail("aperture", "facet caustics give every facet an equal share of the light, so the light must cover "
+                            "the whole footprint ('rectangle'); a disc aperture suits smooth_caustics");
+    if (settings_.point_light())
+      goal.fail("light_distance_mm", "facet caustics give every facet an equal share of the light, which only "
+                                     "collimated light does; a point light suits smooth_caustics");
+    options_ = read_options<Options>(goal);
+    const Vec3 size = settings_.slab.size();
+    facets_ = options_.facets;
+    lens_ = options_.facet == "lens";
+    subdivisions_ = lens_ ? options_.lens_subdivisions : 1;
+    low_mm_ = std::isnan(options_.min_height_mm) ? 0.25 * size.z() : options_.min_height_mm;
+    require_in(goal, "min_height_mm", low_mm_, Range::closed(1e-3, size.z()));
+    start_mm_ = std::isnan(options_.start_height_mm) ? 0.75 * size.z() : options_.start_height_mm;
+    require_in(goal, "start_height_mm", start_mm_, Range::closed(low_mm_, size.z()));
+    max_slope_ = options_.max_slope;
+    facet_mm_ = {size.x() / facets_[0], size.y() / facets_[1]};
+    if (max_slope_ * (facet_mm_[0] + facet_mm_[1]) > size.z() - low_mm_)
+      goal.fail("max_slope", fmt::format("a facet {:.3g} x {:.3g} mm at slope {:g} rises more than the {:.3g} mm "
+                                         "between min_height_mm and the top",
+                                         facet_mm_[0], facet_mm_[1], max_slope_, size.z() - low_mm_));
+    sweeps_ = options_.assignment_sweeps;
+  }
+
+  /// The goal image as irradiance, then as one equal-flux kernel per facet.
+  void fit_kernels(const Properties& goal) {
+    image_goal_ = settings_.image_goal(goal);
+    raster_.width = settings_.image[0];
+    raster_.height = settings_.image[1];
+    raster_.size_mm = {settings_.receiver_mm[0], settings_.receiver_mm[1]};
+    raster_.centre_mm = slab().center().head<2>();
+    kernels_ = fit_equal_mass_kernels(target().pixels, raster_, facets_[0], facets_[1], options_.kernel_iterations);
+  }
+
+  /// Column (facets) → per column a Plane or Paraboloid, clear below, void above.
+  NodePtr facet_tree(const Properties& goal, const MaterialPalette& palette) const {
+    const Parameter slope = free_number(0, -max_slope_, max_slope_);
+    const auto sides = [&](HeightCut::Options& cut) {
+      cut.axis = "z";
+      cut.below.node = make_solid_material(fixed_material(palette, settings_.material, goal.where("material")));
+      cut.above.node = make_solid_material(fixed_material(palette, "void", goal.where()));
+    };
+    NodePtr facet;
+    if (lens_) {
+      // Bent no further than the steepest slope over half a facet.
+      const double most = 2 * max_slope_ / std::min(facet_mm_[0], facet_mm_[1]);
+      ParaboloidOptions lens;
+      lens.offset_mm = fixed_number(slab().lower.z() + start_mm_, lens.offset_mm);
+      lens.slope_a = lens.slope_b = slope;
+      lens.curvature_aa = lens.curvature_ab = lens.curvature_bb = free_number(0, -most, most);
+      sides(lens.cut);
+      facet = make_paraboloid(std::move(lens));
+    } else {
+      PlaneOptions plane;
+      plane.offset_mm = fixed_number(slab().lower.z() + start_mm_, plane.offset_mm);
+      plane.slope_a = plane.slope_b = slope;
+      sides(plane.cut);
+      facet = make_plane(std::move(plane));
+    }
+    ColumnOptions columns;
+    columns.count = facets_;
+    columns.domain = {slab().lower.x(), slab().lower.y(), slab().upper.x(), slab().upper.y()};
+    columns.cells.child.node = std::move(facet);
+    return make_column(std::move(columns));
+  }
+
+  /// One tuner per facet: facet_beam + squared_distance to its kernel (a
+  /// lens matches its spot's centroid and spread, the square root of its
+  /// covariance, to the kernel's; a plane its centroid alone); a 4-neighbour
+  /// network.
+  void add_facet_tuners(const OptimizerChoice& aim) {
+    for (int j = 0; j < facets_[1]; ++j) {
+      for (int i = 0; i < facets_[0]; ++i) {
+        const size_t k = facet_index(i, j);
+        centres_.push_back(facet_centre(i, j));
+        FacetBeamOptions beam;
+        beam.facet_mm = facet_mm_;
+        beam.facet_origin_mm = {slab().lower.x() + i * facet_mm_[0], slab().lower.y() + j * facet_mm_[1]};
+        beam.bottom_mm = slab().lower.z();
+        beam.refractive_index = settings_.refractive_index;
+        beam.distance_mm = settings_.distance_mm;
+        beam.spread = lens_;
+        beam.rays = options_.lens_rays;
+        const double sigma = kernels_[k].sigma_mm;
+        const Eigen::Vector2d centre = kernels_[k].centre_mm;
+        std::vector<double> target = lens_ ? std::vector<double>{centre.x(), centre.y(), sigma, 0.0, 0.0, sigma}
+                                           : std::vector<double>{centre.x(), centre.y()};
+        auto tuner = make_tuner(fmt::format("facet_{}_{}", i, j), make_facet_beam_simulator(beam),
+                                std::make_unique<SquaredDistance>(), std::make_unique<FixedValuesGoal>(std::move(target)),
+                                aim.build());
+        tuner->set_node(*tree_, tree_->root().child(k));
+        network_.add(std::move(tuner));
+      }
+    }
+    network_.connect_grid(facets_[0], facets_[1], 4);
+  }
+
+  /// "assign": serial annealing sweeps swapping kernels between neighbours
+  /// (none with assignment_sweeps 0); "aim": every facet tuned in parallel.
+  void add_phases(const OptimizerChoice& swap) {
+    swaps_ = std::make_shared<NeighbourSwaps>(
+        [this](TunerNetwork& network, size_t a, size_t b) { return swap_delta(network, a, b); },
+        [this](TunerNetwork& network) { return roughness(network); });
+    Phase assign;
+    assign.name = "assign";
+    assign.sweeps = sweeps_;
+    assign.coupling = swaps_;
+    assign.optimizer = swap.spec();
+    assign.record_every_sweep = false;
+    Phase orient;
+    orient.name = "aim";
+    orient.mode = Phase::Mode::parallel;
+    if (sweeps_ > 0) schedule_.add(std::move(assign));
+    schedule_.add(std::move(orient));
+  }
+
   const Bounds& slab() const { return settings_.slab; }
-  const ImageObservation& target() const { return static_cast<const ImageObservation&>(image_goal_->target()); }
+  const ImageObservation& target() const { return image_goal_->typed_target(); }
   size_t facet_index(int i, int j) const { return static_cast<size_t>(i) + static_cast<size_t>(facets_[0]) * static_cast<size_t>(j); }
   Eigen::Vector2d facet_centre(int i, int j) const {
     return {slab().lower.x() + (i + 0.5) * facet_mm_[0], slab().lower.y() + (j + 0.5) * facet_mm_[1]};
   }
-  const HeightSurface& plane(size_t k) const { return dynamic_cast<const HeightSurface&>(tree_->root().child(k)); }
+  const HeightSurface& plane(size_t k) const { return *tree_->root().child(k).height_surface(); }
 
   /// The kernel tuner t aims at (its effective target, which swaps exchange).
   static Eigen::Vector2d kernel(TunerNetwork& network, size_t t) {
@@ -482,7 +502,8 @@ class FacetCausticsTranslator final : public TuningTranslator {
   CausticGoalSettings settings_;
   CausticSetup setup_;
   ReceiverRaster raster_;
-  std::unique_ptr<Goal> image_goal_;
+  Options options_;
+  std::unique_ptr<GoalFor<ImageObservation>> image_goal_;
   std::vector<GaussianKernel> kernels_;
   std::vector<Eigen::Vector2d> centres_;
   std::shared_ptr<NeighbourSwaps> swaps_;

@@ -19,6 +19,7 @@
 
 #include "caustic_translation.h"
 #include "caustics/caustic_parts.h"
+#include "reducer/nodes/nodes.h"
 #include "reducer/reducer_tree.h"
 #include "spec/tuning_translator.h"
 #include "tuning/convergence_plot.h"
@@ -57,19 +58,16 @@ class SmoothCausticsTranslator final : public TuningTranslator {
     require_in(goal, "min_height_mm", low, Range::closed(1e-3, size.z()));
     const double start = std::isnan(options.start_height_mm) ? 0.75 * size.z() : options.start_height_mm;
     require_in(goal, "start_height_mm", start, Range::closed(low, size.z()));
+    const MaterialPalette& palette = experiment.palette();
     set_tree(surface_.node("z", {bounds.lower.z() + start, bounds.lower.z() + low, bounds.upper.z()}, bounds,
-                           settings_.material),
-             "smooth caustics tree", goal, experiment);
+                           fixed_material(palette, settings_.material, goal.where("material")), palette),
+             goal, experiment);
 
-    nlohmann::json simulator = settings_.simulator(surface_.vertices());
-    simulator["estimator"] = options.estimator;
-    slab_ = CausticSlabConfig::read(Properties::wrap(simulator, experiment.file().string() + " (simulator)"));
-    const nlohmann::json optimizer =
-        experiment.optimizer_or({{"type", "nlopt"}, {"algorithm", "LD_LBFGS"}, {"max_evaluations", 1000}});
-    const nlohmann::json parts = {{"simulator", simulator},
-                                  {"metric", {{"type", "image_mse"}}},
-                                  {"goal", settings_.image_goal()},
-                                  {"optimizer", optimizer}};
+    CausticSlabConfig::Options slab = settings_.slab_options(surface_.vertices());
+    slab.estimator = options.estimator;
+    slab_ = CausticGoalSettings::slab_config(goal, slab);
+    const OptimizerChoice optimizer(experiment.root(), "optimizer",
+                                    {{"type", "nlopt"}, {"algorithm", "LD_LBFGS"}, {"max_evaluations", 1000}});
     // Other optimizers run from the same flat start before the main one, for
     // the comparison the paper's SPSA invites (preview/optimizer_comparison.png).
     if (experiment.root().has("compare_optimizers")) {
@@ -78,9 +76,10 @@ class SmoothCausticsTranslator final : public TuningTranslator {
         compared_.push_back({optimizer_label(p.value()), std::move(built)});
       }
     }
-    auto tuner = build_tuner(Properties::wrap(parts, experiment.file().string() + " (tuner)"), "surface",
-                             PartContext{experiment.palette(), &experiment.cache()});
-    main_label_ = optimizer_label(optimizer);
+    auto tuner = make_tuner("surface", make_caustic_simulator(slab_), make_image_mse(), settings_.image_goal(goal),
+                            optimizer.build());
+    tuner->set_origin(goal.where());
+    main_label_ = optimizer_label(optimizer.spec());
     tuner->set_node(*tree_, tree_->root());
     network_.add(std::move(tuner));
     Phase phase;
@@ -124,7 +123,7 @@ class SmoothCausticsTranslator final : public TuningTranslator {
   void prepare(RunContext& context) override {
     Tuner& tuner = network_.tuner(0);
     if (transport_start_)
-      start_report_ = start_caustic_from_transport(tuner, slab_, dynamic_cast<const HeightSurface&>(tree_->root()),
+      start_report_ = start_caustic_from_transport(tuner, slab_, *tree_->root().height_surface(),
                                                    context.timing);
     slope_limit_["start"] = surface_.limit_slopes(tuner, settings_.slab);
     // The optimizer keeps near the limit (a penalty in units of the start's
@@ -165,7 +164,7 @@ class SmoothCausticsTranslator final : public TuningTranslator {
     if (!compared_runs_.empty()) context.result["files"]["previews"].push_back("preview/optimizer_comparison.png");
     if (!surface_stl_wanted(outputs_.fabrication, context.result["caustics"])) return;
     context.result["caustics"]["surface_stl"] =
-        write_caustic_surface_stl(slab_, surface_.print_vertices(), dynamic_cast<const HeightSurface&>(tree_->root()), achieved.pixels, target,
+        write_caustic_surface_stl(slab_, surface_.print_vertices(), *tree_->root().height_surface(), achieved.pixels, target,
                                   {}, nullptr, context.folder)
             .report;
     context.result["files"]["surface"] = "print/surface.stl";

@@ -74,10 +74,12 @@ class DeformationTextureTranslator final : public TuningTranslator {
       goal.fail("plate_contact_mm", fmt::format("{} mm from each side meets in the middle of a {:.4g} mm high shape",
                                                 plate, bounds_.sizes().z()));
     // The shell holds the thickest stack and one step of backing under it.
-    nlohmann::json tree = surface_column_tree(texture_.ink_mm() + texture_.step_mm(), texture_.columns(),
-                                              texture_.ink_layers(), options_.backing);
-    tree["core"] = elastic_.cell_node(bounds_);
-    set_tree(tree, "deformation texture tree", goal, experiment);
+    const MaterialPalette& palette = experiment.palette();
+    set_tree(surface_column_tree(texture_.ink_mm() + texture_.step_mm(), texture_.columns(),
+                                 texture_.ink_layers(palette),
+                                 fixed_material(palette, options_.backing, goal.where("backing")),
+                                 elastic_.cell_node(bounds_, palette)),
+             goal, experiment);
 
     schedule_.add(texture_.add_tuners(
         network_, *tree_, [this](int k) -> ReducerNode& { return tree_->node("shell/" + std::to_string(k)); },
@@ -127,8 +129,7 @@ class DeformationTextureTranslator final : public TuningTranslator {
   /// surface (no shell), then its assignment printed under the shell.
   nlohmann::json compare_without_shell(const nlohmann::json& with_shell, const RunContext& context) {
     const Experiment& experiment = context.experiment;
-    ReducerTree paper(Properties::wrap(elastic_.cell_node(bounds_), experiment.file().string() + " (no shell)"),
-                      experiment.palette());
+    ReducerTree paper(elastic_.cell_node(bounds_, experiment.palette()), experiment.palette());
     paper.bind(experiment.solid());
     auto [tuner, bound] = elastic_.make_tuner(paper, "", experiment);
     const Summary summary = tuner->tune();

@@ -50,7 +50,7 @@ class ElasticBookTranslator final : public TuningTranslator {
     const Properties goal = experiment.goal();
     const Bounds solid = experiment.solid().bounds();
     const Eigen::AlignedBox3d bounds(solid.lower, solid.upper);
-    set_tree(elastic_.cell_node(bounds), "elastic book tree", goal, experiment);
+    set_tree(elastic_.cell_node(bounds, experiment.palette()), goal, experiment);
 
     // The spine (lowest x) clamped, a strip of the cover along its free edge pushed.
     LoadCase load;

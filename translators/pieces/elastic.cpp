@@ -12,7 +12,9 @@
 
 #include "core/properties.h"
 #include "fem/elastic_bound.h"
+#include "fem/fem_parts.h"
 #include "geometry/mesh_io.h"
+#include "reducer/nodes/nodes.h"
 #include "reducer/reducer_tree.h"
 #include "spec/experiment.h"
 #include "spec/translator.h"
@@ -113,16 +115,6 @@ void write_probe_picture(std::span<const double> rest, std::span<const double> g
   write_image(file, image);
 }
 
-nlohmann::json box_json(const Eigen::AlignedBox3d& box) {
-  return {{"min", {box.min().x(), box.min().y(), box.min().z()}}, {"max", {box.max().x(), box.max().y(), box.max().z()}}};
-}
-
-nlohmann::json points_json(const std::vector<Vec3>& points) {
-  nlohmann::json out = nlohmann::json::array();
-  for (const Vec3& p : points) out.push_back({p.x(), p.y(), p.z()});
-  return out;
-}
-
 }  // namespace
 
 std::vector<size_t> spread_vertices(std::span<const Vec3> vertices, size_t count) {
@@ -181,32 +173,31 @@ ElasticPiece::ElasticPiece(const Properties& goal, const Experiment& experiment,
   }
 }
 
-nlohmann::json ElasticPiece::cell_node(const Eigen::AlignedBox3d& bounds) const {
+NodePtr ElasticPiece::cell_node(const Eigen::AlignedBox3d& bounds, const MaterialPalette& palette) const {
   const Vec3 size = bounds.sizes();
-  return {{"type", "voxel"},
-          {"size_mm", {size.x() / cells_[0], size.y() / cells_[1], size.z() / cells_[2]}},
-          {"origin", {bounds.min().x(), bounds.min().y(), bounds.min().z()}},
-          {"child",
-           {{"type", "layered"},
-            {"material", {{"value", options_.materials.front()}, {"choices", options_.materials}}}}}};
+  VoxelOptions o;
+  o.size_mm.edges = {size.x() / cells_[0], size.y() / cells_[1], size.z() / cells_[2]};
+  o.origin = {bounds.min().x(), bounds.min().y(), bounds.min().z()};
+  o.cells.child.node =
+      make_solid_material(material_choice(palette, options_.materials.front(), options_.materials, "goal.materials"));
+  return make_voxel(std::move(o));
 }
 
 Phase ElasticPiece::add_tuner(TunerNetwork& network, ReducerTree& tree, const std::string& cells_path,
                               const LoadCase& load, std::vector<Vec3> probes, const Experiment& experiment) {
   load_ = load;
   probes_ = mesh_probes_.empty() ? std::move(probes) : mesh_probes_;
-  simulator_ = {{"type", "fem"},
-                {"max_tet_volume_mm3", options_.max_tet_volume_mm3},
-                {"nonlinear", false},
-                {"fixed", {box_json(load.fixed)}},
-                {"loads", {box_json(load.loaded)}},
-                {"probes", points_json(probes_)}};
-  simulator_["loads"][0]["force_n"] = {load.force_n.x(), load.force_n.y(), load.force_n.z()};
+  where_ = experiment.goal().where();
+  fem_ = fem::FemSettings::defaults();
+  fem_.mesh.max_volume_mm3 = options_.max_tet_volume_mm3;
+  fem_.solve.nonlinear = false;
+  fem_.fixed = {{load.fixed, Vec3::Zero(), where_ + " (the clamped region)"}};
+  fem_.loads = {{load.loaded, load.force_n, where_ + " (the loaded region)"}};
+  fem_.probes = probes_;
   const PartContext context{experiment.palette(), &experiment.cache()};
-  const std::string origin = experiment.file().string();
   ReducerNode& cells = tree.node(cells_path);
 
-  std::vector<Vec3> targets = mesh_targets_;
+  targets_ = mesh_targets_;
   if (options_.reference) {
     // The goal: what the hidden assignment does, simulated once with the
     // rest of the tree as it is now.
@@ -215,24 +206,19 @@ Phase ElasticPiece::add_tuner(TunerNetwork& network, ReducerTree& tree, const st
     const std::vector<double> start = space.values();
     space.set_values(hidden);
     tree.evaluate();
-    auto fem = SimulatorRegistry::instance().create(Properties::wrap(simulator_, origin + " (reference)"), "simulator",
-                                                    context);
+    auto fem = fem::make_fem_simulator(fem_, context, where_ + " (the reference)");
     fem->setup(cells, SimulationDomain(tree, cells));
     auto observed = fem->make_observation();
     fem->simulate(cells, *observed);
     const auto& u = static_cast<const DisplacementsObservation&>(*observed);
     for (size_t p = 0; p < probes_.size(); ++p)
-      targets.push_back(probes_[p] + Vec3(u.xyz_mm[3 * p], u.xyz_mm[3 * p + 1], u.xyz_mm[3 * p + 2]));
+      targets_.push_back(probes_[p] + Vec3(u.xyz_mm[3 * p], u.xyz_mm[3 * p + 1], u.xyz_mm[3 * p + 2]));
     space.set_values(start);
     tree.evaluate();
   }
 
-  const nlohmann::json optimizer =
-      experiment.optimizer_or({{"type", "branch_and_bound"}, {"value_order", "best_bound_first"}});
-  parts_ = {{"simulator", simulator_},
-            {"metric", {{"type", "shape_mse"}}},
-            {"goal", {{"type", "deformed_shape"}, {"points", points_json(probes_)}, {"targets", points_json(targets)}}},
-            {"optimizer", optimizer}};
+  optimizer_.emplace(experiment.root(), "optimizer",
+                     nlohmann::json{{"type", "branch_and_bound"}, {"value_order", "best_bound_first"}});
   auto [tuner, bound] = make_tuner(tree, cells_path, experiment);
   bound_ = std::move(bound);
   tuner_ = network.size();
@@ -245,14 +231,14 @@ Phase ElasticPiece::add_tuner(TunerNetwork& network, ReducerTree& tree, const st
 
 std::pair<std::unique_ptr<Tuner>, std::shared_ptr<fem::ElasticBound>> ElasticPiece::make_tuner(
     ReducerTree& tree, const std::string& cells_path, const Experiment& experiment) const {
-  if (parts_.is_null()) throw std::logic_error("ElasticPiece::make_tuner before add_tuner");
+  if (!optimizer_) throw std::logic_error("ElasticPiece::make_tuner before add_tuner");
   const PartContext context{experiment.palette(), &experiment.cache()};
-  const std::string origin = experiment.file().string();
   ReducerNode& cells = tree.node(cells_path);
-  auto tuner = build_tuner(Properties::wrap(parts_, origin + " (tuner)"), "cells", context);
+  auto tuner = spec2fab::make_tuner("cells", fem::make_fem_simulator(fem_, context, where_), fem::make_shape_mse(),
+                                    fem::make_deformed_shape_goal(probes_, targets_), optimizer_->build());
+  tuner->set_origin(where_);
   tuner->set_node(tree, cells);
-  auto bound = std::make_shared<fem::ElasticBound>(Properties::wrap(simulator_, origin + " (bound)"), context, tree,
-                                                   cells, *tuner);
+  auto bound = std::make_shared<fem::ElasticBound>(fem_, where_, context, tree, cells, *tuner);
   tuner->set_lower_bound([bound](std::span<const double> x, int assigned, const Observation& target) {
     return bound->lower_bound(x, assigned, static_cast<const DisplacementsObservation&>(target));
   });

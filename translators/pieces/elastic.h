@@ -24,6 +24,9 @@
 #include "core/options.h"
 #include "geometry/mesh.h"
 #include "materials/material.h"
+#include "reducer/node.h"
+#include "fem/fem_setup.h"
+#include "tuning/optimizer.h"
 #include "tuning/schedule.h"
 #include "tuning/tuner_network.h"
 
@@ -93,8 +96,8 @@ class ElasticPiece {
   const ElasticOptions& options() const { return options_; }
   int cell_count() const { return cells_[0] * cells_[1] * cells_[2]; }
   /// The Voxel node of the cells over `bounds`, each a Layered node choosing
-  /// among the materials (JSON, for a tree).
-  nlohmann::json cell_node(const Eigen::AlignedBox3d& bounds) const;
+  /// among the materials.
+  NodePtr cell_node(const Eigen::AlignedBox3d& bounds, const MaterialPalette& palette) const;
 
   /// Adds the tuner (after every tuner already in `network`), bound to the
   /// cells at `cells_path` of `tree`, under `load`, with `probes` (unless
@@ -133,7 +136,11 @@ class ElasticPiece {
   std::vector<MaterialId> reference_ids_;
   Eigen::AlignedBox3d bounds_;
   LoadCase load_;
-  nlohmann::json simulator_, parts_;
+  // The tuner's parts, as add_tuner made them (make_tuner makes more).
+  std::string where_;  ///< the goal, where errors of the FEM's settings point
+  fem::FemSettings fem_;
+  std::vector<Vec3> targets_;
+  std::optional<OptimizerChoice> optimizer_;
   std::shared_ptr<fem::ElasticBound> bound_;
   size_t tuner_ = 0;
 };

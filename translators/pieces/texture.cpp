@@ -15,6 +15,7 @@
 #include <tbb/parallel_for.h>
 
 #include "albedo/albedo_lookup.h"
+#include "albedo/albedo_parts.h"
 #include "core/colour.h"
 #include "core/parameter.h"
 #include "core/properties.h"
@@ -29,6 +30,11 @@
 
 namespace spec2fab {
 namespace {
+
+/// The goal's "metric" (a choice of the two).
+ColourMetric colour_metric(const std::string& name) {
+  return name == "rgb_mse" ? ColourMetric::rgb_mse : ColourMetric::ciede2000;
+}
 
 // What the lookup costs per column, measured on this 2-core machine (Release,
 // 2 threads) over the 512 x 512 photograph runs of benchmarks/RESULTS.md
@@ -251,23 +257,21 @@ TexturePiece::TexturePiece(const Properties& goal, const Experiment& experiment,
   diffusion_ = o.error_diffusion;
   gamut_map_ = o.gamut_map.value_or(diffusion_);
   low_pass_sigma_ = o.low_pass_sigma_px;
-  optimizer_ = experiment.section_or(o.keys.optimizer, {{"type", "exhaustive"}});
-  if (lookup_ && metric_ != "ciede2000" && metric_ != "rgb_mse")
-    goal.fail(o.keys.metric, "unknown metric '" + metric_ + "' for the lookup (known: ciede2000, rgb_mse)");
+  optimizer_.emplace(experiment.root(), o.keys.optimizer, nlohmann::json{{"type", "exhaustive"}});
   if (diffuse_in_lab_ && metric_ != "ciede2000")
     goal.fail("diffusion_space", "lab needs metric ciede2000 (the lookup searches CIELAB then)");
 
   // Every printable stack simulated once, on a stack of its own: the
   // lookup's table, the gamut, and what a column tuner searches.
-  const NodePtr stack = build_node(
-      Properties::wrap({{"type", "layered"}, {"layers", ink_layers()}, {"fill", ground}},
-                       experiment.file().string() + " (texture stack)"),
-      NodeContext{palette});
+  LayeredOptions printable;
+  printable.layers = ink_layers(palette);
+  printable.fill.parameter = fixed_material(palette, ground, goal.where());
+  const NodePtr stack = make_layered(std::move(printable));
   std::unique_ptr<Tuner> tuner = column_tuner(experiment, "printable_stacks", {0.5, 0.5, 0.5});
   tuner->set_node(*stack);
   stacks_ = printable_stacks(*tuner);
   lookup_table_ = std::make_shared<const AlbedoLookup>(
-      stacks_.colours, metric_ == "rgb_mse" ? ColourMetric::rgb_mse : ColourMetric::ciede2000);
+      stacks_.colours, colour_metric(metric_));
   gamut_ = std::make_shared<const PrintableGamut>(stacks_.colours);
   mapped_.resize(image_.pixels.size());
   outside_.resize(image_.pixels.size());
@@ -285,13 +289,12 @@ TexturePiece::TexturePiece(const Properties& goal, const Experiment& experiment,
 std::unique_ptr<Tuner> TexturePiece::column_tuner(const Experiment& experiment, const std::string& name,
                                                   const Rgb& target) const {
   // Below the thickest stack, one more step: what the inks lie on.
-  const nlohmann::json parts = {
-      {"simulator", {{"type", "albedo"}, {"depth_mm", ink_mm_ + step_mm_}, {"step_mm", step_mm_ / 8}}},
-      {"metric", {{"type", metric_}}},
-      {"goal", {{"type", "albedo"}, {"linear_rgb", target}}},
-      {"optimizer", optimizer_}};
-  return build_tuner(Properties::wrap(parts, experiment.file().string() + " (texture tuner)"), name,
-                     PartContext{experiment.palette(), &experiment.cache()});
+  AlbedoSimulatorOptions albedo;
+  albedo.depth_mm = ink_mm_ + step_mm_;
+  albedo.step_mm = step_mm_ / 8;
+  return make_tuner(name, make_albedo_simulator(albedo, PartContext{experiment.palette(), &experiment.cache()}),
+                    make_colour_metric(colour_metric(metric_)),
+                    make_albedo_goal(target), optimizer_->build());
 }
 
 std::vector<PropertyDoc> TexturePiece::docs(const TextureOptions& options) {
@@ -300,11 +303,12 @@ std::vector<PropertyDoc> TexturePiece::docs(const TextureOptions& options) {
   return rows;
 }
 
-nlohmann::json TexturePiece::ink_layers() const {
-  nlohmann::json layers = nlohmann::json::array();
-  for (size_t k = 0; k < inks_.size(); ++k)
-    layers.push_back({{"material", inks_[k]},
-                      {"thickness_mm", {{"value", 0.0}, {"min", 0.0}, {"max", max_ink_mm_[k]}, {"step", step_mm_}}}});
+std::vector<LayeredOptions::Layer> TexturePiece::ink_layers(const MaterialPalette& palette) const {
+  std::vector<LayeredOptions::Layer> layers(inks_.size());
+  for (size_t k = 0; k < inks_.size(); ++k) {
+    layers[k].material.parameter = fixed_material(palette, inks_[k], "inks");
+    layers[k].thickness_mm = free_steps(0, 0, max_ink_mm_[k], step_mm_);
+  }
   return layers;
 }
 
@@ -366,8 +370,14 @@ std::vector<Rgb> TexturePiece::nearest_only(TunerNetwork& network) const {
   return nearest;
 }
 
-nlohmann::json TexturePiece::stack_grid(const std::string& ground) const {
-  return {{"type", "stack_grid"}, {"count", columns_}, {"inks", inks_}, {"stacks", stacks_.values}, {"fill", ground}};
+std::unique_ptr<StackGridNode> TexturePiece::stack_grid(const MaterialPalette& palette,
+                                                       const std::string& ground) const {
+  StackGridOptions o;
+  o.count = columns_;
+  o.inks = inks_;
+  o.stacks = stacks_.values;
+  o.fill = ground;
+  return std::make_unique<StackGridNode>(std::move(o), palette, "texture stack grid");
 }
 
 std::vector<std::uint32_t> TexturePiece::choose_stacks(bool diffuse) const {

@@ -21,6 +21,9 @@
 #include "core/options.h"
 #include "core/registry.h"
 #include "materials/material.h"
+#include "reducer/nodes/nodes.h"
+#include "reducer/nodes/stack_grid.h"
+#include "tuning/optimizer.h"
 #include "tuning/schedule.h"
 
 namespace spec2fab {
@@ -153,7 +156,7 @@ struct TextureOptions {
     d.number(o.layer_step_mm, "layer_step_mm", Range::closed(1e-3, 10), "thickness step of each ink layer",
              Default{"the printer's layer"});
     d.custom(o.max_ink_mm, "max_ink_mm", "thickest layer, one for all inks or one per ink (at least one step)");
-    d.value(o.metric, o.keys.metric.c_str(), "an albedo metric: ciede2000 or rgb_mse");
+    d.choice(o.metric, o.keys.metric.c_str(), {"ciede2000", "rgb_mse"}, "the albedo metric");
     d.value(o.error_diffusion, "error_diffusion",
             "diffuse residuals (serial raster); false: nearest stack per column, in parallel");
     d.value(o.gamut_map, "gamut_map",
@@ -196,9 +199,9 @@ class TexturePiece {
   double step_mm() const { return step_mm_; }
   /// The thickest stack: every ink at its thickest.
   double ink_mm() const { return ink_mm_; }
-  /// The Layered node's "layers": one per ink, from the surface down, each
+  /// The Layered node's layers: one per ink, from the surface down, each
   /// 0 to its thickest on the layer step.
-  nlohmann::json ink_layers() const;
+  std::vector<LayeredOptions::Layer> ink_layers(const MaterialPalette& palette) const;
 
   /// One albedo tuner per column ("column_i_j", bound to `stack(i + nu·j)`
   /// of `tree`, the ink stack under the surface point), its goal the
@@ -214,7 +217,7 @@ class TexturePiece {
   /// Method "lookup": no tuners; the stack grid node (reducer/nodes/stack_grid.h)
   /// holds every column, `ground` below the inks.
   bool lookup() const { return lookup_; }
-  nlohmann::json stack_grid(const std::string& ground) const;
+  std::unique_ptr<StackGridNode> stack_grid(const MaterialPalette& palette, const std::string& ground) const;
   /// Every column's stack from the lookup: error diffusion in the lookup's
   /// space (serpentine Floyd–Steinberg) over gamut-mapped goals when
   /// `diffuse`, else each column's nearest stack to its own pixel.
@@ -248,7 +251,7 @@ class TexturePiece {
   double step_mm_ = 0.027, ink_mm_ = 0, low_pass_sigma_ = 1.5;
   std::string metric_;
   bool diffusion_ = true, gamut_map_ = true, lookup_ = false, diffuse_in_lab_ = false;
-  nlohmann::json optimizer_;
+  std::optional<OptimizerChoice> optimizer_;
   PrintableStacks stacks_;  ///< every printable stack and its albedo
   std::shared_ptr<const AlbedoLookup> lookup_table_;
   std::shared_ptr<const PrintableGamut> gamut_;

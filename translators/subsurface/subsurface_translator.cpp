@@ -26,6 +26,7 @@
 #include "subsurface/stack_bound.h"
 #include "subsurface/subsurface_parts.h"
 #include "tuning/schedule.h"
+#include "tuning/tuner.h"
 
 namespace spec2fab {
 namespace {
@@ -37,11 +38,12 @@ class SubsurfaceTranslator final : public TuningTranslator {
     std::vector<MeasuredMedium> media;
     template <class Context>
     void read(const Properties& goal, const char* name, const Context&) {
-      const nlohmann::json& given = goal.raw(name);
+      const nlohmann::json& given = goal.peek(name);
       if (!given.is_array() || given.size() != 2) goal.fail(name, "give the chessboard's two media");
       for (size_t i = 0; i < 2; ++i) {
-        const nlohmann::json holder = {{"medium", given[i]}};
-        media.push_back(read_medium(Properties::wrap(holder, goal.where(name) + "/" + std::to_string(i)), "medium"));
+        const std::string where = goal.where(name) + "/" + std::to_string(i);
+        if (given[i].is_string()) media.push_back(medium_named(given[i].get<std::string>(), where));
+        else media.push_back(read_medium_coefficients(goal.element_object(name, i), "medium"));
       }
     }
     std::string type_text() const { return "[medium, medium]"; }
@@ -102,18 +104,19 @@ class SubsurfaceTranslator final : public TuningTranslator {
     // The tree: the albedo translator's, with material and thickness free in every layer.
     std::vector<double> thicknesses;
     for (int s : thickness_steps_) thicknesses.push_back(s * step_mm_);
-    nlohmann::json layers = nlohmann::json::array();
-    for (int l = 0; l < layer_count_; ++l) {
-      layers.push_back({{"material", {{"value", materials_.front()}, {"choices", materials_}}},
-                        {"thickness_mm", {{"value", thicknesses.front()}, {"choices", thicknesses}}}});
+    std::vector<LayeredOptions::Layer> layers(static_cast<size_t>(layer_count_));
+    for (LayeredOptions::Layer& layer : layers) {
+      layer.material.parameter = material_choice(palette, materials_.front(), materials_, goal.where("materials"));
+      layer.thickness_mm = number_choice(thicknesses.front(), thicknesses);
     }
-    set_tree(surface_column_tree(shell, columns_, std::move(layers), backing_), "subsurface tree", goal, experiment);
+    set_tree(surface_column_tree(shell, columns_, std::move(layers),
+                                 fixed_material(palette, backing_, goal.where("backing"))),
+             goal, experiment);
 
-    const nlohmann::json simulator = {{"type", "subsurface"},
-                                      {"radius_mm", grid_.radius_mm},
-                                      {"samples", grid_.samples},
-                                      {"depth_mm", shell},
-                                      {"step_mm", step_mm_}};
+    SubsurfaceSimulatorOptions simulator;
+    simulator.grid = grid_;
+    simulator.depth_mm = shell;
+    simulator.step_mm = step_mm_;
     model_ = LayerStackModel::shared(palette, grid_.basis(&experiment.cache()), step_mm_, &experiment.cache());
     std::vector<LayerOptions> options(static_cast<size_t>(layer_count_));
     for (LayerOptions& o : options) {
@@ -121,20 +124,16 @@ class SubsurfaceTranslator final : public TuningTranslator {
       o.steps = thickness_steps_;
     }
     bound_ = std::make_shared<StackBound>(model_, options, palette.id(backing_, goal.where("backing")));
-    const nlohmann::json optimizer =
-        experiment.optimizer_or(nlohmann::json{{"type", "branch_and_bound"}, {"value_order", "best_bound_first"}});
+    const OptimizerChoice optimizer(experiment.root(), "optimizer",
+                                    {{"type", "branch_and_bound"}, {"value_order", "best_bound_first"}});
     const PartContext context{palette, &experiment.cache()};
     for (int j = 0; j < columns_[1]; ++j) {
       for (int i = 0; i < columns_[0]; ++i) {
-        const size_t medium = square_medium(i, j);
-        const nlohmann::json parts = {
-            {"simulator", simulator},
-            {"metric", {{"type", "profile_l2"}}},
-            {"goal", {{"type", "radial_profile"}, {"medium", medium_json(medium)},
-                      {"radius_mm", grid_.radius_mm}, {"samples", grid_.samples}}},
-            {"optimizer", optimizer}};
-        auto tuner = build_tuner(Properties::wrap(parts, experiment.file().string() + " (tuner)"),
-                                 fmt::format("column_{}_{}", i, j), context);
+        auto tuner = make_tuner(fmt::format("column_{}_{}", i, j), make_subsurface_simulator(simulator, context),
+                                make_profile_l2(),
+                                make_radial_profile_goal(media_[square_medium(i, j)], grid_, &experiment.cache()),
+                                optimizer.build());
+        tuner->set_origin(goal.where());
         tuner->set_node(*tree_, tree_->node("shell/" + std::to_string(i + columns_[0] * j)));
         tuner->set_lower_bound([bound = bound_](std::span<const double> x, int assigned, const Observation& target) {
           return bound->lower_bound(x, assigned, static_cast<const RadialProfileObservation&>(target));
@@ -224,17 +223,6 @@ class SubsurfaceTranslator final : public TuningTranslator {
   size_t square_medium(int i, int j) const {
     const int si = i * squares_[0] / columns_[0], sj = j * squares_[1] / columns_[1];
     return static_cast<size_t>((si + sj) % 2);
-  }
-
-  nlohmann::json medium_json(size_t index) const {
-    const MeasuredMedium& m = media_[index];
-    nlohmann::json a = nlohmann::json::array(), s = nlohmann::json::array();
-    for (const DiffusionMedium& c : m.rgb) {
-      a.push_back(c.absorption_per_mm);
-      s.push_back(c.reduced_scattering_per_mm);
-    }
-    return {{"name", m.name}, {"absorption_per_mm", a}, {"reduced_scattering_per_mm", s},
-            {"refractive_index", m.refractive_index}};
   }
 
   std::vector<double> thickness_list() const {

@@ -3,9 +3,29 @@
 
 #include <cmath>
 
-#include "reducer/nodes/height_cut.h"
+#include "reducer/nodes/nodes.h"
 
 namespace spec2fab {
+
+void BSplineOptions::ControlHeights::read(const Properties& properties, const char* name, const NodeContext&) {
+  if (properties.has(name) && properties.peek(name).is_array()) {
+    each = properties.get<std::vector<double>>(name);
+  } else {
+    common = read_numeric_parameter(properties, name, 0, common.lower(), common.upper());
+  }
+}
+
+bool BSplineOptions::check(std::string* why) const {
+  const size_t n = static_cast<size_t>(control[0]) * static_cast<size_t>(control[1]);
+  if (n > 4'000'000) *why = "control: more than 4 million control points";
+  else if (!heights_mm.each.empty() && heights_mm.each.size() != n)
+    *why = "heights_mm: expected " + std::to_string(n) + " heights, got " + std::to_string(heights_mm.each.size());
+  else if (!std::isnan(domain[0]) && !(domain[2] > domain[0] && domain[3] > domain[1]))
+    *why = "domain: expected [a_min, b_min, a_max, b_max] with max > min";
+  else return true;
+  return false;
+}
+
 namespace {
 
 // Uniform cubic B-spline basis at parameter t ∈ [0,1) for the four control
@@ -20,45 +40,7 @@ inline void cubic_basis(double t, double w[4]) {
 
 class BSplineNode final : public ClonableNode<BSplineNode, GeometryNode>, public HeightSurface {
  public:
-  // "heights_mm": one parameter for every control point, or one number each.
-  struct ControlHeights {
-    Parameter common = Parameter::continuous(0, -1e5, 1e5);
-    std::vector<double> each;
-    void read(const Properties& properties, const char* name, const NodeContext&) {
-      if (properties.has(name) && properties.peek(name).is_array()) {
-        each = properties.get<std::vector<double>>(name);
-      } else {
-        common = read_numeric_parameter(properties, name, 0, common.lower(), common.upper());
-      }
-    }
-    std::string type_text() const { return "parameter (mm), or array of na·nb numbers"; }
-    std::string default_text() const { return "0"; }
-  };
-
-  struct Options {
-    std::array<int, 2> control{};
-    ControlHeights heights_mm;
-    std::array<double, 4> domain{kUnset, kUnset, kUnset, kUnset};
-    HeightCut::Options cut;
-    template <class Declare, class Self>
-    static void declare(Declare& d, Self& o) {
-      d.required(o.control, "control", Range::at_least(1), "control points along a and b");
-      d.custom(o.heights_mm, "heights_mm", "control heights, row by row (a fastest)");
-      d.number(o.domain, "domain", Range::any(), "[a_min, b_min, a_max, b_max], the area the control grid spans",
-               Default{"the incoming frame's extent"});
-      HeightCut::Options::declare(d, o.cut);
-    }
-    bool check(std::string* why) const {
-      const size_t n = static_cast<size_t>(control[0]) * static_cast<size_t>(control[1]);
-      if (n > 4'000'000) *why = "control: more than 4 million control points";
-      else if (!heights_mm.each.empty() && heights_mm.each.size() != n)
-        *why = "heights_mm: expected " + std::to_string(n) + " heights, got " + std::to_string(heights_mm.each.size());
-      else if (!std::isnan(domain[0]) && !(domain[2] > domain[0] && domain[3] > domain[1]))
-        *why = "domain: expected [a_min, b_min, a_max, b_max] with max > min";
-      else return true;
-      return false;
-    }
-  };
+  using Options = BSplineOptions;
 
   BSplineNode(const Properties& properties, const NodeContext& context)
       : BSplineNode(read_options<Options>(properties, context)) {}
@@ -141,6 +123,7 @@ class BSplineNode final : public ClonableNode<BSplineNode, GeometryNode>, public
     return p.z() - height(p.x(), p.y());
   }
 
+  const HeightSurface* height_surface() const override { return this; }
   int height_axis() const override { return cut_.axis(); }
   double surface_height(double lateral_1, double lateral_2) const override {
     return height(lateral_1, lateral_2);
@@ -210,6 +193,13 @@ class BSplineNode final : public ClonableNode<BSplineNode, GeometryNode>, public
 };
 
 }  // namespace
+
+NodePtr make_bspline(BSplineOptions options) {
+  require_valid(options, "bspline");
+  options.cut.require_children("bspline");
+  return std::make_unique<BSplineNode>(std::move(options));
+}
+
 }  // namespace spec2fab
 
 SPEC2FAB_REGISTER(spec2fab::NodeRegistry, spec2fab::BSplineNode, "bspline")

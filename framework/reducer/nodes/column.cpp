@@ -4,42 +4,35 @@
 #include <cmath>
 
 #include "core/options.h"
-#include "reducer/node.h"
+#include "reducer/nodes/nodes.h"
 
 namespace spec2fab {
+
+bool ColumnOptions::check(std::string* why) const {
+  if (static_cast<long long>(count[0]) * count[1] > 16'000'000) *why = "count: more than 16 million columns";
+  else if (!std::isnan(domain[0]) && !(domain[2] > domain[0] && domain[3] > domain[1]))
+    *why = "domain: expected [a_min, b_min, a_max, b_max] with max > min";
+  else return cells.check(why);
+  return false;
+}
+
 namespace {
 
 class ColumnNode final : public ClonableNode<ColumnNode, GeometryNode> {
  public:
-  struct Options {
-    std::array<int, 2> count{};
-    std::array<double, 4> domain{kUnset, kUnset, kUnset, kUnset};
-    RepeatedChildren cells;
-    template <class Declare, class Self>
-    static void declare(Declare& d, Self& o) {
-      d.required(o.count, "count", Range::at_least(1), "columns along a and b; column (i, j) is cell i + na·j");
-      d.number(o.domain, "domain", Range::any(), "[a_min, b_min, a_max, b_max], the area the grid covers",
-               Default{"the incoming frame's extent"});
-      RepeatedChildren::declare(d, o.cells);
-    }
-    bool check(std::string* why) const {
-      if (static_cast<long long>(count[0]) * count[1] > 16'000'000) *why = "count: more than 16 million columns";
-      else if (!std::isnan(domain[0]) && !(domain[2] > domain[0] && domain[3] > domain[1]))
-        *why = "domain: expected [a_min, b_min, a_max, b_max] with max > min";
-      else return cells.check(why);
-      return false;
-    }
-  };
+  using Options = ColumnOptions;
 
-  ColumnNode(const Properties& properties, const NodeContext& context) {
-    Options o = read_options<Options>(properties, context);
+  ColumnNode(const Properties& properties, const NodeContext& context)
+      : ColumnNode(read_options<Options>(properties, context), properties.where("children")) {}
+  /// `where` names the node in the error for too many cells.
+  ColumnNode(Options o, const std::string& where) {
     counts_ = o.count;
     if (!std::isnan(o.domain[0])) {
       lower_ = {o.domain[0], o.domain[1]};
       upper_ = {o.domain[2], o.domain[3]};
       explicit_domain_ = true;
     }
-    children_ = o.cells.take(static_cast<size_t>(counts_[0]) * counts_[1], properties.where("children"));
+    children_ = o.cells.take(static_cast<size_t>(counts_[0]) * counts_[1], where);
   }
 
   std::string type_name() const override { return "column"; }
@@ -117,6 +110,12 @@ class ColumnNode final : public ClonableNode<ColumnNode, GeometryNode> {
 };
 
 }  // namespace
+
+NodePtr make_column(ColumnOptions options) {
+  require_valid(options, "column");
+  return std::make_unique<ColumnNode>(std::move(options), "column");
+}
+
 }  // namespace spec2fab
 
 SPEC2FAB_REGISTER(spec2fab::NodeRegistry, spec2fab::ColumnNode, "column")

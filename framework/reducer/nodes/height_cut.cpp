@@ -1,6 +1,14 @@
 #include "reducer/nodes/height_cut.h"
 
+#include <stdexcept>
+#include <string>
+
 namespace spec2fab {
+
+void HeightCut::Options::require_children(std::string_view node) const {
+  if (!below.node || !above.node)
+    throw std::logic_error(std::string(node) + ": built in C++ without its \"below\" and \"above\" children");
+}
 
 HeightCut::HeightCut(Options&& options, std::vector<NodePtr>& children) {
   const char axis = options.axis[0];

@@ -4,6 +4,8 @@
 // (child 1). Each side's frame is (lateral, lateral, distance from the cut),
 // so a Layered child counts its layers from the cut surface.
 
+#include <string_view>
+
 #include "core/options.h"
 #include "reducer/height_surface.h"
 #include "reducer/node.h"
@@ -24,6 +26,8 @@ class HeightCut {
       d.custom(o.below, "below", "child under the surface; its w is the depth below it");
       d.custom(o.above, "above", "child over the surface; its w is the height above it");
     }
+    /// For options built in C++: both children given, else std::logic_error naming `node`.
+    void require_children(std::string_view node) const;
   };
 
   HeightCut() = default;

@@ -4,46 +4,19 @@
 #include <limits>
 
 #include "core/options.h"
-#include "reducer/node.h"
+#include "reducer/nodes/nodes.h"
 
 namespace spec2fab {
 namespace {
 
 class LayeredNode final : public ClonableNode<LayeredNode, MaterialNode> {
  public:
-  struct LayerOptions {
-    MaterialOption material;
-    std::optional<Parameter> thickness_mm;
-    std::string where;
-    template <class Declare, class Self>
-    static void declare(Declare& d, Self& o) {
-      d.custom(o.material, "material", "the layer's material");
-      d.parameter(o.thickness_mm, "thickness_mm", Range::closed(0, 1e4), "the layer's thickness",
-                  Default{"unbounded (the last layer only)"});
-    }
-  };
+  using Options = LayeredOptions;
+  using LayerOptions = LayeredOptions::Layer;
 
-  struct Options {
-    std::vector<LayerOptions> layers;
-    MaterialOption material{"-", std::nullopt}, fill{"the last layer's material", std::nullopt};
-    template <class Declare, class Self>
-    static void declare(Declare& d, Self& o) {
-      d.objects(o.layers, "layers",
-                "outermost first; thickness_mm is a parameter (mm); the last layer may omit it and extend "
-                "without end; give this or \"material\"");
-      d.custom(o.material, "material", "shorthand for one unbounded layer");
-      d.custom(o.fill, "fill", "material deeper than every layer");
-    }
-    bool check(std::string* why) const {
-      if (material.parameter && !layers.empty()) *why = "give \"material\" or \"layers\", not both";
-      else if (!material.parameter && layers.empty()) *why = "give \"layers\" (at least one) or \"material\"";
-      else return true;
-      return false;
-    }
-  };
-
-  LayeredNode(const Properties& properties, const NodeContext& context) {
-    Options o = read_options<Options>(properties, context);
+  LayeredNode(const Properties& properties, const NodeContext& context)
+      : LayeredNode(read_options<Options>(properties, context)) {}
+  explicit LayeredNode(Options o) {
     if (o.material.parameter) layers_.push_back({*o.material.parameter, std::nullopt});
     for (size_t i = 0; i < o.layers.size(); ++i) {
       LayerOptions& layer = o.layers[i];
@@ -148,6 +121,18 @@ class LayeredNode final : public ClonableNode<LayeredNode, MaterialNode> {
 };
 
 }  // namespace
+
+NodePtr make_layered(LayeredOptions options) {
+  require_valid(options, "layered");
+  return std::make_unique<LayeredNode>(std::move(options));
+}
+
+NodePtr make_solid_material(Parameter material) {
+  LayeredOptions options;
+  options.material.parameter = std::move(material);
+  return make_layered(std::move(options));
+}
+
 }  // namespace spec2fab
 
 SPEC2FAB_REGISTER(spec2fab::NodeRegistry, spec2fab::LayeredNode, "layered")

@@ -5,7 +5,7 @@
 // paraboloid without curvature parameters, and the facet-caustic translator
 // uses either per column (planar facets, or the micro-lenses of Papas et al.).
 
-#include "reducer/nodes/height_cut.h"
+#include "reducer/nodes/nodes.h"
 
 namespace spec2fab {
 namespace {
@@ -13,28 +13,7 @@ namespace {
 template <bool Curved>
 class QuadricCutNode final : public ClonableNode<QuadricCutNode<Curved>, GeometryNode>, public HeightSurface {
  public:
-  struct Options {
-    Parameter offset_mm = Parameter::continuous(0, -1e5, 1e5);
-    Parameter slope_a = Parameter::continuous(0, -1e3, 1e3), slope_b = slope_a;
-    Parameter curvature_aa = Parameter::continuous(0, -1e3, 1e3), curvature_ab = curvature_aa,
-              curvature_bb = curvature_aa;
-    std::array<double, 2> center{kUnset, kUnset};
-    HeightCut::Options cut;
-    template <class Declare, class Self>
-    static void declare(Declare& d, Self& o) {
-      d.parameter(o.offset_mm, "offset_mm", "height at the centre");
-      d.parameter(o.slope_a, "slope_a", "dHeight/da at the centre");
-      d.parameter(o.slope_b, "slope_b", "dHeight/db at the centre");
-      if constexpr (Curved) {
-        d.parameter(o.curvature_aa, "curvature_aa", "d²Height/da² (1/mm)");
-        d.parameter(o.curvature_ab, "curvature_ab", "d²Height/da db (1/mm)");
-        d.parameter(o.curvature_bb, "curvature_bb", "d²Height/db² (1/mm)");
-      }
-      d.number(o.center, "center", Range::any(), "[a0, b0], the pivot of the slopes",
-               Default{"centre of the incoming domain"});
-      HeightCut::Options::declare(d, o.cut);
-    }
-  };
+  using Options = QuadricCutOptions<Curved>;
 
   QuadricCutNode(const Properties& properties, const NodeContext& context)
       : QuadricCutNode(read_options<Options>(properties, context)) {}
@@ -101,6 +80,7 @@ class QuadricCutNode final : public ClonableNode<QuadricCutNode<Curved>, Geometr
     return p.z() - height(p);
   }
 
+  const HeightSurface* height_surface() const override { return this; }
   int height_axis() const override { return cut_.axis(); }
   double surface_height(double lateral_1, double lateral_2) const override {
     return height(Vec3(lateral_1, lateral_2, 0));
@@ -168,6 +148,19 @@ using PlaneNode = QuadricCutNode<false>;
 using ParaboloidNode = QuadricCutNode<true>;
 
 }  // namespace
+
+NodePtr make_plane(PlaneOptions options) {
+  require_valid(options, "plane");
+  options.cut.require_children("plane");
+  return std::make_unique<PlaneNode>(std::move(options));
+}
+
+NodePtr make_paraboloid(ParaboloidOptions options) {
+  require_valid(options, "paraboloid");
+  options.cut.require_children("paraboloid");
+  return std::make_unique<ParaboloidNode>(std::move(options));
+}
+
 }  // namespace spec2fab
 
 SPEC2FAB_REGISTER(spec2fab::NodeRegistry, spec2fab::PlaneNode, "plane")

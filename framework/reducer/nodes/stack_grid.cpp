@@ -12,48 +12,24 @@
 #include "core/options.h"
 
 namespace spec2fab {
-namespace {
 
-struct Options {
-  std::array<int, 2> count{};
-  std::vector<std::string> inks;
-  std::vector<std::vector<double>> stacks;
-  std::string fill;
-  std::vector<int> cells;
-  template <class Declare, class Self>
-  static void declare(Declare& d, Self& o) {
-    d.required(o.count, "count", Range::at_least(1), "columns along a and b; column (i, j) is cell i + na·j");
-    d.required(o.inks, "inks", "the inks' materials, from the surface down");
-    d.required(o.stacks, "stacks", "each stack's ink thicknesses (mm), one per ink, in the inks' order");
-    d.required(o.fill, "fill", "the material below every stack");
-    d.value(o.cells, "cells", "each column's stack (an index into stacks), column i + na·j", Default{"stack 0 everywhere"});
-  }
-  bool check(std::string* why) const {
-    if (static_cast<long long>(count[0]) * count[1] > 64'000'000) *why = "count: more than 64 million columns";
-    else if (inks.empty()) *why = "inks: at least one ink";
-    else if (stacks.empty()) *why = "stacks: at least one stack";
-    else if (!cells.empty() && cells.size() != static_cast<size_t>(count[0]) * static_cast<size_t>(count[1]))
-      *why = fmt::format("cells: {} given for {} x {} columns", cells.size(), count[0], count[1]);
-    else return true;
-    return false;
-  }
-};
+StackGridNode::StackGridNode(const Properties& properties, const NodeContext& context)
+    : StackGridNode(read_options<StackGridOptions>(properties), context.palette,
+                    properties.origin() + ": " + properties.pointer()) {}
 
-}  // namespace
-
-StackGridNode::StackGridNode(const Properties& properties, const NodeContext& context) {
-  Options o = read_options<Options>(properties);
+StackGridNode::StackGridNode(StackGridOptions o, const MaterialPalette& palette, const std::string& where) {
+  require_valid(o, "stack_grid");
   count_ = o.count;
-  for (size_t k = 0; k < o.inks.size(); ++k) inks_.push_back(context.palette.id(o.inks[k], properties.where("inks")));
-  fill_ = context.palette.id(o.fill, properties.where("fill"));
+  for (size_t k = 0; k < o.inks.size(); ++k) inks_.push_back(palette.id(o.inks[k], where + "/inks"));
+  fill_ = palette.id(o.fill, where + "/fill");
   for (size_t s = 0; s < o.stacks.size(); ++s) {
     const std::vector<double>& stack = o.stacks[s];
-    const std::string where = properties.where("stacks") + "/" + std::to_string(s) + ": ";
+    const std::string at = where + "/stacks/" + std::to_string(s) + ": ";
     if (stack.size() != inks_.size())
-      throw InputError(where + fmt::format("{} thicknesses for {} inks", stack.size(), inks_.size()));
+      throw InputError(at + fmt::format("{} thicknesses for {} inks", stack.size(), inks_.size()));
     double depth = 0;
     for (double t : stack) {
-      if (!(t >= 0 && t <= 1e4)) throw InputError(where + "thicknesses must lie in [0, 1e4] mm");
+      if (!(t >= 0 && t <= 1e4)) throw InputError(at + "thicknesses must lie in [0, 1e4] mm");
       thickness_mm_.push_back(t);
       bottom_mm_.push_back(depth += t);
     }
@@ -63,7 +39,7 @@ StackGridNode::StackGridNode(const Properties& properties, const NodeContext& co
   cells_.reserve(columns);
   for (int c : o.cells) {
     if (c < 0 || static_cast<size_t>(c) >= o.stacks.size())
-      properties.fail("cells", fmt::format("no stack {} (there are {})", c, o.stacks.size()));
+      throw InputError(where + "/cells: " + fmt::format("no stack {} (there are {})", c, o.stacks.size()));
     cells_.push_back(static_cast<std::uint32_t>(c));
   }
 }
@@ -74,7 +50,7 @@ TypeDoc StackGridNode::doc() {
           "node with a Layered child per column, in one node without parameters, for textures of millions "
           "of columns (the albedo translator's lookup fills it). Points outside the grid take the nearest "
           "edge column.",
-          option_docs<Options>(),
+          option_docs<StackGridOptions>(),
           R"({"type": "stack_grid", "count": [2, 1], "inks": ["VeroCyan"], "stacks": [[0], [0.054]], )"
           R"("fill": "VeroWhitePlus", "cells": [0, 1]})"};
 }

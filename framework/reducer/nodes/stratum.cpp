@@ -1,28 +1,22 @@
 // Stratum geometry node: the iso-distance surface at depth d below the solid's
 // surface splits a shell (child 0) from a core (child 1).
 
+#include <stdexcept>
+
 #include "core/options.h"
 #include "geometry/solid.h"
-#include "reducer/node.h"
+#include "reducer/nodes/nodes.h"
 
 namespace spec2fab {
 namespace {
 
 class StratumNode final : public ClonableNode<StratumNode, GeometryNode> {
  public:
-  struct Options {
-    Parameter depth_mm = Parameter::continuous(1.0, 0, 1e3);
-    ChildNode shell, core;
-    template <class Declare, class Self>
-    static void declare(Declare& d, Self& o) {
-      d.parameter(o.depth_mm, "depth_mm", "shell thickness d");
-      d.custom(o.shell, "shell", "child for depth < d");
-      d.custom(o.core, "core", "child for depth >= d");
-    }
-  };
+  using Options = StratumOptions;
 
-  StratumNode(const Properties& properties, const NodeContext& context) {
-    Options o = read_options<Options>(properties, context);
+  StratumNode(const Properties& properties, const NodeContext& context)
+      : StratumNode(read_options<Options>(properties, context)) {}
+  explicit StratumNode(Options o) {
     depth_mm_ = o.depth_mm;
     children_.push_back(std::move(o.shell.node));
     children_.push_back(std::move(o.core.node));
@@ -91,6 +85,14 @@ class StratumNode final : public ClonableNode<StratumNode, GeometryNode> {
 };
 
 }  // namespace
+
+NodePtr make_stratum(StratumOptions options) {
+  require_valid(options, "stratum");
+  if (!options.shell.node || !options.core.node)
+    throw std::logic_error("stratum: built in C++ without its \"shell\" and \"core\" children");
+  return std::make_unique<StratumNode>(std::move(options));
+}
+
 }  // namespace spec2fab
 
 SPEC2FAB_REGISTER(spec2fab::NodeRegistry, spec2fab::StratumNode, "stratum")

@@ -2,48 +2,33 @@
 // domain; each cell has its own child.
 
 #include <cmath>
+#include <stdexcept>
 
 #include "core/options.h"
-#include "reducer/node.h"
+#include "reducer/nodes/nodes.h"
 
 namespace spec2fab {
+
+void VoxelOptions::CellSize::read(const Properties& properties, const char* name, const NodeContext&) {
+  if (properties.peek(name).is_array()) {
+    edges = properties.get<std::array<double, 3>>(name);
+  } else {
+    edges.fill(properties.get<double>(name));
+  }
+  for (double e : edges)
+    if (!(e > 0)) properties.fail(name, "cell sizes must be positive");
+}
+
 namespace {
 
 class VoxelNode final : public ClonableNode<VoxelNode, GeometryNode> {
  public:
-  // "size_mm": one edge for a cube, or three.
-  struct CellSize {
-    std::array<double, 3> edges{};
-    void read(const Properties& properties, const char* name, const NodeContext&) {
-      if (properties.peek(name).is_array()) {
-        edges = properties.get<std::array<double, 3>>(name);
-      } else {
-        edges.fill(properties.get<double>(name));
-      }
-      for (double e : edges)
-        if (!(e > 0)) properties.fail(name, "cell sizes must be positive");
-    }
-    std::string type_text() const { return "number or [sa, sb, sw] (mm)"; }
-    std::string default_text() const { return "required"; }
-  };
-
-  struct Options {
-    CellSize size_mm;
-    std::array<double, 3> origin{kUnset, kUnset, kUnset};
-    RepeatedChildren cells;
-    template <class Declare, class Self>
-    static void declare(Declare& d, Self& o) {
-      d.custom(o.size_mm, "size_mm", "cell size");
-      d.number(o.origin, "origin", Range::any(), "[a, b, w], the corner of cell 0",
-               Default{"the incoming domain's lower corner"});
-      RepeatedChildren::declare(d, o.cells);
-    }
-    bool check(std::string* why) const { return cells.check(why); }
-  };
+  using Options = VoxelOptions;
 
   VoxelNode(const Properties& properties, const NodeContext& context)
-      : children_where_(properties.where("children")) {
-    Options o = read_options<Options>(properties, context);
+      : VoxelNode(read_options<Options>(properties, context), properties.where("children")) {}
+  /// `children_where` names the node's children in errors about their count.
+  VoxelNode(Options o, std::string children_where) : children_where_(std::move(children_where)) {
     size_ = Vec3(o.size_mm.edges[0], o.size_mm.edges[1], o.size_mm.edges[2]);
     if (!std::isnan(o.origin[0])) {
       origin_ = Vec3(o.origin[0], o.origin[1], o.origin[2]);
@@ -159,6 +144,14 @@ class VoxelNode final : public ClonableNode<VoxelNode, GeometryNode> {
 };
 
 }  // namespace
+
+NodePtr make_voxel(VoxelOptions options) {
+  require_valid(options, "voxel");
+  for (double e : options.size_mm.edges)
+    if (!(e > 0)) throw std::logic_error("voxel: built in C++ with a cell size that is not positive");
+  return std::make_unique<VoxelNode>(std::move(options), "voxel");
+}
+
 }  // namespace spec2fab
 
 SPEC2FAB_REGISTER(spec2fab::NodeRegistry, spec2fab::VoxelNode, "voxel")
