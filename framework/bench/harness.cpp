@@ -81,7 +81,8 @@ class RecordingProblem final : public Problem {
 /// What a problem lacks that an optimizer needs, as the report says it.
 std::string missing_capability(const Optimizer& optimizer, const BenchmarkFacts& facts) {
   for (Capability needed : optimizer.requirements()) {
-    if (std::find(facts.capabilities.begin(), facts.capabilities.end(), needed) == facts.capabilities.end())
+    if (std::find(facts.capabilities.begin(), facts.capabilities.end(), needed) ==
+        facts.capabilities.end())
       return capability_name(needed);
   }
   return {};
@@ -226,17 +227,18 @@ std::string capability_name(Capability capability) {
   return "?";
 }
 
-BenchResult run_bench(const BenchOptions& options, const BenchmarkContext& context) {
-  const auto start = Clock::now();
-  BenchResult result;
-  result.entrants = options.entrants;
-  result.seeds = options.seeds;
-  result.budget = options.budget.describe();
+namespace {
+
+using BuiltProblems = std::vector<std::unique_ptr<BenchmarkProblem>>;
+
+/// Each problem asked for, built once: its facts and start error, or why
+/// this build cannot run it (a module left out: TetGen for fem_book).
+BuiltProblems build_problems(const BenchOptions& options, const BenchmarkContext& context,
+                             BenchResult& result) {
   const auto& registry = BenchmarkRegistry::instance();
   const std::vector<std::string> all = registry.names();
   const std::vector<std::string> names = options.problems.empty() ? all : options.problems;
-
-  std::vector<std::unique_ptr<BenchmarkProblem>> built;
+  BuiltProblems built;
   for (const std::string& name : names) {
     BenchProblem problem;
     problem.name = name;
@@ -255,7 +257,7 @@ BenchResult run_bench(const BenchOptions& options, const BenchmarkContext& conte
       std::vector<double> x = instance->start();
       problem.start_error = instance->problem().error(x);
     } catch (const std::exception& e) {
-      // A module this build left out (TetGen for fem_book): say so, run the rest.
+      // A module this build left out: say so, run the rest.
       if (built.size() > result.problems.size()) built.pop_back();
       built.push_back(nullptr);
       problem.unavailable = e.what();
@@ -263,19 +265,25 @@ BenchResult run_bench(const BenchOptions& options, const BenchmarkContext& conte
     problem.budget = options.budget.evaluations_for(problem.facts.dimension);
     result.problems.push_back(std::move(problem));
   }
+  return built;
+}
 
+std::unique_ptr<Optimizer> build_entrant(const Entrant& entrant) {
+  return build_optimizer(Properties::wrap(entrant.optimizer, "entrant " + entrant.label));
+}
+
+/// Every (entrant, problem) pair with what the problem lacks for it, then
+/// one run slot per seed of each pair that can run, in (pair, seed) order.
+void plan_runs(const BenchOptions& options, BenchResult& result) {
   for (size_t p = 0; p < result.problems.size(); ++p) {
     if (!result.problems[p].unavailable.empty()) continue;
     for (size_t e = 0; e < result.entrants.size(); ++e) {
-      const auto optimizer = build_optimizer(
-          Properties::wrap(result.entrants[e].optimizer, "entrant " + result.entrants[e].label));
+      const auto optimizer = build_entrant(result.entrants[e]);
       BenchPair pair{e, p, missing_capability(*optimizer, result.problems[p].facts),
                      optimizer->stochastic()};
       result.pairs.push_back(pair);
     }
   }
-
-  // One task per run, in (pair, seed) order; each writes only its own slot.
   for (size_t k = 0; k < result.pairs.size(); ++k) {
     const BenchPair& pair = result.pairs[k];
     if (!pair.missing.empty()) continue;
@@ -286,6 +294,48 @@ BenchResult run_bench(const BenchOptions& options, const BenchmarkContext& conte
       run.seed = seed;
     }
   }
+}
+
+/// One run: the entrant minimises a fresh instance of the problem within
+/// the budget, every evaluation recorded into `run`.
+void perform_run(const BenchOptions& options, const BuiltProblems& built, const BenchResult& result,
+                 BenchRun& run) {
+  const BenchPair& pair = result.pairs[run.pair];
+  const BenchProblem& facts = result.problems[pair.problem];
+  const auto run_start = Clock::now();
+  try {
+    const auto instance = built[pair.problem]->instantiate();
+    auto optimizer = build_entrant(result.entrants[pair.entrant]);
+    if (pair.stochastic) optimizer->set_seed(static_cast<std::uint64_t>(run.seed));
+    if (facts.budget > 0) optimizer->plan_evaluations(facts.budget);
+    RecordingProblem recording(instance->problem(), run);
+    const long long budget = facts.budget;
+    const double seconds = options.budget.seconds;
+    const IterationCallback stop = [budget, seconds](const IterationRecord& row) {
+      if (budget > 0 && row.evaluations >= budget) return CallbackResult::terminate;
+      if (seconds > 0 && row.seconds >= seconds) return CallbackResult::terminate;
+      return CallbackResult::proceed;
+    };
+    std::vector<double> x = instance->start();
+    run.summary = optimizer->minimize(recording, x, stop);
+    const Summary& summary = run.summary;
+    // minimize() evaluates the point it returns once more, uncounted.
+    if (!run.errors.empty()) {
+      run.errors.pop_back();
+      run.seconds.pop_back();
+      run.simulator_seconds_at.pop_back();
+    }
+    run.termination = summary.usable() ? to_string(summary.termination)
+                                       : to_string(summary.termination) + ": " + summary.message;
+    run.best_x = x;
+  } catch (const std::exception& e) {
+    run.termination = std::string("error: ") + e.what();
+  }
+  run.wall_seconds = seconds_since(run_start);
+}
+
+/// Every run, in parallel (each writes only its own slot), with progress.
+void perform_runs(const BenchOptions& options, const BuiltProblems& built, BenchResult& result) {
   std::mutex progress_mutex;
   BenchProgress progress{0, result.runs.size(), 0, 0};
   std::vector<int> runs_left(result.pairs.size(), 0);
@@ -297,55 +347,23 @@ BenchResult run_bench(const BenchOptions& options, const BenchmarkContext& conte
   result.threads = threads;
   tbb::task_arena arena(threads);
   arena.execute([&] {
-    tbb::parallel_for(
-        tbb::blocked_range<size_t>(0, result.runs.size(), 1),
-        [&](const tbb::blocked_range<size_t>& range) {
-          for (size_t r = range.begin(); r != range.end(); ++r) {
-            BenchRun& run = result.runs[r];
-            const BenchPair& pair = result.pairs[run.pair];
-            const BenchProblem& facts = result.problems[pair.problem];
-            const Entrant& entrant = result.entrants[pair.entrant];
-            const auto run_start = Clock::now();
-            try {
-              const auto instance = built[pair.problem]->instantiate();
-              auto optimizer =
-                  build_optimizer(Properties::wrap(entrant.optimizer, "entrant " + entrant.label));
-              if (pair.stochastic) optimizer->set_seed(static_cast<std::uint64_t>(run.seed));
-              if (facts.budget > 0) optimizer->plan_evaluations(facts.budget);
-              RecordingProblem recording(instance->problem(), run);
-              const long long budget = facts.budget;
-              const double seconds = options.budget.seconds;
-              const IterationCallback stop = [budget, seconds](const IterationRecord& row) {
-                if (budget > 0 && row.evaluations >= budget) return CallbackResult::terminate;
-                if (seconds > 0 && row.seconds >= seconds) return CallbackResult::terminate;
-                return CallbackResult::proceed;
-              };
-              std::vector<double> x = instance->start();
-              run.summary = optimizer->minimize(recording, x, stop);
-              const Summary& summary = run.summary;
-              // minimize() evaluates the point it returns once more, uncounted.
-              if (!run.errors.empty()) {
-                run.errors.pop_back();
-                run.seconds.pop_back();
-                run.simulator_seconds_at.pop_back();
-              }
-              run.termination = summary.usable()
-                                    ? to_string(summary.termination)
-                                    : to_string(summary.termination) + ": " + summary.message;
-              run.best_x = x;
-            } catch (const std::exception& e) {
-              run.termination = std::string("error: ") + e.what();
-            }
-            run.wall_seconds = seconds_since(run_start);
-            const std::lock_guard lock(progress_mutex);
-            ++progress.runs_done;
-            if (--runs_left[run.pair] == 0) ++progress.pairs_done;
-            if (options.progress) options.progress(progress);
-          }
-        });
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, result.runs.size(), 1),
+                      [&](const tbb::blocked_range<size_t>& range) {
+                        for (size_t r = range.begin(); r != range.end(); ++r) {
+                          BenchRun& run = result.runs[r];
+                          perform_run(options, built, result, run);
+                          const std::lock_guard lock(progress_mutex);
+                          ++progress.runs_done;
+                          if (--runs_left[run.pair] == 0) ++progress.pairs_done;
+                          if (options.progress) options.progress(progress);
+                        }
+                      });
   });
+}
 
-  // Targets: from the start to the optimum (or, where it is unknown, the best any run found).
+/// Targets: from the start to the optimum (or, where it is unknown, the
+/// best any run found), 10^-1 … 10^-8 of the way.
+void set_targets(BenchResult& result) {
   for (size_t p = 0; p < result.problems.size(); ++p) {
     BenchProblem& problem = result.problems[p];
     if (!problem.unavailable.empty()) continue;
@@ -360,6 +378,20 @@ BenchResult run_bench(const BenchOptions& options, const BenchmarkContext& conte
     for (int k = 1; k <= 8; ++k)
       problem.targets.push_back(optimum + (problem.start_error - optimum) * std::pow(10.0, -k));
   }
+}
+
+}  // namespace
+
+BenchResult run_bench(const BenchOptions& options, const BenchmarkContext& context) {
+  const auto start = Clock::now();
+  BenchResult result;
+  result.entrants = options.entrants;
+  result.seeds = options.seeds;
+  result.budget = options.budget.describe();
+  const BuiltProblems built = build_problems(options, context, result);
+  plan_runs(options, result);
+  perform_runs(options, built, result);
+  set_targets(result);
   result.wall_seconds = seconds_since(start);
   return result;
 }

@@ -20,6 +20,7 @@
 #include "core/ranks.h"
 #include "core/seed.h"
 #include "core/properties.h"
+#include "tuning/schedule_state.h"
 
 namespace spec2fab {
 
@@ -213,171 +214,6 @@ void check_phase_pace(const Phase& phase, long long done, long long total, doubl
                                limits::how_to_change("tuning_hours")));
 }
 
-// A trace is most of a checkpoint: an exhaustive tuner records each
-// candidate, and earth_deformable's 4,608 texture tuners hold 3.0 M records.
-// As arrays of JSON numbers they took 0.9 GB for a moment, the run's peak
-// (heaptrack: 24 M JSON values copied); as one byte string of fixed-width
-// records (host byte order: a checkpoint is resumed, or gathered over
-// ranks, on the machine that made it) they are 36 bytes each.
-constexpr size_t kTraceRecordBytes = sizeof(int) + sizeof(long long) + 3 * sizeof(double);
-
-nlohmann::json::binary_t packed_trace(const std::vector<IterationRecord>& trace) {
-  std::vector<std::uint8_t> bytes(trace.size() * kTraceRecordBytes);
-  std::uint8_t* at = bytes.data();
-  auto put = [&at](const auto& value) {
-    std::memcpy(at, &value, sizeof(value));
-    at += sizeof(value);
-  };
-  for (const IterationRecord& r : trace) {
-    put(r.iteration);
-    put(r.evaluations);
-    put(r.error);
-    put(r.best_error);
-    put(r.seconds);
-  }
-  return nlohmann::json::binary_t(std::move(bytes));
-}
-
-std::vector<IterationRecord> unpacked_trace(const nlohmann::json::binary_t& bytes) {
-  if (bytes.size() % kTraceRecordBytes != 0) throw InputError("a trace of " + std::to_string(bytes.size()) + " bytes");
-  std::vector<IterationRecord> trace(bytes.size() / kTraceRecordBytes);
-  const std::uint8_t* at = bytes.data();
-  auto get = [&at](auto& value) {
-    std::memcpy(&value, at, sizeof(value));
-    at += sizeof(value);
-  };
-  for (IterationRecord& r : trace) {
-    get(r.iteration);
-    get(r.evaluations);
-    get(r.error);
-    get(r.best_error);
-    get(r.seconds);
-  }
-  return trace;
-}
-
-// A summary whole, wall times included, for another rank: CBOR keeps every
-// double (NaN too) bit for bit, so records are those of one process.
-nlohmann::json summary_state(const Summary& s) {
-  return {s.optimizer, static_cast<int>(s.termination), s.message, s.initial_error, s.final_error, s.initial_x,
-          s.final_x, s.evaluations, s.iterations, s.seconds, nlohmann::json::binary(packed_trace(s.trace)), s.details};
-}
-
-Summary summary_from_state(const nlohmann::json& j) {
-  Summary s;
-  s.optimizer = j[0].get<std::string>();
-  s.termination = static_cast<Termination>(j[1].get<int>());
-  s.message = j[2].get<std::string>();
-  const auto number = [](const nlohmann::json& v) {  // CBOR's NaN comes back as a float
-    return v.is_number() ? v.get<double>() : std::numeric_limits<double>::quiet_NaN();
-  };
-  s.initial_error = number(j[3]);
-  s.final_error = number(j[4]);
-  s.initial_x = j[5].get<std::vector<double>>();
-  s.final_x = j[6].get<std::vector<double>>();
-  s.evaluations = j[7].get<long long>();
-  s.iterations = j[8].get<int>();
-  s.seconds = j[9].get<double>();
-  s.trace = unpacked_trace(j[10].get_binary());
-  s.details = j[11];
-  return s;
-}
-
-// Under mpirun each rank has tuned its share of a colour class: every rank
-// takes up the others' tunings (their values, set and simulated, and their
-// summaries), so that all hold the network one process would.
-void share_colour_tunings(TunerNetwork& network, const std::vector<size_t>& colour, size_t begin, size_t end,
-                          std::vector<Summary>& summaries) {
-  nlohmann::json mine = nlohmann::json::array();
-  for (size_t i = begin; i < end; ++i) {
-    const size_t t = colour[i];
-    mine.push_back({t, network.tuner(t).search_space().values(), summary_state(summaries[t])});
-  }
-  const std::vector<std::vector<std::uint8_t>> parts = ranks::all_gather(nlohmann::json::to_cbor(mine));
-  std::vector<std::pair<size_t, std::vector<double>>> adopted;
-  for (int from = 0; from < ranks::size(); ++from) {
-    if (from == ranks::rank()) continue;
-    for (const auto& entry : nlohmann::json::from_cbor(parts[static_cast<size_t>(from)])) {
-      const auto t = entry[0].get<size_t>();
-      summaries[t] = summary_from_state(entry[2]);
-      adopted.emplace_back(t, entry[1].get<std::vector<double>>());
-    }
-  }
-  // Tuners of one colour class are independent: each simulates on its own.
-  tbb::parallel_for(size_t{0}, adopted.size(),
-                    [&](size_t k) { network.tuner(adopted[k].first).adopt(adopted[k].second); });
-}
-
-std::vector<double> doubles_from(const nlohmann::json& j) {
-  std::vector<double> out;
-  out.reserve(j.size());
-  for (const auto& v : j) out.push_back(v.is_number() ? v.get<double>() : std::numeric_limits<double>::quiet_NaN());
-  return out;
-}
-
-// The state after `done` phases, as CBOR: doubles bit for bit.
-std::vector<std::uint8_t> checkpoint_state(const std::vector<Phase>& phases, size_t done, const RunRecord& record,
-                                           TunerNetwork& network) {
-  nlohmann::json names = nlohmann::json::array(), couplings = nlohmann::json::array();
-  for (const Phase& phase : phases) names.push_back(phase.name);
-  for (size_t p = 0; p < done; ++p) couplings.push_back(phases[p].coupling ? phases[p].coupling->saved_state() : nullptr);
-  nlohmann::json runs = nlohmann::json::array(), tuners = nlohmann::json::array();
-  for (const TunerRun& run : record.runs) runs.push_back({run.phase, run.sweep, run.tuner, summary_state(run.summary)});
-  for (size_t t = 0; t < network.size(); ++t) {
-    if (!network.tuner(t).is_bound()) {
-      tuners.push_back(nullptr);
-      continue;
-    }
-    const Tuner::State s = network.tuner(t).state();
-    tuners.push_back({s.parameters, s.target, s.simulated, s.published, s.free, s.optimizer});
-  }
-  return nlohmann::json::to_cbor({{"phases", names},
-                                  {"phases_done", done},
-                                  {"runs", runs},
-                                  {"phase_seconds", record.phase_seconds},
-                                  {"phase_tuner_runs", record.phase_tuner_runs},
-                                  {"phase_evaluations", record.phase_evaluations},
-                                  {"couplings", couplings},
-                                  {"tuners", tuners}});
-}
-
-// Takes up a state checkpoint_state() saved; returns the phases it had done.
-size_t restore_checkpoint(const std::vector<std::uint8_t>& saved, const std::vector<Phase>& phases, RunRecord& record,
-                          TunerNetwork& network) {
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::from_cbor(saved);
-    nlohmann::json names = nlohmann::json::array();
-    for (const Phase& phase : phases) names.push_back(phase.name);
-    if (j.at("phases") != names || j.at("tuners").size() != network.size())
-      throw InputError("the saved state is of another schedule (phases " + j.at("phases").dump() + ", " +
-                       std::to_string(j.at("tuners").size()) + " tuners)");
-    const size_t done = j.at("phases_done").get<size_t>();
-    if (done > phases.size()) throw InputError("the saved state claims more phases than the schedule has");
-    for (size_t p = 0; p < done; ++p) {
-      record.phase_names.push_back(phases[p].name);
-      if (phases[p].coupling) phases[p].coupling->restore(j.at("couplings").at(p));
-    }
-    for (const auto& run : j.at("runs"))
-      record.runs.push_back({run.at(0).get<size_t>(), run.at(1).get<int>(), run.at(2).get<size_t>(), summary_from_state(run.at(3))});
-    record.phase_seconds = j.at("phase_seconds").get<std::vector<double>>();
-    record.phase_tuner_runs = j.at("phase_tuner_runs").get<std::vector<long long>>();
-    record.phase_evaluations = j.at("phase_evaluations").get<std::vector<long long>>();
-    const auto& tuners = j.at("tuners");
-    for (size_t t = 0; t < network.size(); ++t) {
-      const auto& s = tuners.at(t);
-      if (s.is_null() || !network.tuner(t).is_bound()) continue;
-      network.tuner(t).restore({doubles_from(s.at(0)), doubles_from(s.at(1)), doubles_from(s.at(2)),
-                                doubles_from(s.at(3)), s.at(4).get<std::vector<bool>>(), s.at(5)});
-    }
-    return done;
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(std::string("the saved state is unreadable: ") + e.what());
-  } catch (const std::invalid_argument& e) {
-    throw InputError(std::string("the saved state does not fit: ") + e.what());
-  }
-}
-
 std::string progress_detail(int sweep, double error_sum, size_t runs) {
   return fmt::format("sweep {}, mean error {:.4g}", sweep + 1,
                      error_sum / static_cast<double>(std::max<size_t>(runs, 1)));
@@ -396,111 +232,167 @@ std::string Schedule::check_plan(TunerNetwork& network, size_t first_phase) cons
   return check_schedule_plan(phases_, first_phase, network);
 }
 
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+}
+
+/// Refuses a phase that cannot run as declared — a tuner the network lacks;
+/// in a parallel phase, a coupling that must run serially, tuners whose
+/// subtrees overlap, or one reading the tree beyond its node beside another
+/// of its colour class — and returns its colour classes (none when serial).
+std::vector<std::vector<size_t>> runnable_classes(const Phase& phase, const std::vector<size_t>& tuners,
+                                                  TunerNetwork& network) {
+  for (size_t t : tuners) {
+    if (t >= network.size()) throw std::invalid_argument("schedule: no tuner " + std::to_string(t));
+  }
+  if (phase.mode != Phase::Mode::parallel) return {};
+  if (phase.coupling && !phase.coupling->allows_parallel()) {
+    throw std::invalid_argument("schedule: phase '" + phase.name + "' couples tuners by " + phase.coupling->name() +
+                                ", which must run serially");
+  }
+  if (const auto overlap = overlapping_tuners(network, tuners)) {
+    throw std::invalid_argument("schedule: phase '" + phase.name + "' runs tuners '" +
+                                network.tuner(overlap->first).name() + "' and '" +
+                                network.tuner(overlap->second).name() + "' in parallel, but their subtrees overlap");
+  }
+  auto classes = network.colour_classes(tuners);
+  if (const auto reading = tuner_reading_a_neighbour(network, classes))
+    throw std::invalid_argument("schedule: phase '" + phase.name + "': " + reading_a_neighbour_problem(network, *reading));
+  return classes;
+}
+
+/// One phase as it runs: its sweeps over its tuners (serially, or colour
+/// class by colour class in parallel, shared over MPI ranks), the coupling
+/// between them, progress and pace, and what it adds to the record.
+class PhaseRun {
+ public:
+  PhaseRun(const Phase& phase, size_t index, TunerNetwork& network, std::uint64_t seed, RunRecord& record,
+           double seconds_before)
+      : phase_(phase),
+        index_(index),
+        network_(network),
+        seed_(seed),
+        record_(record),
+        tuners_(phase.members(network.size())),
+        classes_(runnable_classes(phase, tuners_, network)),
+        runs_(static_cast<long long>(tuners_.size()) * phase.sweeps),
+        progress_(phase.name, runs_),
+        seconds_before_(seconds_before) {
+    record_.phase_names.push_back(phase.name);
+    // A phase's own optimizer (built once per phase, kept over its sweeps).
+    if (!phase.optimizer.is_null()) {
+      const Properties properties = Properties::wrap(phase.optimizer, "schedule phase '" + phase.name + "' optimizer");
+      for (size_t t : tuners_) own_.push_back(network.tuner(t).exchange_optimizer(build_optimizer(properties)));
+    }
+  }
+
+  void sweep(int sweep) {
+    if (phase_.coupling) phase_.coupling->begin_sweep(network_, tuners_);
+    tuned_.assign(network_.size(), false);
+    summaries_.assign(network_.size(), Summary());
+    sweep_error_ = 0;
+    swept_ = 0;
+    if (phase_.mode == Phase::Mode::parallel) {
+      for (const auto& colour : classes_) tune_class(colour, sweep);
+    } else {
+      for (size_t t : tuners_) {
+        tune(t, sweep);
+        ++record_.tuner_runs_here;
+        after_runs({t}, sweep);
+      }
+    }
+    for (size_t t : tuners_) evaluations_ += summaries_[t].evaluations;
+    if (phase_.record_every_sweep || sweep + 1 == phase_.sweeps)
+      for (size_t t : tuners_) record_.runs.push_back({index_, sweep, t, std::move(summaries_[t])});
+  }
+
+  void finish() {
+    if (phase_.coupling) phase_.coupling->end_phase(network_, tuners_);
+    for (size_t k = 0; k < own_.size(); ++k) network_.tuner(tuners_[k]).exchange_optimizer(std::move(own_[k]));
+    progress_.finish();
+    record_.phase_tuner_runs.push_back(done_);
+    record_.phase_evaluations.push_back(evaluations_);
+    if (phase_.fix_after) {
+      for (size_t t : tuners_) {
+        for (const auto& e : network_.tuner(t).search_space().entries()) e.parameter->set_free(false);
+      }
+    }
+    record_.phase_seconds.push_back(seconds_since(start_));
+  }
+
+ private:
+  void tune(size_t t, int sweep) {
+    Tuner& tuner = network_.tuner(t);
+    tuner.optimizer().set_seed(tuner_seed(seed_, index_, sweep, t));
+    summaries_[t] = tuner.tune();
+  }
+
+  // Under mpirun each rank tunes its share of the class, then takes up the others'.
+  void tune_class(const std::vector<size_t>& colour, int sweep) {
+    const auto [begin, end] = ranks::share(static_cast<long long>(colour.size()), ranks::rank(), ranks::size());
+    tbb::parallel_for(static_cast<size_t>(begin), static_cast<size_t>(end), [&](size_t i) { tune(colour[i], sweep); });
+    record_.tuner_runs_here += end - begin;
+    if (ranks::size() > 1)
+      schedule_state::share_colour_tunings(network_, colour, static_cast<size_t>(begin), static_cast<size_t>(end),
+                                           summaries_);
+    after_runs(colour, sweep);
+  }
+
+  // The coupling after each run, in order; progress and pace.
+  void after_runs(const std::vector<size_t>& tuned, int sweep) {
+    for (size_t t : tuned) {
+      tuned_[t] = true;
+      if (phase_.coupling) phase_.coupling->after_tune(network_, t, tuned_);
+    }
+    done_ += static_cast<long long>(tuned.size());
+    for (size_t t : tuned) sweep_error_ += summaries_[t].final_error;
+    swept_ += tuned.size();
+    progress_.update(done_, progress_detail(sweep, sweep_error_, swept_));
+    check_phase_pace(phase_, done_, runs_, seconds_since(start_), seconds_before_);
+  }
+
+  const Phase& phase_;
+  const size_t index_;
+  TunerNetwork& network_;
+  const std::uint64_t seed_;
+  RunRecord& record_;
+  const std::vector<size_t> tuners_;
+  const std::vector<std::vector<size_t>> classes_;
+  const long long runs_;
+  Progress progress_;
+  const double seconds_before_;
+  const std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+  std::vector<std::unique_ptr<Optimizer>> own_;  ///< the tuners' optimizers while the phase's own tune
+  long long done_ = 0, evaluations_ = 0;
+  // This sweep's.
+  std::vector<bool> tuned_;
+  std::vector<Summary> summaries_;
+  double sweep_error_ = 0;  ///< sum of the final errors of this sweep's runs so far
+  size_t swept_ = 0;
+};
+
+}  // namespace
+
 RunRecord Schedule::run(TunerNetwork& network, std::uint64_t seed, PhaseCheckpoint* checkpoint) const {
   RunRecord record;
   size_t first = 0;
   if (checkpoint) {
     if (const std::vector<std::uint8_t> saved = checkpoint->load(); !saved.empty()) {
-      first = restore_checkpoint(saved, phases_, record, network);
+      first = schedule_state::restore_checkpoint(saved, phases_, record, network);
       if (first > 0)
         spdlog::info("resuming after phase '{}' ({} of {}), which the killed run had finished", phases_[first - 1].name,
-                  first, phases_.size());
+                     first, phases_.size());
     }
   }
   check_plan(network, first);  // the loops below, bounded before they start
   const auto schedule_start = std::chrono::steady_clock::now();
-  const auto seconds_since = [](std::chrono::steady_clock::time_point since) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-  };
   for (size_t p = first; p < phases_.size(); ++p) {
-    const Phase& phase = phases_[p];
-    const std::vector<size_t> tuners = phase.members(network.size());
-    for (size_t t : tuners) {
-      if (t >= network.size()) throw std::invalid_argument("schedule: no tuner " + std::to_string(t));
-    }
-    const bool parallel = phase.mode == Phase::Mode::parallel;
-    if (parallel && phase.coupling && !phase.coupling->allows_parallel()) {
-      throw std::invalid_argument("schedule: phase '" + phase.name + "' couples tuners by " +
-                                  phase.coupling->name() + ", which must run serially");
-    }
-    if (parallel) {
-      if (const auto overlap = overlapping_tuners(network, tuners)) {
-        throw std::invalid_argument("schedule: phase '" + phase.name + "' runs tuners '" +
-                                    network.tuner(overlap->first).name() + "' and '" +
-                                    network.tuner(overlap->second).name() +
-                                    "' in parallel, but their subtrees overlap");
-      }
-    }
-    record.phase_names.push_back(phase.name);
-    const auto start = std::chrono::steady_clock::now();
-    const auto classes = parallel ? network.colour_classes(tuners) : std::vector<std::vector<size_t>>{};
-    if (const auto reading = tuner_reading_a_neighbour(network, classes))
-      throw std::invalid_argument("schedule: phase '" + phase.name + "': " + reading_a_neighbour_problem(network, *reading));
-    std::vector<std::unique_ptr<Optimizer>> own_optimizers;
-    if (!phase.optimizer.is_null()) {
-      const Properties properties = Properties::wrap(phase.optimizer, "schedule phase '" + phase.name + "' optimizer");
-      for (size_t t : tuners) own_optimizers.push_back(network.tuner(t).exchange_optimizer(build_optimizer(properties)));
-    }
-    const long long phase_runs = static_cast<long long>(tuners.size()) * phase.sweeps;
-    Progress progress(phase.name, phase_runs);
-    const double seconds_before = std::chrono::duration<double>(start - schedule_start).count();
-    long long done = 0, evaluations = 0;
-    for (int sweep = 0; sweep < phase.sweeps; ++sweep) {
-      if (phase.coupling) phase.coupling->begin_sweep(network, tuners);
-      std::vector<bool> tuned(network.size(), false);
-      std::vector<Summary> summaries(network.size());
-      double sweep_error = 0;  // sum of the final errors of this sweep's runs so far
-      size_t swept = 0;
-      auto tune_one = [&](size_t t) {
-        Tuner& tuner = network.tuner(t);
-        tuner.optimizer().set_seed(tuner_seed(seed, p, sweep, t));
-        summaries[t] = tuner.tune();
-      };
-      if (parallel) {
-        for (const auto& colour : classes) {
-          // Under mpirun each rank tunes its share of the class.
-          const auto [begin, end] = ranks::share(static_cast<long long>(colour.size()), ranks::rank(), ranks::size());
-          tbb::parallel_for(static_cast<size_t>(begin), static_cast<size_t>(end), [&](size_t i) { tune_one(colour[i]); });
-          record.tuner_runs_here += end - begin;
-          if (ranks::size() > 1) share_colour_tunings(network, colour, static_cast<size_t>(begin), static_cast<size_t>(end), summaries);
-          for (size_t t : colour) {
-            tuned[t] = true;
-            if (phase.coupling) phase.coupling->after_tune(network, t, tuned);
-          }
-          done += static_cast<long long>(colour.size());
-          for (size_t t : colour) sweep_error += summaries[t].final_error;
-          swept += colour.size();
-          progress.update(done, progress_detail(sweep, sweep_error, swept));
-          check_phase_pace(phase, done, phase_runs, seconds_since(start), seconds_before);
-        }
-      } else {
-        for (size_t t : tuners) {
-          tune_one(t);
-          ++record.tuner_runs_here;
-          tuned[t] = true;
-          if (phase.coupling) phase.coupling->after_tune(network, t, tuned);
-          sweep_error += summaries[t].final_error;
-          progress.update(++done, progress_detail(sweep, sweep_error, ++swept));
-          check_phase_pace(phase, done, phase_runs, seconds_since(start), seconds_before);
-        }
-      }
-      for (size_t t : tuners) evaluations += summaries[t].evaluations;
-      if (phase.record_every_sweep || sweep + 1 == phase.sweeps)
-        for (size_t t : tuners) record.runs.push_back({p, sweep, t, std::move(summaries[t])});
-    }
-    if (phase.coupling) phase.coupling->end_phase(network, tuners);
-    for (size_t k = 0; k < own_optimizers.size(); ++k) network.tuner(tuners[k]).exchange_optimizer(std::move(own_optimizers[k]));
-    progress.finish();
-    record.phase_tuner_runs.push_back(done);
-    record.phase_evaluations.push_back(evaluations);
-    if (phase.fix_after) {
-      for (size_t t : tuners) {
-        for (const auto& e : network.tuner(t).search_space().entries()) e.parameter->set_free(false);
-      }
-    }
-    record.phase_seconds.push_back(
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-    if (checkpoint) checkpoint->save(checkpoint_state(phases_, p + 1, record, network));
+    PhaseRun phase(phases_[p], p, network, seed, record, seconds_since(schedule_start));
+    for (int sweep = 0; sweep < phases_[p].sweeps; ++sweep) phase.sweep(sweep);
+    phase.finish();
+    if (checkpoint) checkpoint->save(schedule_state::checkpoint_state(phases_, p + 1, record, network));
   }
   return record;
 }
