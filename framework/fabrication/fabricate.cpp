@@ -105,6 +105,59 @@ std::array<int, 3> mesh_stride(const FabricationGrid& grid, double mesh_voxel_mm
 
 }  // namespace
 
+namespace {
+
+/// Every registered writer that is switched on, in name order; whether any
+/// needs the material surfaces, and the slice sinks they offer.
+struct Writers {
+  std::vector<std::unique_ptr<PrintWriter>> all;
+  std::vector<SliceSink*> sinks;
+  bool need_surfaces = false;
+
+  explicit Writers(const PrintWriterContext& context) {
+    const Properties no_options = Properties::wrap(nlohmann::json::object(), "output");
+    for (const std::string& name : PrintWriterRegistry::instance().names()) {
+      if (!context.options.writes(name)) continue;
+      all.push_back(PrintWriterRegistry::instance().create_named(name, no_options, "print writer", context));
+      need_surfaces |= all.back()->needs_surfaces();
+      if (SliceSink* sink = all.back()->sink()) sinks.push_back(sink);
+    }
+  }
+};
+
+/// This rank's print layers [first, first + count) under mpirun, split by
+/// whole mesh layers so that no mesh cell straddles two ranks; count -1:
+/// every layer (one process).
+std::pair<int, int> layers_of_this_rank(const FabricationGrid& grid, int layers_per_unit) {
+  if (ranks::size() <= 1) return {0, -1};
+  const long long units = (grid.size[2] + layers_per_unit - 1) / layers_per_unit;
+  const auto [begin, end] = ranks::share(units, ranks::rank(), ranks::size());
+  const int first = static_cast<int>(begin * layers_per_unit);
+  return {first, static_cast<int>(std::min<long long>(end * layers_per_unit, grid.size[2])) - first};
+}
+
+/// result.json's "materials": voxels and volume per material, and with
+/// surfaces their meshes' volume, triangles and level.
+nlohmann::json material_census(const MaterialPalette& palette, const std::vector<long long>& voxels,
+                               const FabricationGrid& grid, const std::optional<MaterialSurfaces>& surfaces) {
+  nlohmann::json materials = nlohmann::json::object();
+  for (size_t id = 1; id < palette.size(); ++id) {
+    const std::string& name = palette.name(static_cast<MaterialId>(id));
+    nlohmann::json entry = {{"voxels", voxels[id]},
+                            {"volume_mm3", static_cast<double>(voxels[id]) * grid.voxel_volume_mm3()}};
+    if (surfaces) {
+      const Mesh& mesh = surfaces->meshes()[id];
+      entry["mesh_volume_mm3"] = mesh.signed_volume();
+      entry["triangles"] = mesh.triangles.size();
+      if (!mesh.triangles.empty()) entry["surface_level"] = surfaces->reports()[id].level;
+    }
+    materials[name] = entry;
+  }
+  return materials;
+}
+
+}  // namespace
+
 FabricationReport fabricate(const ReducerTree& tree, const PrinterProfile& printer,
                             const FabricationOptions& options, RunFolder& folder) {
   const auto start = std::chrono::steady_clock::now();
@@ -122,29 +175,12 @@ FabricationReport fabricate(const ReducerTree& tree, const PrinterProfile& print
   if (!options.any()) return report;  // nothing to write, so nothing to refuse
   fabricator.check(options.max_voxels, FabricationOptions::kMaxVoxelsOption);
 
-  // Every registered writer that is switched on, in name order.
-  const PrintWriterContext context{printer, palette, options, folder};
-  const Properties no_options = Properties::wrap(nlohmann::json::object(), "output");
-  std::vector<std::unique_ptr<PrintWriter>> writers;
-  bool need_surfaces = false;
-  std::vector<SliceSink*> sinks;
-  for (const std::string& name : PrintWriterRegistry::instance().names()) {
-    if (!options.writes(name)) continue;
-    writers.push_back(PrintWriterRegistry::instance().create_named(name, no_options, "print writer", context));
-    need_surfaces |= writers.back()->needs_surfaces();
-    if (SliceSink* sink = writers.back()->sink()) sinks.push_back(sink);
-  }
-  // Split over ranks by whole mesh layers, so that no mesh cell straddles two.
+  const PrintWriterContext context{printer, palette, options, folder};  // the writers keep it
+  Writers writers(context);
+  std::vector<SliceSink*>& sinks = writers.sinks;
   const std::array<int, 3> stride = mesh_stride(grid, options.mesh_voxel_mm);
   const bool split = ranks::size() > 1;
-  int first_layer = 0, layer_count = -1;
-  if (split) {
-    const int unit = need_surfaces ? stride[2] : 1;  // print layers per share unit
-    const long long units = (grid.size[2] + unit - 1) / unit;
-    const auto [begin, end] = ranks::share(units, ranks::rank(), ranks::size());
-    first_layer = static_cast<int>(begin * unit);
-    layer_count = static_cast<int>(std::min<long long>(end * unit, grid.size[2])) - first_layer;
-  }
+  const auto [first_layer, layer_count] = layers_of_this_rank(grid, writers.need_surfaces ? stride[2] : 1);
   // On ranks other than 0 the writers only consume their slab: rank 0
   // finishes them (manifest, meshes, render) for the whole print.
   std::vector<std::unique_ptr<SlabSink>> slab_sinks;
@@ -152,11 +188,11 @@ FabricationReport fabricate(const ReducerTree& tree, const PrinterProfile& print
     for (SliceSink*& sink : sinks) sink = slab_sinks.emplace_back(std::make_unique<SlabSink>(*sink)).get();
   }
   std::optional<MaterialSurfaces> surfaces;
-  if (need_surfaces) {
+  if (writers.need_surfaces) {
     surfaces.emplace(SurfaceSettings{stride, options.mesh_adaptivity, options.mesh_volume_tolerance, split});
     sinks.push_back(&*surfaces);
   }
-  fabricator.time_sample_rows(need_surfaces);
+  fabricator.time_sample_rows(writers.need_surfaces);
   spdlog::info("fabricating for {}: {}", printer.name, plan.describe());
   spdlog::debug("sampled rows: {:.3g} s per voxel on one thread", plan.sampled_seconds_per_voxel);
   Progress progress("fabricating", layer_count < 0 ? grid.size[2] : layer_count);
@@ -172,31 +208,17 @@ FabricationReport fabricate(const ReducerTree& tree, const PrinterProfile& print
     if (!ranks::root()) return report;  // rank 0 reports and writes the rest
   }
 
-  nlohmann::json materials = nlohmann::json::object();
+  nlohmann::json materials = material_census(palette, voxels, grid, surfaces);
   nlohmann::json files = nlohmann::json::object();
-  for (size_t id = 1; id < palette.size(); ++id) {
-    const std::string& name = palette.name(static_cast<MaterialId>(id));
-    nlohmann::json entry = {
-        {"voxels", voxels[id]},
-        {"volume_mm3", static_cast<double>(voxels[id]) * grid.voxel_volume_mm3()}};
-    if (surfaces) {
-      const Mesh& mesh = surfaces->meshes()[id];
-      entry["mesh_volume_mm3"] = mesh.signed_volume();
-      entry["triangles"] = mesh.triangles.size();
-      if (!mesh.triangles.empty()) entry["surface_level"] = surfaces->reports()[id].level;
-    }
-    materials[name] = entry;
-  }
   if (surfaces) report.result["mesh_voxel_mm"] = surfaces->mesh_grid().voxel_mm;
   const std::vector<Mesh> no_surfaces;
-  for (const auto& writer : writers) writer->finish(surfaces ? surfaces->meshes() : no_surfaces, {files, materials});
+  for (const auto& writer : writers.all) writer->finish(surfaces ? surfaces->meshes() : no_surfaces, {files, materials});
   report.result["void_voxels"] = voxels[kVoid];
   report.result["materials"] = materials;
   report.result["files"] = files;
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  spdlog::info("fabricated {:.3g} voxels in {:.1f} s ({:.3g} voxels/s)",
-               static_cast<double>(plan.voxels), report.seconds,
-               static_cast<double>(plan.voxels) / std::max(report.seconds, 1e-9));
+  spdlog::info("fabricated {:.3g} voxels in {:.1f} s ({:.3g} voxels/s)", static_cast<double>(plan.voxels),
+               report.seconds, static_cast<double>(plan.voxels) / std::max(report.seconds, 1e-9));
   return report;
 }
 

@@ -41,6 +41,7 @@
 #include <spdlog/spdlog.h>
 
 #include "caustic_translation.h"
+#include "facet_stitching.h"
 #include "caustics/caustic_parts.h"
 #include "caustics/facet_beam_simulator.h"
 #include "caustics/gaussian_kernels.h"
@@ -136,7 +137,8 @@ class FacetCausticsTranslator final : public TuningTranslator {
 
   void report(const RunRecord& /*record*/, RunContext& context) override {
     const ImageObservation& goal = target();
-    const StitchReport stitch = stitch_offsets();
+    const StitchReport stitch = stitch_facet_offsets(tree_->root(), grid(), slab().lower.z() + start_mm_,
+                                                     slab().lower.z() + low_mm_, slab().upper.z());
 
     Mesh slab;
     const std::vector<double> achieved = trace_surface(&slab);
@@ -193,11 +195,6 @@ class FacetCausticsTranslator final : public TuningTranslator {
   }
 
  private:
-  struct StitchReport {
-    double rms_step_mm = 0, max_step_mm = 0;
-    int lowered = 0;
-  };
-
   /// The translator's own goal keys (facets, their shape, heights, slope).
   void read_goal(const Properties& goal) {
     // Each facet takes one equal-flux kernel: that needs equal light on every facet.
@@ -319,7 +316,7 @@ class FacetCausticsTranslator final : public TuningTranslator {
 
   const Bounds& slab() const { return settings_.slab; }
   const ImageObservation& target() const { return image_goal_->typed_target(); }
-  size_t facet_index(int i, int j) const { return static_cast<size_t>(i) + static_cast<size_t>(facets_[0]) * static_cast<size_t>(j); }
+  size_t facet_index(int i, int j) const { return grid().index(i, j); }
   Eigen::Vector2d facet_centre(int i, int j) const {
     return {slab().lower.x() + (i + 0.5) * facet_mm_[0], slab().lower.y() + (j + 0.5) * facet_mm_[1]};
   }
@@ -358,93 +355,7 @@ class FacetCausticsTranslator final : public TuningTranslator {
     return delta;
   }
 
-  /// visit(k, m, c, d) for every shared corner: corner c of facet k meets
-  /// corner d of its east or north neighbour m (corners numbered as in
-  /// corner_heights).
-  template <class Visit>
-  void for_each_seam(Visit&& visit) const {
-    for (int j = 0; j < facets_[1]; ++j)
-      for (int i = 0; i < facets_[0]; ++i) {
-        const size_t k = facet_index(i, j);
-        if (i + 1 < facets_[0]) visit(k, facet_index(i + 1, j), 1, 0), visit(k, facet_index(i + 1, j), 2, 3);
-        if (j + 1 < facets_[1]) visit(k, facet_index(i, j + 1), 3, 0), visit(k, facet_index(i, j + 1), 2, 1);
-      }
-  }
-
-  /// Offsets so that neighbouring facets meet with the least squared steps
-  /// at their shared corners (slopes as aimed), a faint pull to the start
-  /// height fixing the free constant; then shifted so the lowest corner sits
-  /// at min_height, and facets poking above the top lowered into the slab.
-  StitchReport stitch_offsets() {
-    const size_t n = network_.size();
-    std::vector<std::array<double, 4>> shape(n);  // corner heights above the plane's offset
-    std::vector<Parameter*> offsets(n);
-    for (size_t k = 0; k < n; ++k) {
-      tree_->root().child(k).visit_parameters([&](const std::string& name, Parameter& p) {
-        if (name == "offset_mm") offsets[k] = &p;
-      });
-      const auto corners = corner_heights(k);
-      for (int c = 0; c < 4; ++c) shape[k][static_cast<size_t>(c)] = corners[static_cast<size_t>(c)] - offsets[k]->value();
-    }
-    std::vector<Eigen::Triplet<double>> entries;
-    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(n));
-    const double pull = 1e-6;
-    const double start = slab().lower.z() + start_mm_;
-    // Each seam's step (o_k + s_kc) − (o_m + s_md) in the least squares.
-    for_each_seam([&](size_t k, size_t m, int c, int d) {
-      const double gap = shape[k][static_cast<size_t>(c)] - shape[m][static_cast<size_t>(d)];
-      const auto ik = static_cast<int>(k), im = static_cast<int>(m);
-      entries.emplace_back(ik, ik, 1.0);
-      entries.emplace_back(im, im, 1.0);
-      entries.emplace_back(ik, im, -1.0);
-      entries.emplace_back(im, ik, -1.0);
-      rhs[ik] -= gap;
-      rhs[im] += gap;
-    });
-    for (size_t k = 0; k < n; ++k) {
-      entries.emplace_back(static_cast<int>(k), static_cast<int>(k), pull);
-      rhs[static_cast<Eigen::Index>(k)] += pull * start;
-    }
-    Eigen::SparseMatrix<double> normal(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
-    normal.setFromTriplets(entries.begin(), entries.end());
-    const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(normal);
-    Eigen::VectorXd solved = solver.solve(rhs);
-    if (solver.info() != Eigen::Success || !solved.allFinite()) throw std::runtime_error("facet caustics: offset stitching failed");
-    double lowest = HUGE_VAL;
-    for (size_t k = 0; k < n; ++k)
-      for (double s : shape[k]) lowest = std::min(lowest, solved[static_cast<Eigen::Index>(k)] + s);
-    StitchReport report;
-    const double floor = slab().lower.z() + low_mm_, top = slab().upper.z();
-    for (size_t k = 0; k < n; ++k) {
-      double o = solved[static_cast<Eigen::Index>(k)] + floor - lowest;
-      const double highest = o + *std::max_element(shape[k].begin(), shape[k].end());
-      if (highest > top) {
-        o -= highest - top;
-        ++report.lowered;
-      }
-      offsets[k]->set(o);
-    }
-    tree_->evaluate();
-    std::vector<std::array<double, 4>> corners(n);
-    for (size_t k = 0; k < n; ++k) corners[k] = corner_heights(k);
-    double sum = 0;
-    long long count = 0;
-    for_each_seam([&](size_t k, size_t m, int c, int d) {
-      const double step = std::abs(corners[k][static_cast<size_t>(c)] - corners[m][static_cast<size_t>(d)]);
-      sum += step * step;
-      ++count;
-      report.max_step_mm = std::max(report.max_step_mm, step);
-    });
-    report.rms_step_mm = count > 0 ? std::sqrt(sum / static_cast<double>(count)) : 0.0;
-    return report;
-  }
-
-  /// Facet k's world heights at its corners (x0, y0), (x1, y0), (x1, y1), (x0, y1).
-  std::array<double, 4> corner_heights(size_t k) const {
-    const HeightSurface& p = plane(k);
-    const double a = facet_mm_[0], b = facet_mm_[1];
-    return {p.surface_height(0, 0), p.surface_height(a, 0), p.surface_height(a, b), p.surface_height(0, b)};
-  }
+  FacetGrid grid() const { return {facets_, facet_mm_}; }
 
   /// The faceted slab as it stands, traced; `mesh` (when given) receives it
   /// in world coordinates.

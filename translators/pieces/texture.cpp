@@ -207,6 +207,20 @@ TexturePiece::TexturePiece(const Properties& goal, const Experiment& experiment,
   read_options_into(o, goal);
   const MaterialPalette& palette = experiment.palette();
   if (ground_key) palette.id(ground, goal.where(ground_key));
+  read_columns(goal, experiment, o);
+  read_inks(goal, experiment, o, ground);
+  metric_ = o.metric;
+  diffusion_ = o.error_diffusion;
+  gamut_map_ = o.gamut_map.value_or(diffusion_);
+  low_pass_sigma_ = o.low_pass_sigma_px;
+  optimizer_.emplace(experiment.root(), o.keys.optimizer, nlohmann::json{{"type", "exhaustive"}});
+  if (diffuse_in_lab_ && metric_ != "ciede2000")
+    goal.fail("diffusion_space", "lab needs metric ciede2000 (the lookup searches CIELAB then)");
+
+  map_into_printable_gamut(goal, experiment, ground);
+}
+
+void TexturePiece::read_columns(const Properties& goal, const Experiment& experiment, const TextureOptions& o) {
   const PrinterProfile& printer = experiment.printer();
   columns_ = o.columns;
   lookup_ = o.lookup();
@@ -230,6 +244,12 @@ TexturePiece::TexturePiece(const Properties& goal, const Experiment& experiment,
                               image_.pixels.begin() + static_cast<std::ptrdiff_t>(row + 1) * columns_[0]);
     image_.pixels = std::move(rows_from_bottom);
   }
+}
+
+void TexturePiece::read_inks(const Properties& goal, const Experiment& experiment, const TextureOptions& o,
+                             const std::string& ground) {
+  const MaterialPalette& palette = experiment.palette();
+  const PrinterProfile& printer = experiment.printer();
   if (o.inks) {
     inks_ = *o.inks;
     for (const std::string& ink : inks_) palette.id(ink, goal.where("inks"));
@@ -253,14 +273,11 @@ TexturePiece::TexturePiece(const Properties& goal, const Experiment& experiment,
     max_ink_mm_.assign(inks_.size(), each);
     ink_mm_ = static_cast<double>(inks_.size()) * each;
   }
-  metric_ = o.metric;
-  diffusion_ = o.error_diffusion;
-  gamut_map_ = o.gamut_map.value_or(diffusion_);
-  low_pass_sigma_ = o.low_pass_sigma_px;
-  optimizer_.emplace(experiment.root(), o.keys.optimizer, nlohmann::json{{"type", "exhaustive"}});
-  if (diffuse_in_lab_ && metric_ != "ciede2000")
-    goal.fail("diffusion_space", "lab needs metric ciede2000 (the lookup searches CIELAB then)");
+}
 
+void TexturePiece::map_into_printable_gamut(const Properties& goal, const Experiment& experiment,
+                                            const std::string& ground) {
+  const MaterialPalette& palette = experiment.palette();
   // Every printable stack simulated once, on a stack of its own: the
   // lookup's table, the gamut, and what a column tuner searches.
   LayeredOptions printable;

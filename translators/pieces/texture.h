@@ -240,6 +240,16 @@ class TexturePiece {
   const std::vector<Rgb>& printable_colours() const { return stacks_.colours; }
 
  private:
+  /// The columns (the goal image's pixels, or the printer's resolution for
+  /// the lookup) and the goal image, in column order.
+  void read_columns(const Properties& goal, const Experiment& experiment, const TextureOptions& o);
+  /// The inks (given, the translator's, or the printer's opaque model
+  /// materials but the ground) and each one's thickest layer.
+  void read_inks(const Properties& goal, const Experiment& experiment, const TextureOptions& o,
+                 const std::string& ground);
+  /// Every printable stack simulated once (the lookup's table, the gamut,
+  /// what a column tuner searches), and each goal pixel moved into the gamut.
+  void map_into_printable_gamut(const Properties& goal, const Experiment& experiment, const std::string& ground);
   /// A column's albedo tuner, its goal `target`, not yet bound to a node.
   std::unique_ptr<Tuner> column_tuner(const Experiment& experiment, const std::string& name, const Rgb& target) const;
 
