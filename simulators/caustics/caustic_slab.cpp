@@ -1,0 +1,382 @@
+// The caustics simulator's slab (caustics/caustic_slab.h): its config read
+// or built, where its top vertices lie, the heights' derivatives and least-
+// squares fit, and the closed meshes of a smooth or faceted slab.
+
+#include "caustics/caustic_slab.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <optional>
+#include <stdexcept>
+#include <unordered_map>
+
+#include <Eigen/Geometry>
+#include <Eigen/SparseCholesky>
+#include <fmt/format.h>
+
+#include "core/error.h"
+#include "core/limits.h"
+#include "core/parameter.h"
+#include "core/properties.h"
+
+namespace spec2fab {
+
+CausticSlabConfig CausticSlabConfig::read(const Properties& properties) {
+  const Options o = read_options<Options>(properties);
+  try {
+    return from(o);
+  } catch (const InputError& e) {
+    options_detail::fail_at_key(properties, e.what());
+  }
+}
+
+CausticSlabConfig CausticSlabConfig::from(const Options& o) {
+  CausticSlabConfig config;
+  CausticSetup& s = config.setup;
+  s.width_mm = o.size_mm[0];
+  s.depth_mm = o.size_mm[1];
+  config.thickness_mm = o.thickness_mm;
+  config.origin_mm = Eigen::Vector3d(o.origin_mm[0], o.origin_mm[1], o.origin_mm[2]);
+  s.vertices_x = o.vertices[0];
+  s.vertices_y = o.vertices[1];
+  s.refractive_index = o.refractive_index;
+  s.light_direction = Eigen::Vector3d(o.light[0], o.light[1], o.light[2]);
+  s.point_light = !std::isnan(o.light_position_mm[0]);
+  if (s.point_light) s.light_position_mm = Eigen::Vector3d(o.light_position_mm[0], o.light_position_mm[1], o.light_position_mm[2]);
+  s.receiver_distance_mm = o.distance_mm;
+  const bool receiver_given = o.receiver_mm[0] > 0;
+  s.receiver_width_mm = receiver_given ? o.receiver_mm[0] : o.size_mm[0];
+  s.receiver_depth_mm = receiver_given ? o.receiver_mm[1] : o.size_mm[1];
+  s.receiver_centre_mm = Eigen::Vector2d(o.receiver_centre_mm[0], o.receiver_centre_mm[1]);
+  s.image_width = o.image[0];
+  s.image_height = o.image[1];
+  s.image_from_behind = o.image_from_behind;
+  const bool rays_given = o.rays[0] > 0;
+  s.rays_x = rays_given ? o.rays[0] : 2 * o.image[0];
+  s.rays_y = rays_given ? o.rays[1] : 2 * o.image[1];
+  s.jitter = o.jitter;
+  s.fresnel = o.fresnel;
+  s.disc_aperture = o.aperture == "disc";
+  s.estimator = o.estimator == "facets"   ? CausticSetup::Estimator::facets
+                : o.estimator == "smooth" ? CausticSetup::Estimator::smooth
+                                          : CausticSetup::Estimator::rays;
+  s.seed = static_cast<unsigned>(o.seed);
+  // Sizes that set the simulator's memory, checked before it allocates (a
+  // fuzzed [120, 312540] image asked for 150 million rays: 4.3 GB).
+  const auto check_size = [&](const char* key, const char* what, double count, const char* limit) {
+    if (const double most = limits::get(limit); count > most)
+      throw InputError(fmt::format("{}: {:.4g} {}, more than the {:.4g} allowed {}", key, count, what,
+                                   most, limits::how_to_change(limit)));
+  };
+  check_size("vertices", "top-surface vertices", double(s.vertices_x) * s.vertices_y, "caustic_vertices");
+  check_size("image", "pixels", double(s.image_width) * s.image_height, "image_pixels");
+  check_size(rays_given ? "rays" : "image", rays_given ? "rays" : "rays (2 x image in each direction)",
+             double(s.rays_x) * s.rays_y, "caustic_rays");
+  return config;
+}
+
+Eigen::SparseMatrix<double, Eigen::RowMajor> slab_height_jacobian(const CausticSetup& setup,
+                                                                  const Eigen::Vector3d& origin_mm,
+                                                                  const HeightSurface& surface,
+                                                                  const SearchSpace& space) {
+  std::unordered_map<const Parameter*, int> column;
+  for (const SearchSpace::Entry& e : space.entries()) column.emplace(e.parameter, static_cast<int>(column.size()));
+  std::vector<Eigen::Triplet<double>> triplets;
+  for_each_slab_vertex(setup, origin_mm, [&](size_t k, double a, double b) {
+    surface.visit_height_derivatives(a, b, [&](const Parameter& p, double weight) {
+      const auto found = column.find(&p);
+      if (found != column.end()) triplets.emplace_back(static_cast<int>(k), found->second, weight);
+    });
+  });
+  Eigen::SparseMatrix<double, Eigen::RowMajor> jacobian(
+      static_cast<Eigen::Index>(setup.vertices_x) * setup.vertices_y, static_cast<Eigen::Index>(space.dimension()));
+  jacobian.setFromTriplets(triplets.begin(), triplets.end());
+  return jacobian;
+}
+
+std::vector<double> fit_slab_surface(const CausticSetup& setup, const Eigen::Vector3d& origin_mm,
+                                     const HeightSurface& surface, const SearchSpace& space,
+                                     std::span<const double> heights_mm, int* clamped) {
+  const Eigen::SparseMatrix<double> jacobian = slab_height_jacobian(setup, origin_mm, surface, space);
+  if (heights_mm.size() != static_cast<size_t>(jacobian.rows()))
+    throw std::invalid_argument("fit_slab_surface: one height per top vertex expected");
+  // Heights are linear in the parameters with no offset (a B-spline's
+  // weights sum to one): h + origin_z = J p. A whisper of Tikhonov keeps
+  // parameters no vertex sees at their current values.
+  const Eigen::VectorXd current = Eigen::Map<const Eigen::VectorXd>(space.values().data(), static_cast<Eigen::Index>(space.dimension()));
+  Eigen::VectorXd target(jacobian.rows());
+  for (Eigen::Index k = 0; k < target.size(); ++k) target[k] = heights_mm[static_cast<size_t>(k)] + origin_mm.z();
+  const double ridge = 1e-9 * jacobian.squaredNorm() / static_cast<double>(std::max<Eigen::Index>(1, jacobian.cols()));
+  Eigen::SparseMatrix<double> normal = jacobian.transpose() * jacobian;
+  for (Eigen::Index k = 0; k < normal.cols(); ++k) normal.coeffRef(k, k) += ridge;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(normal);
+  if (solver.info() != Eigen::Success) throw std::runtime_error("fit_slab_surface: the fit is singular");
+  const Eigen::VectorXd fitted = solver.solve(jacobian.transpose() * target + ridge * current);
+  std::vector<double> values(fitted.begin(), fitted.end());
+  int at_bound = 0;
+  for (size_t k = 0; k < values.size(); ++k) {
+    const Parameter& p = space.parameter(k);
+    if (values[k] < p.lower() || values[k] > p.upper()) ++at_bound;
+    values[k] = p.nearest_admissible(values[k]);
+  }
+  if (clamped) *clamped = at_bound;
+  return values;
+}
+
+Mesh caustic_slab_mesh(const CausticSetup& setup, const HeightSurface& surface,
+                       const Eigen::Vector3d& origin_mm) {
+  if (surface.height_axis() != 2)
+    throw InputError("caustics: the slab's surface must give heights along w");
+  CausticTracer tracer(setup);
+  std::vector<double> heights(tracer.heights().size());
+  for_each_slab_vertex(setup, origin_mm, [&](size_t k, double a, double b) {
+    heights[k] = surface.surface_height(a, b) - origin_mm.z();
+  });
+  tracer.set_heights(heights);
+  Mesh mesh;
+  tracer.mesh(mesh.vertices, mesh.triangles);
+  for (Vec3& v : mesh.vertices) v += slab_offset(setup, origin_mm);
+  return mesh;
+}
+
+namespace {
+
+/// Collects unshared triangles, each turned to face `outward`.
+struct TriangleSoup {
+  Mesh mesh;
+  void add(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& outward) {
+    const Vec3 normal = (b - a).cross(c - a);
+    if (normal.squaredNorm() < 1e-24) return;  // degenerate: a wall of zero height
+    const int k = static_cast<int>(mesh.vertices.size());
+    mesh.vertices.insert(mesh.vertices.end(), {a, b, c});
+    mesh.triangles.emplace_back(k, normal.dot(outward) >= 0 ? k + 1 : k + 2,
+                                normal.dot(outward) >= 0 ? k + 2 : k + 1);
+  }
+  /// A convex planar polygon (its corners in order, points on its edges
+  /// included) as a fan from its centroid: no triangle is degenerate even
+  /// where several corners lie on one edge.
+  void polygon(const std::vector<Vec3>& corners, const Vec3& outward) {
+    if (corners.size() == 3) {
+      add(corners[0], corners[1], corners[2], outward);
+      return;
+    }
+    Vec3 centre = Vec3::Zero();
+    for (const Vec3& c : corners) centre += c;
+    centre /= static_cast<double>(corners.size());
+    for (size_t k = 0; k < corners.size(); ++k)
+      add(centre, corners[k], corners[(k + 1) % corners.size()], outward);
+  }
+  /// The region between two vertical chains of points (each sorted by
+  /// height, one per end of a wall), as a ladder of triangles, each with
+  /// two corners on one chain and one on the other.
+  void ladder(const std::vector<Vec3>& left, const std::vector<Vec3>& right, const Vec3& outward) {
+    size_t l = 0, r = 0;
+    while (l + 1 < left.size() || r + 1 < right.size()) {
+      if (r + 1 == right.size() || (l + 1 < left.size() && left[l + 1].z() <= right[r + 1].z())) {
+        add(left[l], right[r], left[l + 1], outward);
+        ++l;
+      } else {
+        add(left[l], right[r], right[r + 1], outward);
+        ++r;
+      }
+    }
+  }
+};
+
+/// Heights at which the faceted slab has a vertex on each vertical line
+/// through a grid corner, so that walls meeting there split their sides at
+/// one another's corners (no T-junctions: every edge of the welded mesh is
+/// shared).
+class CornerLines {
+ public:
+  CornerLines(int nx, int ny, std::span<const std::array<double, 4>> heights)
+      : nx_(nx), heights_((nx + 1) * (ny + 1)) {
+    for (int j = 0; j < ny; ++j) {
+      for (int i = 0; i < nx; ++i) {
+        const auto& h = heights[static_cast<size_t>(i + nx * j)];
+        at(i, j).push_back(h[0]);
+        at(i + 1, j).push_back(h[1]);
+        at(i + 1, j + 1).push_back(h[2]);
+        at(i, j + 1).push_back(h[3]);
+      }
+    }
+    for (int j = 0; j <= ny; ++j)
+      for (int i = 0; i <= nx; ++i)
+        if (i == 0 || j == 0 || i == nx || j == ny)
+          at(i, j).push_back(0.0);  // side walls reach the bottom
+    for (auto& line : heights_) {
+      std::sort(line.begin(), line.end());
+      line.erase(std::unique(line.begin(), line.end()), line.end());
+    }
+  }
+  /// The points of line (i, j) at (xy) from height `from` to `to`, both ends included, bottom
+  /// first.
+  std::vector<Vec3> chain(int i, int j, const Vec2& xy, double from, double to) const {
+    const double low = std::min(from, to), high = std::max(from, to);
+    std::vector<Vec3> out;
+    for (double z : heights_[static_cast<size_t>(i + (nx_ + 1) * j)])
+      if (z >= low && z <= high) out.emplace_back(xy.x(), xy.y(), z);
+    return out;
+  }
+
+ private:
+  std::vector<double>& at(int i, int j) { return heights_[static_cast<size_t>(i + (nx_ + 1) * j)]; }
+  int nx_;
+  std::vector<std::vector<double>> heights_;
+};
+
+}  // namespace
+
+namespace {
+
+/// Where four facets meet at a grid corner and the two higher ones are
+/// diagonal, the solid narrows to a vertical segment that four walls share:
+/// not a 2-manifold. Raising the higher of the two lower corners to the lower
+/// of the two higher ones leaves three facets over the segment instead, at
+/// the cost of tilting one triangle of that facet. Returns how many corners
+/// it raised.
+int fill_pinched_corners(int nx, int ny, std::vector<std::array<double, 4>>& heights) {
+  int filled = 0;
+  const auto cell = [&](int i, int j) -> std::array<double, 4>& {
+    return heights[static_cast<size_t>(i) + static_cast<size_t>(nx) * static_cast<size_t>(j)];
+  };
+  for (int j = 1; j < ny; ++j)
+    for (int i = 1; i < nx; ++i) {
+      // Around the corner, counter-clockwise from south-west.
+      double* around[4] = {&cell(i - 1, j - 1)[2], &cell(i, j - 1)[3], &cell(i, j)[0], &cell(i - 1, j)[1]};
+      for (int first = 0; first < 2; ++first) {
+        const double high = std::min(*around[first], *around[first + 2]);
+        double* low_a = around[first + 1];
+        double* low_b = around[(first + 3) % 4];
+        double* raised = *low_a >= *low_b ? low_a : low_b;
+        if (high > *raised) {
+          *raised = high;
+          ++filled;
+          break;
+        }
+      }
+    }
+  return filled;
+}
+
+}  // namespace
+
+Mesh faceted_slab_mesh(const CausticSetup& setup, int nx, int ny,
+                       std::span<const std::array<double, 4>> corner_heights_in, int* pinches_filled) {
+  if (nx < 1 || ny < 1 ||
+      corner_heights_in.size() != static_cast<size_t>(nx) * static_cast<size_t>(ny))
+    throw std::invalid_argument("faceted_slab_mesh: expected nx · ny facets");
+  std::vector<std::array<double, 4>> corner_heights(corner_heights_in.begin(), corner_heights_in.end());
+  const int filled = fill_pinched_corners(nx, ny, corner_heights);
+  if (pinches_filled != nullptr) *pinches_filled = filled;
+  const auto x = [&](int i) { return setup.width_mm * (static_cast<double>(i) / nx - 0.5); };
+  const auto y = [&](int j) { return setup.depth_mm * (static_cast<double>(j) / ny - 0.5); };
+  const auto corner = [&](int i, int j) { return Vec2(x(i), y(j)); };
+  const auto facet = [&](int i, int j) -> const std::array<double, 4>& {
+    return corner_heights[static_cast<size_t>(i) +
+                          static_cast<size_t>(nx) * static_cast<size_t>(j)];
+  };
+  const CornerLines lines(nx, ny, corner_heights);
+  const auto at = [](const Vec2& xy, double z) { return Vec3(xy.x(), xy.y(), z); };
+
+  // Where two neighbours' top edges cross, their wall narrows to a point on
+  // both: computed once per edge, so that the tops and the wall share it
+  // exactly. east[i + nx·j]: the edge east of facet (i, j); north likewise.
+  const size_t count = static_cast<size_t>(nx) * static_cast<size_t>(ny);
+  std::vector<std::optional<Vec3>> east(count), north(count);
+  const auto crossing = [&](const Vec2& p, const Vec2& q, double a_p, double a_q, double b_p,
+                            double b_q) -> std::optional<Vec3> {
+    const double dp = a_p - b_p, dq = a_q - b_q;
+    if (dp * dq >= 0) return std::nullopt;
+    const double t = dp / (dp - dq);
+    return at(p + t * (q - p), a_p + t * (a_q - a_p));
+  };
+  for (int j = 0; j < ny; ++j) {
+    for (int i = 0; i < nx; ++i) {
+      const auto& h = facet(i, j);
+      if (i + 1 < nx) {
+        const auto& e = facet(i + 1, j);
+        east[static_cast<size_t>(i + nx * j)] =
+            crossing(corner(i + 1, j), corner(i + 1, j + 1), h[1], h[2], e[0], e[3]);
+      }
+      if (j + 1 < ny) {
+        const auto& n = facet(i, j + 1);
+        north[static_cast<size_t>(i + nx * j)] =
+            crossing(corner(i, j + 1), corner(i + 1, j + 1), h[3], h[2], n[0], n[1]);
+      }
+    }
+  }
+  const auto edge_point = [](const std::vector<std::optional<Vec3>>& edges, size_t k,
+                             std::vector<Vec3>& polygon) {
+    if (edges[k]) polygon.push_back(*edges[k]);
+  };
+
+  // The wall over grid edge (pi, pj) → (qi, qj) between side A (tops a_p,
+  // a_q) and side B (b_p, b_q), facing from A to B where A is higher.
+  const Vec3 up(0, 0, 1), down(0, 0, -1), to_east(1, 0, 0), to_north(0, 1, 0);
+  TriangleSoup soup;
+  const auto wall = [&](int pi, int pj, int qi, int qj, double a_p, double a_q, double b_p,
+                        double b_q, const std::optional<Vec3>& cross, const Vec3& a_to_b) {
+    const Vec2 p = corner(pi, pj), q = corner(qi, qj);
+    const std::vector<Vec3> at_p = lines.chain(pi, pj, p, a_p, b_p),
+                            at_q = lines.chain(qi, qj, q, a_q, b_q);
+    if (!cross) {
+      soup.ladder(at_p, at_q, (a_p - b_p) + (a_q - b_q) >= 0 ? a_to_b : Vec3(-a_to_b));
+      return;
+    }
+    // Two triangles' worth, each a fan from the crossing to one end's chain.
+    for (const auto& [chain, higher] : {std::pair{&at_p, a_p > b_p}, std::pair{&at_q, a_q > b_q}}) {
+      for (size_t k = 0; k + 1 < chain->size(); ++k)
+        soup.add((*chain)[k], (*chain)[k + 1], *cross, higher ? a_to_b : Vec3(-a_to_b));
+    }
+  };
+
+  for (int j = 0; j < ny; ++j) {
+    for (int i = 0; i < nx; ++i) {
+      const auto& h = facet(i, j);
+      const Vec3 c00 = at(corner(i, j), h[0]), c10 = at(corner(i + 1, j), h[1]),
+                 c11 = at(corner(i + 1, j + 1), h[2]), c01 = at(corner(i, j + 1), h[3]);
+      const size_t k = static_cast<size_t>(i + nx * j);
+      // The top's two triangles, (00, 10, 11) and (00, 11, 01), with the
+      // crossing points on their outer edges.
+      std::vector<Vec3> first{c00};
+      if (j > 0) edge_point(north, static_cast<size_t>(i + nx * (j - 1)), first);
+      first.push_back(c10);
+      if (i + 1 < nx) edge_point(east, k, first);
+      first.push_back(c11);
+      soup.polygon(first, up);
+      std::vector<Vec3> second{c00, c11};
+      if (j + 1 < ny) edge_point(north, k, second);
+      second.push_back(c01);
+      if (i > 0) edge_point(east, static_cast<size_t>(i - 1 + nx * j), second);
+      soup.polygon(second, up);
+      // East and north: against the next facet, or the slab's side (height 0 beyond).
+      if (i + 1 < nx) {
+        const auto& e = facet(i + 1, j);
+        wall(i + 1, j, i + 1, j + 1, h[1], h[2], e[0], e[3], east[k], to_east);
+      } else {
+        wall(i + 1, j, i + 1, j + 1, h[1], h[2], 0, 0, std::nullopt, to_east);
+      }
+      if (j + 1 < ny) {
+        const auto& n = facet(i, j + 1);
+        wall(i, j + 1, i + 1, j + 1, h[3], h[2], n[0], n[1], north[k], to_north);
+      } else {
+        wall(i, j + 1, i + 1, j + 1, h[3], h[2], 0, 0, std::nullopt, to_north);
+      }
+      if (i == 0) wall(i, j, i, j + 1, h[0], h[3], 0, 0, std::nullopt, -to_east);
+      if (j == 0) wall(i, j, i + 1, j, h[0], h[1], 0, 0, std::nullopt, -to_north);
+    }
+  }
+  // The flat bottom as one polygon through the side walls' lowest points.
+  std::vector<Vec3> bottom;
+  for (int i = 0; i < nx; ++i) bottom.push_back(at(corner(i, 0), 0));
+  for (int j = 0; j < ny; ++j) bottom.push_back(at(corner(nx, j), 0));
+  for (int i = nx; i > 0; --i) bottom.push_back(at(corner(i, ny), 0));
+  for (int j = ny; j > 0; --j) bottom.push_back(at(corner(0, j), 0));
+  soup.polygon(bottom, down);
+  return std::move(soup.mesh);
+}
+
+}  // namespace spec2fab
