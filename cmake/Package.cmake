@@ -1,5 +1,7 @@
 # `cmake --install` and find_package(Spec2Fab): the command, one static
-# library of every module (libspec2fab.a, which is spec2fab_all), the command's
+# library of every module but TetGen's (libspec2fab.a: spec2fab_modules, MIT),
+# TetGen's module on its own (libspec2fab_tetgen.a, AGPLv3: the opt-in
+# component "tetgen"), the command's
 # objects (libspec2fab_cli.a), the headers under include/spec2fab/, and a
 # config file (cmake/Spec2FabConfig.cmake.in) that finds the dependencies
 # again and links the library whole. examples/custom_goal builds against it,
@@ -41,11 +43,16 @@ endfunction()
 spec2fab_external_libraries(SPEC2FAB_EXTERNAL_LIBRARIES ${SPEC2FAB_MODULES})
 
 install(TARGETS spec2fab RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
-install(FILES $<TARGET_FILE:spec2fab_all> DESTINATION ${CMAKE_INSTALL_LIBDIR} RENAME libspec2fab.a)
+install(FILES $<TARGET_FILE:spec2fab_modules> DESTINATION ${CMAKE_INSTALL_LIBDIR} RENAME libspec2fab.a)
+if(TARGET spec2fab_tetgen_archive)
+  install(FILES $<TARGET_FILE:spec2fab_tetgen_archive> DESTINATION ${CMAKE_INSTALL_LIBDIR} RENAME libspec2fab_tetgen.a)
+endif()
 install(FILES $<TARGET_FILE:spec2fab_cli_archive> DESTINATION ${CMAKE_INSTALL_LIBDIR} RENAME libspec2fab_cli.a)
+# Public headers only: a header named *_impl.h is private to its folder's
+# sources (tests/package checks that no installed header includes one).
 foreach(root framework simulators translators)
   install(DIRECTORY ${root}/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/spec2fab/${root}
-          FILES_MATCHING PATTERN "*.h")
+          FILES_MATCHING PATTERN "*.h" PATTERN "*_impl.h" EXCLUDE)
 endforeach()
 install(FILES ${PROJECT_BINARY_DIR}/generated/core/build_options.h
         DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/spec2fab/framework/core)

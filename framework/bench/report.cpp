@@ -13,7 +13,7 @@
 
 #include "bench/harness.h"
 #include "bench/plot.h"
-#include "bench/report_support.h"
+#include "bench/report_impl.h"
 #include "core/file_write.h"
 #include "core/strings.h"
 #include "tuning/problem.h"

@@ -10,7 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bench/plot.h"
-#include "bench/report_support.h"
+#include "bench/report_impl.h"
 #include "core/file_write.h"
 #include "core/strings.h"
 #include "tuning/problem.h"

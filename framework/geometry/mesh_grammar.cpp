@@ -1,6 +1,6 @@
-// The mesh formats' grammar, checked before Assimp (geometry/mesh_grammar.h).
+// The mesh formats' grammar, checked before Assimp (geometry/mesh_grammar_impl.h).
 
-#include "geometry/mesh_grammar.h"
+#include "geometry/mesh_grammar_impl.h"
 
 #include <algorithm>
 #include <cctype>

@@ -32,7 +32,7 @@
 
 #include "core/error.h"
 #include "core/limits.h"
-#include "geometry/mesh_grammar.h"
+#include "geometry/mesh_grammar_impl.h"
 
 namespace spec2fab {
 

@@ -20,7 +20,7 @@
 #include "core/ranks.h"
 #include "core/seed.h"
 #include "core/properties.h"
-#include "tuning/schedule_state.h"
+#include "tuning/schedule_state_impl.h"
 
 namespace spec2fab {
 

@@ -1,4 +1,4 @@
-#include "tuning/schedule_state.h"
+#include "tuning/schedule_state_impl.h"
 
 #include <cstring>
 #include <limits>

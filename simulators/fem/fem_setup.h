@@ -14,7 +14,7 @@
 #include "core/properties.h"
 #include "core/registry.h"
 #include "fem/elastic_solver.h"
-#include "fem/tetgen/tetgen_mesher.h"
+#include "fem/tet_mesher.h"
 
 namespace spec2fab::fem {
 

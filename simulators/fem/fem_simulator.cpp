@@ -24,7 +24,7 @@
 #include "fem/fem_setup.h"
 #include "fem/interface_conformer.h"
 #include "fem/mesh_cache.h"
-#include "fem/tetgen/tetgen_mesher.h"
+#include "fem/tet_mesher.h"
 #include "fem/vtu_writer.h"
 #include "geometry/mesh_io.h"
 #include "tuning/parts.h"

@@ -11,7 +11,7 @@
 #include "core/run_cache.h"
 #include "fem/interface_conformer.h"
 #include "fem/interface_plc.h"
-#include "fem/tetgen/tetgen_mesher.h"
+#include "fem/tet_mesher.h"
 
 namespace spec2fab::fem {
 

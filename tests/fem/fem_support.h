@@ -10,7 +10,7 @@
 
 #include "fem/elastic_solver.h"
 #include "fem/fem_setup.h"
-#include "fem/tetgen/tetgen_mesher.h"
+#include "fem/tet_mesher.h"
 #include "geometry/primitives.h"
 #include "geometry/solid.h"
 #include "materials/palette.h"

@@ -18,6 +18,47 @@ function(run)
 endfunction()
 
 run(${CMAKE_COMMAND} --install ${BUILD} --prefix ${WORK}/prefix)
+
+# Public headers only: none private (*_impl.h) is installed, and every
+# header an installed one includes ("x/y.h") is installed too.
+file(GLOB_RECURSE installed RELATIVE ${WORK}/prefix/include/spec2fab ${WORK}/prefix/include/spec2fab/*.h)
+list(LENGTH installed installed_count)
+if(installed_count LESS 100)
+  message(FATAL_ERROR "only ${installed_count} headers installed")
+endif()
+foreach(header IN LISTS installed)
+  if(header MATCHES "_impl\\.h$")
+    message(FATAL_ERROR "a private header is installed: ${header}")
+  endif()
+  file(STRINGS ${WORK}/prefix/include/spec2fab/${header} includes REGEX "^#include \"[^\"]+\"")
+  foreach(line IN LISTS includes)
+    string(REGEX REPLACE "^#include \"([^\"]+)\".*" "\\1" included "${line}")
+    get_filename_component(folder ${header} DIRECTORY)
+    set(found FALSE)
+    foreach(root framework simulators translators ${folder})
+      if(EXISTS ${WORK}/prefix/include/spec2fab/${root}/${included})
+        set(found TRUE)
+      endif()
+    endforeach()
+    if(NOT found)
+      message(FATAL_ERROR "${header} includes \"${included}\", which is not installed")
+    endif()
+  endforeach()
+endforeach()
+
+# The default library holds no TetGen (AGPLv3) code; its own archive does.
+execute_process(COMMAND nm -C ${WORK}/prefix/lib/libspec2fab.a OUTPUT_VARIABLE symbols)
+if(symbols MATCHES "tetgenio|tetgenmesh|tetgenbehavior")
+  message(FATAL_ERROR "libspec2fab.a has TetGen symbols")
+endif()
+set(with_tetgen FALSE)
+if(EXISTS ${WORK}/prefix/lib/libspec2fab_tetgen.a)  # a build with SPEC2FAB_WITH_TETGEN
+  set(with_tetgen TRUE)
+  execute_process(COMMAND nm -C ${WORK}/prefix/lib/libspec2fab_tetgen.a OUTPUT_VARIABLE symbols)
+  if(NOT symbols MATCHES "tetgenio")
+    message(FATAL_ERROR "libspec2fab_tetgen.a has no TetGen symbols: is the component empty?")
+  endif()
+endif()
 run(${CMAKE_COMMAND} -S ${SOURCE}/examples/custom_goal -B ${WORK}/example -G Ninja
     -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH=${WORK}/prefix)
 run(${CMAKE_COMMAND} --build ${WORK}/example)
@@ -68,3 +109,29 @@ foreach(file tree.json preview/section_xz.png print/VeroWhitePlus.stl preview/re
     message(FATAL_ERROR "the example's run wrote no ${file}")
   endif()
 endforeach()
+
+if(NOT with_tetgen)
+  return()
+endif()
+# Linked against the default package, the program has no TetGen: it does
+# not load libtet, and the fem simulator says how to get a mesher.
+execute_process(COMMAND ldd ${WORK}/example/custom_spec2fab OUTPUT_VARIABLE libraries)
+if(libraries MATCHES "libtet")
+  message(FATAL_ERROR "custom_spec2fab, built without the tetgen component, loads libtet:\n${libraries}")
+endif()
+execute_process(COMMAND ${WORK}/example/custom_spec2fab simulate -q fem ${SOURCE}/datasets/simulations/fem_cantilever.json
+                        --out ${WORK}/fem --repeat 1
+                RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE out)
+if(NOT code EQUAL 2 OR NOT out MATCHES "find_package\\(Spec2Fab COMPONENTS tetgen\\)")
+  message(FATAL_ERROR "without the tetgen component, simulate fem should refuse to mesh (exit 2) naming it; got ${code}:\n${out}")
+endif()
+
+# With the component, the same program meshes and solves.
+run(${CMAKE_COMMAND} -S ${SOURCE}/examples/custom_goal -B ${WORK}/example_tetgen -G Ninja
+    -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH=${WORK}/prefix -DCUSTOM_GOAL_WITH_TETGEN=ON)
+run(${CMAKE_COMMAND} --build ${WORK}/example_tetgen)
+run(${WORK}/example_tetgen/custom_spec2fab simulate -q fem ${SOURCE}/datasets/simulations/fem_cantilever.json
+    --out ${WORK}/fem_tetgen --repeat 1)
+if(NOT EXISTS ${WORK}/fem_tetgen/displacements.csv)
+  message(FATAL_ERROR "with the tetgen component, simulate fem wrote no displacements.csv")
+endif()

@@ -1,5 +1,7 @@
-// The one translation unit that includes TetGen (AGPLv3); see tetgen_mesher.h.
-#include "fem/tetgen/tetgen_mesher.h"
+// The one translation unit that includes TetGen (AGPLv3), in a module of its
+// own (spec2fab_tetgen, built with SPEC2FAB_WITH_TETGEN): linked, it registers
+// itself as the mesher behind fem/tet_mesher.h.
+#include "fem/tet_mesher.h"
 
 #include <cstdio>
 #include <sstream>
@@ -8,15 +10,9 @@
 #include "core/build_options.h"
 #include "core/error.h"
 
-#if SPEC2FAB_WITH_TETGEN
 #include <tetgen.h>
-#endif
 
 namespace spec2fab::fem {
-
-#if SPEC2FAB_WITH_TETGEN
-
-bool tetgen_available() { return true; }
 
 namespace {
 
@@ -62,13 +58,7 @@ void run_tetgen(const std::string& switches, tetgenio& in, tetgenio& out, const 
   }
 }
 
-}  // namespace
-
-TetMesh tetrahedralize(const Mesh& surface, const TetgenOptions& options) {
-  return tetrahedralize(surface_plc(surface), options);
-}
-
-TetMesh tetrahedralize(const Plc& plc, const TetgenOptions& options) {
+TetMesh tetgen_tetrahedralize(const Plc& plc, const TetgenOptions& options) {
   const std::string& name = plc.name;
   tetgenio in;
   in.firstnumber = 0;
@@ -140,18 +130,8 @@ TetMesh tetrahedralize(const Plc& plc, const TetgenOptions& options) {
   return read_result(refined);
 }
 
-#else
+// Linked whole (every module is), so this runs before main().
+[[maybe_unused]] const bool registered = register_tet_mesher(&tetgen_tetrahedralize);
 
-bool tetgen_available() { return false; }
-
-TetMesh tetrahedralize(const Plc& plc, const TetgenOptions& /*options*/) {
-  throw InputError(plc.name + ": " + left_out_of_build("mesher", "tetgen") + " (no tetrahedral meshes without it)");
-}
-
-TetMesh tetrahedralize(const Mesh& surface, const TetgenOptions& options) {
-  return tetrahedralize(surface_plc(surface), options);
-}
-
-#endif
-
+}  // namespace
 }  // namespace spec2fab::fem

@@ -1,13 +1,16 @@
 #pragma once
-/// Quality tetrahedral meshes of a closed surface with TetGen (H. Si,
-/// "TetGen, a Delaunay-based quality tetrahedral mesh generator", ACM TOMS
-/// 2015), Debian's libtet1.5-dev.
+/// Quality tetrahedral meshes of a closed surface or of a PLC (a surface
+/// with inner facets the mesh must follow), by TetGen (H. Si, "TetGen, a
+/// Delaunay-based quality tetrahedral mesh generator", ACM TOMS 2015,
+/// Debian's libtet1.5-dev).
 ///
-/// TetGen is AGPLv3: this header and tetgen_mesher.cpp are the only files of
-/// Spec2Fab that include it, and they build into their own target
-/// (spec2fab_tetgen, CMake option SPEC2FAB_WITH_TETGEN, on by default). A
-/// build with the option off has no FEM meshing and links no AGPL code; see
-/// LICENSE.
+/// TetGen is AGPLv3, so it is a module a program links by choice: this
+/// header and tet_mesher.cpp (MIT, in the fem module) only dispatch to the
+/// mesher that fem/tetgen/tetgen_mesher.cpp registers when it is linked —
+/// the spec2fab command and the tests link it; a project using the
+/// installed package links it with find_package(Spec2Fab COMPONENTS tetgen)
+/// and Spec2Fab::tetgen. Without it, meshing is refused in one line that
+/// says how to get it. See LICENSE.
 
 #include <optional>
 
@@ -32,15 +35,19 @@ struct TetgenOptions {
   double refine_max_volume_mm3 = 0;
 };
 
-/// True when this build has TetGen.
+/// True when this program has a mesher (TetGen's module is linked).
 bool tetgen_available();
 
 /// Tetrahedralises the inside of `surface` (closed, outward-facing). Throws
 /// InputError naming the mesh when TetGen refuses it (self-intersections,
-/// open surface) or this build has no TetGen.
+/// open surface) or this program has no mesher.
 TetMesh tetrahedralize(const Mesh& surface, const TetgenOptions& options);
 /// Tetrahedralises a PLC (interface_plc.h): every facet, inner ones too, is
 /// a union of faces of the result.
 TetMesh tetrahedralize(const Plc& plc, const TetgenOptions& options);
+
+/// What the TetGen module registers from its static initialiser.
+using PlcMesher = TetMesh (*)(const Plc& plc, const TetgenOptions& options);
+bool register_tet_mesher(PlcMesher mesher);
 
 }  // namespace spec2fab::fem
