@@ -9,6 +9,10 @@
 /// knowledge of the type, and writes itself to files (`spec2fab simulate`,
 /// run previews): a new observation type says how in its own file, by
 /// overriding write_files; there is no list of types to extend.
+///
+/// Here are the types several simulators and goals share (images, vectors,
+/// albedo); a type one simulator alone makes lives with it
+/// (subsurface/radial_profile.h, fem/displacements.h).
 
 #include <array>
 #include <filesystem>
@@ -17,8 +21,6 @@
 #include <string>
 #include <string_view>
 #include <vector>
-
-#include "core/radial_basis.h"
 
 namespace spec2fab {
 
@@ -54,49 +56,7 @@ struct ImageObservation final : ObservationOf<ImageObservation> {
   std::vector<std::string> write_files(const std::filesystem::path& folder) const override;
 };
 
-/// A radial diffuse reflectance profile R(r), RGB, as coefficients of an
-/// orthonormal Fourier–Bessel basis on a disc (core/radial_basis.h): the
-/// squared distance between two coefficient vectors is the area-integrated
-/// squared difference of the profiles. samples() gives R(r) at the basis's radii.
-struct RadialProfileObservation final : ObservationOf<RadialProfileObservation> {
-  static constexpr std::string_view kType = "radial_profile";
-  std::shared_ptr<const RadialBasis> basis;
-  std::vector<double> coefficients;  ///< 3 per basis function (RGB interleaved)
 
-  void reset(std::shared_ptr<const RadialBasis> b) {
-    basis = std::move(b);
-    coefficients.assign(3 * static_cast<size_t>(basis->size()), 0.0);
-  }
-  /// R(r_n) at basis->radii(), RGB interleaved.
-  std::vector<double> samples() const {
-    std::vector<double> out(coefficients.size());
-    basis->to_samples(coefficients, 3, out);
-    return out;
-  }
-  std::span<const double> values() const override { return coefficients; }
-  std::span<double> values() override { return coefficients; }
-  /// profile.csv: R(r) in 1/mm² at the basis's radii.
-  std::vector<std::string> write_files(const std::filesystem::path& folder) const override;
-};
-
-/// Displacements (mm), 3 per point: first `probe_count` probe points (at
-/// the rest positions probe_rest_mm, 3 per probe), then every node of the
-/// simulator's mesh (a goal may hold probes only).
-struct DisplacementsObservation final : ObservationOf<DisplacementsObservation> {
-  static constexpr std::string_view kType = "displacements";
-  std::vector<double> xyz_mm;
-  int probe_count = 0;
-  std::vector<double> probe_rest_mm;
-  /// Per-tet von Mises stress (MPa; 0 in void) and its largest value and
-  /// 99th percentile over the solid's tets, for goals that bound stress.
-  std::vector<double> von_mises_mpa;
-  double stress_max_mpa = 0, stress_p99_mpa = 0;
-  std::span<const double> probes() const { return {xyz_mm.data(), 3 * static_cast<size_t>(probe_count)}; }
-  std::span<const double> values() const override { return xyz_mm; }
-  std::span<double> values() override { return xyz_mm; }
-  /// observation.csv: probes first, then nodes.
-  std::vector<std::string> write_files(const std::filesystem::path& folder) const override;
-};
 
 /// Plain numbers (e.g. a coverage fraction, a scalar response).
 struct VectorObservation final : ObservationOf<VectorObservation> {

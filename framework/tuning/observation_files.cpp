@@ -57,30 +57,6 @@ std::vector<std::string> ImageObservation::write_files(const fs::path& folder) c
   return {"image.png"};
 }
 
-std::vector<std::string> RadialProfileObservation::write_files(const fs::path& folder) const {
-  // R(r) in 1/mm² (reflected flux per unit area per unit incident flux).
-  std::string csv = "radius_mm,r,g,b\n";
-  const std::vector<double> rgb = samples();
-  const std::span<const double> radii = basis->radii();
-  for (size_t i = 0; i < radii.size(); ++i) {
-    csv += fmt::format("{:.6g},{:.9g},{:.9g},{:.9g}\n", radii[i], rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2]);
-  }
-  write_file(folder / "profile.csv", csv);
-  return {"profile.csv"};
-}
-
-std::vector<std::string> DisplacementsObservation::write_files(const fs::path& folder) const {
-  // Probes first (their rest point), then the mesh's nodes.
-  std::string csv = "point,kind,ux_mm,uy_mm,uz_mm\n";
-  for (size_t i = 0; 3 * i + 2 < xyz_mm.size(); ++i) {
-    const bool probe = i < static_cast<size_t>(probe_count);
-    csv += fmt::format("{},{},{:.9g},{:.9g},{:.9g}\n", probe ? i : i - static_cast<size_t>(probe_count),
-                       probe ? "probe" : "node", xyz_mm[3 * i], xyz_mm[3 * i + 1], xyz_mm[3 * i + 2]);
-  }
-  write_file(folder / "observation.csv", csv);
-  return {"observation.csv"};
-}
-
 std::vector<std::string> AlbedoObservation::write_files(const fs::path& folder) const {
   std::string csv = "channel,linear,srgb_8bit\n";
   static const char* names[] = {"r", "g", "b"};

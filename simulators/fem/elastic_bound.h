@@ -58,6 +58,7 @@
 #include "fem/mesh_cache.h"
 #include "tuning/observation.h"
 #include "tuning/simulation_domain.h"
+#include "fem/displacements.h"
 
 namespace spec2fab {
 class ReducerTree;

@@ -9,6 +9,7 @@
 #include "bench/benchmark_problem.h"
 #include "fem/elastic_bound.h"
 #include "tuning/tuner.h"
+#include "fem/displacements.h"
 
 namespace spec2fab {
 namespace {

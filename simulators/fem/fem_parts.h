@@ -9,6 +9,7 @@
 
 #include "fem/fem_setup.h"
 #include "tuning/parts.h"
+#include "fem/displacements.h"
 
 namespace spec2fab::fem {
 

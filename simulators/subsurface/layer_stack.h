@@ -19,7 +19,7 @@
 #include <tuple>
 #include <vector>
 
-#include "core/radial_basis.h"
+#include "subsurface/radial_basis.h"
 #include "materials/palette.h"
 #include "subsurface/multipole.h"
 

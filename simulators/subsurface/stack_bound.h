@@ -29,6 +29,7 @@
 
 #include "subsurface/layer_stack.h"
 #include "tuning/observation.h"
+#include "subsurface/radial_profile.h"
 
 namespace spec2fab {
 

@@ -10,9 +10,10 @@
 
 #include "core/options.h"
 #include "core/properties.h"
-#include "core/radial_basis.h"
+#include "subsurface/radial_basis.h"
 #include "subsurface/multipole.h"
 #include "tuning/parts.h"
+#include "subsurface/radial_profile.h"
 
 namespace spec2fab {
 

@@ -16,6 +16,7 @@
 #include "materials/palette.h"
 #include "reducer/reducer_tree.h"
 #include "tuning/parts.h"
+#include "fem/displacements.h"
 
 namespace spec2fab::fem::testing {
 

@@ -6,6 +6,7 @@
 #include "reducer/node.h"
 #include "tuning/parts.h"
 #include "tuning/vector_parts.h"
+#include "fem/displacements.h"
 
 namespace spec2fab::testing {
 

@@ -1,5 +1,5 @@
 // Compiled by ctest, not linked: with SPEC2FAB_BIND_INCOMPATIBLE defined it
-// binds an image metric to a displacement simulator and must NOT compile
+// binds an image metric to a vector simulator and must NOT compile
 // (test tuning.incompatible_parts_do_not_compile); without it, the same file
 // with compatible parts must compile (tuning.compatible_parts_compile), which
 // shows the failure comes from the type check and nothing else.
@@ -8,25 +8,25 @@
 
 namespace spec2fab {
 
-struct Displacements final : SimulatorFor<DisplacementsObservation> {
+struct Displacements final : SimulatorFor<VectorObservation> {
   std::string name() const override { return "displacements"; }
   using SimulatorFor::simulate;
-  void simulate(const ReducerNode&, DisplacementsObservation&) override {}
+  void simulate(const ReducerNode&, VectorObservation&) override {}
 };
-struct DisplacementRms final : MetricFor<DisplacementsObservation> {
+struct DisplacementRms final : MetricFor<VectorObservation> {
   std::string name() const override { return "displacement_rms"; }
   using MetricFor::error;
-  double error(const DisplacementsObservation&, const DisplacementsObservation&) const override { return 0; }
+  double error(const VectorObservation&, const VectorObservation&) const override { return 0; }
 };
 struct ImageMse final : MetricFor<ImageObservation> {
   std::string name() const override { return "image_mse"; }
   using MetricFor::error;
   double error(const ImageObservation&, const ImageObservation&) const override { return 0; }
 };
-struct RestShape final : GoalFor<DisplacementsObservation> {
+struct RestShape final : GoalFor<VectorObservation> {
   std::string name() const override { return "rest_shape"; }
-  const DisplacementsObservation& typed_target() const override { return target; }
-  DisplacementsObservation target;
+  const VectorObservation& typed_target() const override { return target; }
+  VectorObservation target;
 };
 
 #ifdef SPEC2FAB_BIND_INCOMPATIBLE

@@ -7,7 +7,7 @@
 #include <numbers>
 #include <vector>
 
-#include "core/radial_basis.h"
+#include "subsurface/radial_basis.h"
 #include "core/run_cache.h"
 
 namespace spec2fab {

@@ -1,4 +1,4 @@
-#include "core/radial_basis.h"
+#include "subsurface/radial_basis.h"
 
 #include <cmath>
 #include <numbers>
