@@ -2,8 +2,9 @@
 
 namespace spec2fab {
 
-NodePtr surface_column_tree(double shell_mm, std::array<int, 2> columns, std::vector<LayeredOptions::Layer> layers,
-                            const Parameter& backing, NodePtr core) {
+SurfaceColumnTree surface_column_tree(double shell_mm, std::array<int, 2> columns,
+                                      std::vector<LayeredOptions::Layer> layers, const Parameter& backing,
+                                      NodePtr core) {
   LayeredOptions stack;
   stack.layers = std::move(layers);
   stack.layers.emplace_back().material.parameter = backing;
@@ -13,8 +14,9 @@ NodePtr surface_column_tree(double shell_mm, std::array<int, 2> columns, std::ve
   StratumOptions stratum;
   stratum.depth_mm = fixed_number(shell_mm, stratum.depth_mm);
   stratum.shell.node = make_column(std::move(grid));
+  ReducerNode* column_node = stratum.shell.node.get();
   stratum.core.node = core ? std::move(core) : make_solid_material(backing);
-  return make_stratum(std::move(stratum));
+  return {make_stratum(std::move(stratum)), column_node};
 }
 
 }  // namespace spec2fab

@@ -13,11 +13,19 @@
 
 namespace spec2fab {
 
-/// The tree's root (TuningTranslator::set_tree binds it). `layers`: the
-/// Layered node's layers without the backing (added last). Column i + nu·j
-/// is node "shell/<i + nu·j>". `core`: what fills the core instead of the
-/// backing (the deformable texture's cells).
-NodePtr surface_column_tree(double shell_mm, std::array<int, 2> columns, std::vector<LayeredOptions::Layer> layers,
-                            const Parameter& backing, NodePtr core = nullptr);
+/// The tree: its root (TuningTranslator::set_tree binds it), and the Column
+/// node, whose child i + nu·j (node "shell/<i + nu·j>") is a column's stack.
+struct SurfaceColumnTree {
+  NodePtr root;
+  ReducerNode* columns = nullptr;  ///< owned by root; it does not move with it
+  ReducerNode& column(size_t k) const { return columns->child(k); }
+};
+
+/// `layers`: the Layered node's layers without the backing (added last).
+/// `core`: what fills the core instead of the backing (the deformable
+/// texture's cells).
+SurfaceColumnTree surface_column_tree(double shell_mm, std::array<int, 2> columns,
+                                      std::vector<LayeredOptions::Layer> layers, const Parameter& backing,
+                                      NodePtr core = nullptr);
 
 }  // namespace spec2fab

@@ -60,10 +60,11 @@ class AlbedoTranslator final : public TuningTranslator {
       stratum.core.node = make_solid_material(backing);
       set_tree(make_stratum(std::move(stratum)), goal, experiment);
     } else {
-      set_tree(surface_column_tree(shell, texture_.columns(), texture_.ink_layers(palette), backing), goal,
-               experiment);
+      SurfaceColumnTree columns = surface_column_tree(shell, texture_.columns(), texture_.ink_layers(palette), backing);
+      set_tree(std::move(columns.root), goal, experiment);
       schedule_.add(texture_.add_tuners(
-          network_, *tree_, [this](int k) -> ReducerNode& { return tree_->node("shell/" + std::to_string(k)); },
+          network_, *tree_,
+        [column_node = columns.columns](int k) -> ReducerNode& { return column_node->child(static_cast<size_t>(k)); },
           experiment));
     }
     // render.png is the predicted look (report); the material render goes beside it.

@@ -127,7 +127,7 @@ class CausticsTextureTranslator final : public TuningTranslator {
     auto caustic = make_tuner("surface", make_caustic_simulator(slab_), make_image_mse(), settings_.image_goal(goal),
                               optimizer.build());
     caustic->set_origin(goal.where());
-    caustic->set_node(*tree_, tree_->node("below"));
+    caustic->set_node(*tree_, *caustic_surface_);
     caustic_tuner_ = network_.add(std::move(caustic));
 
     Phase surface;
@@ -185,7 +185,7 @@ class CausticsTextureTranslator final : public TuningTranslator {
   /// Plane (w, t) with the ink layers over the clear material below it and
   /// void above; below: the B-spline bottom face, heights within the body.
   NodePtr tree(const Properties& goal, const MaterialPalette& palette, double start, double thinnest,
-               double body) const {
+               double body) {
     const Bounds& bounds = settings_.slab;
     const Parameter clear = fixed_material(palette, settings_.material, goal.where("material"));
     const Parameter empty = fixed_material(palette, "void", goal.where());
@@ -206,15 +206,19 @@ class CausticsTextureTranslator final : public TuningTranslator {
     cut.offset_mm = fixed_number(cut_z_, cut.offset_mm);
     cut.cut.above.node = make_column(std::move(columns));
     cut.cut.below.node = surface_.node("w", {start - texture_mm_, thinnest - texture_mm_, body}, bounds, clear, palette);
+    // Kept for the tuners and reports (the tree owns them; they do not move).
+    texture_columns_ = cut.cut.above.node.get();
+    caustic_surface_ = cut.cut.below.node.get();
     return make_plane(std::move(cut));
   }
 
-  ReducerNode& texture_stack(int column) { return tree_->node("above/" + std::to_string(column) + "/below"); }
+  /// The ink stack of texture column `column`: below its Plane.
+  ReducerNode& texture_stack(int column) { return texture_columns_->child(static_cast<size_t>(column)).child(0); }
 
   void prepare(RunContext& context) override {
     Tuner& caustic = network_.tuner(caustic_tuner_);
     if (transport_start_)
-      start_report_ = start_caustic_from_transport(caustic, slab_, *tree_->node("below").height_surface(),
+      start_report_ = start_caustic_from_transport(caustic, slab_, *caustic_surface_->height_surface(),
                                                    context.timing);
     slope_limit_["start"] = surface_.limit_slopes(caustic, settings_.slab);
     caustic.set_penalty(surface_.slope_penalty(settings_.slab, caustic.error()));
@@ -270,7 +274,7 @@ class CausticsTextureTranslator final : public TuningTranslator {
     };
     if (!surface_stl_wanted(outputs_.fabrication, context.result["caustics"])) return;
     const SurfaceStl stl = write_caustic_surface_stl(
-        slab_, surface_.print_vertices(), *tree_->node("below").height_surface(), cast.pixels, target, mirror, &shadow,
+        slab_, surface_.print_vertices(), *caustic_surface_->height_surface(), cast.pixels, target, mirror, &shadow,
         context.folder);
     context.result["caustics"]["surface_stl"] = stl.report;
     context.result["caustics"]["surface_stl"]["z_range_mm"] = {stl.bounds.lower.z(), stl.bounds.upper.z()};
@@ -288,6 +292,8 @@ class CausticsTextureTranslator final : public TuningTranslator {
   nlohmann::json start_report_, slope_limit_;
   CausticSlabConfig slab_;
   size_t caustic_tuner_ = 0;
+  ReducerNode* texture_columns_ = nullptr;  ///< the Column node of the texture
+  ReducerNode* caustic_surface_ = nullptr;  ///< the B-spline bottom face
   std::vector<double> start_;  ///< the caustic tuner's start
 };
 

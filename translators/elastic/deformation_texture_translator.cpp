@@ -75,14 +75,14 @@ class DeformationTextureTranslator final : public TuningTranslator {
                                                 plate, bounds_.sizes().z()));
     // The shell holds the thickest stack and one step of backing under it.
     const MaterialPalette& palette = experiment.palette();
-    set_tree(surface_column_tree(texture_.ink_mm() + texture_.step_mm(), texture_.columns(),
-                                 texture_.ink_layers(palette),
-                                 fixed_material(palette, options_.backing, goal.where("backing")),
-                                 elastic_.cell_node(bounds_, palette)),
-             goal, experiment);
+    SurfaceColumnTree columns = surface_column_tree(
+        texture_.ink_mm() + texture_.step_mm(), texture_.columns(), texture_.ink_layers(palette),
+        fixed_material(palette, options_.backing, goal.where("backing")), elastic_.cell_node(bounds_, palette));
+    set_tree(std::move(columns.root), goal, experiment);
 
     schedule_.add(texture_.add_tuners(
-        network_, *tree_, [this](int k) -> ReducerNode& { return tree_->node("shell/" + std::to_string(k)); },
+        network_, *tree_,
+        [column_node = columns.columns](int k) -> ReducerNode& { return column_node->child(static_cast<size_t>(k)); },
         experiment));
     load_.fixed = Eigen::AlignedBox3d(bounds_.min(), Vec3(bounds_.max().x(), bounds_.max().y(), bounds_.min().z() + plate));
     load_.loaded = Eigen::AlignedBox3d(Vec3(bounds_.min().x(), bounds_.min().y(), bounds_.max().z() - plate), bounds_.max());

@@ -109,9 +109,9 @@ class SubsurfaceTranslator final : public TuningTranslator {
       layer.material.parameter = material_choice(palette, materials_.front(), materials_, goal.where("materials"));
       layer.thickness_mm = number_choice(thicknesses.front(), thicknesses);
     }
-    set_tree(surface_column_tree(shell, columns_, std::move(layers),
-                                 fixed_material(palette, backing_, goal.where("backing"))),
-             goal, experiment);
+    SurfaceColumnTree surface_tree =
+        surface_column_tree(shell, columns_, std::move(layers), fixed_material(palette, backing_, goal.where("backing")));
+    set_tree(std::move(surface_tree.root), goal, experiment);
 
     SubsurfaceSimulatorOptions simulator;
     simulator.grid = grid_;
@@ -134,7 +134,7 @@ class SubsurfaceTranslator final : public TuningTranslator {
                                 make_radial_profile_goal(media_[square_medium(i, j)], grid_, &experiment.cache()),
                                 optimizer.build());
         tuner->set_origin(goal.where());
-        tuner->set_node(*tree_, tree_->node("shell/" + std::to_string(i + columns_[0] * j)));
+        tuner->set_node(*tree_, surface_tree.column(static_cast<size_t>(i + columns_[0] * j)));
         tuner->set_lower_bound([bound = bound_](std::span<const double> x, int assigned, const Observation& target) {
           return bound->lower_bound(x, assigned, static_cast<const RadialProfileObservation&>(target));
         });
