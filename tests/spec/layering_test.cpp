@@ -86,7 +86,8 @@ TEST(Layering, FrameworkFoldersIncludeWithoutLoops) {
 // The spec2fab program (translators/cli) reads files, so it may wrap.
 TEST(Layering, TranslatorsComposeTypedPartsNotJsonOrCasts) {
   const fs::path translators = fs::path(SPEC2FAB_DATASETS_DIR) / ".." / "translators";
-  const std::regex forbidden(R"(Properties::wrap|dynamic_cast|build_tuner\(|build_node\(|optimizer_or\()");
+  const std::vector<std::string> forbidden = {"Properties::wrap", "dynamic_cast", "build_tuner(", "build_node(",
+                                              "optimizer_or("};
   int files = 0;
   for (const auto& entry : fs::recursive_directory_iterator(translators)) {
     const fs::path relative = fs::relative(entry.path(), translators);
@@ -98,7 +99,8 @@ TEST(Layering, TranslatorsComposeTypedPartsNotJsonOrCasts) {
     int number = 0;
     for (std::string line; std::getline(in, line);) {
       ++number;
-      EXPECT_FALSE(std::regex_search(line, forbidden)) << relative.string() << ":" << number << ": " << line;
+      for (const std::string& word : forbidden)
+        EXPECT_EQ(line.find(word), std::string::npos) << relative.string() << ":" << number << ": " << line;
     }
   }
   EXPECT_GE(files, 15) << "the translators' sources were not found";

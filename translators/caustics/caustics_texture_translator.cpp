@@ -101,7 +101,7 @@ class CausticsTextureTranslator final : public TuningTranslator {
     require_in(goal, "start_thickness_mm", start, Range::closed(thinnest, size.z()));
     cut_z_ = bounds.upper.z() - texture_mm_;
 
-    set_tree(tree(goal, experiment.palette(), start, thinnest, body), goal, experiment);
+    set_tree(compose_tree(goal, experiment.palette(), start, thinnest, body), goal, experiment);
 
     // Texture tuners, 0 … columns − 1: the texture piece over a dark ground
     // (the clear slab under the inks reflects nothing back).
@@ -121,10 +121,13 @@ class CausticsTextureTranslator final : public TuningTranslator {
     slab.thickness_mm = size.z();
     slab.image_from_behind = true;  // the wall as the room sees it (see the top)
     slab_ = CausticGoalSettings::slab_config(goal, slab);
+    // The goal image first: its problems are the user's to fix before an
+    // optimizer this build lacks.
+    auto image_goal = settings_.image_goal(goal);
     const OptimizerChoice optimizer(experiment.root(), "optimizer",
                                     {{"type", "nlopt"}, {"algorithm", "LD_LBFGS"}, {"max_evaluations", 1000}});
     optimizer_label_ = optimizer_label(optimizer.spec());
-    auto caustic = make_tuner("surface", make_caustic_simulator(slab_), make_image_mse(), settings_.image_goal(goal),
+    auto caustic = make_tuner("surface", make_caustic_simulator(slab_), make_image_mse(), std::move(image_goal),
                               optimizer.build());
     caustic->set_origin(goal.where());
     caustic->set_node(*tree_, *caustic_surface_);
@@ -184,7 +187,7 @@ class CausticsTextureTranslator final : public TuningTranslator {
   /// Plane (z, t under the top) → above: Column (the texture's columns) →
   /// Plane (w, t) with the ink layers over the clear material below it and
   /// void above; below: the B-spline bottom face, heights within the body.
-  NodePtr tree(const Properties& goal, const MaterialPalette& palette, double start, double thinnest,
+  NodePtr compose_tree(const Properties& goal, const MaterialPalette& palette, double start, double thinnest,
                double body) {
     const Bounds& bounds = settings_.slab;
     const Parameter clear = fixed_material(palette, settings_.material, goal.where("material"));

@@ -66,6 +66,9 @@ class SmoothCausticsTranslator final : public TuningTranslator {
     CausticSlabConfig::Options slab = settings_.slab_options(surface_.vertices());
     slab.estimator = options.estimator;
     slab_ = CausticGoalSettings::slab_config(goal, slab);
+    // The goal image first: its problems are the user's to fix before an
+    // optimizer this build lacks.
+    auto image_goal = settings_.image_goal(goal);
     const OptimizerChoice optimizer(experiment.root(), "optimizer",
                                     {{"type", "nlopt"}, {"algorithm", "LD_LBFGS"}, {"max_evaluations", 1000}});
     // Other optimizers run from the same flat start before the main one, for
@@ -76,7 +79,7 @@ class SmoothCausticsTranslator final : public TuningTranslator {
         compared_.push_back({optimizer_label(p.value()), std::move(built)});
       }
     }
-    auto tuner = make_tuner("surface", make_caustic_simulator(slab_), make_image_mse(), settings_.image_goal(goal),
+    auto tuner = make_tuner("surface", make_caustic_simulator(slab_), make_image_mse(), std::move(image_goal),
                             optimizer.build());
     tuner->set_origin(goal.where());
     main_label_ = optimizer_label(optimizer.spec());
