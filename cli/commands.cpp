@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <iostream>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include <chrono>
@@ -28,6 +29,7 @@
 #include "reducer/node.h"
 #include "reducer/reducer_tree.h"
 #include "spec/experiment.h"
+#include "spec/run_report.h"
 #include "core/run_folder.h"
 #include "spec/translator.h"
 #include "spec/tree_outputs.h"
@@ -114,9 +116,9 @@ int bench_command(BenchArguments arguments) {
 namespace {
 
 // A path recorded in result.json: absolute, or relative to the folder the run
-// was started in (tried from here).
-fs::path recorded_file(const Properties& record, const std::string& key) {
-  const fs::path file = record.get<std::string>(key);
+// was started in (tried from here); a problem is named at `key` of `record`.
+fs::path recorded_file(const Properties& record, const std::string& key, const std::string& path) {
+  const fs::path file = path;
   if (const std::string why = unreadable_file_reason(file); !why.empty())
     record.fail(key, why + ": " + file.string() + " (relative paths are read from the folder the run was started in)");
   return file;
@@ -139,23 +141,27 @@ int export_command(const ExportArguments& arguments) {
         result_file.string() +
         ": file not found; export reads the geometry from the run folder tree.json came from");
   }
-  // Read as any input is: a value of the wrong type is named by its path.
+  // The run's manifest, read through the declaration that wrote it
+  // (spec/run_report.h): a missing or mistyped field is named by its path.
   const Properties result = Properties::load(result_file);
-  const Properties inputs = result.object("inputs");
-  const Properties geometry = inputs.object("geometry");
-  const fs::path mesh_file = recorded_file(geometry, "mesh");
-  const fs::path materials_file = arguments.materials.empty() ? recorded_file(inputs, "materials") : arguments.materials;
+  const Properties inputs_where = result.object("inputs");
+  const InputsRecord inputs = read_section<InputsRecord>(inputs_where);
+  const GeometryRecord& geometry = inputs.geometry;
+  const Properties geometry_where = inputs_where.object("geometry");
+  const fs::path mesh_file = recorded_file(geometry_where, "mesh", geometry.mesh);
+  const fs::path materials_file =
+      arguments.materials.empty() ? recorded_file(inputs_where, "materials", inputs.materials) : arguments.materials;
 
   const PrinterProfile printer = PrinterProfile::load(arguments.printer);
   const MaterialLibrary library = MaterialLibrary::load(materials_file);
   const MaterialPalette palette(library, printer);
   UvSource uv = UvSource::mesh;
   try {
-    uv = parse_uv_source(geometry.get<std::string>("uv", "mesh"));
+    uv = parse_uv_source(geometry.uv);
   } catch (const std::invalid_argument&) {
-    geometry.fail("uv", "unknown uv source");
+    geometry_where.fail("uv", "unknown uv source");
   }
-  Solid solid(load_mesh(mesh_file, geometry.get<double>("scale_to_mm", 1.0)), uv, geometry.get<int>("uv_axis", 2));
+  Solid solid(load_mesh(mesh_file, geometry.scale_to_mm), uv, geometry.uv_axis);
   // Materials the tree names must be loaded in the new printer: the palette
   // says which one is missing, where, and what the printer holds.
   ReducerTree tree(Properties::load(tree_file), palette);
@@ -165,7 +171,7 @@ int export_command(const ExportArguments& arguments) {
                           : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism,
                                   static_cast<size_t>(threads));
-  tree.bind(solid, geometry.get<double>("field_voxel_mm", 0.0));
+  tree.bind(solid, geometry.field_voxel_mm);
   FabricationOptions options;
   if (arguments.max_voxels > 0) options.max_voxels = static_cast<long long>(arguments.max_voxels);
   options.mesh_voxel_mm = arguments.mesh_voxel_mm;
@@ -181,7 +187,7 @@ int export_command(const ExportArguments& arguments) {
                                     {"geometry", mesh_file.string()},
                                     {"materials", materials_file.string()},
                                     {"printer", {{"name", printer.name}, {"file", printer.origin}}},
-                                    {"fabrication", report.result}});
+                                    {"fabrication", write_section(report.record)}});
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   folder.write_json("timing.json", {{"threads", threads},
@@ -210,12 +216,10 @@ int validate_command(const fs::path& experiment) {
 
 namespace {
 
-/// A file as it is now (absolute path, size, modification time): what a
-/// session cache keys the values made from it by, so that an edited file is
-/// read again.
 // A file's identity for the session cache: where it is, how long, when it
-// last changed. A file that cannot be examined keys as size 0 and no time
-// (its reader then says what is wrong with it).
+// last changed, so that an edited file is read again. A file that cannot be
+// examined keys as size 0 and no time (its reader then says what is wrong
+// with it).
 std::string file_key(const fs::path& file) {
   std::error_code error;
   const auto path = fs::absolute(file, error).lexically_normal();
@@ -227,6 +231,36 @@ std::string file_key(const fs::path& file) {
   const auto modified = fs::last_write_time(file, error);
   if (error) return key + "|" + std::to_string(size) + "|0";
   return key + "|" + std::to_string(size) + "|" + std::to_string(modified.time_since_epoch().count());
+}
+
+/// simulation.json's own fields; the simulator adds its sections beside them.
+struct SimulationHeader {
+  std::string simulator, produces, config, printer;
+  nlohmann::json subtree;  ///< the subtree simulated, in the tree format
+  double setup_seconds = 0, simulate_seconds = 0;
+  int evaluations = 0;
+  nlohmann::json values;  ///< the observation's values, or where to read them (SimulatorFiles::values_in)
+  std::vector<std::string> files;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.simulator, "simulator", "the simulator");
+    f(s.produces, "produces", "the observation it produces");
+    f(s.config, "config", "the configuration file");
+    f(s.printer, "printer", "the printer whose materials it used");
+    f(s.subtree, "subtree", "the subtree simulated");
+    f(s.setup_seconds, "setup_seconds", "its setup");
+    f(s.simulate_seconds, "simulate_seconds", "one simulation, the mean of the evaluations");
+    f(s.evaluations, "evaluations", "simulations timed");
+    f(s.values, "values", "the observation's values, or the files that hold them");
+    f(s.files, "files", "what the simulator wrote");
+  }
+};
+
+std::set<std::string> reserved_names(const SimulationHeader& header) {
+  std::set<std::string> names;
+  const nlohmann::json written = write_section(header);  // alive while items() walks it
+  for (const auto& item : written.items()) names.insert(item.key());
+  return names;
 }
 
 }  // namespace
@@ -311,22 +345,20 @@ int simulate_command(const SimulateArguments& arguments) {
   // Under mpirun every rank holds the same answer; rank 0's folder is the
   // one kept (RunFolder).
   RunFolder folder(arguments.out);
-  nlohmann::json record = {{"simulator", simulator->name()},
-                           {"produces", std::string(simulator->produces())},
-                           {"config", arguments.config.string()},
-                           {"printer", printer.name},
-                           {"subtree", subtree.to_json(palette)},
-                           {"setup_seconds", setup_seconds},
-                           {"simulate_seconds", simulate_seconds},
-                           {"evaluations", evaluations}};
+  SimulationHeader header{simulator->name(), std::string(simulator->produces()), arguments.config.string(),
+                          printer.name, subtree.to_json(palette), setup_seconds, simulate_seconds, evaluations,
+                          {}, {}};
+  ReportSections sections(reserved_names(header));
   const std::vector<std::string> files = folder.writing([&] {
-    std::vector<std::string> written = simulator->write_report(*observation, folder.path("."), record);
-    if (!record.contains("values")) {
-      record["values"] = std::vector<double>(observation->values().begin(), observation->values().end());
-    }
-    record["files"] = written;
+    const SimulatorFiles written = simulator->write_report(*observation, folder.path("."), sections);
+    header.values = written.values_in.empty()
+                        ? nlohmann::json(std::vector<double>(observation->values().begin(), observation->values().end()))
+                        : nlohmann::json(written.values_in);
+    header.files = written.files;
+    nlohmann::json record = write_section(header);
+    sections.write_into(record);
     folder.write_json("simulation.json", record);
-    return written;
+    return written.files;
   });
   folder.commit();
   if (!ranks::root()) return 0;

@@ -19,6 +19,7 @@
 #include "core/options.h"
 #include "materials/printer_profile.h"
 #include "spec/experiment.h"
+#include "spec/run_report.h"
 #include "spec/tree_outputs.h"
 
 namespace spec2fab::cli {
@@ -143,6 +144,15 @@ std::string option_table(const TypeDoc& doc) {
   return md.str();
 }
 
+std::string report_table(const std::vector<ReportFieldDoc>& rows) {
+  std::ostringstream md;
+  md << "| field | type | meaning |\n|---|---|---|\n";
+  for (const ReportFieldDoc& row : rows)
+    md << "| `" << table_cell(row.name) << "` | " << table_cell(row.type) << " | " << table_cell(row.meaning)
+       << " |\n";
+  return md.str();
+}
+
 }  // namespace
 
 std::string parts_reference() {
@@ -180,6 +190,11 @@ bool update_option_tables(const fs::path& file) {
     std::istringstream words(text.substr(start + open.size(), line_end - start - open.size()));
     std::string kind, name, scope;
     words >> kind >> name >> scope;
+    if (kind == "report" && name == "run") {  // result.json's shared sections (spec/run_report.h)
+      out += text.substr(at, line_end + 1 - at) + report_table(run_report_docs());
+      at = end;
+      continue;
+    }
     std::optional<TypeDoc> doc;
     if (kind == "experiment" && name == "file") doc = TypeDoc{"", ExperimentKeys::docs(), ""};
     if (kind == "experiment" && name == "geometry") doc = TypeDoc{"", option_docs<GeometryKeys>(), ""};

@@ -25,6 +25,22 @@ namespace {
 
 using namespace spec2fab;
 
+/// Its section of result.json, declared like options: each field once, with
+/// its meaning (spec2fab/core/report.h).
+struct MassReport {
+  double target_g = 0, achieved_g = 0, relative_error = 0, cut_z_mm = 0, wall_mm = 0;
+  std::string material;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.target_g, "target_g", "the mass asked for");
+    f(s.achieved_g, "achieved_g", "the print's simulated mass");
+    f(s.relative_error, "relative_error", "(achieved - target) / target");
+    f(s.cut_z_mm, "cut_z_mm", "height of the tuned cut");
+    f(s.wall_mm, "wall_mm", "wall of the hollow part");
+    f(s.material, "material", "the print's material");
+  }
+};
+
 class TargetMassTranslator final : public TuningTranslator {
  public:
   /// The goal's keys, declared once: read here, documented by doc().
@@ -95,12 +111,8 @@ class TargetMassTranslator final : public TuningTranslator {
     Tuner& tuner = network_.tuner(0);
     tuner.error();
     const double achieved = static_cast<const MassObservation&>(tuner.simulated()).grams;
-    context.result["mass"] = {{"target_g", grams_},
-                              {"achieved_g", achieved},
-                              {"relative_error", (achieved - grams_) / grams_},
-                              {"cut_z_mm", tuner.search_space().values().front()},
-                              {"wall_mm", wall_mm_},
-                              {"material", material_}};
+    context.report.add("mass", MassReport{grams_, achieved, (achieved - grams_) / grams_,
+                                          tuner.search_space().values().front(), wall_mm_, material_});
   }
 
   double grams_ = 10, wall_mm_ = 2;

@@ -159,23 +159,24 @@ nlohmann::json material_census(const MaterialPalette& palette, const std::vector
 }  // namespace
 
 FabricationReport fabricate(const ReducerTree& tree, const PrinterProfile& printer,
-                            const FabricationOptions& options, RunFolder& folder) {
+                            const FabricationOptions& options, RunFolder& folder,
+                            const std::vector<PrintSurface>& surfaces) {
   const auto start = std::chrono::steady_clock::now();
   FabricationReport report;
   Fabricator fabricator(tree, printer);
   const FabricationPlan& plan = fabricator.plan();
   const FabricationGrid& grid = plan.grid;
   const MaterialPalette& palette = tree.palette();
-  report.result = {
-      {"printer", printer.name},
-      {"grid", grid.size},
-      {"voxel_mm", grid.voxel_mm},
-      {"first_voxel_centre_mm", {grid.origin_mm.x(), grid.origin_mm.y(), grid.origin_mm.z()}},
-      {"voxels", plan.voxels}};
+  FabricationRecord& record = report.record;
+  record.printer = printer.name;
+  record.grid = grid.size;
+  record.voxel_mm = grid.voxel_mm;
+  record.first_voxel_centre_mm = {grid.origin_mm.x(), grid.origin_mm.y(), grid.origin_mm.z()};
+  record.voxels = plan.voxels;
   if (!options.any()) return report;  // nothing to write, so nothing to refuse
   fabricator.check(options.max_voxels, FabricationOptions::kMaxVoxelsOption);
 
-  const PrintWriterContext context{printer, palette, options, folder};  // the writers keep it
+  const PrintWriterContext context{printer, palette, options, folder, surfaces};  // the writers keep it
   Writers writers(context);
   std::vector<SliceSink*>& sinks = writers.sinks;
   const std::array<int, 3> stride = mesh_stride(grid, options.mesh_voxel_mm);
@@ -187,10 +188,10 @@ FabricationReport fabricate(const ReducerTree& tree, const PrinterProfile& print
   if (split && !ranks::root()) {
     for (SliceSink*& sink : sinks) sink = slab_sinks.emplace_back(std::make_unique<SlabSink>(*sink)).get();
   }
-  std::optional<MaterialSurfaces> surfaces;
+  std::optional<MaterialSurfaces> material_surfaces;
   if (writers.need_surfaces) {
-    surfaces.emplace(SurfaceSettings{stride, options.mesh_adaptivity, options.mesh_volume_tolerance, split});
-    sinks.push_back(&*surfaces);
+    material_surfaces.emplace(SurfaceSettings{stride, options.mesh_adaptivity, options.mesh_volume_tolerance, split});
+    sinks.push_back(&*material_surfaces);
   }
   fabricator.time_sample_rows(writers.need_surfaces);
   spdlog::info("fabricating for {}: {}", printer.name, plan.describe());
@@ -208,14 +209,16 @@ FabricationReport fabricate(const ReducerTree& tree, const PrinterProfile& print
     if (!ranks::root()) return report;  // rank 0 reports and writes the rest
   }
 
-  nlohmann::json materials = material_census(palette, voxels, grid, surfaces);
-  nlohmann::json files = nlohmann::json::object();
-  if (surfaces) report.result["mesh_voxel_mm"] = surfaces->mesh_grid().voxel_mm;
+  nlohmann::json materials = material_census(palette, voxels, grid, material_surfaces);
+  if (material_surfaces) record.mesh_voxel_mm = material_surfaces->mesh_grid().voxel_mm;
   const std::vector<Mesh> no_surfaces;
-  for (const auto& writer : writers.all) writer->finish(surfaces ? surfaces->meshes() : no_surfaces, {files, materials});
-  report.result["void_voxels"] = voxels[kVoid];
-  report.result["materials"] = materials;
-  report.result["files"] = files;
+  PrintFiles listed;
+  for (const auto& writer : writers.all)
+    writer->finish(material_surfaces ? material_surfaces->meshes() : no_surfaces, listed);
+  for (const auto& [material, entries] : listed.by_material().items()) materials[material].update(entries);
+  record.void_voxels = voxels[kVoid];
+  record.materials = std::move(materials);
+  record.files = listed.listed();
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   spdlog::info("fabricated {:.3g} voxels in {:.1f} s ({:.3g} voxels/s)", static_cast<double>(plan.voxels),
                report.seconds, static_cast<double>(plan.voxels) / std::max(report.seconds, 1e-9));

@@ -9,6 +9,7 @@
 ///   print/model.3mf                                ("3mf": one named, coloured object per material)
 ///   preview/render.png                             ("render": ray-traced picture of the print)
 
+#include <array>
 #include <cstdint>
 #include <initializer_list>
 #include <map>
@@ -21,6 +22,8 @@
 
 #include "core/options.h"
 #include "core/properties.h"
+#include "core/report.h"
+#include "fabrication/print_writer.h"
 #include "materials/printer_profile.h"
 #include "reducer/reducer_tree.h"
 #include "core/run_folder.h"
@@ -93,9 +96,35 @@ struct FabricationOptions {
   static constexpr const char* kMaxVoxelsOption = "output.max_voxels";
 };
 
+/// result.json "fabrication" (core/report.h): deterministic figures. The
+/// per-material entries and the files are the print writers' (each writes
+/// its own key), so their shape is theirs.
+struct FabricationRecord {
+  std::string printer;
+  std::array<int, 3> grid{};
+  std::array<double, 3> voxel_mm{};
+  std::array<double, 3> first_voxel_centre_mm{};
+  long long voxels = 0;
+  std::optional<std::array<double, 3>> mesh_voxel_mm;
+  std::optional<long long> void_voxels;
+  std::optional<nlohmann::json> materials, files;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.printer, "printer", "the printer profile's name");
+    f(s.grid, "grid", "print voxels along x, y, z");
+    f(s.voxel_mm, "voxel_mm", "print voxel edges (dpi and layer)");
+    f(s.first_voxel_centre_mm, "first_voxel_centre_mm", "centre of voxel (0, 0, 0)");
+    f(s.voxels, "voxels", "print voxels in the grid");
+    f(s.mesh_voxel_mm, "mesh_voxel_mm", "cell of the STL/3MF surfaces");
+    f(s.void_voxels, "void_voxels", "print voxels left empty inside the grid");
+    f(s.materials, "materials", "per material name: voxels, volume, and each writer's figures (STL volume, ...)");
+    f(s.files, "files", "per print writer, the files it wrote");
+  }
+};
+
 struct FabricationReport {
-  nlohmann::json result;  ///< deterministic: grid, voxels and volumes per material, files
-  double seconds = 0;     ///< wall time (for timing.json)
+  FabricationRecord record;
+  double seconds = 0;  ///< wall time (for timing.json)
 };
 
 /// Throws InputError when the plan exceeds options.max_voxels or the object
@@ -113,7 +142,8 @@ long long check_fabrication(const ReducerTree& tree, const PrinterProfile& print
 /// ranks' reports hold the grid only). Outputs are those of one process,
 /// byte for byte.
 FabricationReport fabricate(const ReducerTree& tree, const PrinterProfile& printer,
-                            const FabricationOptions& options, RunFolder& folder);
+                            const FabricationOptions& options, RunFolder& folder,
+                            const std::vector<PrintSurface>& surfaces = {});
 
 /// A material name made safe as a file name ("Vero Cyan/2" -> "Vero_Cyan_2").
 std::string material_file_name(const std::string& material);

@@ -381,33 +381,42 @@ namespace {
 class StlFiles final : public PrintWriter {
  public:
   StlFiles(const Properties& /*switch*/, const PrintWriterContext& context)
-      : palette_(context.palette), folder_(context.folder) {}
+      : palette_(context.palette), folder_(context.folder), surfaces_(context.surfaces) {}
   static TypeDoc doc() {
     return {"print/<material>.stl: one closed surface per material (binary STL, mm), as the paper sent "
             "to its printer: the iso-surface of the material's fraction in each mesh cell, at the level "
             "that makes the mesh's volume the material's voxel count (within 0.5 %), so that layers "
-            "thinner than a cell keep their volume. The caustics translators' print/surface.stl (the "
-            "tuned slab) follows the same switch.",
+            "thinner than a cell keep their volume. A surface the translator defines exactly (the caustics "
+            "translators' tuned slab) goes beside them as print/<name>.stl, print/surface.stl.",
             output_option_docs({"mesh_voxel_mm", "mesh_adaptivity"}),
             R"({"output": {"stl": true}})"};
   }
   bool needs_surfaces() const override { return true; }
-  void finish(const std::vector<Mesh>& surfaces, PrintFiles report) override {
-    nlohmann::json files = nlohmann::json::array();
+  void finish(const std::vector<Mesh>& surfaces, PrintFiles& report) override {
+    std::vector<std::string> files;
     for (size_t id = 1; id < surfaces.size(); ++id) {
       if (surfaces[id].triangles.empty()) continue;
       const std::string& name = palette_.name(static_cast<MaterialId>(id));
       const std::string stl = "print/" + material_file_name(name) + ".stl";
       write_stl(surfaces[id], folder_.path(stl));
-      report.materials[name]["stl"] = stl;
+      report.material_file(name, "stl", stl);
       files.push_back(stl);
     }
-    report.files["stl"] = files;
+    for (const PrintSurface& surface : surfaces_) {
+      const std::string stl = "print/" + surface.name + ".stl";
+      if (std::find(files.begin(), files.end(), stl) != files.end())
+        throw InputError(stl + ": a material's surface has the name of the translator's " + surface.name +
+                         " surface; rename the material in its library");
+      write_stl(surface.mesh, folder_.path(stl));
+      files.push_back(stl);
+    }
+    report.files("stl", files);
   }
 
  private:
   const MaterialPalette& palette_;
   RunFolder& folder_;
+  const std::vector<PrintSurface>& surfaces_;
 };
 
 }  // namespace

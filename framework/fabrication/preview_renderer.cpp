@@ -218,9 +218,9 @@ class RenderPreview final : public PrintWriter {
             R"({"output": {"render": true}})"};
   }
   bool needs_surfaces() const override { return true; }
-  void finish(const std::vector<Mesh>& surfaces, PrintFiles report) override {
+  void finish(const std::vector<Mesh>& surfaces, PrintFiles& report) override {
     render_preview(surfaces, palette_, options_, folder_.path(file_));
-    report.files["render"] = file_;
+    report.file("render", file_);
   }
 
  private:

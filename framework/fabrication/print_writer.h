@@ -17,6 +17,8 @@
 #include <nlohmann/json.hpp>
 
 #include "core/registry.h"
+#include "geometry/mesh.h"
+#include "materials/palette.h"
 #include "materials/printer_profile.h"
 #include "core/run_folder.h"
 
@@ -24,7 +26,15 @@ namespace spec2fab {
 
 class SliceSink;
 struct FabricationOptions;
-struct Mesh;
+
+/// A surface a translator defines exactly (a caustic slab's smooth top), in
+/// the print's coordinates: the writers of meshes write it beside the
+/// materials' surfaces, which come from print voxels and would terrace it —
+/// "stl" as print/<name>.stl, under the same switch.
+struct PrintSurface {
+  std::string name;
+  Mesh mesh;
+};
 
 /// What a writer is made with.
 struct PrintWriterContext {
@@ -32,12 +42,27 @@ struct PrintWriterContext {
   const MaterialPalette& palette;
   const FabricationOptions& options;
   RunFolder& folder;
+  const std::vector<PrintSurface>& surfaces;  ///< the translator's own, beside the materials'
 };
 
-/// What a writer reports into (result.json "fabrication").
-struct PrintFiles {
-  nlohmann::json& files;      ///< "files": its file names under its own keys
-  nlohmann::json& materials;  ///< "materials": per material name, its entry
+/// What the writers list in result.json "fabrication": each writer its files
+/// under its own keys in "files", and a material's own file in that
+/// material's entry.
+class PrintFiles {
+ public:
+  /// One file or folder under `key` ("3mf": "print/model.3mf").
+  void file(const std::string& key, const std::string& path) { files_[key] = path; }
+  /// Several under `key` ("stl": one per material).
+  void files(const std::string& key, const std::vector<std::string>& paths) { files_[key] = paths; }
+  /// `material`'s own file under `key` in its entry.
+  void material_file(const std::string& material, const std::string& key, const std::string& path) {
+    materials_[material][key] = path;
+  }
+  const nlohmann::json& listed() const { return files_; }
+  const nlohmann::json& by_material() const { return materials_; }
+
+ private:
+  nlohmann::json files_ = nlohmann::json::object(), materials_ = nlohmann::json::object();
 };
 
 class PrintWriter {
@@ -49,7 +74,7 @@ class PrintWriter {
   virtual bool needs_surfaces() const { return false; }
   /// After the stream: writes the files and lists them. `surfaces`
   /// (per material id) is empty unless some writer needs them.
-  virtual void finish(const std::vector<Mesh>& surfaces, PrintFiles report) = 0;
+  virtual void finish(const std::vector<Mesh>& surfaces, PrintFiles& report) = 0;
 };
 
 /// Properties: the writer's own switch's section (empty for a bool switch).

@@ -159,9 +159,9 @@ class SliceStackFiles final : public PrintWriter {
             R"({"output": {"slices": true}})"};
   }
   SliceSink* sink() override { return &writer_; }
-  void finish(const std::vector<Mesh>& /*surfaces*/, PrintFiles report) override {
-    report.files["slices"] = "print/slices/";
-    report.files["manifest"] = "print/slices/manifest.json";
+  void finish(const std::vector<Mesh>& /*surfaces*/, PrintFiles& report) override {
+    report.file("slices", "print/slices/");
+    report.file("manifest", "print/slices/manifest.json");
   }
 
  private:

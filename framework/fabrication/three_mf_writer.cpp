@@ -178,9 +178,9 @@ class ThreeMfFile final : public PrintWriter {
             R"({"output": {"3mf": true}})"};
   }
   bool needs_surfaces() const override { return true; }
-  void finish(const std::vector<Mesh>& surfaces, PrintFiles report) override {
+  void finish(const std::vector<Mesh>& surfaces, PrintFiles& report) override {
     write_three_mf(surfaces, palette_, folder_.path("print/model.3mf"));
-    report.files["3mf"] = "print/model.3mf";
+    report.file("3mf", "print/model.3mf");
   }
 
  private:

@@ -47,10 +47,11 @@ std::string file_text(const std::filesystem::path& file) {
 }
 
 /// What a checkpoint was made from: a resumed run must have the same.
-nlohmann::json run_identity(const Experiment& experiment, const nlohmann::json& result) {
-  return {{"spec2fab_version", result["spec2fab_version"]},
-          {"seed", result["seed"]},
-          {"inputs", result["inputs"]},
+nlohmann::json run_identity(const Experiment& experiment, const RunHeader& header) {
+  const nlohmann::json written = write_section(header);
+  return {{"spec2fab_version", written["spec2fab_version"]},
+          {"seed", written["seed"]},
+          {"inputs", written["inputs"]},
           {"experiment_text", file_text(experiment.file())}};
 }
 
@@ -75,34 +76,6 @@ void check_run_identity(RunFolder& folder, const nlohmann::json& identity) {
   folder.write_checkpoint("run.json", std::vector<std::uint8_t>(text.begin(), text.end()));
 }
 
-nlohmann::json describe_inputs(const Experiment& experiment) {
-  const Solid& solid = experiment.solid();
-  const Bounds& b = solid.bounds();
-  const PrinterProfile& printer = experiment.printer();
-  return {
-      {"experiment", experiment.file().string()},
-      {"geometry",
-       {{"mesh", experiment.geometry_spec().mesh.string()},
-        {"vertices", solid.mesh().vertices.size()},
-        {"triangles", solid.mesh().triangles.size()},
-        {"volume_mm3", solid.volume()},
-        {"surface_area_mm2", solid.mesh().surface_area()},
-        {"bounds_mm", {{b.lower.x(), b.lower.y(), b.lower.z()}, {b.upper.x(), b.upper.y(), b.upper.z()}}},
-        {"uv", to_string(solid.uv_source())},
-        // What `spec2fab export` needs to rebuild the same Solid.
-        {"scale_to_mm", experiment.geometry_spec().scale_to_mm},
-        {"uv_axis", experiment.geometry_spec().uv_axis},
-        {"field_voxel_mm", experiment.geometry_spec().field_voxel_mm}}},
-      {"materials", experiment.library().origin()},
-      {"printer",
-       {{"name", printer.name},
-        {"file", printer.origin},
-        {"resolution_dpi", printer.dpi},
-        {"layer_mm", printer.layer_mm},
-        {"model_materials", printer.model_materials}}},
-  };
-}
-
 }  // namespace
 
 std::filesystem::path run_experiment(const std::filesystem::path& file, const RunOptions& options) {
@@ -124,22 +97,19 @@ std::filesystem::path run_experiment(const std::filesystem::path& file, const Ru
 
   // result.json holds only what the inputs determine, so that a rerun with any
   // thread count is byte-identical; wall-clock times go to timing.json.
-  nlohmann::json result = {{"spec2fab_version", version()},
-                           {"experiment", experiment.name()},
-                           {"translator", experiment.translator()},
-                           {"seed", options.seed.value_or(experiment.seed())},
-                           {"inputs", describe_inputs(experiment)}};
+  RunReport report(RunHeader{version(), experiment.name(), experiment.translator(),
+                             options.seed.value_or(experiment.seed()), InputsRecord::of(experiment)});
   nlohmann::json timing = {{"threads", threads}};
-  check_run_identity(folder, run_identity(experiment, result));
+  check_run_identity(folder, run_identity(experiment, report.header()));
   FolderCheckpoint checkpoint(folder);
   // Only rank 0's folder keeps a checkpoint: the other ranks need not build one.
-  RunContext context{experiment, folder, threads, options.seed.value_or(experiment.seed()), result, &timing,
+  RunContext context{experiment, folder, threads, report.header().seed, report, &timing,
                      ranks::root() ? &checkpoint : nullptr};
   spdlog::info("running '{}' ({}) on {} thread(s)", experiment.name(), experiment.translator(), threads);
   folder.writing([&] {
     prepared.translator->run(context);
     folder.write_json("tree.json", prepared.translator->tree().to_json());
-    folder.write_json("result.json", result);
+    folder.write_json("result.json", report.to_json());
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     timing["wall_seconds"] = seconds;
     if (ranks::size() > 1) {

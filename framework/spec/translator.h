@@ -16,8 +16,9 @@
 #include <nlohmann/json.hpp>
 
 #include "core/registry.h"
-#include "spec/experiment.h"
 #include "core/run_folder.h"
+#include "spec/experiment.h"
+#include "spec/run_report.h"
 
 namespace spec2fab {
 
@@ -29,7 +30,7 @@ struct RunContext {
   RunFolder& folder;
   int threads = 1;
   std::uint64_t seed = 1;
-  nlohmann::json& result;  ///< result.json; the translator adds its own section(s)
+  RunReport& report;  ///< result.json: each part adds its own section, once
   /// timing.json (wall-clock figures, which would break result.json's
   /// byte-identity); null when nobody records timings.
   nlohmann::json* timing = nullptr;

@@ -60,51 +60,37 @@ std::vector<PropertyDoc> TreeOutputOptions::docs() {
   return docs;
 }
 
-void write_tree_outputs(ReducerTree& tree, const TreeOutputOptions& options,
-                        RunContext& context) {
+void write_tree_outputs(ReducerTree& tree, const TreeOutputOptions& options, RunContext& context,
+                        const std::vector<PrintSurface>& surfaces) {
   const MaterialCensus census = take_census(tree, options.census_voxel_mm);
-  nlohmann::json volumes = nlohmann::json::object();
+  CensusRecord record{census.voxel_mm, census.grid, {}};
   long long inside_voxels = 0;
   for (size_t id = 1; id < census.voxels.size(); ++id) inside_voxels += census.voxels[id];
   for (size_t id = 1; id < census.voxels.size(); ++id) {
     const auto material = static_cast<MaterialId>(id);
-    volumes[tree.palette().name(material)] = {
-        {"voxels", census.voxels[id]},
-        {"volume_mm3", census.volume_mm3(material)},
-        {"fraction", inside_voxels > 0 ? static_cast<double>(census.voxels[id]) /
-                                             static_cast<double>(inside_voxels)
-                                       : 0.0}};
+    record.materials[tree.palette().name(material)] = {
+        census.voxels[id], census.volume_mm3(material),
+        inside_voxels > 0 ? static_cast<double>(census.voxels[id]) / static_cast<double>(inside_voxels) : 0.0};
   }
-  context.result["tree"] = {{"nodes", tree.node_count()},
-                            {"parameters", tree.all_parameters().dimension()},
-                            {"free_parameters", tree.search_space().dimension()}};
-  context.result["material_census"] = {
-      {"voxel_mm", census.voxel_mm}, {"grid", census.grid}, {"materials", volumes}};
+  context.report.add("tree", TreeSummary{tree.node_count(), tree.all_parameters().dimension(),
+                                         tree.search_space().dimension()});
+  context.report.add("material_census", record);
   const Vec3 center = context.experiment.solid().bounds().center();
   static const char* names[] = {"section_yz.png", "section_xz.png", "section_xy.png"};
-  nlohmann::json previews = nlohmann::json::array();
+  std::vector<std::string> previews;
   for (int axis = 0; axis < 3; ++axis) {
     const std::string name = std::string("preview/") + names[axis];
-    write_cross_section_png(tree, axis, center[axis], options.section_pixels,
-                            context.folder.path(name));
+    write_cross_section_png(tree, axis, center[axis], options.section_pixels, context.folder.path(name));
     previews.push_back(name);
   }
+  // The cross-sections lead the previews, before the translator's.
+  std::vector<std::string>& all = context.report.files.previews;
+  all.insert(all.begin(), previews.begin(), previews.end());
   const FabricationReport print =
-      fabricate(tree, context.experiment.printer(), options.fabrication, context.folder);
-  context.result["fabrication"] = print.result;
+      fabricate(tree, context.experiment.printer(), options.fabrication, context.folder, surfaces);
+  context.report.add("fabrication", print.record);
   if (context.timing) (*context.timing)["fabrication_seconds"] = print.seconds;
-  nlohmann::json files = {{"tree", "tree.json"}, {"previews", previews}};
-  if (print.result.contains("files")) files["print"] = print.result["files"];
-  if (context.result.contains("files")) {
-    for (auto& [key, value] : context.result["files"].items()) {
-      if (key == "previews") {
-        for (const auto& p : value) files["previews"].push_back(p);
-      } else {
-        files[key] = value;
-      }
-    }
-  }
-  context.result["files"] = files;
+  context.report.files.print = print.record.files;
 }
 
 }  // namespace spec2fab

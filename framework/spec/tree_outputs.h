@@ -3,9 +3,13 @@
 /// material census and the tree's size in result.json, cross-section
 /// previews, and the print (fabrication/fabricate.h) with its files listed.
 
+#include <map>
 #include <optional>
+#include <string>
+#include <vector>
 
 #include "core/properties.h"
+#include "core/report.h"
 #include "fabrication/fabricate.h"
 #include "spec/translator.h"
 
@@ -42,7 +46,46 @@ struct TreeOutputOptions {
   static std::vector<PropertyDoc> docs();
 };
 
-void write_tree_outputs(ReducerTree& tree, const TreeOutputOptions& options,
-                        RunContext& context);
+/// result.json "tree".
+struct TreeSummary {
+  std::size_t nodes = 0, parameters = 0, free_parameters = 0;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.nodes, "nodes", "nodes of the reducer tree");
+    f(s.parameters, "parameters", "its parameters, fixed and free");
+    f(s.free_parameters, "free_parameters", "those the tuners tune");
+  }
+};
+
+/// One material's share of the census.
+struct MaterialVolume {
+  long long voxels = 0;
+  double volume_mm3 = 0, fraction = 0;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.voxels, "voxels", "census voxels of the material");
+    f(s.volume_mm3, "volume_mm3", "their volume");
+    f(s.fraction, "fraction", "share of the voxels inside the solid");
+  }
+};
+
+/// result.json "material_census" (reducer/census.h).
+struct CensusRecord {
+  double voxel_mm = 0;
+  std::array<int, 3> grid{};
+  std::map<std::string, MaterialVolume> materials;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.voxel_mm, "voxel_mm", "cubic voxel edge of the census (goal.census_voxel_mm)");
+    f(s.grid, "grid", "voxels along x, y, z over the solid's bounds");
+    f(s.materials, "materials", "per material name");
+  }
+};
+
+/// The cross-sections, the census, the tree's size and the print; `surfaces`
+/// are smooth surfaces the translator defined exactly, which the mesh
+/// writers write beside the materials' (fabrication/print_writer.h).
+void write_tree_outputs(ReducerTree& tree, const TreeOutputOptions& options, RunContext& context,
+                        const std::vector<PrintSurface>& surfaces = {});
 
 }  // namespace spec2fab

@@ -5,8 +5,18 @@
 
 namespace spec2fab {
 
-void write_tuning_outputs(const RunRecord& record, TunerNetwork& network, RunContext& context) {
-  context.result["tuning"] = record.to_json(network);
+void write_tuning_outputs(const RunRecord& record, TunerNetwork& network, RunContext& context,
+                          bool final_errors) {
+  TuningReport report = record.report(network);
+  if (final_errors) {
+    std::vector<TunerFinalError>& tuners = report.tuners.emplace();
+    for (size_t t = 0; t < network.size(); ++t) {
+      Tuner& tuner = network.tuner(t);
+      tuner.reset_target();
+      tuners.push_back({tuner.name(), tuner.error()});
+    }
+  }
+  context.report.add("tuning", report);
   context.folder.write_text("convergence.csv", record.convergence_csv(network));
   write_convergence_plot(record, network.size(), context.folder.path("preview/convergence.png"));
   if (context.timing) (*context.timing)["tuning_phase_seconds"] = record.phase_seconds;

@@ -8,6 +8,9 @@
 
 namespace spec2fab {
 
-void write_tuning_outputs(const RunRecord& record, TunerNetwork& network, RunContext& context);
+/// With `final_errors`, "tuning" also lists each tuner's error against its
+/// own goal (not a diffused target) at the end.
+void write_tuning_outputs(const RunRecord& record, TunerNetwork& network, RunContext& context,
+                          bool final_errors = false);
 
 }  // namespace spec2fab

@@ -32,11 +32,12 @@ void TuningTranslator::run(RunContext& context) {
       record = schedule_.run(network_, context.seed, context.checkpoint);
       context.tuner_runs_here += record.tuner_runs_here;
       tree_->evaluate();
-      write_tuning_outputs(record, network_, context);
+      write_tuning_outputs(record, network_, context, report_final_errors_);
     }
     report(record, context);
   }
-  write_tree_outputs(*tree_, outputs_, context);
+  write_tree_outputs(*tree_, outputs_, context, print_surfaces_);
+  after_print(context);
 }
 
 }  // namespace spec2fab

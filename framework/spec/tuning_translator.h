@@ -2,7 +2,7 @@
 /// The skeleton of every translator that tunes a reducer tree: it owns the
 /// tree, the tree outputs, the tuner network and the schedule, and runs
 ///
-///   prepare → schedule → tree evaluated → tuning record → report → tree outputs
+///   prepare → schedule → tree evaluated → tuning record → report → tree outputs → after_print
 ///
 /// A translator derived from it builds the tree (`set_tree`), adds tuners to
 /// `network_` and phases to `schedule_` in its constructor — from pieces such
@@ -39,13 +39,22 @@ class TuningTranslator : public Translator {
   /// chooses its parameters without them (the albedo lookup) and says so.
   virtual bool tunes() const { return network_.size() > 0; }
   /// After the schedule ran, the tree was evaluated and the tuning record
-  /// written: the translator's figures, previews and files.
+  /// written: the translator's figures (its section of the RunReport),
+  /// previews, and the surfaces it wants printed (print_surfaces_).
   virtual void report(const RunRecord& record, RunContext& context) = 0;
+  /// After the print was written: what checks the print's files (a
+  /// surface read back and traced).
+  virtual void after_print(RunContext& /*context*/) {}
 
   std::unique_ptr<ReducerTree> tree_;
   TreeOutputOptions outputs_;
   TunerNetwork network_;
   Schedule schedule_;
+  /// Surfaces the translator defines exactly, printed beside the materials'
+  /// (fabrication/print_writer.h); set in report().
+  std::vector<PrintSurface> print_surfaces_;
+  /// The tuning record lists each tuner's final error against its own goal.
+  bool report_final_errors_ = false;
 };
 
 }  // namespace spec2fab

@@ -22,6 +22,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/report.h"
+
 #include "core/registry.h"
 #include "core/run_cache.h"
 #include "core/search_space.h"
@@ -46,6 +48,14 @@ struct SimulatorInput {
   std::string meaning;
 };
 
+/// What Simulator::write_report wrote.
+struct SimulatorFiles {
+  std::vector<std::string> files;
+  /// Where the values are better read than from simulation.json's list of
+  /// them ("displacements.csv (nodes) and probes"); empty: listed there.
+  std::string values_in;
+};
+
 class Simulator {
  public:
   virtual ~Simulator() = default;
@@ -67,12 +77,12 @@ class Simulator {
   /// After simulate(subtree, out): writes what a person would look at into
   /// `folder` and returns the files written; by default the observation in
   /// its own form (Observation::write_files). A simulator with better outputs
-  /// (meshes, pictures, tables) overrides it, adds figures to `record`
-  /// (simulation.json) and, where its values are better read from its files,
-  /// sets record["values"] itself.
-  virtual std::vector<std::string> write_report(const Observation& out, const std::filesystem::path& folder,
-                                                nlohmann::json& /*record*/) const {
-    return out.write_files(folder);
+  /// (meshes, pictures, tables) overrides it, adds its figures to `record`
+  /// (simulation.json) as typed sections (core/report.h) and, where its
+  /// values are better read from its files, says where.
+  virtual SimulatorFiles write_report(const Observation& out, const std::filesystem::path& folder,
+                                      ReportSections& /*record*/) const {
+    return {out.write_files(folder), {}};
   }
 
   /// Whether simulate() reads the tree beyond `subtree`: a volumetric

@@ -397,38 +397,32 @@ RunRecord Schedule::run(TunerNetwork& network, std::uint64_t seed, PhaseCheckpoi
   return record;
 }
 
-nlohmann::json RunRecord::to_json(TunerNetwork& network) const {
-  nlohmann::json phases = nlohmann::json::array();
+TuningReport RunRecord::report(TunerNetwork& network) const {
+  TuningReport report;
   for (size_t p = 0; p < phase_names.size(); ++p) {
-    double initial = 0, final_error = 0;
-    long long evaluations = 0, runs_in_phase = 0;
+    PhaseTotals totals{phase_names[p], 0, 0, 0, 0};
     for (const TunerRun& run : runs) {
       if (run.phase != p) continue;
-      initial += run.summary.initial_error;
-      final_error += run.summary.final_error;
-      evaluations += run.summary.evaluations;
-      ++runs_in_phase;
+      totals.sum_initial_error += run.summary.initial_error;
+      totals.sum_final_error += run.summary.final_error;
+      totals.evaluations += run.summary.evaluations;
+      ++totals.tuner_runs;
     }
     // Phases that keep only their last sweep count every run and evaluation.
     if (p < phase_tuner_runs.size()) {
-      runs_in_phase = phase_tuner_runs[p];
-      evaluations = phase_evaluations[p];
+      totals.tuner_runs = phase_tuner_runs[p];
+      totals.evaluations = phase_evaluations[p];
     }
-    phases.push_back({{"name", phase_names[p]},
-                      {"tuner_runs", runs_in_phase},
-                      {"evaluations", evaluations},
-                      {"sum_initial_error", initial},
-                      {"sum_final_error", final_error}});
+    report.phases.push_back(std::move(totals));
   }
-  nlohmann::json tuners = nlohmann::json::array();
   for (const TunerRun& run : runs) {
     nlohmann::json entry = run.summary.to_json();
     entry["phase"] = phase_names[run.phase];
     entry["sweep"] = run.sweep;
     entry["tuner"] = network.tuner(run.tuner).name();
-    tuners.push_back(std::move(entry));
+    report.tuner_runs.push_back(std::move(entry));
   }
-  return {{"phases", phases}, {"tuner_runs", tuners}};
+  return report;
 }
 
 std::string RunRecord::convergence_csv(TunerNetwork& network) const {

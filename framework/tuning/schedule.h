@@ -21,6 +21,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/registry.h"
+#include "core/report.h"
 #include "tuning/tuner_network.h"
 
 namespace spec2fab {
@@ -170,6 +171,47 @@ struct TunerRun {
   Summary summary;
 };
 
+/// One phase's totals in result.json "tuning".
+struct PhaseTotals {
+  std::string name;
+  long long tuner_runs = 0, evaluations = 0;
+  double sum_initial_error = 0, sum_final_error = 0;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.name, "name", "the phase");
+    f(s.tuner_runs, "tuner_runs", "tuner runs made, recorded or not");
+    f(s.evaluations, "evaluations", "error evaluations spent");
+    f(s.sum_initial_error, "sum_initial_error", "its recorded runs' errors at their start, summed");
+    f(s.sum_final_error, "sum_final_error", "and at their end");
+  }
+};
+
+/// A tuner's error against its own goal after the whole schedule.
+struct TunerFinalError {
+  std::string name;
+  double final_error = 0;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.name, "name", "the tuner");
+    f(s.final_error, "final_error", "its error against its goal (not a diffused target) at the end");
+  }
+};
+
+/// result.json "tuning" (core/report.h), without wall times.
+struct TuningReport {
+  std::vector<PhaseTotals> phases;
+  /// Per recorded run: the optimizer's summary (its fields are the
+  /// optimizer's: Summary::to_json) with phase, sweep and tuner.
+  std::vector<nlohmann::json> tuner_runs;
+  std::optional<std::vector<TunerFinalError>> tuners;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.phases, "phases", "per phase of the schedule");
+    f(s.tuner_runs, "tuner_runs", "per recorded tuner run: the optimizer's summary, phase, sweep and tuner");
+    f(s.tuners, "tuners", "each tuner's final error (the tree translator)");
+  }
+};
+
 struct RunRecord {
   std::vector<std::string> phase_names;
   std::vector<TunerRun> runs;         ///< in schedule order (deterministic)
@@ -183,7 +225,7 @@ struct RunRecord {
   long long tuner_runs_here = 0;
 
   /// Per-run summaries and per-phase totals, without wall times.
-  nlohmann::json to_json(TunerNetwork& network) const;
+  TuningReport report(TunerNetwork& network) const;
   /// "phase,sweep,tuner,iteration,evaluations,error,best_error" rows.
   std::string convergence_csv(TunerNetwork& network) const;
 };

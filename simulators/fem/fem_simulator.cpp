@@ -20,6 +20,7 @@
 #include "fem/calculix_deck.h"
 #include "fem/elastic_solver.h"
 #include "fem/fem_picture.h"
+#include "fem/fem_record.h"
 #include "fem/fem_parts.h"
 #include "fem/fem_setup.h"
 #include "fem/interface_conformer.h"
@@ -153,8 +154,8 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
 
   std::string failure() const override { return failure_; }
 
-  std::vector<std::string> write_report(const Observation& observation, const std::filesystem::path& folder,
-                                        nlohmann::json& record) const override {
+  SimulatorFiles write_report(const Observation& observation, const std::filesystem::path& folder,
+                              ReportSections& record) const override {
     const auto& out = static_cast<const DisplacementsObservation&>(observation);
     const size_t probes = static_cast<size_t>(out.probe_count);
     std::vector<double> u(out.xyz_mm.begin() + static_cast<long>(3 * probes), out.xyz_mm.end());
@@ -175,54 +176,52 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
       write_vtu(folder / "fem.vtu", *mesh_, ids, names, u, out.von_mises_mpa);
     }
     write_deformation_picture(*mesh_, boundary_, u, folder / "deformation.png");
-    nlohmann::json probe_list = nlohmann::json::array();
+    std::vector<ProbeRecord> probe_list;
     for (size_t p = 0; p < probes; ++p) {
-      probe_list.push_back({{"point", {out.probe_rest_mm[3 * p], out.probe_rest_mm[3 * p + 1], out.probe_rest_mm[3 * p + 2]}},
-                            {"displacement_mm", {out.xyz_mm[3 * p], out.xyz_mm[3 * p + 1], out.xyz_mm[3 * p + 2]}}});
+      probe_list.push_back({{out.probe_rest_mm[3 * p], out.probe_rest_mm[3 * p + 1], out.probe_rest_mm[3 * p + 2]},
+                            {out.xyz_mm[3 * p], out.xyz_mm[3 * p + 1], out.xyz_mm[3 * p + 2]}});
     }
     double largest = 0;
     for (size_t v = 0; v < mesh_->nodes.size(); ++v) {
       largest = std::max(largest, Vec3(u[3 * v], u[3 * v + 1], u[3 * v + 2]).norm());
     }
-    record["probes"] = probe_list;
-    record["values"] = "displacements.csv (nodes) and probes";
-    record["mesh"] = {{"nodes", mesh_->nodes.size()},
-                      {"tets", mesh_->tets.size()},
-                      {"tets_plain_solid", meshed_->plain_tets},
-                      {"reused_from_an_earlier_setup", mesh_reused_},
-                      {"interfaces_followed", conform_.interfaces_cut},
-                      {"interfaces_as_tetgen_facets", meshed_->remeshed},
-                      {"interface_facets_merged", meshed_->plc.merged_facets},
-                      {"curved_interfaces_cut_in", meshed_->plc.interfaces_left_out},
-                      {"edges_split_after_tetgen", meshed_->cut_after.edges_split},
-                      {"nodes_snapped_after_tetgen", meshed_->cut_after.nodes_snapped},
-                      {"subtrees_elastically_uniform", conform_.subtrees_uniform},
-                      {"interfaces_moved_by_tuned_parameters", moving_interfaces_},
-                      {"free_dofs", solver_->free_dofs()},
-                      {"cholesky_factor_nonzeros", solver_->factor_nonzeros()},
-                      {"cholesky_factor_flops", solver_->factor_flops()},
-                      {"volume_mm3", mesh_->total_volume()}};
-    record["solve"] = {{"nonlinear", settings_.solve.nonlinear},
-                       {"newton_iterations", report_.newton_iterations},
-                       {"load_steps", report_.load_steps},
-                       {"factorizations", report_.factorizations},
-                       {"converged", report_.converged},
-                       {"relative_residual", report_.relative_residual},
-                       {"assembly_seconds", report_.assembly_seconds},
-                       {"factorization_seconds", report_.factorization_seconds},
-                       {"triangular_solve_seconds", report_.solve_seconds},
-                       {"linear_solver", to_string(settings_.linear_solver)},
-                       {"cg_iterations", report_.cg_iterations},
-                       {"multigrid_operator_complexity", solver_->multigrid_complexity()},
-                       {"ranks", solver_->solve_ranks()},
-                       {"max_displacement_mm", largest}};
-    record["stress"] = {{"von_mises_max_mpa", out.stress_max_mpa},
-                        {"von_mises_p99_mpa", out.stress_p99_mpa},
-                        {"per_tet", "fem.vtu (cell data von_mises_mpa)"}};
-    record["timing"] = {{"mesh_seconds", timings_.mesh},
-                        {"conform_seconds", timings_.conform},
-                        {"pattern_and_analysis_seconds", timings_.assemble_setup},
-                        {"solve_seconds", timings_.solve}};
+    record.add("probes", probe_list);
+    FemMeshRecord mesh;
+    mesh.nodes = mesh_->nodes.size();
+    mesh.tets = mesh_->tets.size();
+    mesh.tets_plain_solid = meshed_->plain_tets;
+    mesh.reused_from_an_earlier_setup = mesh_reused_;
+    mesh.interfaces_followed = conform_.interfaces_cut;
+    mesh.interfaces_as_tetgen_facets = meshed_->remeshed;
+    mesh.interface_facets_merged = meshed_->plc.merged_facets;
+    mesh.curved_interfaces_cut_in = meshed_->plc.interfaces_left_out;
+    mesh.edges_split_after_tetgen = meshed_->cut_after.edges_split;
+    mesh.nodes_snapped_after_tetgen = meshed_->cut_after.nodes_snapped;
+    mesh.subtrees_elastically_uniform = conform_.subtrees_uniform;
+    mesh.interfaces_moved_by_tuned_parameters = moving_interfaces_;
+    mesh.free_dofs = solver_->free_dofs();
+    mesh.cholesky_factor_nonzeros = solver_->factor_nonzeros();
+    mesh.cholesky_factor_flops = solver_->factor_flops();
+    mesh.volume_mm3 = mesh_->total_volume();
+    record.add("mesh", mesh);
+    FemSolveRecord solve;
+    solve.nonlinear = settings_.solve.nonlinear;
+    solve.newton_iterations = report_.newton_iterations;
+    solve.load_steps = report_.load_steps;
+    solve.factorizations = report_.factorizations;
+    solve.converged = report_.converged;
+    solve.relative_residual = report_.relative_residual;
+    solve.assembly_seconds = report_.assembly_seconds;
+    solve.factorization_seconds = report_.factorization_seconds;
+    solve.triangular_solve_seconds = report_.solve_seconds;
+    solve.linear_solver = to_string(settings_.linear_solver);
+    solve.cg_iterations = report_.cg_iterations;
+    solve.multigrid_operator_complexity = solver_->multigrid_complexity();
+    solve.ranks = solver_->solve_ranks();
+    solve.max_displacement_mm = largest;
+    record.add("solve", solve);
+    record.add("stress", FemStressRecord{out.stress_max_mpa, out.stress_p99_mpa});
+    record.add("timing", FemTimingRecord{timings_.mesh, timings_.conform, timings_.assemble_setup, timings_.solve});
     std::vector<std::string> files{"displacements.csv", "deformed.stl", "deformation.png", "fem.vtu"};
     if (settings_.write_calculix_deck) {
       std::vector<double> youngs(mesh_->tets.size(), 0.0), poisson(mesh_->tets.size(), 0.0);
@@ -236,7 +235,7 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
                           settings_.solve.load_steps, folder / "calculix.inp");
       files.push_back("calculix.inp");
     }
-    return files;
+    return {files, "displacements.csv (nodes) and probes"};
   }
 
   static TypeDoc doc() {

@@ -6,6 +6,7 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <array>
 #include <cstdint>
@@ -581,18 +582,38 @@ TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
                      "export {dir}/run --printer " + printer() + " --out {dir}/out", expected});
   };
   const std::string tree = kLayered;
-  const std::string result = R"({"inputs": {"geometry": {"mesh": ")" + sphere() + R"("}, "materials": ")" + library() +
-                             R"("}})";
+  // A run's manifest as `run` writes it (spec/run_report.h), every field present.
+  const auto manifest = [&](const std::function<void(nlohmann::json&)>& change) {
+    nlohmann::json inputs = {
+        {"experiment", "e.json"},
+        {"geometry",
+         {{"mesh", sphere()}, {"vertices", 8}, {"triangles", 12}, {"volume_mm3", 1.0}, {"surface_area_mm2", 6.0},
+          {"bounds_mm", {{0, 0, 0}, {1, 1, 1}}}, {"uv", "mesh"}, {"scale_to_mm", 1.0}, {"uv_axis", 2},
+          {"field_voxel_mm", 0.0}}},
+        {"materials", library()},
+        {"printer",
+         {{"name", "p"}, {"file", "p.json"}, {"resolution_dpi", {600, 600}}, {"layer_mm", 0.03},
+          {"model_materials", nlohmann::json::array()}}}};
+    change(inputs);
+    return nlohmann::json{{"inputs", inputs}}.dump();
+  };
+  const std::string result = manifest([](nlohmann::json&) {});
   export_case("no tree.json", {{"result.json", result}}, "tree.json: file not found");
   export_case("no result.json", {{"tree.json", tree}}, "result.json: file not found");
   export_case("result.json malformed", {{"tree.json", tree}, {"result.json", "{"}}, "malformed JSON");
-  export_case("result.json without the mesh", {{"tree.json", tree}, {"result.json", R"({"inputs": {}})"}},
+  export_case("result.json with an empty manifest", {{"tree.json", tree}, {"result.json", R"({"inputs": {}})"}},
+              "/inputs/experiment: missing required key");
+  export_case("result.json without the mesh",
+              {{"tree.json", tree}, {"result.json", manifest([](nlohmann::json& inputs) { inputs.erase("geometry"); })}},
               "/inputs/geometry: missing required key");
   export_case("a string where the scale belongs",
               {{"tree.json", tree},
-               {"result.json", R"({"inputs": {"geometry": {"mesh": ")" + sphere() +
-                                   R"(", "scale_to_mm": "big"}, "materials": ")" + library() + R"("}})"}},
-              "scale_to_mm");
+               {"result.json", manifest([](nlohmann::json& inputs) { inputs["geometry"]["scale_to_mm"] = "big"; })}},
+              "/inputs/geometry/scale_to_mm: expected a number");
+  export_case("a manifest without its uv axis",
+              {{"tree.json", tree},
+               {"result.json", manifest([](nlohmann::json& inputs) { inputs["geometry"].erase("uv_axis"); })}},
+              "/inputs/geometry/uv_axis: missing required key");
   export_case("tree.json malformed", {{"tree.json", "{\"type\": "}, {"result.json", result}}, "malformed JSON");
   export_case("tree.json names an unknown node", {{"tree.json", R"({"type": "nod"})"}, {"result.json", result}},
               "unknown node 'nod'");

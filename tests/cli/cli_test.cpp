@@ -208,6 +208,19 @@ TEST_F(Cli, PartsReferenceInDocsIsCurrent) {
       << "docs/parts.md is stale: regenerate it with `build/spec2fab list --markdown > docs/parts.md`";
 }
 
+// docs/run-report.md's table of result.json's shared sections is the
+// declarations', regenerated on a copy.
+TEST_F(Cli, RunReportTableIsCurrent) {
+  const fs::path original = kDatasets / "../docs/run-report.md";
+  const fs::path copy = dir_ / "run-report.md";
+  fs::copy_file(original, copy);
+  const Result r = run_spec2fab("list --update-doc " + copy.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_THAT(r.out, HasSubstr(": current"))
+      << "docs/run-report.md is stale: `build/spec2fab list --update-doc docs/run-report.md`";
+  EXPECT_THAT(read(copy), HasSubstr("| `inputs.geometry.scale_to_mm` | number |"));
+}
+
 // The option tables of docs/experiment-format.md are the code's, regenerated
 // on a copy: nothing changes.
 TEST_F(Cli, OptionTablesInExperimentFormatAreCurrent) {
@@ -724,6 +737,10 @@ TEST_F(Cli, SmoothCausticsTunesTheSurfaceAndReportsImageErrors) {
   // a 31 × 31 top grid, two wall triangles and one bottom fan triangle per
   // rim edge.
   EXPECT_EQ(caustics["surface_stl"]["triangles"], 2 * 30 * 30 + 3 * 4 * 30);
+  // The print writer "stl" wrote it beside the material's and lists it.
+  const nlohmann::json& stls = result["fabrication"]["files"]["stl"];
+  EXPECT_NE(std::find(stls.begin(), stls.end(), "print/surface.stl"), stls.end()) << stls;
+  EXPECT_EQ(result["files"]["print"]["stl"], stls);
   EXPECT_EQ(caustics["start"]["method"], "optimal transport");
   expect_admesh_clean(dir_ / "run/print/surface.stl");
   // An independent tracer (tools/caustic_check) sees the print cast the
@@ -834,8 +851,8 @@ TEST_F(Cli, NoStlWritesNoSurfaceStlEither) {
   EXPECT_FALSE(fs::exists(dir_ / "run/print/surface.stl"));
   EXPECT_FALSE(fs::exists(dir_ / "run/preview/surface_stl_traced.png"));
   const auto result = nlohmann::json::parse(read(dir_ / "run" / "result.json"));
-  EXPECT_EQ(result["caustics"]["surface_stl"], "not written (output.stl is false)");
-  EXPECT_FALSE(result["files"].contains("surface"));
+  EXPECT_FALSE(result["caustics"].contains("surface_stl"));
+  EXPECT_FALSE(result["files"].contains("print"));
 }
 
 TEST_F(Cli, CausticCheckSeesAFlatBoardPassTheBeamUnchanged) {

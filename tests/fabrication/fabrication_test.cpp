@@ -154,7 +154,7 @@ class Fabricate : public ::testing::Test {
     options.progress = false;
     options.render_pixels = 128;
     report_ =
-        new nlohmann::json(fabricate(*fixture_->tree, fixture_->printer, options, folder).result);
+        new nlohmann::json(write_section(fabricate(*fixture_->tree, fixture_->printer, options, folder).record));
     folder.commit();
   }
   static void TearDownTestSuite() {

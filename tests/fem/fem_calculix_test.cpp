@@ -115,8 +115,10 @@ TEST_F(FemCalculix, ElasticBookReferenceAssignmentAgreesTo1e5) {
 
   const fs::path folder = fs::temp_directory_path() / ("spec2fab_ccx_book_" + std::to_string(::getpid()));
   fs::create_directories(folder);
+  ReportSections sections;
+  fem->write_report(*out, folder, sections);
   nlohmann::json record;
-  fem->write_report(*out, folder, record);
+  sections.write_into(record);
   const size_t nodes = record["mesh"]["nodes"].get<size_t>();
   const std::string command =
       "cd '" + folder.string() + "' && '" + find_calculix().string() + "' -i calculix > ccx.log 2>&1";

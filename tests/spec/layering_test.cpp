@@ -123,5 +123,30 @@ TEST(Layering, TranslatorsComposeTypedPartsNotJsonOrCasts) {
   EXPECT_GE(files, 15) << "the translators' sources were not found";
 }
 
+// result.json and simulation.json are built from typed sections, each added
+// once (core/report.h): no translator, no part of the run and no simulator's
+// report writes into a shared JSON object it was handed.
+TEST(Layering, ReportsAreTypedSectionsNotASharedJson) {
+  const fs::path root = fs::path(SPEC2FAB_DATASETS_DIR) / "..";
+  std::vector<fs::path> files;
+  for (const char* folder : {"translators", "framework/spec", "simulators"})
+    for (const auto& entry : fs::recursive_directory_iterator(root / folder))
+      if (entry.is_regular_file() && (entry.path().extension() == ".h" || entry.path().extension() == ".cpp"))
+        files.push_back(entry.path());
+  files.push_back(root / "framework/tuning/parts.h");
+  files.push_back(root / "framework/fabrication/print_writer.h");
+  for (const fs::path& file : files) {
+    std::ifstream in(file);
+    int number = 0;
+    for (std::string line; std::getline(in, line);) {
+      ++number;
+      for (size_t at = line.find("nlohmann::json&"); at != std::string::npos; at = line.find("nlohmann::json&", at + 1))
+        EXPECT_TRUE(at >= 6 && line.compare(at - 6, 6, "const ") == 0)
+            << fs::relative(file, root).string() << ":" << number << ": " << line;
+    }
+  }
+  EXPECT_GE(files.size(), 60u) << "the sources were not found";
+}
+
 }  // namespace
 }  // namespace spec2fab

@@ -276,7 +276,7 @@ TEST(Schedule, LaterPhaseSeesWhatAnEarlierPhaseFixed) {
   EXPECT_EQ(record.runs[1].summary.message, "no free parameters");  // tuner 0, fixed by phase 1
   EXPECT_EQ(record.runs[2].summary.final_error, 0.0);
   EXPECT_THAT(record.convergence_csv(network), HasSubstr("phase,sweep,tuner,iteration,evaluations,error,best_error\n"));
-  const nlohmann::json json = record.to_json(network);
+  const nlohmann::json json = write_section(record.report(network));
   EXPECT_EQ(json["phases"].size(), 2u);
   Phase parallel_diffusion;
   parallel_diffusion.mode = Phase::Mode::parallel;
@@ -340,7 +340,7 @@ TEST(Schedule, NeighbourSwapsExchangeTargetsAndValuesUntilTheEnergyIsLowest) {
   // their own optimizers back and no neighbour moves outside the phase.
   EXPECT_EQ(record.runs.size(), size_t(n));
   EXPECT_EQ(record.phase_tuner_runs, std::vector<long long>{30 * n});
-  EXPECT_EQ(record.to_json(network)["phases"][0]["tuner_runs"], 30 * n);
+  EXPECT_EQ(record.report(network).phases[0].tuner_runs, 30 * n);
   EXPECT_EQ(network.tuner(0).optimizer().name(), "exhaustive");
   EXPECT_FALSE(network.tuner(0).problem().has(Capability::neighbour_moves));
 }

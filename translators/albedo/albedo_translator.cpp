@@ -31,6 +31,24 @@
 namespace spec2fab {
 namespace {
 
+/// result.json "albedo": the texture's figures, the nearest-stack baseline
+/// error diffusion is measured against, and the lookup's cost.
+struct AlbedoReport {
+  TextureReport texture;
+  DeltaEByGamut delta_e00_nearest_only;
+  double low_pass_delta_e00_nearest_only = 0;
+  std::optional<LookupEstimate> lookup;
+  Rgb achieved_mean_linear_rgb{0, 0, 0};
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.texture, "", "the texture");
+    f(s.delta_e00_nearest_only, "delta_e00_nearest_only", "ΔE00 with each column at its nearest stack");
+    f(s.low_pass_delta_e00_nearest_only, "low_pass_delta_e00_nearest_only", "and after the low-pass");
+    f(s.lookup, "lookup", "what the lookup cost (method lookup)");
+    f(s.achieved_mean_linear_rgb, "achieved_mean_linear_rgb", "the achieved colours' mean");
+  }
+};
+
 class AlbedoTranslator final : public TuningTranslator {
  public:
   /// Its own goal key; the texture piece declares the rest.
@@ -108,11 +126,10 @@ class AlbedoTranslator final : public TuningTranslator {
 
   void prepare(RunContext& context) override {
     if (!texture_.lookup()) return;
-    const nlohmann::json estimate = texture_.lookup_estimate();
+    const LookupEstimate estimate = texture_.lookup_estimate();
     spdlog::info("texture: {} x {} columns ({:.3g}) over {} printable stacks: ~{:.1f} s, ~{:.0f} MB",
-                 texture_.columns()[0], texture_.columns()[1], estimate["columns"].get<double>(),
-                 estimate["printable_stacks"].get<size_t>(), estimate["seconds"].get<double>(),
-                 estimate["megabytes"].get<double>());
+                 texture_.columns()[0], texture_.columns()[1], static_cast<double>(estimate.columns),
+                 estimate.printable_stacks, estimate.seconds, estimate.megabytes);
     const auto began = std::chrono::steady_clock::now();
     stacks_ = texture_.choose_stacks(texture_.diffusion());
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
@@ -132,22 +149,22 @@ class AlbedoTranslator final : public TuningTranslator {
       nearest = texture_.diffusion() ? texture_.nearest_only(network_) : achieved;
       tree_->evaluate();  // nearest_only moved the parameters and set them back
     }
-    nlohmann::json report = texture_.report(achieved);
-    const nlohmann::json baseline = texture_.report(nearest);
-    report["delta_e00_nearest_only"] = baseline["delta_e00"];
-    report["low_pass_delta_e00_nearest_only"] = baseline["low_pass_delta_e00"];
-    if (texture_.lookup()) report["lookup"] = texture_.lookup_estimate();
-    Rgb mean{0, 0, 0};
+    AlbedoReport report;
+    report.texture = texture_.report(achieved);
+    const TextureReport baseline = texture_.report(nearest);
+    report.delta_e00_nearest_only = baseline.delta_e00;
+    report.low_pass_delta_e00_nearest_only = baseline.low_pass_delta_e00;
+    if (texture_.lookup()) report.lookup = texture_.lookup_estimate();
     for (const Rgb& c : achieved)
-      for (int k = 0; k < 3; ++k) mean[k] += c[k] / static_cast<double>(achieved.size());
-    report["achieved_mean_linear_rgb"] = mean;
-    context.result["albedo"] = report;
+      for (int k = 0; k < 3; ++k) report.achieved_mean_linear_rgb[k] += c[k] / static_cast<double>(achieved.size());
+    context.report.add("albedo", report);
     texture_.write_preview({&texture_.image().pixels, &achieved, &nearest},
                            context.folder.path("preview/goal_vs_achieved.png"));
-    context.result["files"] = {{"previews", {"preview/goal_vs_achieved.png"}}};
-    if (!texture_.lookup()) context.result["files"]["previews"].push_back("preview/convergence.png");
+    std::vector<std::string>& previews = context.report.files.previews;
+    previews.push_back("preview/goal_vs_achieved.png");
+    if (!texture_.lookup()) previews.push_back("preview/convergence.png");
     write_predicted_look(achieved, context.folder.path("preview/render.png"));
-    context.result["files"]["previews"].push_back("preview/render.png");
+    previews.push_back("preview/render.png");
   }
 
   /// The surface in each point's predicted colour (the simulated albedo of

@@ -100,19 +100,18 @@ std::unique_ptr<GoalFor<ImageObservation>> CausticGoalSettings::image_goal(const
   }
 }
 
-nlohmann::json CausticGoalSettings::image_report(std::span<const double> achieved, std::span<const double> initial,
-                                                 const ImageObservation& goal) const {
-  nlohmann::json report = caustic_image_errors(achieved, goal);
-  const nlohmann::json at_start = caustic_image_errors(initial, goal);
-  report["initial_rmse"] = at_start["rmse"];
-  report["initial_ssim"] = at_start["ssim"];
-  report["initial_psnr_db"] = at_start["psnr_db"];
-  report["image_size"] = image;
-  report["refractive_index"] = refractive_index;
-  report["aperture"] = aperture;
-  report["receiver_mm"] = receiver_mm;
-  report["distance_mm"] = distance_mm;
-  return report;
+CausticImageReport CausticGoalSettings::image_report(std::span<const double> achieved, std::span<const double> initial,
+                                                     const ImageObservation& goal) const {
+  const CausticImageErrors at_start = caustic_image_errors(initial, goal);
+  return {caustic_image_errors(achieved, goal),
+          at_start.rmse,
+          at_start.ssim,
+          at_start.psnr_db,
+          image,
+          refractive_index,
+          aperture,
+          receiver_mm,
+          distance_mm};
 }
 
 namespace {
@@ -134,7 +133,7 @@ void for_each_control_pair(const std::array<int, 2>& control, const Bounds& foot
 
 }  // namespace
 
-nlohmann::json CausticSurfaceSettings::limit_slopes(Tuner& tuner, const Bounds& footprint) const {
+SlopeLimitReport CausticSurfaceSettings::limit_slopes(Tuner& tuner, const Bounds& footprint) const {
   std::vector<double> c = tuner.search_space().values();
   if (c.size() != static_cast<size_t>(control[0]) * static_cast<size_t>(control[1]))
     throw std::logic_error("limit_slopes: the tuner's parameters are not the surface's control heights");
@@ -175,12 +174,7 @@ nlohmann::json CausticSurfaceSettings::limit_slopes(Tuner& tuner, const Bounds& 
     largest = std::max(largest, std::abs(c[k] - before[k]));
   }
   if (moved > 0) tuner.set_values(c);
-  return {{"max_slope", max_slope},
-          {"steepest_control_slope_before", steepest(before)},
-          {"steepest_control_slope", steepest(c)},
-          {"controls_moved", moved},
-          {"largest_move_mm", largest},
-          {"sweeps", sweeps}};
+  return {max_slope, steepest(before), steepest(c), moved, largest, sweeps};
 }
 
 std::function<double(std::span<const double>, std::span<double>)> CausticSurfaceSettings::slope_penalty(
@@ -223,21 +217,40 @@ NodePtr CausticSurfaceSettings::node(const std::string& axis, const std::array<d
   return make_bspline(std::move(o));
 }
 
-SurfaceStl write_caustic_surface_stl(const CausticSlabConfig& slab, std::array<int, 2> print_vertices,
-                                     const HeightSurface& surface, std::span<const double> simulated,
-                                     const ImageObservation& goal, const std::function<void(Mesh&)>& to_print,
-                                     const GridField* exit_filter, RunFolder& folder) {
+namespace {
+
+/// The simulator's setup for the file: its own vertices, traced with rays.
+CausticSetup print_setup(const CausticSlabConfig& slab, std::array<int, 2> print_vertices) {
   CausticSetup setup = slab.setup;
   setup.vertices_x = print_vertices[0];
   setup.vertices_y = print_vertices[1];
   setup.estimator = CausticSetup::Estimator::rays;  // the file as it is: facets, walls and all
   setup.rays_x = std::max(setup.rays_x, 8 * setup.image_width);
   setup.rays_y = std::max(setup.rays_y, 8 * setup.image_height);
-  Mesh mesh = caustic_slab_mesh(setup, surface, slab.origin_mm);
+  return setup;
+}
+
+const char* const kSurfaceStl = "print/surface.stl";
+
+}  // namespace
+
+PrintSurface caustic_print_surface(const CausticSlabConfig& slab, std::array<int, 2> print_vertices,
+                                   const HeightSurface& surface, const std::function<void(Mesh&)>& to_print) {
+  Mesh mesh = caustic_slab_mesh(print_setup(slab, print_vertices), surface, slab.origin_mm);
   if (to_print) to_print(mesh);
-  const std::filesystem::path file = folder.path("print/surface.stl");
-  write_stl(mesh, file);
-  Mesh loaded = load_mesh(file);
+  return {"surface", std::move(mesh)};
+}
+
+// path("print"), not path(kSurfaceStl), which would make the folder print/.
+bool surface_stl_written(RunFolder& folder) { return std::filesystem::exists(folder.path("print") / "surface.stl"); }
+
+SurfaceStlReport check_caustic_surface_stl(const CausticSlabConfig& slab, std::array<int, 2> print_vertices,
+                                           const HeightSurface& surface, const Mesh& printed,
+                                           std::span<const double> simulated, const ImageObservation& goal,
+                                           const std::function<void(Mesh&)>& to_print,
+                                           const GridField* exit_filter, RunFolder& folder) {
+  CausticSetup setup = print_setup(slab, print_vertices);
+  Mesh loaded = load_mesh(folder.path(kSurfaceStl));
   if (to_print) to_print(loaded);  // back to the subtree's frame
   const Eigen::Vector3d offset = slab_offset(slab.setup, slab.origin_mm);
   // The file holds the surface: every vertex above the bottom lies on it
@@ -254,18 +267,17 @@ SurfaceStl write_caustic_surface_stl(const CausticSlabConfig& slab, std::array<i
   CausticTracer tracer(setup, std::move(loaded.vertices), std::move(loaded.triangles));
   std::vector<double> traced(simulated.size());
   tracer.render(traced);
-  write_caustic_panels({goal.pixels, traced}, goal.width, goal.height, folder.path("preview/surface_stl_traced.png"));
-  return {{{"file", "print/surface.stl"},
-           {"preview", "preview/surface_stl_traced.png"},
-           {"triangles", mesh.triangles.size()},
-           {"largest_height_error_mm", height_error},
-           {"traced_relative_rmse_vs_simulated", rms_difference(traced, simulated) / root_mean_square(simulated)},
-           {"traced", caustic_image_errors(traced, goal)}},
-          mesh.bounds()};
+  SurfaceStlReport report;
+  write_caustic_panels({goal.pixels, traced}, goal.width, goal.height, folder.path(report.preview));
+  report.triangles = printed.triangles.size();
+  report.largest_height_error_mm = height_error;
+  report.traced_relative_rmse_vs_simulated = rms_difference(traced, simulated) / root_mean_square(simulated);
+  report.traced = caustic_image_errors(traced, goal);
+  return report;
 }
 
-nlohmann::json start_caustic_from_transport(Tuner& tuner, const CausticSlabConfig& slab, const HeightSurface& surface,
-                                            nlohmann::json* timing) {
+TransportStartReport start_caustic_from_transport(Tuner& tuner, const CausticSlabConfig& slab,
+                                                  const HeightSurface& surface, nlohmann::json* timing) {
   const auto& goal = static_cast<const ImageObservation&>(tuner.goal().target());
   const std::vector<double> values = tuner.search_space().values();
   const double mean_height =
@@ -279,14 +291,9 @@ nlohmann::json start_caustic_from_transport(Tuner& tuner, const CausticSlabConfi
                clamped ? fmt::format("; {} control points held at their bounds", clamped) : std::string());
   if (timing)
     (*timing)["start_seconds"] = {{"transport", start.transport_seconds}, {"integration", start.integration_seconds}};
-  return {{"method", "optimal transport"},
-          {"lit_pixels", start.sites},
-          {"newton_steps", start.newton_steps},
-          {"worst_cell_mass_error", start.worst_mass_error},
-          {"relief_mm", start.relief_mm},
-          {"largest_slope", start.largest_slope},
-          {"integration_rms_slope_error", start.integration_rms_slope_error},
-          {"controls_at_bounds", clamped}};
+  return {"optimal transport",        start.sites,         start.newton_steps,
+          start.worst_mass_error,     start.relief_mm,     start.largest_slope,
+          start.integration_rms_slope_error, clamped};
 }
 
 std::string optimizer_label(const nlohmann::json& optimizer) {
@@ -334,18 +341,15 @@ void write_height_map(std::span<const double> heights, int nx, int ny, const std
   write_image(file, coloured);
 }
 
-nlohmann::json caustic_image_errors(std::span<const double> image, const ImageObservation& goal) {
+CausticImageErrors caustic_image_errors(std::span<const double> image, const ImageObservation& goal) {
   const double rmse = rms_difference(image, goal.pixels);
   // The goal puts all the slab's light on the receiver: what the image lacks
   // of it fell outside (or was reflected), and the rmse already pays for it.
   const double cast = std::accumulate(image.begin(), image.end(), 0.0);
   const double asked = std::accumulate(goal.pixels.begin(), goal.pixels.end(), 0.0);
   const double psnr = image_psnr(image, goal.pixels);
-  return {{"rmse", rmse},
-          {"relative_rmse", rmse / root_mean_square(goal.pixels)},
-          {"ssim", image_ssim(image, goal.pixels, goal.width, goal.height)},
-          {"psnr_db", std::isfinite(psnr) ? nlohmann::json(psnr) : nlohmann::json("inf")},
-          {"light_off_receiver", asked > 0 ? 1 - cast / asked : 0.0}};
+  return {rmse, rmse / root_mean_square(goal.pixels), image_ssim(image, goal.pixels, goal.width, goal.height),
+          std::isfinite(psnr) ? nlohmann::json(psnr) : nlohmann::json("inf"), asked > 0 ? 1 - cast / asked : 0.0};
 }
 
 }  // namespace spec2fab

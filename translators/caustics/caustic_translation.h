@@ -18,6 +18,7 @@
 
 #include "core/options.h"
 #include "core/registry.h"
+#include "core/report.h"
 #include "fabrication/fabricate.h"
 #include "geometry/mesh.h"
 #include "reducer/node.h"
@@ -33,6 +34,113 @@ class Tuner;
 class Properties;
 class RunFolder;
 struct GridField;
+
+/// An image's errors against the goal (SSIM and PSNR with the goal's peak as
+/// their range).
+struct CausticImageErrors {
+  double rmse = 0, relative_rmse = 0, ssim = 0;
+  nlohmann::json psnr_db;  ///< a number, or "inf" for an image equal to the goal
+  double light_off_receiver = 0;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.rmse, "rmse", "root mean square of image minus goal (irradiance)");
+    f(s.relative_rmse, "relative_rmse", "that over the goal's root mean square");
+    f(s.ssim, "ssim", "structural similarity to the goal");
+    f(s.psnr_db, "psnr_db", "peak signal-to-noise ratio, or \"inf\"");
+    f(s.light_off_receiver, "light_off_receiver", "share of the slab's light that missed the receiver");
+  }
+};
+
+/// result.json "caustics": the achieved image's errors, the start's, and
+/// the receiver's setup (CausticGoalSettings::image_report).
+struct CausticImageReport {
+  CausticImageErrors achieved;
+  double initial_rmse = 0, initial_ssim = 0;
+  nlohmann::json initial_psnr_db;
+  std::array<int, 2> image_size{};
+  double refractive_index = 0;
+  std::string aperture;
+  std::array<double, 2> receiver_mm{};
+  double distance_mm = 0;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.achieved, "", "the achieved image");
+    f(s.initial_rmse, "initial_rmse", "rmse at the start");
+    f(s.initial_ssim, "initial_ssim", "ssim at the start");
+    f(s.initial_psnr_db, "initial_psnr_db", "psnr_db at the start");
+    f(s.image_size, "image_size", "simulated image, width and height");
+    f(s.refractive_index, "refractive_index", "of the slab");
+    f(s.aperture, "aperture", "where the light comes through");
+    f(s.receiver_mm, "receiver_mm", "receiver extent");
+    f(s.distance_mm, "distance_mm", "receiver below the slab's bottom");
+  }
+};
+
+/// What holding the surface to its slope limit changed.
+struct SlopeLimitReport {
+  double max_slope = 0, steepest_control_slope_before = 0, steepest_control_slope = 0;
+  int controls_moved = 0;
+  double largest_move_mm = 0;
+  int sweeps = 0;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.max_slope, "max_slope", "the limit (goal.max_slope)");
+    f(s.steepest_control_slope_before, "steepest_control_slope_before", "steepest slope between neighbouring controls before");
+    f(s.steepest_control_slope, "steepest_control_slope", "and after");
+    f(s.controls_moved, "controls_moved", "control heights moved");
+    f(s.largest_move_mm, "largest_move_mm", "the largest move");
+    f(s.sweeps, "sweeps", "projection sweeps it took");
+  }
+};
+
+/// The limit held at the start and after tuning.
+struct SlopeLimits {
+  std::optional<SlopeLimitReport> at_start, at_end;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.at_start, "start", "before tuning");
+    f(s.at_end, "final", "after tuning");
+  }
+};
+
+/// The start from optimal transport (caustics/caustic_start.h).
+struct TransportStartReport {
+  std::string method = "optimal transport";
+  int lit_pixels = 0, newton_steps = 0;
+  double worst_cell_mass_error = 0, relief_mm = 0, largest_slope = 0, integration_rms_slope_error = 0;
+  int controls_at_bounds = 0;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.method, "method", "how the start was found");
+    f(s.lit_pixels, "lit_pixels", "goal pixels the light is transported to");
+    f(s.newton_steps, "newton_steps", "Newton steps of the transport");
+    f(s.worst_cell_mass_error, "worst_cell_mass_error", "its worst cell's mass error, over the mean mass");
+    f(s.relief_mm, "relief_mm", "highest minus lowest height");
+    f(s.largest_slope, "largest_slope", "steepest slope of the integrated surface");
+    f(s.integration_rms_slope_error, "integration_rms_slope_error", "tilts the heights could not follow (rms)");
+    f(s.controls_at_bounds, "controls_at_bounds", "control points held at their bounds by the fit");
+  }
+};
+
+/// print/surface.stl read back and traced (check_caustic_surface_stl).
+struct SurfaceStlReport {
+  std::string file = "print/surface.stl", preview = "preview/surface_stl_traced.png";
+  std::size_t triangles = 0;
+  double largest_height_error_mm = 0, traced_relative_rmse_vs_simulated = 0;
+  CausticImageErrors traced;
+  std::optional<std::array<double, 2>> z_range_mm;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.file, "file", "the file");
+    f(s.preview, "preview", "goal | traced");
+    f(s.triangles, "triangles", "its triangles");
+    f(s.largest_height_error_mm, "largest_height_error_mm", "farthest a vertex lies from the tuned surface");
+    f(s.traced_relative_rmse_vs_simulated, "traced_relative_rmse_vs_simulated",
+      "the file traced with rays against the simulator's image, relative rms");
+    f(s.traced, "traced", "the traced image against the goal");
+    f(s.z_range_mm, "z_range_mm", "lowest and highest z of the file (print frame)");
+  }
+};
 
 /// The goal keys both read: image, material, distance, receiver, image size,
 /// rays, refractive index (by default the material's, from the library). The slab is the solid's bounding box; the
@@ -80,8 +188,8 @@ struct CausticGoalSettings {
   std::unique_ptr<GoalFor<ImageObservation>> image_goal(const Properties& goal) const;
   /// result.json "caustics": caustic_image_errors of the achieved image,
   /// initial_rmse / initial_ssim of the start's, and the receiver's setup.
-  nlohmann::json image_report(std::span<const double> achieved, std::span<const double> initial,
-                              const ImageObservation& goal) const;
+  CausticImageReport image_report(std::span<const double> achieved, std::span<const double> initial,
+                                  const ImageObservation& goal) const;
 };
 
 /// The shaped face: a B-spline height surface over the slab's footprint,
@@ -117,7 +225,7 @@ struct CausticSurfaceSettings {
   /// onto each neighbouring pair's limit and the heights' bounds until no
   /// pair exceeds its limit by 1e-9 mm. Returns what it changed: the
   /// steepest control slope before, the controls moved, the largest move.
-  nlohmann::json limit_slopes(Tuner& tuner, const Bounds& footprint) const;
+  SlopeLimitReport limit_slopes(Tuner& tuner, const Bounds& footprint) const;
   /// The same limit as a penalty on the tuner's error, so that its optimizer
   /// keeps near it: `weight` × Σ (excess / limit)² over neighbouring pairs
   /// (one pair at twice its limit costs `weight`).
@@ -133,35 +241,32 @@ struct CausticSurfaceSettings {
                const Parameter& material, const MaterialPalette& palette) const;
 };
 
-/// Whether print/surface.stl is to be written: it is an STL like the
-/// materials', so "output": {"stl": false} leaves it out too, and then
-/// `caustics_report["surface_stl"]` says so.
-inline bool surface_stl_wanted(const FabricationOptions& fabrication, nlohmann::json& caustics_report) {
-  if (fabrication.writes("stl")) return true;
-  caustics_report["surface_stl"] = "not written (output.stl is false)";
-  return false;
-}
-
 /// print/surface.stl: the tuned slab as one smooth closed mesh — the
 /// surface meshed on `print_vertices` — for printers that take a surface (the
 /// per-material STLs come from print voxels, whose 27 µm terraces would
 /// scatter the light). `to_print` (an involution, or empty for none) maps
-/// the subtree's frame to the print's. Read back and traced with rays (8
-/// per pixel pitch along each axis at least) — through `exit_filter` when
-/// given, the texture over the exit face — it must cast what the simulator
-/// cast (`simulated`) up to their meshes and sampling; the difference, the
+/// the subtree's frame to the print's. The "stl" print writer writes it
+/// beside the materials' surfaces, under the same switch.
+PrintSurface caustic_print_surface(const CausticSlabConfig& slab, std::array<int, 2> print_vertices,
+                                   const HeightSurface& surface, const std::function<void(Mesh&)>& to_print);
+
+/// After fabrication wrote `printed` (caustic_print_surface's) to
+/// print/surface.stl: the file read back and traced with rays (8 per pixel
+/// pitch along each axis at least) — through `exit_filter` when given, the
+/// texture over the exit face — must cast what the simulator cast
+/// (`simulated`) up to their meshes and sampling; the difference, the
 /// traced image's errors against `goal` ("traced"), and how far the file's
 /// vertices lie from the surface are reported; goal | traced goes to
 /// preview/surface_stl_traced.png.
-struct SurfaceStl {
-  nlohmann::json report;  ///< file, preview, triangles, largest_height_error_mm, traced_relative_rmse_vs_simulated, traced
-  Bounds bounds;          ///< of the mesh written, in the print's coordinates
-};
-SurfaceStl write_caustic_surface_stl(const CausticSlabConfig& slab, std::array<int, 2> print_vertices,
-                                     const HeightSurface& surface, std::span<const double> simulated,
-                                     const ImageObservation& goal,
-                                     const std::function<void(Mesh&)>& to_print, const GridField* exit_filter,
-                                     RunFolder& folder);
+SurfaceStlReport check_caustic_surface_stl(const CausticSlabConfig& slab, std::array<int, 2> print_vertices,
+                                           const HeightSurface& surface, const Mesh& printed,
+                                           std::span<const double> simulated, const ImageObservation& goal,
+                                           const std::function<void(Mesh&)>& to_print,
+                                           const GridField* exit_filter, RunFolder& folder);
+
+/// Whether fabrication wrote print/surface.stl (its "stl" writer on, on the
+/// rank that writes the run's files).
+bool surface_stl_written(RunFolder& folder);
 
 /// Moves `tuner` — the caustics simulator of `slab` on `surface`, its goal
 /// the image to cast — to the surface optimal transport gives
@@ -170,8 +275,8 @@ SurfaceStl write_caustic_surface_stl(const CausticSlabConfig& slab, std::array<i
 /// ("start": Newton steps, relief, largest slope, controls held at their
 /// bounds). Its wall times go to `timing` (timing.json), where they do not
 /// break result.json's byte-identity across thread counts.
-nlohmann::json start_caustic_from_transport(Tuner& tuner, const CausticSlabConfig& slab, const HeightSurface& surface,
-                                            nlohmann::json* timing);
+TransportStartReport start_caustic_from_transport(Tuner& tuner, const CausticSlabConfig& slab,
+                                                  const HeightSurface& surface, nlohmann::json* timing);
 
 /// "nlopt LD_LBFGS", "ceres numeric", "spsa": an optimizer's type and, for the
 /// adapters, what tells two of its runs apart (algorithm, derivatives).
@@ -186,8 +291,7 @@ void write_caustic_panels(const std::vector<std::span<const double>>& images, in
 /// yellow high), nx × ny values row by row from the lowest y, scaled up.
 void write_height_map(std::span<const double> heights, int nx, int ny, const std::filesystem::path& file);
 
-/// {"rmse", "relative_rmse", "ssim", "psnr_db", "light_off_receiver"} of an
-/// image against the goal (SSIM and PSNR with the goal's peak as their range).
-nlohmann::json caustic_image_errors(std::span<const double> image, const ImageObservation& goal);
+/// An image's errors against the goal.
+CausticImageErrors caustic_image_errors(std::span<const double> image, const ImageObservation& goal);
 
 }  // namespace spec2fab

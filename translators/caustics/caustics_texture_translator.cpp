@@ -56,6 +56,39 @@ TextureOptions texture_options() {
   return options;
 }
 
+/// result.json "texture": the texture's figures, its thickness and the light
+/// it lets through.
+struct TextureSection {
+  TextureReport texture;
+  double thickness_mm = 0;
+  Spread transmittance;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.texture, "", "the texture");
+    f(s.thickness_mm, "thickness_mm", "the texture layer's thickness");
+    f(s.transmittance, "transmittance", "light it lets through, over the exit face");
+  }
+};
+
+/// result.json "caustics".
+struct CausticsTextureReport {
+  CausticImageReport image;
+  bool compensate_texture = true;
+  std::optional<TransportStartReport> start;
+  SlopeLimits slope_limit;
+  std::array<int, 2> control{};
+  std::optional<SurfaceStlReport> surface_stl;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.image, "", "the cast image, against the goal carrying the light the texture lets through");
+    f(s.compensate_texture, "compensate_texture", "whether the caustic was tuned through the texture");
+    f(s.start, "start", "the start from optimal transport");
+    f(s.slope_limit, "slope_limit", "the slope limit held");
+    f(s.control, "control", "B-spline control points of the face");
+    f(s.surface_stl, "surface_stl", "print/surface.stl checked (output.stl)");
+  }
+};
+
 class CausticsTextureTranslator final : public TuningTranslator {
  public:
   /// Its own goal keys; the texture and caustic pieces declare the rest.
@@ -223,7 +256,7 @@ class CausticsTextureTranslator final : public TuningTranslator {
     if (transport_start_)
       start_report_ = start_caustic_from_transport(caustic, slab_, *caustic_surface_->height_surface(),
                                                    context.timing);
-    slope_limit_["start"] = surface_.limit_slopes(caustic, settings_.slab);
+    slope_limit_.at_start = surface_.limit_slopes(caustic, settings_.slab);
     caustic.set_penalty(surface_.slope_penalty(settings_.slab, caustic.error()));
     start_ = caustic.search_space().values();
   }
@@ -236,53 +269,63 @@ class CausticsTextureTranslator final : public TuningTranslator {
     const auto [t_min, t_max] = std::minmax_element(transmittance.begin(), transmittance.end());
     const double t_mean = std::accumulate(transmittance.begin(), transmittance.end(), 0.0) /
                           static_cast<double>(transmittance.size());
-    nlohmann::json texture = texture_.report(achieved);
-    texture["thickness_mm"] = texture_mm_;
-    texture["transmittance"] = {{"mean", t_mean}, {"min", *t_min}, {"max", *t_max}};
-    context.result["texture"] = texture;
+    context.report.add("texture", TextureSection{texture_.report(achieved), texture_mm_,
+                                                 Spread{t_mean, *t_max, *t_min}});
 
     // The caustic the print casts: through the texture, against the goal
     // carrying the light the texture lets through.
     Tuner& caustic = network_.tuner(caustic_tuner_);
-    slope_limit_["final"] = surface_.limit_slopes(caustic, settings_.slab);
+    slope_limit_.at_end = surface_.limit_slopes(caustic, settings_.slab);
     caustic.set_simulator_input(TextureShadow::kInput, shadow);
     const std::vector<double> tuned = caustic.search_space().values();
-    ImageObservation target = static_cast<const ImageObservation&>(caustic.goal().target());
-    for (double& p : target.pixels) p *= t_mean;
+    target_ = static_cast<const ImageObservation&>(caustic.goal().target());
+    for (double& p : target_.pixels) p *= t_mean;
     caustic.error_at(start_);
     const std::vector<double> initial = static_cast<const ImageObservation&>(caustic.simulated()).pixels;
     caustic.error_at(tuned);
-    const auto& cast = static_cast<const ImageObservation&>(caustic.simulated());
-    nlohmann::json report = settings_.image_report(cast.pixels, initial, target);
-    report["compensate_texture"] = compensate_;
-    if (transport_start_) report["start"] = start_report_;
-    report["slope_limit"] = slope_limit_;
-    report["control"] = surface_.control;
-    context.result["caustics"] = report;
+    cast_ = static_cast<const ImageObservation&>(caustic.simulated()).pixels;
+    report_.image = settings_.image_report(cast_, initial, target_);
+    report_.compensate_texture = compensate_;
+    if (transport_start_) report_.start = start_report_;
+    report_.slope_limit = slope_limit_;
+    report_.control = surface_.control;
 
-    write_caustic_panels({target.pixels, cast.pixels}, target.width, target.height,
+    write_caustic_panels({target_.pixels, cast_}, target_.width, target_.height,
                          context.folder.path("preview/goal_vs_simulated.png"));
     write_height_map(caustic.search_space().values(), surface_.control[0], surface_.control[1],
                      context.folder.path("preview/height_map.png"));
     std::vector<Rgb> grey;
     for (double t : transmittance) grey.push_back({t, t, t});
     texture_.write_preview({&texture_.image().pixels, &achieved, &grey}, context.folder.path("preview/texture.png"));
-    context.result["files"] = {{"previews",
-                                {"preview/convergence.png", "preview/goal_vs_simulated.png", "preview/height_map.png",
-                                 "preview/texture.png"}}};
-    // The subtree's frame is the print's mirrored about the cut: z = cut − w.
-    const auto mirror = [this](Mesh& mesh) {
-      for (Vec3& v : mesh.vertices) v.z() = cut_z_ - v.z();
+    for (const char* file : {"preview/convergence.png", "preview/goal_vs_simulated.png", "preview/height_map.png",
+                             "preview/texture.png"})
+      context.report.files.previews.push_back(file);
+    shadow_field_ = shadow;
+    if (outputs_.fabrication.writes("stl"))
+      print_surfaces_ = {caustic_print_surface(slab_, surface_.print_vertices(), *caustic_surface_->height_surface(),
+                                               mirror())};
+  }
+
+  /// The subtree's frame is the print's mirrored about the cut: z = cut − w.
+  std::function<void(Mesh&)> mirror() const {
+    return [cut_z = cut_z_](Mesh& mesh) {
+      for (Vec3& v : mesh.vertices) v.z() = cut_z - v.z();
       for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
     };
-    if (!surface_stl_wanted(outputs_.fabrication, context.result["caustics"])) return;
-    const SurfaceStl stl = write_caustic_surface_stl(
-        slab_, surface_.print_vertices(), *caustic_surface_->height_surface(), cast.pixels, target, mirror, &shadow,
-        context.folder);
-    context.result["caustics"]["surface_stl"] = stl.report;
-    context.result["caustics"]["surface_stl"]["z_range_mm"] = {stl.bounds.lower.z(), stl.bounds.upper.z()};
-    context.result["files"]["surface"] = "print/surface.stl";
-    context.result["files"]["previews"].push_back("preview/surface_stl_traced.png");
+  }
+
+  /// print/surface.stl as written, traced through the texture.
+  void after_print(RunContext& context) override {
+    if (surface_stl_written(context.folder)) {
+      const Mesh& printed = print_surfaces_.front().mesh;
+      SurfaceStlReport& stl = report_.surface_stl.emplace(check_caustic_surface_stl(
+          slab_, surface_.print_vertices(), *caustic_surface_->height_surface(), printed, cast_, target_, mirror(),
+          &shadow_field_, context.folder));
+      const Bounds bounds = printed.bounds();
+      stl.z_range_mm = std::array<double, 2>{bounds.lower.z(), bounds.upper.z()};
+      context.report.files.previews.push_back(stl.preview);
+    }
+    context.report.add("caustics", report_);
   }
 
   CausticGoalSettings settings_;
@@ -292,7 +335,12 @@ class CausticsTextureTranslator final : public TuningTranslator {
   std::string optimizer_label_;
   double texture_mm_ = 0, cut_z_ = 0;
   bool compensate_ = true, transport_start_ = true;
-  nlohmann::json start_report_, slope_limit_;
+  TransportStartReport start_report_;
+  SlopeLimits slope_limit_;
+  ImageObservation target_;  ///< the goal carrying the light the texture lets through
+  std::vector<double> cast_;  ///< the caustic the print casts
+  GridField shadow_field_;    ///< the texture's transmittance over the exit face
+  CausticsTextureReport report_;
   CausticSlabConfig slab_;
   size_t caustic_tuner_ = 0;
   ReducerNode* texture_columns_ = nullptr;  ///< the Column node of the texture

@@ -56,6 +56,62 @@
 namespace spec2fab {
 namespace {
 
+/// The kernels' own image against the goal: what the facets aim for.
+struct KernelFit {
+  CausticImageErrors errors;
+  std::size_t count = 0;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.errors, "", "the kernels' image against the goal");
+    f(s.count, "count", "equal-flux Gaussian kernels");
+  }
+};
+
+/// The swap phase: how much smoother the assignment of kernels got.
+struct SwapRecord {
+  int sweeps = 0;
+  double roughness_mm2_start = 0, roughness_mm2_final = 0;
+  std::vector<double> roughness_mm2_per_sweep;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.sweeps, "sweeps", "annealing sweeps");
+    f(s.roughness_mm2_start, "roughness_mm2_start", "roughness of the assignment before");
+    f(s.roughness_mm2_final, "roughness_mm2_final", "and after");
+    f(s.roughness_mm2_per_sweep, "roughness_mm2_per_sweep", "after each sweep");
+  }
+};
+
+/// How well the facets hit their kernels.
+struct AimReport {
+  double rms_miss_mm = 0, max_miss_mm = 0;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.rms_miss_mm, "rms_miss_mm", "rms of the facets' misses");
+    f(s.max_miss_mm, "max_miss_mm", "the largest miss");
+  }
+};
+
+/// result.json "caustics".
+struct FacetCausticsReport {
+  CausticImageReport image;
+  KernelFit kernels;
+  std::array<int, 2> facets{};
+  std::array<double, 2> facet_mm{};
+  SwapRecord assignment;
+  AimReport aim;
+  StitchReport stitch;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.image, "", "the traced slab's image");
+    f(s.kernels, "kernels", "the kernels the facets aim for");
+    f(s.facets, "facets", "facets along x and y");
+    f(s.facet_mm, "facet_mm", "a facet's size");
+    f(s.assignment, "assignment", "the swap phase");
+    f(s.aim, "aim", "the aim phase");
+    f(s.stitch, "stitch", "the facets' offsets stitched");
+  }
+};
+
 class FacetCausticsTranslator final : public TuningTranslator {
  public:
   /// Its own goal keys; the caustic piece declares the rest.
@@ -143,20 +199,15 @@ class FacetCausticsTranslator final : public TuningTranslator {
     Mesh slab;
     const std::vector<double> achieved = trace_surface(&slab);
     const double energy_start = swaps_->energies().empty() ? roughness(network_) : swaps_->energies().front();
-    nlohmann::json report = settings_.image_report(achieved, flat_, goal);
-    report["kernels"] = caustic_image_errors(kernel_image_, goal);
-    report["kernels"]["count"] = kernels_.size();
-    report["facets"] = facets_;
-    report["facet_mm"] = facet_mm_;
-    report["assignment"] = {{"sweeps", sweeps_},
-                            {"roughness_mm2_start", energy_start},
-                            {"roughness_mm2_final", roughness(network_)},
-                            {"roughness_mm2_per_sweep", swaps_->energies()}};
-    report["aim"] = aim_report();
-    report["stitch"] = {{"rms_step_mm", stitch.rms_step_mm},
-                        {"max_step_mm", stitch.max_step_mm},
-                        {"facets_lowered_to_fit", stitch.lowered}};
-    context.result["caustics"] = report;
+    FacetCausticsReport report;
+    report.image = settings_.image_report(achieved, flat_, goal);
+    report.kernels = {caustic_image_errors(kernel_image_, goal), kernels_.size()};
+    report.facets = facets_;
+    report.facet_mm = facet_mm_;
+    report.assignment = {sweeps_, energy_start, roughness(network_), swaps_->energies()};
+    report.aim = aim_report();
+    report.stitch = stitch;
+    context.report.add("caustics", report);
 
     write_caustic_panels({goal.pixels, kernel_image_, achieved}, goal.width, goal.height,
                          context.folder.path("preview/goal_vs_simulated.png"));
@@ -164,11 +215,10 @@ class FacetCausticsTranslator final : public TuningTranslator {
     for (size_t k = 0; k < network_.size(); ++k)
       centre_heights.push_back(plane(k).surface_height(0.5 * facet_mm_[0], 0.5 * facet_mm_[1]));
     write_height_map(centre_heights, facets_[0], facets_[1], context.folder.path("preview/height_map.png"));
-    context.result["files"] = {
-        {"previews", {"preview/convergence.png", "preview/goal_vs_simulated.png", "preview/height_map.png"}}};
-    if (!surface_stl_wanted(outputs_.fabrication, context.result["caustics"])) return;
-    context.result["files"]["surface"] = "print/surface.stl";
-    write_stl(slab, context.folder.path("print/surface.stl"));
+    for (const char* file : {"preview/convergence.png", "preview/goal_vs_simulated.png", "preview/height_map.png"})
+      context.report.files.previews.push_back(file);
+    // The faceted slab, walls included, beside the materials' STLs.
+    if (outputs_.fabrication.writes("stl")) print_surfaces_ = {{"surface", std::move(slab)}};
   }
 
   static TypeDoc doc() {
@@ -392,7 +442,7 @@ class FacetCausticsTranslator final : public TuningTranslator {
   }
 
   /// How well the planes reached their kernels: RMS and largest miss (mm).
-  nlohmann::json aim_report() {
+  AimReport aim_report() {
     double sum = 0, worst = 0;
     for (size_t t = 0; t < network_.size(); ++t) {
       Tuner& tuner = network_.tuner(t);
@@ -400,7 +450,7 @@ class FacetCausticsTranslator final : public TuningTranslator {
       sum += e;
       worst = std::max(worst, std::sqrt(e));
     }
-    return {{"rms_miss_mm", std::sqrt(sum / static_cast<double>(network_.size()))}, {"max_miss_mm", worst}};
+    return {std::sqrt(sum / static_cast<double>(network_.size())), worst};
   }
 
   std::array<int, 2> facets_{45, 45};

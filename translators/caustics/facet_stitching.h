@@ -27,6 +27,12 @@ struct FacetGrid {
 struct StitchReport {
   double rms_step_mm = 0, max_step_mm = 0;
   int lowered = 0;  ///< facets lowered to fit under the top
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {  // result.json (core/report.h)
+    f(s.rms_step_mm, "rms_step_mm", "rms step between neighbouring facets at their shared corners");
+    f(s.max_step_mm, "max_step_mm", "the largest step");
+    f(s.lowered, "facets_lowered_to_fit", "facets lowered to fit under the top");
+  }
 };
 
 /// Sets the offsets ("offset_mm") of the Column node `columns`' facets so

@@ -27,6 +27,39 @@
 namespace spec2fab {
 namespace {
 
+/// One optimizer's run in the comparison (goal.compare_optimizers).
+struct OptimizerOutcome {
+  std::string optimizer;
+  double initial_error = 0, final_error = 0;
+  long long evaluations = 0;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.optimizer, "optimizer", "the optimizer (type and algorithm)");
+    f(s.initial_error, "initial_error", "error at the start");
+    f(s.final_error, "final_error", "error at its end");
+    f(s.evaluations, "evaluations", "error evaluations it spent");
+  }
+};
+
+/// result.json "caustics".
+struct SmoothCausticsReport {
+  CausticImageReport image;
+  std::array<int, 2> control{};
+  std::optional<TransportStartReport> start;
+  SlopeLimits slope_limit;
+  std::optional<std::vector<OptimizerOutcome>> optimizers;
+  std::optional<SurfaceStlReport> surface_stl;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.image, "", "the cast image");
+    f(s.control, "control", "B-spline control points of the face");
+    f(s.start, "start", "the start from optimal transport (goal.start transport)");
+    f(s.slope_limit, "slope_limit", "the slope limit held");
+    f(s.optimizers, "optimizers", "the optimizers compared from the same start");
+    f(s.surface_stl, "surface_stl", "print/surface.stl checked (output.stl)");
+  }
+};
+
 class SmoothCausticsTranslator final : public TuningTranslator {
  public:
   /// Its own goal keys; the caustic piece declares the rest.
@@ -128,7 +161,7 @@ class SmoothCausticsTranslator final : public TuningTranslator {
     if (transport_start_)
       start_report_ = start_caustic_from_transport(tuner, slab_, *tree_->root().height_surface(),
                                                    context.timing);
-    slope_limit_["start"] = surface_.limit_slopes(tuner, settings_.slab);
+    slope_limit_.at_start = surface_.limit_slopes(tuner, settings_.slab);
     // The optimizer keeps near the limit (a penalty in units of the start's
     // error); the end is held to it exactly.
     tuner.set_penalty(surface_.slope_penalty(settings_.slab, tuner.error()));
@@ -148,44 +181,50 @@ class SmoothCausticsTranslator final : public TuningTranslator {
 
   void report(const RunRecord& record, RunContext& context) override {
     Tuner& tuner = network_.tuner(0);
-    slope_limit_["final"] = surface_.limit_slopes(tuner, settings_.slab);
-    const auto& target = static_cast<const ImageObservation&>(tuner.goal().target());
+    slope_limit_.at_end = surface_.limit_slopes(tuner, settings_.slab);
+    target_ = static_cast<const ImageObservation&>(tuner.goal().target());
     tuner.error();
-    const auto& achieved = static_cast<const ImageObservation&>(tuner.simulated());
-    nlohmann::json report = settings_.image_report(achieved.pixels, initial_, target);
-    report["control"] = surface_.control;
-    if (transport_start_) report["start"] = start_report_;
-    report["slope_limit"] = slope_limit_;
-    context.result["caustics"] = report;
+    achieved_ = static_cast<const ImageObservation&>(tuner.simulated()).pixels;
+    report_.image = settings_.image_report(achieved_, initial_, target_);
+    report_.control = surface_.control;
+    if (transport_start_) report_.start = start_report_;
+    report_.slope_limit = slope_limit_;
+    std::vector<std::string>& previews = context.report.files.previews;
     if (!compared_runs_.empty()) report_comparison(record.runs.front().summary, compared_runs_, context);
-    write_caustic_panels({target.pixels, achieved.pixels}, target.width, target.height,
+    write_caustic_panels({target_.pixels, achieved_}, target_.width, target_.height,
                          context.folder.path("preview/goal_vs_simulated.png"));
     write_height_map(tuner.search_space().values(), surface_.control[0], surface_.control[1],
                      context.folder.path("preview/height_map.png"));
-    context.result["files"] = {
-        {"previews", {"preview/convergence.png", "preview/goal_vs_simulated.png", "preview/height_map.png"}}};
-    if (!compared_runs_.empty()) context.result["files"]["previews"].push_back("preview/optimizer_comparison.png");
-    if (!surface_stl_wanted(outputs_.fabrication, context.result["caustics"])) return;
-    context.result["caustics"]["surface_stl"] =
-        write_caustic_surface_stl(slab_, surface_.print_vertices(), *tree_->root().height_surface(), achieved.pixels, target,
-                                  {}, nullptr, context.folder)
-            .report;
-    context.result["files"]["surface"] = "print/surface.stl";
-    context.result["files"]["previews"].push_back("preview/surface_stl_traced.png");
+    for (const char* file : {"preview/convergence.png", "preview/goal_vs_simulated.png", "preview/height_map.png"})
+      previews.push_back(file);
+    if (!compared_runs_.empty()) previews.push_back("preview/optimizer_comparison.png");
+    if (outputs_.fabrication.writes("stl"))
+      print_surfaces_ = {caustic_print_surface(slab_, surface_.print_vertices(), surface(), {})};
   }
+
+  /// print/surface.stl as written, traced.
+  void after_print(RunContext& context) override {
+    if (surface_stl_written(context.folder)) {
+      report_.surface_stl = check_caustic_surface_stl(slab_, surface_.print_vertices(), surface(),
+                                                      print_surfaces_.front().mesh, achieved_, target_, {}, nullptr,
+                                                      context.folder);
+      context.report.files.previews.push_back(report_.surface_stl->preview);
+    }
+    context.report.add("caustics", report_);
+  }
+
+  const HeightSurface& surface() const { return *tree_->root().height_surface(); }
 
   /// result.json "optimizers" (errors, evaluations), timing.json the wall
   /// times and when each run first reached every other run's final error,
   /// and the comparison plot.
-  void report_comparison(const Summary& main, const std::vector<Summary>& compared, RunContext& context) const {
+  void report_comparison(const Summary& main, const std::vector<Summary>& compared, RunContext& context) {
     std::vector<LabelledRun> runs{{main_label_, &main}};
     for (size_t k = 0; k < compared.size(); ++k) runs.push_back({compared_[k].first, &compared[k]});
-    nlohmann::json summaries = nlohmann::json::array(), times = nlohmann::json::array();
+    std::vector<OptimizerOutcome> summaries;
+    nlohmann::json times = nlohmann::json::array();
     for (const LabelledRun& run : runs) {
-      summaries.push_back({{"optimizer", run.label},
-                           {"initial_error", run.summary->initial_error},
-                           {"final_error", run.summary->final_error},
-                           {"evaluations", run.summary->evaluations}});
+      summaries.push_back({run.label, run.summary->initial_error, run.summary->final_error, run.summary->evaluations});
       nlohmann::json reached = nlohmann::json::object();
       for (const LabelledRun& other : runs) {
         if (&other == &run) continue;
@@ -198,7 +237,7 @@ class SmoothCausticsTranslator final : public TuningTranslator {
                        {"seconds", run.summary->seconds},
                        {"seconds_to_reach_final_error_of", reached}});
     }
-    context.result["caustics"]["optimizers"] = summaries;
+    report_.optimizers = summaries;
     if (context.timing) (*context.timing)["optimizers"] = times;
     write_optimizer_comparison_plot(runs, context.folder.path("preview/optimizer_comparison.png"));
   }
@@ -210,8 +249,12 @@ class SmoothCausticsTranslator final : public TuningTranslator {
   std::vector<std::pair<std::string, std::unique_ptr<Optimizer>>> compared_;
   std::vector<double> initial_;       ///< the image at the start
   bool transport_start_ = true;
-  nlohmann::json start_report_, slope_limit_;
+  TransportStartReport start_report_;
+  SlopeLimits slope_limit_;
   std::vector<Summary> compared_runs_;
+  ImageObservation target_;      ///< the goal image, for the check of print/surface.stl
+  std::vector<double> achieved_;  ///< the image cast at the end
+  SmoothCausticsReport report_;
 };
 
 }  // namespace

@@ -40,6 +40,44 @@ ElasticOptions elastic_defaults() {
   return o;
 }
 
+/// The paper's model (cells up to the surface) against ours (the shell in
+/// the FEM): each one's assignment under both.
+struct ShellComparison {
+  std::vector<std::string> assignment;
+  int cells_differing_from_tuned_with_shell = 0;
+  double shape_mse_mm2_as_modelled_without_shell = 0, shape_mse_mm2_as_printed_with_shell = 0,
+         as_printed_relative_to_goal_mean_square = 0, tuned_with_shell_shape_mse_mm2 = 0,
+         tuned_with_shell_relative_to_goal_mean_square = 0,
+         tuned_with_shell_shape_mse_mm2_if_modelled_without_shell = 0, assignments_evaluated = 0;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.assignment, "assignment", "the assignment tuned without the shell");
+    f(s.cells_differing_from_tuned_with_shell, "cells_differing_from_tuned_with_shell", "cells it differs in");
+    f(s.shape_mse_mm2_as_modelled_without_shell, "shape_mse_mm2_as_modelled_without_shell",
+      "its error as that model sees it");
+    f(s.shape_mse_mm2_as_printed_with_shell, "shape_mse_mm2_as_printed_with_shell", "and as printed, under the shell");
+    f(s.as_printed_relative_to_goal_mean_square, "as_printed_relative_to_goal_mean_square",
+      "that relative to the goal's mean square");
+    f(s.tuned_with_shell_shape_mse_mm2, "tuned_with_shell_shape_mse_mm2", "ours, as printed");
+    f(s.tuned_with_shell_relative_to_goal_mean_square, "tuned_with_shell_relative_to_goal_mean_square",
+      "that relative to the goal's mean square");
+    f(s.tuned_with_shell_shape_mse_mm2_if_modelled_without_shell,
+      "tuned_with_shell_shape_mse_mm2_if_modelled_without_shell", "ours as the model without the shell sees it");
+    f(s.assignments_evaluated, "assignments_evaluated", "assignments the search without the shell simulated");
+  }
+};
+
+/// result.json "deformation".
+struct DeformationReport {
+  ElasticReport elastic;
+  std::optional<ShellComparison> shell_left_out_of_the_fem;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.elastic, "", "the cells' tuning");
+    f(s.shell_left_out_of_the_fem, "shell_left_out_of_the_fem", "the comparison (goal.compare_without_shell)");
+  }
+};
+
 class DeformationTextureTranslator final : public TuningTranslator {
  public:
   /// Its own goal keys; the texture and elastic pieces declare the rest.
@@ -127,7 +165,7 @@ class DeformationTextureTranslator final : public TuningTranslator {
  private:
   /// The paper's model: the same search on a tree whose cells reach the
   /// surface (no shell), then its assignment printed under the shell.
-  nlohmann::json compare_without_shell(const nlohmann::json& with_shell, const RunContext& context) {
+  ShellComparison compare_without_shell(const ElasticReport& with_shell, const RunContext& context) {
     const Experiment& experiment = context.experiment;
     ReducerTree paper(elastic_.cell_node(bounds_, experiment.palette()), experiment.palette());
     paper.bind(experiment.solid());
@@ -149,30 +187,32 @@ class DeformationTextureTranslator final : public TuningTranslator {
       names.push_back(paper.palette().name(static_cast<MaterialId>(chosen[c])));
       differ += chosen[c] != tuned[c];
     }
-    const double goal_ms = with_shell.at("goal_mean_squared_displacement_mm2").get<double>();
-    return {{"assignment", names},
-            {"cells_differing_from_tuned_with_shell", differ},
-            {"shape_mse_mm2_as_modelled_without_shell", as_modelled},
-            {"shape_mse_mm2_as_printed_with_shell", as_printed},
-            {"as_printed_relative_to_goal_mean_square", as_printed / goal_ms},
-            {"tuned_with_shell_shape_mse_mm2", with_shell.at("shape_mse_mm2")},
-            {"tuned_with_shell_relative_to_goal_mean_square", with_shell.at("shape_mse_mm2").get<double>() / goal_ms},
-            {"tuned_with_shell_shape_mse_mm2_if_modelled_without_shell", ours_without_shell},
-            {"assignments_evaluated", summary.details.value("leaves_evaluated", 0.0)}};
+    const double goal_ms = with_shell.goal_mean_squared_displacement_mm2;
+    return {names,
+            differ,
+            as_modelled,
+            as_printed,
+            as_printed / goal_ms,
+            with_shell.shape_mse_mm2,
+            with_shell.shape_mse_mm2 / goal_ms,
+            ours_without_shell,
+            summary.details.value("leaves_evaluated", 0.0)};
   }
 
   void report(const RunRecord& record, RunContext& context) override {
     const std::vector<Rgb> achieved = texture_.achieved(network_);
-    context.result["texture"] = texture_.report(achieved);
+    context.report.add("texture", texture_.report(achieved));
     texture_.write_preview({&texture_.image().pixels, &achieved},
                            context.folder.path("preview/texture_goal_vs_achieved.png"));
     // The cells' tuner ran last: its run is the record's last.
-    nlohmann::json elastic = elastic_.report(network_, *tree_, record.runs.back().summary, context);
-    if (options_.compare_without_shell) elastic["shell_left_out_of_the_fem"] = compare_without_shell(elastic, context);
-    context.result["deformation"] = elastic;
-    std::vector<std::string> previews{"preview/convergence.png", "preview/texture_goal_vs_achieved.png"};
+    DeformationReport deformation{elastic_.report(network_, *tree_, record.runs.back().summary, context), {}};
+    if (options_.compare_without_shell)
+      deformation.shell_left_out_of_the_fem = compare_without_shell(deformation.elastic, context);
+    context.report.add("deformation", deformation);
+    std::vector<std::string>& previews = context.report.files.previews;
+    previews.push_back("preview/convergence.png");
+    previews.push_back("preview/texture_goal_vs_achieved.png");
     for (const std::string& file : ElasticPiece::previews()) previews.push_back(file);
-    context.result["files"] = {{"previews", previews}};
   }
 
   Options options_;

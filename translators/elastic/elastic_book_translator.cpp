@@ -95,10 +95,10 @@ class ElasticBookTranslator final : public TuningTranslator {
 
  private:
   void report(const RunRecord& record, RunContext& context) override {
-    context.result["elastic_book"] = elastic_.report(network_, *tree_, record.runs.front().summary, context);
-    std::vector<std::string> previews{"preview/convergence.png"};
+    context.report.add("elastic_book", elastic_.report(network_, *tree_, record.runs.front().summary, context));
+    std::vector<std::string>& previews = context.report.files.previews;
+    previews.push_back("preview/convergence.png");
     for (const std::string& file : ElasticPiece::previews()) previews.push_back(file);
-    context.result["files"] = {{"previews", previews}};
   }
 
   Options options_;

@@ -252,8 +252,8 @@ std::vector<std::string> ElasticPiece::assignment(TunerNetwork& network, const R
   return names;
 }
 
-nlohmann::json ElasticPiece::report(TunerNetwork& network, const ReducerTree& tree, const Summary& summary,
-                                    RunContext& context) const {
+ElasticReport ElasticPiece::report(TunerNetwork& network, const ReducerTree& tree, const Summary& summary,
+                                   RunContext& context) const {
   Tuner& tuner = network.tuner(tuner_);
   const double error = tuner.error();
   const auto& achieved = static_cast<const DisplacementsObservation&>(tuner.simulated());
@@ -264,27 +264,23 @@ nlohmann::json ElasticPiece::report(TunerNetwork& network, const ReducerTree& tr
   const std::span<const double> goal_u = goal.probes();
   for (double v : goal_u) largest = std::max(largest, std::abs(v)), mean_square += v * v;
   mean_square /= std::max<double>(1.0, static_cast<double>(goal_u.size() / 3));
-  nlohmann::json report = {
-      {"cells", cells_},
-      {"materials", options_.materials},
-      {"assignment", assigned},
-      {"shape_mse_mm2", error},
-      {"probe_rms_mm", std::sqrt(error)},
-      {"goal_mean_squared_displacement_mm2", mean_square},
-      {"largest_goal_displacement_mm", largest},
-      {"probes", probes_.size()},
-      {"branch_and_bound",
-       {{"assignments", exhaustive},
-        {"evaluated", summary.details.value("leaves_evaluated", 0.0)},
-        {"nodes_pruned", summary.details.value("nodes_pruned", 0.0)},
-        {"bound_calls", bound_->calls()},
-        {"bound_factorizations", bound_->factorizations()}}}};
+  ElasticReport report;
+  report.cells = cells_;
+  report.materials = options_.materials;
+  report.assignment = assigned;
+  report.shape_mse_mm2 = error;
+  report.probe_rms_mm = std::sqrt(error);
+  report.goal_mean_squared_displacement_mm2 = mean_square;
+  report.largest_goal_displacement_mm = largest;
+  report.probes = probes_.size();
+  report.branch_and_bound = {exhaustive, summary.details.value("leaves_evaluated", 0.0),
+                             summary.details.value("nodes_pruned", 0.0), bound_->calls(), bound_->factorizations()};
   if (options_.reference) {
     int differ = 0;
     for (size_t c = 0; c < assigned.size(); ++c) differ += assigned[c] != (*options_.reference)[c];
-    report["reference"] = *options_.reference;
-    report["reference_recovered"] = differ == 0;
-    report["cells_differing_from_reference"] = differ;
+    report.reference = *options_.reference;
+    report.reference_recovered = differ == 0;
+    report.cells_differing_from_reference = differ;
   }
   write_search_plot(bound_->history(), bound_->variables(), exhaustive,
                     static_cast<long long>(summary.details.value("leaves_evaluated", 0.0)),

@@ -21,6 +21,8 @@
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
+#include "core/report.h"
+
 #include "core/options.h"
 #include "geometry/mesh.h"
 #include "materials/material.h"
@@ -85,6 +87,48 @@ struct LoadCase {
 /// from the vertex with the highest z (ties: lowest index), deterministic.
 std::vector<size_t> spread_vertices(std::span<const Vec3> vertices, size_t count);
 
+/// What branch and bound spared over the cells' assignments.
+struct ElasticSearchCounts {
+  double assignments = 0, evaluated = 0, nodes_pruned = 0;
+  long bound_calls = 0, bound_factorizations = 0;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.assignments, "assignments", "assignments an exhaustive search tries (materials ^ cells)");
+    f(s.evaluated, "evaluated", "assignments simulated");
+    f(s.nodes_pruned, "nodes_pruned", "subtrees the elastic bound pruned");
+    f(s.bound_calls, "bound_calls", "bounds computed");
+    f(s.bound_factorizations, "bound_factorizations", "stiffness factorizations they took");
+  }
+};
+
+/// The elastic piece's figures in result.json (ElasticPiece::report).
+struct ElasticReport {
+  std::array<int, 3> cells{};
+  std::vector<std::string> materials, assignment;
+  double shape_mse_mm2 = 0, probe_rms_mm = 0, goal_mean_squared_displacement_mm2 = 0,
+         largest_goal_displacement_mm = 0;
+  std::size_t probes = 0;
+  ElasticSearchCounts branch_and_bound;
+  std::optional<std::vector<std::string>> reference;
+  std::optional<bool> reference_recovered;
+  std::optional<int> cells_differing_from_reference;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.cells, "cells", "cells along x, y, z");
+    f(s.materials, "materials", "the materials a cell chooses from");
+    f(s.assignment, "assignment", "each cell's material, x fastest");
+    f(s.shape_mse_mm2, "shape_mse_mm2", "mean squared distance of the probes from their goal");
+    f(s.probe_rms_mm, "probe_rms_mm", "its root");
+    f(s.goal_mean_squared_displacement_mm2, "goal_mean_squared_displacement_mm2", "the goal's own mean square");
+    f(s.largest_goal_displacement_mm, "largest_goal_displacement_mm", "the goal's largest displacement component");
+    f(s.probes, "probes", "probe points");
+    f(s.branch_and_bound, "branch_and_bound", "the search's counts");
+    f(s.reference, "reference", "the hidden assignment the goal came from");
+    f(s.reference_recovered, "reference_recovered", "whether the search found it");
+    f(s.cells_differing_from_reference, "cells_differing_from_reference", "cells it got otherwise");
+  }
+};
+
 class ElasticPiece {
  public:
   /// Reads the options from `goal` (`cells` voxel cells over the solid's
@@ -120,8 +164,8 @@ class ElasticPiece {
   /// search's counts, recovery of the reference) and the previews
   /// preview/search.png (the paper's Fig. 10) and preview/goal_vs_achieved.png
   /// (probes from the side), for the tree as it is now.
-  nlohmann::json report(TunerNetwork& network, const ReducerTree& tree, const Summary& summary,
-                        RunContext& context) const;
+  ElasticReport report(TunerNetwork& network, const ReducerTree& tree, const Summary& summary,
+                       RunContext& context) const;
   /// The previews report() writes.
   static std::vector<std::string> previews() { return {"preview/search.png", "preview/goal_vs_achieved.png"}; }
   /// The options' rows for a translator's TypeDoc (prefixed "goal."), with

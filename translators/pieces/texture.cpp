@@ -372,42 +372,37 @@ std::vector<Rgb> TexturePiece::colours_of(const std::vector<std::uint32_t>& stac
   return out;
 }
 
-nlohmann::json TexturePiece::lookup_estimate() const {
+LookupEstimate TexturePiece::lookup_estimate() const {
   const long long columns = column_count();
-  return {{"columns", columns},
-          {"printable_stacks", stacks_.colours.size()},
-          {"seconds", lookup_seconds(columns)},
-          {"megabytes", lookup_megabytes(columns)}};
+  return {columns, stacks_.colours.size(), lookup_seconds(columns), lookup_megabytes(columns)};
 }
 
-nlohmann::json TexturePiece::report(const std::vector<Rgb>& achieved) const {
+TextureReport TexturePiece::report(const std::vector<Rgb>& achieved) const {
   std::vector<bool> inside(outside_.size());
   for (size_t p = 0; p < inside.size(); ++p) inside[p] = !outside_[p];
   const long long out_of_gamut = std::count(outside_.begin(), outside_.end(), true);
   std::vector<double> distance;
   for (size_t p = 0; p < outside_.size(); ++p)
     if (outside_[p]) distance.push_back(ciede2000(linear_rgb_to_lab(image_.pixels[p]), linear_rgb_to_lab(mapped_[p])));
-  nlohmann::json gamut = {
-      {"printable_stacks", stacks_.colours.size()},
-      {"hull_vertices", gamut_->vertex_count()},
-      {"goal_pixels_outside", out_of_gamut},
-      {"goal_fraction_outside", static_cast<double>(out_of_gamut) / static_cast<double>(std::max<size_t>(outside_.size(), 1))},
-      {"mean_delta_e00_outside_to_gamut",
-       distance.empty() ? 0.0 : std::accumulate(distance.begin(), distance.end(), 0.0) / static_cast<double>(distance.size())}};
-  nlohmann::json delta = delta_e_statistics(image_.pixels, achieved);
-  delta["in_gamut"] = delta_e_statistics(image_.pixels, achieved, inside);
-  delta["out_of_gamut"] = delta_e_statistics(image_.pixels, achieved, outside_);
-  return {{"columns", columns_},
-          {"method", lookup_ ? "lookup" : "tuners"},
-          {"inks", inks_},
-          {"metric", metric_},
-          {"error_diffusion", diffusion_},
-          {"gamut_map", gamut_map_},
-          {"printable_stacks", stacks_.colours.size()},
-          {"gamut", gamut},
-          {"delta_e00", delta},
-          {"low_pass_sigma_px", low_pass_sigma_},
-          {"low_pass_delta_e00", low_pass_delta_e(image_, achieved, low_pass_sigma_)}};
+  const GamutReport gamut{
+      stacks_.colours.size(), gamut_->vertex_count(), out_of_gamut,
+      static_cast<double>(out_of_gamut) / static_cast<double>(std::max<size_t>(outside_.size(), 1)),
+      distance.empty() ? 0.0
+                       : std::accumulate(distance.begin(), distance.end(), 0.0) / static_cast<double>(distance.size())};
+  const DeltaEByGamut delta{delta_e_statistics(image_.pixels, achieved),
+                            delta_e_statistics(image_.pixels, achieved, inside),
+                            delta_e_statistics(image_.pixels, achieved, outside_)};
+  return {columns_,
+          lookup_ ? "lookup" : "tuners",
+          inks_,
+          metric_,
+          diffusion_,
+          gamut_map_,
+          stacks_.colours.size(),
+          gamut,
+          delta,
+          low_pass_sigma_,
+          low_pass_delta_e(image_, achieved, low_pass_sigma_)};
 }
 
 }  // namespace spec2fab

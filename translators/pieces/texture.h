@@ -20,6 +20,7 @@
 
 #include "core/options.h"
 #include "core/registry.h"
+#include "core/report.h"
 #include "materials/material.h"
 #include "reducer/nodes/nodes.h"
 #include "reducer/nodes/stack_grid.h"
@@ -58,10 +59,92 @@ std::array<int, 2> printer_resolution_columns(const Solid& solid, const PrinterP
 /// the eye sees from a distance: the measure error diffusion improves).
 double low_pass_delta_e(const GoalImage& goal, const std::vector<Rgb>& achieved, double sigma);
 
-/// {"pixels", "mean", "p95", "max"} ΔE00 between goal and achieved colours,
-/// over the pixels `where` marks (all when empty); {"pixels": 0} for none.
-nlohmann::json delta_e_statistics(const std::vector<Rgb>& goal, const std::vector<Rgb>& achieved,
-                                  const std::vector<bool>& where = {});
+/// ΔE00 between goal and achieved colours over some pixels (result.json).
+struct DeltaE {
+  std::size_t pixels = 0;
+  std::optional<double> mean, p95, max;  ///< absent over no pixels
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.pixels, "pixels", "pixels compared");
+    f(s.mean, "mean", "mean ΔE00");
+    f(s.p95, "p95", "95th percentile");
+    f(s.max, "max", "largest");
+  }
+};
+
+/// Over all pixels, and over those whose goal is in or out of the gamut.
+struct DeltaEByGamut {
+  DeltaE all;
+  DeltaE in_gamut, out_of_gamut;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.all, "", "over all pixels");
+    f(s.in_gamut, "in_gamut", "over pixels whose goal is printable");
+    f(s.out_of_gamut, "out_of_gamut", "over pixels whose goal lies outside the printable gamut");
+  }
+};
+
+/// ΔE00 between goal and achieved colours over the pixels `where` marks
+/// (all when empty).
+DeltaE delta_e_statistics(const std::vector<Rgb>& goal, const std::vector<Rgb>& achieved,
+                          const std::vector<bool>& where = {});
+
+/// The goal's share outside the printable gamut.
+struct GamutReport {
+  std::size_t printable_stacks = 0, hull_vertices = 0;
+  long long goal_pixels_outside = 0;
+  double goal_fraction_outside = 0, mean_delta_e00_outside_to_gamut = 0;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.printable_stacks, "printable_stacks", "stacks the inks can print");
+    f(s.hull_vertices, "hull_vertices", "vertices of their colours' convex hull (in Lab)");
+    f(s.goal_pixels_outside, "goal_pixels_outside", "goal pixels outside it");
+    f(s.goal_fraction_outside, "goal_fraction_outside", "their share");
+    f(s.mean_delta_e00_outside_to_gamut, "mean_delta_e00_outside_to_gamut",
+      "mean ΔE00 from those pixels to where the gamut map moved them");
+  }
+};
+
+/// What the lookup costs.
+struct LookupEstimate {
+  long long columns = 0;
+  std::size_t printable_stacks = 0;
+  double seconds = 0, megabytes = 0;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.columns, "columns", "columns looked up");
+    f(s.printable_stacks, "printable_stacks", "stacks each is chosen from");
+    f(s.seconds, "seconds", "estimated time");
+    f(s.megabytes, "megabytes", "estimated memory");
+  }
+};
+
+/// A texture's figures in result.json (TexturePiece::report).
+struct TextureReport {
+  std::array<int, 2> columns{};
+  std::string method;
+  std::vector<std::string> inks;
+  std::string metric;
+  bool error_diffusion = false, gamut_map = false;
+  std::size_t printable_stacks = 0;
+  GamutReport gamut;
+  DeltaEByGamut delta_e00;
+  double low_pass_sigma_px = 0, low_pass_delta_e00 = 0;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.columns, "columns", "columns along u and v");
+    f(s.method, "method", "tuners, or lookup");
+    f(s.inks, "inks", "the inks, from the surface down");
+    f(s.metric, "metric", "the colour metric");
+    f(s.error_diffusion, "error_diffusion", "whether errors were diffused to neighbouring columns");
+    f(s.gamut_map, "gamut_map", "whether goals were moved into the printable gamut");
+    f(s.printable_stacks, "printable_stacks", "stacks the inks can print");
+    f(s.gamut, "gamut", "the goal against the printable gamut");
+    f(s.delta_e00, "delta_e00", "ΔE00 between goal and achieved");
+    f(s.low_pass_sigma_px, "low_pass_sigma_px", "blur of the low-pass error, in columns");
+    f(s.low_pass_delta_e00, "low_pass_delta_e00", "mean ΔE00 after the blur (what the eye sees from afar)");
+  }
+};
 
 /// Every stack a column can be printed with: the values of the tuner's
 /// (discrete) search space, first axis fastest, and each one's simulated
@@ -226,16 +309,14 @@ class TexturePiece {
   std::vector<Rgb> colours_of(const std::vector<std::uint32_t>& stacks) const;
   /// What the lookup will cost, as the log line printed before it and the
   /// figures result.json keeps.
-  nlohmann::json lookup_estimate() const;
+  LookupEstimate lookup_estimate() const;
   /// Simulated albedo of every column at its current stack.
   std::vector<Rgb> achieved(TunerNetwork& network) const;
   /// The baseline diffusion is measured against: each column's nearest stack
   /// to its own pixel. Leaves every column at the stack it had.
   std::vector<Rgb> nearest_only(TunerNetwork& network) const;
-  /// result.json: columns, inks, metric, error_diffusion, gamut_map,
-  /// printable_stacks, gamut (the goal's share outside it), delta_e00 (all,
-  /// in_gamut, out_of_gamut), low_pass_sigma_px, low_pass_delta_e00.
-  nlohmann::json report(const std::vector<Rgb>& achieved) const;
+  /// The figures result.json keeps of the texture `achieved`.
+  TextureReport report(const std::vector<Rgb>& achieved) const;
   /// The printable stacks' simulated colours (stack k as in stack_grid).
   const std::vector<Rgb>& printable_colours() const { return stacks_.colours; }
 

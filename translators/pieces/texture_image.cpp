@@ -99,16 +99,16 @@ double low_pass_delta_e(const GoalImage& goal, const std::vector<Rgb>& achieved,
   return sum / static_cast<double>(goal.pixels.size());
 }
 
-nlohmann::json delta_e_statistics(const std::vector<Rgb>& goal, const std::vector<Rgb>& achieved,
-                                  const std::vector<bool>& where) {
+DeltaE delta_e_statistics(const std::vector<Rgb>& goal, const std::vector<Rgb>& achieved,
+                          const std::vector<bool>& where) {
   std::vector<double> d;
   for (size_t i = 0; i < goal.size(); ++i)
     if (where.empty() || where[i]) d.push_back(ciede2000(linear_rgb_to_lab(goal[i]), linear_rgb_to_lab(achieved[i])));
-  if (d.empty()) return {{"pixels", 0}};
+  if (d.empty()) return {};
   const double mean = std::accumulate(d.begin(), d.end(), 0.0) / static_cast<double>(d.size());
   std::sort(d.begin(), d.end());
   const auto p95 = d[static_cast<size_t>(std::ceil(0.95 * static_cast<double>(d.size()))) - 1];
-  return {{"pixels", d.size()}, {"mean", mean}, {"p95", p95}, {"max", d.back()}};
+  return {d.size(), mean, p95, d.back()};
 }
 
 }  // namespace spec2fab

@@ -31,6 +31,73 @@
 namespace spec2fab {
 namespace {
 
+/// One layer of a column's tuned stack.
+struct StackLayer {
+  std::string material;
+  double thickness_mm = 0;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.material, "material", "its material");
+    f(s.thickness_mm, "thickness_mm", "its thickness");
+  }
+};
+
+/// A column's tuned stack, from the surface down.
+struct ColumnStack {
+  std::string tuner;
+  std::vector<StackLayer> layers;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.tuner, "tuner", "the column's tuner");
+    f(s.layers, "layers", "its layers, from the surface down");
+  }
+};
+
+/// How much of the exhaustive search branch and bound spared.
+struct BranchAndBoundCounts {
+  double exhaustive_candidates_per_column = 0;
+  long long leaves_evaluated_total = 0;
+  Spread fraction_of_exhaustive;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.exhaustive_candidates_per_column, "exhaustive_candidates_per_column", "stacks an exhaustive search tries");
+    f(s.leaves_evaluated_total, "leaves_evaluated_total", "stacks branch and bound simulated, all columns");
+    f(s.fraction_of_exhaustive, "fraction_of_exhaustive", "per column, their share of the exhaustive search");
+  }
+};
+
+/// result.json "subsurface".
+struct SubsurfaceReport {
+  std::array<int, 2> columns{}, squares{};
+  std::vector<std::string> media;
+  int layers = 0;
+  std::vector<std::string> materials;
+  std::vector<double> thickness_mm;
+  std::string backing;
+  double profile_radius_mm = 0;
+  int profile_samples = 0;
+  Spread profile_rms_per_mm2, profile_relative_rms, profile_l2;
+  BranchAndBoundCounts branch_and_bound;
+  std::vector<ColumnStack> stacks;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.columns, "columns", "columns along u and v");
+    f(s.squares, "squares", "chessboard squares along u and v");
+    f(s.media, "media", "the two measured media");
+    f(s.layers, "layers", "layers per column");
+    f(s.materials, "materials", "the materials a layer chooses from");
+    f(s.thickness_mm, "thickness_mm", "the thicknesses a layer chooses from");
+    f(s.backing, "backing", "the material under the layers");
+    f(s.profile_radius_mm, "profile_radius_mm", "radius of the reflectance profiles");
+    f(s.profile_samples, "profile_samples", "their samples");
+    f(s.profile_rms_per_mm2, "profile_rms_per_mm2", "per column, RMS of achieved minus goal profile");
+    f(s.profile_relative_rms, "profile_relative_rms", "that relative to the goal's RMS");
+    f(s.profile_l2, "profile_l2", "per column, the tuner's final error");
+    f(s.branch_and_bound, "branch_and_bound", "the search's savings");
+    f(s.stacks, "stacks", "each column's tuned stack");
+  }
+};
+
 class SubsurfaceTranslator final : public TuningTranslator {
  public:
   // "media": the chessboard's two media.
@@ -165,7 +232,7 @@ class SubsurfaceTranslator final : public TuningTranslator {
       fractions.push_back(evaluated / candidates);
       leaves += static_cast<long long>(evaluated);
     }
-    nlohmann::json stacks = nlohmann::json::array();
+    SubsurfaceReport report;
     for (size_t t = 0; t < network_.size(); ++t) {
       Tuner& tuner = network_.tuner(t);
       errors.push_back(tuner.error());
@@ -174,35 +241,26 @@ class SubsurfaceTranslator final : public TuningTranslator {
       const std::vector<double> s = simulated.samples(), g = target.samples();
       column_rms.push_back(rms_difference(s, g));
       relative_rms.push_back(column_rms.back() / root_mean_square(g));
-      stacks.push_back(stack_json(tuner, context));
+      report.stacks.push_back(stack_of(tuner));
     }
-    auto stats = [](std::vector<double> v) {
-      const double mean = std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
-      std::sort(v.begin(), v.end());
-      return nlohmann::json{{"mean", mean}, {"max", v.back()}, {"min", v.front()}};
-    };
-    context.result["subsurface"] = {
-        {"columns", columns_},
-        {"squares", squares_},
-        {"media", {media_[0].name, media_[1].name}},
-        {"layers", layer_count_},
-        {"materials", materials_},
-        {"thickness_mm", thickness_list()},
-        {"backing", backing_},
-        {"profile_radius_mm", grid_.radius_mm},
-        {"profile_samples", grid_.samples},
-        {"profile_rms_per_mm2", stats(column_rms)},
-        {"profile_relative_rms", stats(relative_rms)},
-        {"profile_l2", stats(errors)},
-        {"branch_and_bound",
-         {{"exhaustive_candidates_per_column", candidates},
-          {"leaves_evaluated_total", leaves},
-          {"fraction_of_exhaustive", stats(fractions)}}},
-        {"stacks", stacks}};
+    report.columns = columns_;
+    report.squares = squares_;
+    report.media = {media_[0].name, media_[1].name};
+    report.layers = layer_count_;
+    report.materials = materials_;
+    report.thickness_mm = thickness_list();
+    report.backing = backing_;
+    report.profile_radius_mm = grid_.radius_mm;
+    report.profile_samples = grid_.samples;
+    report.profile_rms_per_mm2 = Spread::of(column_rms);
+    report.profile_relative_rms = Spread::of(relative_rms);
+    report.profile_l2 = Spread::of(errors);
+    report.branch_and_bound = {candidates, leaves, Spread::of(fractions)};
+    context.report.add("subsurface", report);
     write_profiles(context.folder.path("preview/profiles.png"));
     write_appearance(context.folder.path("preview/appearance.png"));
-    context.result["files"] = {
-        {"previews", {"preview/convergence.png", "preview/profiles.png", "preview/appearance.png"}}};
+    for (const char* file : {"preview/convergence.png", "preview/profiles.png", "preview/appearance.png"})
+      context.report.files.previews.push_back(file);
   }
 
   static TypeDoc doc() {
@@ -231,14 +289,12 @@ class SubsurfaceTranslator final : public TuningTranslator {
     return out;
   }
 
-  nlohmann::json stack_json(Tuner& tuner, RunContext& /*context*/) const {
-    nlohmann::json layers = nlohmann::json::array();
+  ColumnStack stack_of(Tuner& tuner) const {
+    ColumnStack stack{tuner.name(), {}};
     const std::vector<double> x = tuner.search_space().values();
-    for (size_t l = 0; 2 * l + 1 < x.size(); ++l) {
-      layers.push_back({{"material", tree_->palette().name(static_cast<MaterialId>(std::lround(x[2 * l])))},
-                        {"thickness_mm", x[2 * l + 1]}});
-    }
-    return {{"tuner", tuner.name()}, {"layers", layers}};
+    for (size_t l = 0; 2 * l + 1 < x.size(); ++l)
+      stack.layers.push_back({tree_->palette().name(static_cast<MaterialId>(std::lround(x[2 * l]))), x[2 * l + 1]});
+    return stack;
   }
 
   /// Goal (thin) vs achieved (thick) R(r)·r — the flux per unit radius — for

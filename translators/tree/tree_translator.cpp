@@ -23,6 +23,7 @@ class TreeTranslator final : public TuningTranslator {
   TreeTranslator(const Properties& /*root*/, const Experiment& experiment) {
     const Properties goal = experiment.goal();
     set_tree(std::make_unique<ReducerTree>(goal.object("tree"), experiment.palette()), goal, experiment);
+    report_final_errors_ = true;  // its only figures: each tuner's error against its goal at the end
     if (goal.has("tuners")) {
       const auto plan = build_tuning_plan(goal, *tree_, PartContext{experiment.palette(), &experiment.cache()});
       network_ = std::move(plan->network);
@@ -59,15 +60,9 @@ class TreeTranslator final : public TuningTranslator {
   }
 
  private:
-  /// Each tuner's error against its goal (not a diffused target) at the end.
-  void report(const RunRecord& record, RunContext& context) override {
-    nlohmann::json tuners = nlohmann::json::array();
-    for (size_t t = 0; t < network_.size(); ++t) {
-      Tuner& tuner = network_.tuner(t);
-      tuner.reset_target();
-      tuners.push_back({{"name", tuner.name()}, {"final_error", tuner.error()}});
-    }
-    context.result["tuning"]["tuners"] = tuners;
+  /// The tuning record (with each tuner's final error) says it all; the log
+  /// has each run.
+  void report(const RunRecord& record, RunContext& /*context*/) override {
     for (const TunerRun& run : record.runs) {
       spdlog::debug("{} ({}, sweep {}): {}", network_.tuner(run.tuner).name(), record.phase_names[run.phase],
                     run.sweep + 1, run.summary.brief_report());
