@@ -485,7 +485,7 @@ struct Grid {
     for (size_t t = 0; t < network.size(); ++t) {
       network.tuner(t).search_space().set_values(start[t]);
     }
-    const RunRecord record = schedule.run(network, 7);
+    const RunRecord record = schedule.run(network, 7, Limits());
     long long evaluations = 0;
     for (const TunerRun& run : record.runs) evaluations += run.summary.evaluations;
     return evaluations;

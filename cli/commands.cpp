@@ -46,6 +46,7 @@ int run_command(const RunArguments& arguments) {
   options.threads = arguments.threads;
   options.seed = arguments.seed;
   options.resume = arguments.resume;
+  options.limits = arguments.limits;
   const fs::path folder = run_experiment(arguments.experiment, options);
   if (ranks::root()) std::cout << "wrote " << folder.string() << "/ (result.json, tree.json, preview/, print/)\n";
   return 0;
@@ -161,10 +162,10 @@ int export_command(const ExportArguments& arguments) {
   } catch (const std::invalid_argument&) {
     geometry_where.fail("uv", "unknown uv source");
   }
-  Solid solid(load_mesh(mesh_file, geometry.scale_to_mm), uv, geometry.uv_axis);
+  Solid solid(load_mesh(mesh_file, geometry.scale_to_mm, arguments.limits), uv, geometry.uv_axis);
   // Materials the tree names must be loaded in the new printer: the palette
   // says which one is missing, where, and what the printer holds.
-  ReducerTree tree(Properties::load(tree_file), palette);
+  ReducerTree tree(Properties::load(tree_file), palette, arguments.limits);
 
   const int threads = arguments.threads > 0
                           ? arguments.threads
@@ -200,8 +201,8 @@ int export_command(const ExportArguments& arguments) {
   return 0;
 }
 
-int validate_command(const fs::path& experiment) {
-  const PreparedExperiment prepared = prepare_experiment(experiment);
+int validate_command(const fs::path& experiment, const Limits& limits) {
+  const PreparedExperiment prepared = prepare_experiment(experiment, limits);
   const Experiment& e = *prepared.experiment;
   std::cout << experiment.string() << ": ok\n"
             << "  name:       " << e.name() << "\n"
@@ -266,7 +267,7 @@ std::set<std::string> reserved_names(const SimulationHeader& header) {
 }  // namespace
 
 PreparedSimulation prepare_simulation(const fs::path& config_file, const std::string& simulator,
-                                      const std::shared_ptr<RunCache>& session) {
+                                      const Limits& limits, const std::shared_ptr<RunCache>& session) {
   PreparedSimulation prepared;
   const Properties config = Properties::load(config_file);
   prepared.cache = session ? session : std::make_shared<RunCache>();
@@ -281,7 +282,7 @@ PreparedSimulation prepare_simulation(const fs::path& config_file, const std::st
     return std::make_shared<const MaterialPalette>(*prepared.library, *prepared.printer);
   });
   // Under mpirun every rank prepares and runs the same simulation.
-  const PartContext context{*prepared.palette, prepared.cache.get(), ranks::size() > 1};
+  const PartContext context{*prepared.palette, prepared.cache.get(), ranks::size() > 1, &limits};
   const auto& simulators = SimulatorRegistry::instance();
   if (!simulators.contains(simulator)) {
     throw InputError("simulate: unknown simulator '" + simulator + "'" + did_you_mean(simulator, simulators.names()) +
@@ -292,9 +293,9 @@ PreparedSimulation prepare_simulation(const fs::path& config_file, const std::st
   if (config.has("mesh")) {
     const fs::path mesh_file = config.existing_file("mesh");
     prepared.solid = cache.get<const Solid>(
-        file_key(mesh_file), [&] { return std::make_shared<const Solid>(load_mesh(mesh_file), UvSource::planar); });
+        file_key(mesh_file), [&] { return std::make_shared<const Solid>(load_mesh(mesh_file, 1.0, limits), UvSource::planar); });
   }
-  prepared.tree = std::make_unique<ReducerTree>(config.object("subtree"), *prepared.palette);
+  prepared.tree = std::make_unique<ReducerTree>(config.object("subtree"), *prepared.palette, limits);
   prepared.subtree_location = config.where("subtree");
   if (prepared.solid) prepared.tree->bind(*prepared.solid);
   const auto options = config.optional_object("simulator");
@@ -305,7 +306,7 @@ PreparedSimulation prepare_simulation(const fs::path& config_file, const std::st
 }
 
 int simulate_command(const SimulateArguments& arguments) {
-  const PreparedSimulation prepared = prepare_simulation(arguments.config, arguments.simulator);
+  const PreparedSimulation prepared = prepare_simulation(arguments.config, arguments.simulator, arguments.limits);
   const MaterialPalette& palette = *prepared.palette;
   const PrinterProfile& printer = *prepared.printer;
   ReducerTree& tree = *prepared.tree;

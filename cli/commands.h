@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "core/limits.h"
 #include "core/run_cache.h"
 #include "geometry/solid.h"
 #include "materials/material_library.h"
@@ -23,6 +24,7 @@ struct RunArguments {
   int threads = 0;
   std::optional<std::uint64_t> seed;
   bool resume = false;
+  Limits limits;  ///< --limit's
 };
 
 struct ExportArguments {
@@ -33,6 +35,7 @@ struct ExportArguments {
   int threads = 0;
   double max_voxels = 0;     ///< 0: the default limit
   double mesh_voxel_mm = 0;  ///< 0: automatic
+  Limits limits;             ///< --limit's
 };
 
 struct SimulateArguments {
@@ -40,6 +43,7 @@ struct SimulateArguments {
   std::filesystem::path config;  ///< materials, printer, subtree, simulator options
   std::filesystem::path out;
   int repeat = 0;  ///< evaluations timed; 0: up to 100, stopping once 2 s have passed
+  Limits limits;   ///< --limit's
 };
 
 struct BenchArguments {
@@ -74,7 +78,7 @@ struct PreparedSimulation {
 /// path, size and modification time) and the parts' shared tables; without
 /// one, everything is made afresh and lives as long as the simulation.
 PreparedSimulation prepare_simulation(const std::filesystem::path& config, const std::string& simulator,
-                                      const std::shared_ptr<RunCache>& session = nullptr);
+                                      const Limits& limits, const std::shared_ptr<RunCache>& session = nullptr);
 
 int run_command(const RunArguments& arguments);
 /// Runs the optimizer x problem matrix and writes its report (docs/benchmarking.md).
@@ -83,7 +87,7 @@ int bench_command(BenchArguments arguments);
 int export_command(const ExportArguments& arguments);
 /// Runs one simulator standalone on a subtree and writes its observation.
 int simulate_command(const SimulateArguments& arguments);
-int validate_command(const std::filesystem::path& experiment);
+int validate_command(const std::filesystem::path& experiment, const Limits& limits);
 int list_command(const std::string& kind, bool verbose, const std::filesystem::path& datasets);
 /// docs/parts.md: every registered part, its options and an example, as
 /// Markdown (`list --markdown`; a test keeps the committed file current).

@@ -265,10 +265,11 @@ struct CommandLine {
   /// Runs the chosen command; its errors are main's to report.
   int dispatch() {
     if (*seed_option) run.seed = seed;
-    for (const std::string& assignment : limit_assignments)
-      limits::set_from_command_line(assignment);
+    Limits limits;
+    for (const std::string& assignment : limit_assignments) limits.set_from_command_line(assignment);
+    run.limits = simulate.limits = export_arguments.limits = limits;
     if (*run_cmd) return cli::run_command(run);
-    if (*validate_cmd) return cli::validate_command(validate_file);
+    if (*validate_cmd) return cli::validate_command(validate_file, limits);
     if (*bench_cmd) return cli::bench_command(bench);
     if (*simulate_cmd) return cli::simulate_command(simulate);
     if (*export_cmd) return cli::export_command(export_arguments);

@@ -84,7 +84,7 @@ class TargetMassTranslator final : public TuningTranslator {
     // The tuner, from the parts' factories; the optimizer is the
     // experiment's "optimizer", or exhaustive search.
     const OptimizerChoice optimizer(experiment.root(), "optimizer", {{"type", "exhaustive"}});
-    auto tuner = make_tuner("cut", make_mass_simulator({.cell_mm = {1.0, 1.0, step}}, PartContext{palette, &experiment.cache()}),
+    auto tuner = make_tuner("cut", make_mass_simulator({.cell_mm = {1.0, 1.0, step}}, experiment.part_context()),
                             make_relative_mass_error(), make_mass_goal(grams_), optimizer.build());
     tuner->set_node(*tree_, tree_->root());
     network_.add(std::move(tuner));

@@ -12,18 +12,10 @@
 #include "core/properties.h"
 #include "core/strings.h"
 
-namespace spec2fab::limits {
+namespace spec2fab {
+namespace limits {
 
 namespace {
-
-struct Layers {
-  std::map<std::string, double, std::less<>> experiment, command_line;
-};
-
-Layers& layers() {
-  static Layers instance;
-  return instance;
-}
 
 std::mutex& guard() {
   static std::mutex m;
@@ -78,22 +70,27 @@ std::vector<LimitDoc> docs() {
   return all;
 }
 
-double get(std::string_view name) {
-  const std::lock_guard lock(guard());
-  const Layers& l = layers();
-  if (const auto found = l.command_line.find(name); found != l.command_line.end()) return found->second;
-  if (const auto found = l.experiment.find(name); found != l.experiment.end()) return found->second;
-  const LimitDoc* doc = find(name);
+}  // namespace limits
+
+const Limits& default_limits() {
+  static const Limits defaults;
+  return defaults;
+}
+
+double Limits::get(std::string_view name) const {
+  if (const auto found = command_line_.find(name); found != command_line_.end()) return found->second;
+  if (const auto found = experiment_.find(name); found != experiment_.end()) return found->second;
+  const LimitDoc* doc = limits::find(name);
   if (doc == nullptr) throw std::logic_error("limits: no limit '" + std::string(name) + "'");
   return doc->default_value;
 }
 
-void set_from_command_line(const std::string& assignment) {
+void Limits::set_from_command_line(const std::string& assignment) {
   const size_t equals = assignment.find('=');
   const std::string name = assignment.substr(0, equals);
-  if (find(name) == nullptr)
-    throw InputError("--limit " + assignment + ": no limit '" + name + "'" + did_you_mean(name, names()) +
-                     " (limits: " + join(names()) + ")");
+  if (limits::find(name) == nullptr)
+    throw InputError("--limit " + assignment + ": no limit '" + name + "'" + did_you_mean(name, limits::names()) +
+                     " (limits: " + join(limits::names()) + ")");
   double value = NAN;
   try {
     size_t used = 0;
@@ -104,33 +101,27 @@ void set_from_command_line(const std::string& assignment) {
   }
   if (!(value > 0) || !std::isfinite(value))
     throw InputError("--limit " + assignment + ": give NAME=VALUE with a positive number, e.g. --limit " + name + "=" +
-                     fmt::format("{:g}", find(name)->default_value * 2));
-  if (const std::string why = beyond_ceiling(name, value); !why.empty()) throw InputError("--limit " + assignment + ": " + why);
-  const std::lock_guard lock(guard());
-  layers().command_line[name] = value;
+                     fmt::format("{:g}", limits::find(name)->default_value * 2));
+  if (const std::string why = limits::beyond_ceiling(name, value); !why.empty())
+    throw InputError("--limit " + assignment + ": " + why);
+  command_line_[name] = value;
 }
 
-void set_from_experiment(const Properties& limits) {
+void Limits::set_from_experiment(const Properties& limits) {
   std::map<std::string, double, std::less<>> read;
-  for (const LimitDoc& doc : docs()) {
+  for (const LimitDoc& doc : limits::docs()) {
     if (!limits.has(doc.name)) continue;
     const double value = limits.get<double>(doc.name);
     if (!(value > 0)) limits.fail(doc.name, "must be a positive number");
-    if (const std::string why = beyond_ceiling(doc.name, value); !why.empty()) limits.fail(doc.name, why);
+    if (const std::string why = limits::beyond_ceiling(doc.name, value); !why.empty()) limits.fail(doc.name, why);
     read[doc.name] = value;
   }
-  const std::lock_guard lock(guard());
-  layers().experiment = std::move(read);
+  experiment_ = std::move(read);
 }
 
-void reset() {
-  const std::lock_guard lock(guard());
-  layers() = Layers();
-}
-
-std::string how_to_change(std::string_view name) {
+std::string Limits::how_to_change(std::string_view name) const {
   return fmt::format("(limit {} = {:.3g}; set it with --limit {}=… or the experiment's \"limits\")", name, get(name),
                      name);
 }
 
-}  // namespace spec2fab::limits
+}  // namespace spec2fab

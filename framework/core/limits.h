@@ -4,10 +4,16 @@
 /// (docs/robustness.md). The defaults suit a workstation; an experiment's
 /// "limits" object sets them for its runs, and `--limit NAME=VALUE` on the
 /// command line (run, validate, simulate, export) wins over both.
-/// Process-wide: a command runs one experiment.
+///
 /// Each limit is declared beside the part it guards:
 ///     SPEC2FAB_LIMIT("tets", 1e7, "tetrahedra TetGen would make for the FEM");
+/// and the values in force are a `Limits`, which travels with the run — the
+/// experiment (Experiment::limits), the parts it builds (PartContext, the
+/// tree's NodeContext) — never a process global: two runs in one process
+/// (the Python module, threads) keep their own.
 
+#include <functional>
+#include <map>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -26,6 +32,31 @@ struct LimitDoc {
   std::string ceiling_reason;
 };
 
+/// The values one run or command goes by: the declared defaults, under an
+/// experiment's "limits", under the command line's (which win).
+class Limits {
+ public:
+  /// The declared defaults.
+  Limits() = default;
+  /// The limit in force (std::logic_error for a name nobody declared).
+  double get(std::string_view name) const;
+  /// "NAME=VALUE" from the command line; InputError for an unknown name or
+  /// a value that is not a positive number, or above the limit's ceiling.
+  void set_from_command_line(const std::string& assignment);
+  /// An experiment's "limits" object (replacing any experiment's before; the
+  /// command line's values still win).
+  void set_from_experiment(const Properties& limits);
+  /// What to say after a refusal: "(limit NAME = VALUE; set it with --limit NAME=… or the experiment's \"limits\")".
+  std::string how_to_change(std::string_view name) const;
+
+ private:
+  std::map<std::string, double, std::less<>> experiment_, command_line_;
+};
+
+/// The declared defaults, for what is built outside a run (tests, tools): an
+/// unchanging value, not a setting.
+const Limits& default_limits();
+
 namespace limits {
 
 /// Every limit the program links, by name: each is declared beside the part
@@ -35,17 +66,6 @@ std::vector<LimitDoc> docs();
 /// limit of the same name is a programming error (std::logic_error).
 bool declare(std::string name, double default_value, std::string meaning, double ceiling = 0,
              std::string ceiling_reason = {});
-/// The limit in force (the command line's, else the experiment's, else the default).
-double get(std::string_view name);
-/// "NAME=VALUE" from the command line; InputError for an unknown name or a
-/// value that is not a positive number.
-void set_from_command_line(const std::string& assignment);
-/// An experiment's "limits" object (replacing any earlier experiment's).
-void set_from_experiment(const Properties& limits);
-/// Back to the defaults (tests).
-void reset();
-/// What to say after a refusal: "(limit NAME VALUE; set it with --limit NAME=… or the experiment's \"limits\")".
-std::string how_to_change(std::string_view name);
 
 }  // namespace limits
 }  // namespace spec2fab

@@ -198,7 +198,8 @@ bool take_raw(std::string_view& in, std::vector<T>& values) {
 /// clear refusal, not the run. The child sends back the mesh, or the
 /// refusal's text; a child that dies, or takes longer than `seconds`, is
 /// named as such.
-Mesh import_isolated(const std::filesystem::path& file, double scale_to_mm, double seconds) {
+Mesh import_isolated(const std::filesystem::path& file, double scale_to_mm, const Limits& limits) {
+  const double seconds = limits.get("mesh_read_seconds");
   int pipe_ends[2];
   if (pipe2(pipe_ends, O_CLOEXEC) != 0) return import_with_assimp(file, scale_to_mm);
   const pid_t child = fork();
@@ -258,7 +259,7 @@ Mesh import_isolated(const std::filesystem::path& file, double scale_to_mm, doub
   }
   if (timed_out)
     fail(file, "read", fmt::format("the mesh reader (Assimp) did not finish in {:g} s; the file is malformed or far "
-                                   "too large {}", seconds, limits::how_to_change("mesh_read_seconds")));
+                                   "too large {}", seconds, limits.how_to_change("mesh_read_seconds")));
   if (WIFSIGNALED(status) || !WIFEXITED(status) || WEXITSTATUS(status) != 0 || answer.empty()) {
     const int signal = WIFSIGNALED(status) ? WTERMSIG(status) : 0;
     fail(file, "read", std::string("the mesh reader (Assimp) crashed on it") +
@@ -276,7 +277,7 @@ Mesh import_isolated(const std::filesystem::path& file, double scale_to_mm, doub
 
 }  // namespace
 
-Mesh load_mesh(const std::filesystem::path& file, double scale_to_mm, double reader_seconds, MeshReaderProcess process) {
+Mesh load_mesh(const std::filesystem::path& file, double scale_to_mm, const Limits& limits, MeshReaderProcess process) {
   std::error_code error;
   if (!std::filesystem::exists(file, error)) fail(file, "read", "file not found");
   if (!std::filesystem::is_regular_file(file, error)) fail(file, "read", "not a regular file");
@@ -288,7 +289,7 @@ Mesh load_mesh(const std::filesystem::path& file, double scale_to_mm, double rea
   // Open MPI forbids fork() in its processes: under mpirun Assimp runs here.
   if (process == MeshReaderProcess::this_one || std::getenv("OMPI_COMM_WORLD_SIZE") != nullptr)
     return import_with_assimp(file, scale_to_mm);
-  return import_isolated(file, scale_to_mm, reader_seconds > 0 ? reader_seconds : limits::get("mesh_read_seconds"));
+  return import_isolated(file, scale_to_mm, limits);
 }
 
 namespace {

@@ -4,6 +4,7 @@
 
 #include <filesystem>
 
+#include "core/limits.h"
 #include "geometry/mesh.h"
 
 namespace spec2fab {
@@ -19,13 +20,13 @@ namespace spec2fab {
 /// checked before Assimp sees the file. Assimp's readers have crashed or
 /// hung on malformed files these checks now refuse, so by default they still
 /// run in a child process: a reader that dies, or takes longer than
-/// `reader_seconds` (0: the limit "mesh_read_seconds", 60 s by default), is
+/// `limits`' "mesh_read_seconds" (the run's; 60 s by default), is
 /// a refusal naming the file.
 enum class MeshReaderProcess {
   automatic,  ///< a child process; this one under mpirun, whose processes must not fork
   this_one,   ///< this process (the fuzz harness: no fork per input, and a crash the checks let through is seen)
 };
-Mesh load_mesh(const std::filesystem::path& file, double scale_to_mm = 1.0, double reader_seconds = 0,
+Mesh load_mesh(const std::filesystem::path& file, double scale_to_mm = 1.0, const Limits& limits = default_limits(),
                MeshReaderProcess process = MeshReaderProcess::automatic);
 
 /// Writes a mesh (format from the extension: .obj, .stl, .ply) — used to make

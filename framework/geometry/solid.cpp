@@ -280,17 +280,17 @@ double Solid::field_band_voxels(double interior_band_mm, double voxel_mm) const 
   return impl_->mesh.surface_area() * (std::max(interior_band_mm, 0.0) + 3 * voxel_mm) / (voxel_mm * voxel_mm * voxel_mm);
 }
 
-std::string Solid::field_beyond_limit(double interior_band_mm, double voxel_mm) const {
+std::string Solid::field_beyond_limit(double interior_band_mm, double voxel_mm, const Limits& limits) const {
   // Measured on a 50 mm sphere (Release, 2 threads): 13-15 bytes and 0.19-0.24 us a voxel.
   constexpr double kBytesPerVoxel = 20, kSecondsPerVoxel = 0.25e-6;
   const double voxels = field_band_voxels(interior_band_mm, voxel_mm);
-  const double max_voxels = limits::get("field_band_voxels");
+  const double max_voxels = limits.get("field_band_voxels");
   if (voxels <= max_voxels) return {};
   return fmt::format("{:g} mm makes the surface field over a {:g} mm band about {:.3g} voxels (~{:.2g} GB, ~{} to "
                      "build), more than the {:.3g} allowed; give a coarser field_voxel_mm, or leave it out (here the "
                      "default would be {:.3g} mm) {}",
                      voxel_mm, interior_band_mm, voxels, voxels * kBytesPerVoxel * 1e-9, format_seconds(voxels * kSecondsPerVoxel),
-                     max_voxels, default_field_voxel(interior_band_mm), limits::how_to_change("field_band_voxels"));
+                     max_voxels, default_field_voxel(interior_band_mm), limits.how_to_change("field_band_voxels"));
 }
 
 const SurfaceField& Solid::field(double interior_band_mm, double voxel_mm) const {

@@ -5,6 +5,7 @@
 
 #include <memory>
 
+#include "core/limits.h"
 #include "geometry/mesh.h"
 #include "geometry/uv_projection.h"
 
@@ -65,7 +66,7 @@ class Solid {
   /// Why field(interior_band_mm, voxel_mm) must not be built — its voxels
   /// past the field_band_voxels limit, with their memory and build time —
   /// or nothing.
-  std::string field_beyond_limit(double interior_band_mm, double voxel_mm) const;
+  std::string field_beyond_limit(double interior_band_mm, double voxel_mm, const Limits& limits) const;
 
  private:
   friend class SurfaceField;  // its hot path projects onto triangles inline

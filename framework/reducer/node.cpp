@@ -18,10 +18,10 @@ SPEC2FAB_LIMIT("tree_depth", 100, "levels of nesting in a reducer tree (the pape
 SPEC2FAB_LIMIT("column_cells", 1e6, "cells of one column node, each a subtree of nodes");
 
 NodePtr build_node(const Properties& properties, const NodeContext& context) {
-  if (const double max_depth = limits::get("tree_depth"); context.depth > max_depth) {
+  if (const double max_depth = context.limits().get("tree_depth"); context.depth > max_depth) {
     properties.fail(fmt::format("the tree is nested more than {:g} levels deep here; a tree that deep is "
                                 "refused (a generated tree gone wrong?) {}",
-                                max_depth, limits::how_to_change("tree_depth")));
+                                max_depth, context.limits().how_to_change("tree_depth")));
   }
   return NodeRegistry::instance().create(properties, "node", context);
 }
@@ -148,18 +148,18 @@ bool RepeatedChildren::check(std::string* why) const {
   return false;
 }
 
-std::vector<NodePtr> RepeatedChildren::take(size_t count, const std::string& where) {
+std::vector<NodePtr> RepeatedChildren::take(size_t count, const std::string& where, const Limits& limits) {
   // Each cell is a node of its own, with its share of every walk over the
   // tree: millions of them are a texture, which stack_grid holds in one node.
   // Measured in a run of a 1000 x 1000 column on a 50 mm sphere (Release, 2
   // threads): 1.07 kB and 2.2 us a cell.
   constexpr double kBytesPerCell = 1.1e3, kSecondsPerCell = 2.2e-6;
-  if (const double max_cells = limits::get("column_cells"); static_cast<double>(count) > max_cells) {
+  if (const double max_cells = limits.get("column_cells"); static_cast<double>(count) > max_cells) {
     const auto cells = static_cast<double>(count);
     throw InputError(fmt::format("{}: {:.3g} cells of nodes (~{:.2g} GB, ~{} of a run), more than the {:.3g} one node "
                                  "may hold; a texture's columns belong in a stack_grid node {}",
                                  where, cells, cells * kBytesPerCell * 1e-9, format_seconds(cells * kSecondsPerCell),
-                                 max_cells, limits::how_to_change("column_cells")));
+                                 max_cells, limits.how_to_change("column_cells")));
   }
   std::vector<NodePtr> out;
   if (child.node) {

@@ -21,6 +21,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/limits.h"
 #include "core/parameter.h"
 #include "core/registry.h"
 #include "materials/palette.h"
@@ -37,11 +38,13 @@ using NodePtr = std::unique_ptr<ReducerNode>;
 struct NodeContext {
   const MaterialPalette& palette;
   int depth = 0;  ///< of the node being built; the root is 0
+  const Limits* run_limits = nullptr;  ///< the run's (core/limits.h); null: the defaults
 
-  // Deeper than limits::get("tree_depth") (core/limits.h), a tree is
-  // refused: every walk over a tree recurses, and thousands of levels would
-  // overflow the stack. The paper's trees are five levels deep.
-  NodeContext child() const { return {palette, depth + 1}; }
+  const Limits& limits() const { return run_limits != nullptr ? *run_limits : default_limits(); }
+  // Deeper than the "tree_depth" limit, a tree is refused: every walk over a
+  // tree recurses, and thousands of levels would overflow the stack. The
+  // paper's trees are five levels deep.
+  NodeContext child() const { return {palette, depth + 1, run_limits}; }
 };
 
 using NodeRegistry = Registry<ReducerNode, const NodeContext&>;
@@ -249,8 +252,9 @@ struct RepeatedChildren {
   }
   /// "give either …" unless exactly one of the two is given.
   bool check(std::string* why) const;
-  /// `count` nodes: the template cloned, or the list (which must hold `count`).
-  std::vector<NodePtr> take(size_t count, const std::string& where);
+  /// `count` nodes: the template cloned, or the list (which must hold `count`);
+  /// more than the "column_cells" limit of `limits` is refused.
+  std::vector<NodePtr> take(size_t count, const std::string& where, const Limits& limits);
 };
 /// Writes children back: as "child" when all are identical, else as "children".
 void repeated_children_to_json(const std::vector<NodePtr>& children,

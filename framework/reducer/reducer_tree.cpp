@@ -13,11 +13,11 @@
 
 namespace spec2fab {
 
-ReducerTree::ReducerTree(const Properties& properties, const MaterialPalette& palette)
-    : ReducerTree(build_node(properties, NodeContext{palette}), palette) {}
+ReducerTree::ReducerTree(const Properties& properties, const MaterialPalette& palette, const Limits& limits)
+    : ReducerTree(build_node(properties, NodeContext{palette, 0, &limits}), palette, limits) {}
 
-ReducerTree::ReducerTree(NodePtr root, const MaterialPalette& palette)
-    : root_(std::move(root)), palette_(&palette) {}
+ReducerTree::ReducerTree(NodePtr root, const MaterialPalette& palette, const Limits& limits)
+    : root_(std::move(root)), palette_(&palette), limits_(limits) {}
 
 void ReducerTree::bind(const Solid& solid, double field_voxel_mm) {
   solid_ = &solid;
@@ -29,7 +29,8 @@ void ReducerTree::bind(const Solid& solid, double field_voxel_mm) {
   evaluate();
   // The default voxel keeps any band near two million voxels; a given one may not.
   if (field_voxel_mm > 0) {
-    if (std::string problem = solid.field_beyond_limit(context.required_band_mm, field_voxel_mm); !problem.empty())
+    if (std::string problem = solid.field_beyond_limit(context.required_band_mm, field_voxel_mm, limits_);
+        !problem.empty())
       throw FieldBeyondLimit(problem);
   }
   field_ = &solid.field(context.required_band_mm, field_voxel_mm);

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/limits.h"
 #include "core/search_space.h"
 #include "geometry/solid.h"
 #include "reducer/node.h"
@@ -29,9 +30,11 @@ class FieldBeyondLimit : public InputError {
 class ReducerTree {
  public:
   /// Builds a tree from its JSON description; materials resolve in `palette`,
-  /// which must outlive the tree.
-  ReducerTree(const Properties& properties, const MaterialPalette& palette);
-  ReducerTree(NodePtr root, const MaterialPalette& palette);
+  /// which must outlive the tree. `limits` are the run's (the tree's depth,
+  /// a column's cells, the field's band).
+  ReducerTree(const Properties& properties, const MaterialPalette& palette,
+              const Limits& limits = default_limits());
+  ReducerTree(NodePtr root, const MaterialPalette& palette, const Limits& limits = default_limits());
 
   ReducerNode& root() { return *root_; }
   const ReducerNode& root() const { return *root_; }
@@ -123,6 +126,7 @@ class ReducerTree {
 
   NodePtr root_;
   const MaterialPalette* palette_;
+  Limits limits_;
   const Solid* solid_ = nullptr;
   const SurfaceField* field_ = nullptr;
 };

@@ -9,6 +9,7 @@
 #include <spdlog/spdlog.h>
 
 #include "geometry/mesh_io.h"
+#include "tuning/parts.h"
 
 namespace spec2fab {
 
@@ -42,13 +43,13 @@ std::vector<PropertyDoc> ExperimentKeys::docs() {
   return rows;
 }
 
-Experiment Experiment::load(const std::filesystem::path& file) {
+Experiment Experiment::load(const std::filesystem::path& file, const Limits& command_line) {
   Experiment experiment(Properties::load(file));
   const Properties& root = experiment.root_;
   experiment.file_ = file;
   // Before anything they bound is read: the mesh, images, trees.
-  if (const auto limits = root.optional_object("limits")) limits::set_from_experiment(*limits);
-  else limits::set_from_experiment(Properties::wrap(nlohmann::json::object(), file.string()));
+  experiment.limits_ = command_line;
+  if (const auto limits = root.optional_object("limits")) experiment.limits_.set_from_experiment(*limits);
   const ExperimentKeys keys = read_options<ExperimentKeys>(root);
   experiment.name_ = keys.name.empty() ? default_name(file) : keys.name;
   for (char c : experiment.name_) {
@@ -65,17 +66,20 @@ Experiment Experiment::load(const std::filesystem::path& file) {
   const Properties geometry = root.object("geometry");
   experiment.geometry_spec_ = read_geometry(geometry);
   const GeometrySpec& g = experiment.geometry_spec_;
-  Mesh mesh = load_mesh(g.mesh, g.scale_to_mm);
+  Mesh mesh = load_mesh(g.mesh, g.scale_to_mm, experiment.limits_);
   spdlog::debug("loaded {}: {} vertices, {} triangles", g.mesh.string(), mesh.vertices.size(),
                 mesh.triangles.size());
   experiment.solid_ = std::make_shared<Solid>(std::move(mesh), g.uv, g.uv_axis);
   if (g.field_voxel_mm > 0) {
     // The field's band is at least a few of its voxels thick, before any tree
     // asks for a deeper one (ReducerTree::bind checks that band).
-    if (const std::string problem = experiment.solid_->field_beyond_limit(0, g.field_voxel_mm); !problem.empty())
+    if (const std::string problem = experiment.solid_->field_beyond_limit(0, g.field_voxel_mm, experiment.limits_);
+        !problem.empty())
       geometry.fail("field_voxel_mm", problem);
   }
   return experiment;
 }
+
+PartContext Experiment::part_context() const { return PartContext{palette(), &cache(), false, &limits_}; }
 
 }  // namespace spec2fab

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "core/limits.h"
 #include "core/options.h"
 #include "core/properties.h"
 #include "core/run_cache.h"
@@ -25,6 +26,8 @@
 #include "materials/printer_profile.h"
 
 namespace spec2fab {
+
+struct PartContext;
 
 /// The experiment file's own keys, declared once (core/options.h); the
 /// sections it names (geometry, goal, optimizer, output) are read by the
@@ -83,8 +86,9 @@ struct GeometrySpec {
 
 class Experiment {
  public:
-  /// Reads the file and loads the shared inputs. Throws InputError.
-  static Experiment load(const std::filesystem::path& file);
+  /// Reads the file and loads the shared inputs, under `command_line`'s
+  /// limits (which win over the experiment's "limits"). Throws InputError.
+  static Experiment load(const std::filesystem::path& file, const Limits& command_line);
 
   const std::filesystem::path& file() const { return file_; }
   const std::string& name() const { return name_; }
@@ -99,6 +103,12 @@ class Experiment {
   // A translator's tuners take the "optimizer" section, or its default,
   // through OptimizerChoice (tuning/optimizer.h).
   std::optional<Properties> output() const { return root_.optional_object("output"); }
+
+  /// The limits this experiment's runs go by (core/limits.h).
+  const Limits& limits() const { return limits_; }
+  /// What the parts a translator builds are made with: the palette, the
+  /// run's cache and limits.
+  PartContext part_context() const;
 
   const Solid& solid() const { return *solid_; }
   const MaterialLibrary& library() const { return *library_; }
@@ -115,6 +125,7 @@ class Experiment {
   std::filesystem::path file_;
   std::string name_, translator_;
   std::uint64_t seed_ = 1;
+  Limits limits_;
   GeometrySpec geometry_spec_;
   std::shared_ptr<Solid> solid_;
   std::shared_ptr<MaterialLibrary> library_;

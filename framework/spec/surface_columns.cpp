@@ -4,7 +4,7 @@ namespace spec2fab {
 
 SurfaceColumnTree surface_column_tree(double shell_mm, std::array<int, 2> columns,
                                       std::vector<LayeredOptions::Layer> layers, const Parameter& backing,
-                                      NodePtr core) {
+                                      const Limits& limits, NodePtr core) {
   LayeredOptions stack;
   stack.layers = std::move(layers);
   stack.layers.emplace_back().material.parameter = backing;
@@ -13,7 +13,7 @@ SurfaceColumnTree surface_column_tree(double shell_mm, std::array<int, 2> column
   grid.cells.child.node = make_layered(std::move(stack));
   StratumOptions stratum;
   stratum.depth_mm = fixed_number(shell_mm, stratum.depth_mm);
-  stratum.shell.node = make_column(std::move(grid));
+  stratum.shell.node = make_column(std::move(grid), limits);
   ReducerNode* column_node = stratum.shell.node.get();
   stratum.core.node = core ? std::move(core) : make_solid_material(backing);
   return {make_stratum(std::move(stratum)), column_node};

@@ -26,6 +26,6 @@ struct SurfaceColumnTree {
 /// texture's cells).
 SurfaceColumnTree surface_column_tree(double shell_mm, std::array<int, 2> columns,
                                       std::vector<LayeredOptions::Layer> layers, const Parameter& backing,
-                                      NodePtr core = nullptr);
+                                      const Limits& limits, NodePtr core = nullptr);
 
 }  // namespace spec2fab

@@ -17,9 +17,9 @@
 
 namespace spec2fab {
 
-PreparedExperiment prepare_experiment(const std::filesystem::path& file) {
+PreparedExperiment prepare_experiment(const std::filesystem::path& file, const Limits& limits) {
   PreparedExperiment prepared;
-  prepared.experiment = std::make_unique<Experiment>(Experiment::load(file));
+  prepared.experiment = std::make_unique<Experiment>(Experiment::load(file, limits));
   const Experiment& experiment = *prepared.experiment;
   prepared.translator = TranslatorRegistry::instance().create(experiment.root(), "translator",
                                                               experiment, "translator");
@@ -80,7 +80,7 @@ void check_run_identity(RunFolder& folder, const nlohmann::json& identity) {
 
 std::filesystem::path run_experiment(const std::filesystem::path& file, const RunOptions& options) {
   const auto start = std::chrono::steady_clock::now();
-  PreparedExperiment prepared = prepare_experiment(file);
+  PreparedExperiment prepared = prepare_experiment(file, options.limits);
   const Experiment& experiment = *prepared.experiment;
 
   const int threads = options.threads > 0

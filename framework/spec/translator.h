@@ -72,7 +72,8 @@ struct PreparedExperiment {
 };
 
 /// Throws InputError for any problem in the file or the inputs it names.
-PreparedExperiment prepare_experiment(const std::filesystem::path& file);
+/// `limits`: the command line's (which win over the experiment's "limits").
+PreparedExperiment prepare_experiment(const std::filesystem::path& file, const Limits& limits);
 
 struct RunOptions {
   std::filesystem::path out;  ///< empty: out/<experiment name>
@@ -82,6 +83,7 @@ struct RunOptions {
   /// output folder finished (its checkpoint), to the files an uninterrupted
   /// run writes; with none, start from the beginning.
   bool resume = false;
+  Limits limits;  ///< the command line's, over the experiment's "limits"
 };
 
 /// Prepares and runs an experiment, writing the run folder all-or-nothing.

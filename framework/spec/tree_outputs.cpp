@@ -25,7 +25,7 @@ TreeOutputOptions TreeOutputOptions::read(const Properties& goal, const Experime
   options.census_voxel_mm = std::isnan(goal_keys.census_voxel_mm) ? longest / 128 : goal_keys.census_voxel_mm;
   require_in(goal, "census_voxel_mm", options.census_voxel_mm, Range::closed(longest / 2048, longest));
   // The census walks every one of its voxels: refused before, by count.
-  const double max_census_voxels = limits::get("census_voxels");
+  const double max_census_voxels = experiment.limits().get("census_voxels");
   double census_voxels = 1;
   for (int axis = 0; axis < 3; ++axis)
     census_voxels *= std::max(1.0, std::ceil(experiment.solid().bounds().size()[axis] / options.census_voxel_mm));
@@ -37,7 +37,7 @@ TreeOutputOptions TreeOutputOptions::read(const Properties& goal, const Experime
               fmt::format("{:.3g} mm makes a census of {:.3g} voxels (~{} of walking the tree), more than the "
                           "{:.3g} it takes at most; give a coarser census_voxel_mm (the default is {:.3g} mm) {}",
                           options.census_voxel_mm, census_voxels, format_seconds(census_voxels * kSecondsPerVoxel),
-                          max_census_voxels, longest / 128, limits::how_to_change("census_voxels")));
+                          max_census_voxels, longest / 128, experiment.limits().how_to_change("census_voxels")));
   }
   const auto output = experiment.output();
   if (output) options.section_pixels = read_options<OutputKeys>(*output).section_pixels;

@@ -8,6 +8,7 @@ namespace spec2fab {
 void TuningTranslator::set_tree(std::unique_ptr<ReducerTree> tree, const Properties& goal,
                                 const Experiment& experiment) {
   tree_ = std::move(tree);
+  limits_ = &experiment.limits();
   try {
     tree_->bind(experiment.solid(), experiment.geometry_spec().field_voxel_mm);
   } catch (const FieldBeyondLimit& e) {
@@ -17,11 +18,11 @@ void TuningTranslator::set_tree(std::unique_ptr<ReducerTree> tree, const Propert
 }
 
 void TuningTranslator::set_tree(NodePtr root, const Properties& goal, const Experiment& experiment) {
-  set_tree(std::make_unique<ReducerTree>(std::move(root), experiment.palette()), goal, experiment);
+  set_tree(std::make_unique<ReducerTree>(std::move(root), experiment.palette(), experiment.limits()), goal, experiment);
 }
 
 std::string TuningTranslator::check_limits() {
-  return network_.size() > 0 ? schedule_.check_plan(network_) : std::string();
+  return network_.size() > 0 ? schedule_.check_plan(network_, *limits_) : std::string();
 }
 
 void TuningTranslator::run(RunContext& context) {
@@ -29,7 +30,7 @@ void TuningTranslator::run(RunContext& context) {
     prepare(context);
     RunRecord record;
     if (network_.size() > 0) {
-      record = schedule_.run(network_, context.seed, context.checkpoint);
+      record = schedule_.run(network_, context.seed, context.experiment.limits(), context.checkpoint);
       context.tuner_runs_here += record.tuner_runs_here;
       tree_->evaluate();
       write_tuning_outputs(record, network_, context, report_final_errors_);

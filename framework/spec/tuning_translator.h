@@ -55,6 +55,9 @@ class TuningTranslator : public Translator {
   std::vector<PrintSurface> print_surfaces_;
   /// The tuning record lists each tuner's final error against its own goal.
   bool report_final_errors_ = false;
+
+ private:
+  const Limits* limits_ = nullptr;  ///< the experiment's (set_tree)
 };
 
 }  // namespace spec2fab

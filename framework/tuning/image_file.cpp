@@ -106,11 +106,11 @@ std::string capturing_stderr(Decode&& decode) {
 
 }  // namespace
 
-cv::Mat read_image(const std::filesystem::path& file, const std::string& where, int flags, double max_pixels) {
+cv::Mat read_image(const std::filesystem::path& file, const std::string& where, int flags, const Limits& limits) {
   const std::string named = where + ": " + file.string();
   std::string limit;  // built piecewise: g++ 12 warns falsely (-Wrestrict) on " " + std::string&&
-  if (!(max_pixels > 0)) limit.append(" ").append(limits::how_to_change("image_pixels"));
-  if (!(max_pixels > 0)) max_pixels = limits::get("image_pixels");
+  limit.append(" ").append(limits.how_to_change("image_pixels"));
+  const double max_pixels = limits.get("image_pixels");
   if (const std::string why = unreadable_file_reason(file); !why.empty()) throw InputError(named + ": " + why);
   if (const auto size = png_size(file); size && static_cast<double>(size->width) * static_cast<double>(size->height) > max_pixels) {
     throw InputError(fmt::format("{}: the image is {} x {} pixels, more than the {:.3g} read at most{}", named,

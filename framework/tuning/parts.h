@@ -24,6 +24,7 @@
 
 #include "core/report.h"
 
+#include "core/limits.h"
 #include "core/registry.h"
 #include "core/run_cache.h"
 #include "core/search_space.h"
@@ -210,6 +211,9 @@ struct PartContext {
   /// spread one solve over the ranks does (the FEM's gamg solver); the
   /// others compute the same answer on each rank.
   bool solve_across_ranks = false;
+  /// The run's limits (core/limits.h); null: the declared defaults.
+  const Limits* run_limits = nullptr;
+  const Limits& limits() const { return run_limits != nullptr ? *run_limits : default_limits(); }
 };
 
 using SimulatorRegistry = Registry<Simulator, const PartContext&>;

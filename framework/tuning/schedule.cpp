@@ -160,7 +160,8 @@ namespace {
 // What the phases from `first` on ask for, counted before they start: tuner
 // runs (sweeps × tuners) and error evaluations (each run's optimizer plan;
 // runs whose optimizer cannot say are left out of that count and named).
-std::string check_schedule_plan(const std::vector<Phase>& phases, size_t first, TunerNetwork& network) {
+std::string check_schedule_plan(const std::vector<Phase>& phases, size_t first, TunerNetwork& network,
+                                const Limits& limits) {
   double runs = 0, evaluations = 0, unplanned_runs = 0;
   for (size_t p = first; p < phases.size(); ++p) {
     const Phase& phase = phases[p];
@@ -179,18 +180,18 @@ std::string check_schedule_plan(const std::vector<Phase>& phases, size_t first, 
         unplanned_runs += phase.sweeps;
     }
   }
-  if (const double max_runs = limits::get("tuner_runs"); runs > max_runs)
+  if (const double max_runs = limits.get("tuner_runs"); runs > max_runs)
     throw InputError(fmt::format("schedule: its phases ask for {:.3g} tuner runs (sweeps times tuners), more than the "
                                  "{:.3g} allowed {}",
-                                 runs, max_runs, limits::how_to_change("tuner_runs")));
-  if (const double max_evaluations = limits::get("evaluations"); evaluations > max_evaluations)
+                                 runs, max_runs, limits.how_to_change("tuner_runs")));
+  if (const double max_evaluations = limits.get("evaluations"); evaluations > max_evaluations)
     throw InputError(fmt::format("schedule: its phases plan {:.3g} error evaluations (each tuner run's optimizer "
                                  "evaluations, summed){}, more than the {:.3g} allowed {}",
                                  evaluations,
                                  unplanned_runs > 0 ? fmt::format(" besides {:.3g} runs of optimizers that cannot say "
                                                                   "how many they make", unplanned_runs)
                                                     : std::string(),
-                                 max_evaluations, limits::how_to_change("evaluations")));
+                                 max_evaluations, limits.how_to_change("evaluations")));
   const std::string counted = fmt::format("{:.0f} tuner run(s) in {} phase(s), ", runs, phases.size() - first);
   if (unplanned_runs == 0) return counted + fmt::format("{:.3g} error evaluations planned", evaluations);
   if (evaluations == 0) return counted + "by optimizers that cannot say how many evaluations they make";
@@ -203,15 +204,16 @@ std::string check_schedule_plan(const std::vector<Phase>& phases, size_t first, 
 // finish, so that a schedule far beyond the limit stops after its first runs
 // rather than after days. Under mpirun the ranks' clocks differ and a refusal
 // on one would leave the others waiting: only runs of one process are checked.
-void check_phase_pace(const Phase& phase, long long done, long long total, double phase_seconds, double seconds_before) {
+void check_phase_pace(const Phase& phase, long long done, long long total, double phase_seconds, double seconds_before,
+                      const Limits& limits) {
   if (done <= 0 || done >= total || ranks::size() > 1) return;
   const double projected = seconds_before + phase_seconds / static_cast<double>(done) * static_cast<double>(total);
-  const double max_hours = limits::get("tuning_hours");
+  const double max_hours = limits.get("tuning_hours");
   if (projected <= max_hours * 3600) return;
   throw InputError(fmt::format("schedule: phase '{}' took {:.3g} s for its first {} of {} tuner runs; at that pace "
                                "the run's tuning would take about {:.3g} h, more than the {:.3g} h allowed {}",
                                phase.name, phase_seconds, done, total, projected / 3600, max_hours,
-                               limits::how_to_change("tuning_hours")));
+                               limits.how_to_change("tuning_hours")));
 }
 
 std::string progress_detail(int sweep, double error_sum, size_t runs) {
@@ -228,8 +230,8 @@ std::vector<size_t> Phase::members(size_t network_size) const {
   return all;
 }
 
-std::string Schedule::check_plan(TunerNetwork& network, size_t first_phase) const {
-  return check_schedule_plan(phases_, first_phase, network);
+std::string Schedule::check_plan(TunerNetwork& network, const Limits& limits, size_t first_phase) const {
+  return check_schedule_plan(phases_, first_phase, network, limits);
 }
 
 namespace {
@@ -269,7 +271,7 @@ std::vector<std::vector<size_t>> runnable_classes(const Phase& phase, const std:
 class PhaseRun {
  public:
   PhaseRun(const Phase& phase, size_t index, TunerNetwork& network, std::uint64_t seed, RunRecord& record,
-           double seconds_before)
+           double seconds_before, const Limits& limits)
       : phase_(phase),
         index_(index),
         network_(network),
@@ -279,7 +281,8 @@ class PhaseRun {
         classes_(runnable_classes(phase, tuners_, network)),
         runs_(static_cast<long long>(tuners_.size()) * phase.sweeps),
         progress_(phase.name, runs_),
-        seconds_before_(seconds_before) {
+        seconds_before_(seconds_before),
+        limits_(limits) {
     record_.phase_names.push_back(phase.name);
     // A phase's own optimizer (built once per phase, kept over its sweeps).
     if (!phase.optimizer.is_null()) {
@@ -350,7 +353,7 @@ class PhaseRun {
     for (size_t t : tuned) sweep_error_ += summaries_[t].final_error;
     swept_ += tuned.size();
     progress_.update(done_, progress_detail(sweep, sweep_error_, swept_));
-    check_phase_pace(phase_, done_, runs_, seconds_since(start_), seconds_before_);
+    check_phase_pace(phase_, done_, runs_, seconds_since(start_), seconds_before_, limits_);
   }
 
   const Phase& phase_;
@@ -363,6 +366,7 @@ class PhaseRun {
   const long long runs_;
   Progress progress_;
   const double seconds_before_;
+  const Limits& limits_;
   const std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
   std::vector<std::unique_ptr<Optimizer>> own_;  ///< the tuners' optimizers while the phase's own tune
   long long done_ = 0, evaluations_ = 0;
@@ -375,7 +379,8 @@ class PhaseRun {
 
 }  // namespace
 
-RunRecord Schedule::run(TunerNetwork& network, std::uint64_t seed, PhaseCheckpoint* checkpoint) const {
+RunRecord Schedule::run(TunerNetwork& network, std::uint64_t seed, const Limits& limits,
+                        PhaseCheckpoint* checkpoint) const {
   RunRecord record;
   size_t first = 0;
   if (checkpoint) {
@@ -386,10 +391,10 @@ RunRecord Schedule::run(TunerNetwork& network, std::uint64_t seed, PhaseCheckpoi
                      first, phases_.size());
     }
   }
-  check_plan(network, first);  // the loops below, bounded before they start
+  check_plan(network, limits, first);  // the loops below, bounded before they start
   const auto schedule_start = std::chrono::steady_clock::now();
   for (size_t p = first; p < phases_.size(); ++p) {
-    PhaseRun phase(phases_[p], p, network, seed, record, seconds_since(schedule_start));
+    PhaseRun phase(phases_[p], p, network, seed, record, seconds_since(schedule_start), limits);
     for (int sweep = 0; sweep < phases_[p].sweeps; ++sweep) phase.sweep(sweep);
     phase.finish();
     if (checkpoint) checkpoint->save(schedule_state::checkpoint_state(phases_, p + 1, record, network));

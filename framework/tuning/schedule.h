@@ -20,6 +20,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/limits.h"
 #include "core/registry.h"
 #include "core/report.h"
 #include "tuning/tuner_network.h"
@@ -239,7 +240,8 @@ class Schedule {
   /// index out of range. With a checkpoint, saves the state after each phase
   /// and starts after the last phase an earlier process saved (InputError
   /// when that state is not of this schedule and network).
-  RunRecord run(TunerNetwork& network, std::uint64_t seed, PhaseCheckpoint* checkpoint = nullptr) const;
+  RunRecord run(TunerNetwork& network, std::uint64_t seed, const Limits& limits,
+                PhaseCheckpoint* checkpoint = nullptr) const;
   /// What run() checks before it starts (run() checks it again): InputError
   /// when the phases from `first_phase` on ask for more tuner runs, or plan
   /// more error evaluations (Optimizer::planned_evaluations), than the
@@ -248,7 +250,7 @@ class Schedule {
   /// with InputError, when the tuning would take longer than tuning_hours.
   /// What check_plan counted, for `spec2fab validate`: "N tuner runs in P
   /// phase(s), M error evaluations planned".
-  std::string check_plan(TunerNetwork& network, size_t first_phase = 0) const;
+  std::string check_plan(TunerNetwork& network, const Limits& limits, size_t first_phase = 0) const;
 
  private:
   std::vector<Phase> phases_;

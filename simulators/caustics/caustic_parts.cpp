@@ -80,16 +80,16 @@ class CausticImageGoal final : public GoalFor<ImageObservation> {
  public:
   using Options = CausticImageGoalOptions;
 
-  CausticImageGoal(const Properties& properties, const PartContext& /*context*/) {
+  CausticImageGoal(const Properties& properties, const PartContext& context) {
     const Options options = read_options<Options>(properties);
     try {
-      read(options);
+      read(options, context.limits());
     } catch (const InputError& e) {
       options_detail::fail_at_key(properties, e.what());
     }
   }
   /// InputErrors say "image: problem", for the caller to place.
-  explicit CausticImageGoal(const Options& options) { read(options); }
+  CausticImageGoal(const Options& options, const Limits& limits) { read(options, limits); }
 
   std::string name() const override { return "caustic_image"; }
   const ImageObservation& typed_target() const override { return target_; }
@@ -105,9 +105,9 @@ class CausticImageGoal final : public GoalFor<ImageObservation> {
   }
 
  private:
-  void read(const Options& options) {
+  void read(const Options& options, const Limits& limits) {
     const std::filesystem::path& file = options.image;
-    const cv::Mat picture = read_image(file, "image", cv::IMREAD_GRAYSCALE);
+    const cv::Mat picture = read_image(file, "image", cv::IMREAD_GRAYSCALE, limits);
     const std::array<int, 2>& size = options.size;
     const std::array<double, 2>& receiver = options.receiver_mm;
     const double flux = options.flux_mm2;
@@ -185,8 +185,9 @@ class ImageMse final : public MetricFor<ImageObservation> {
 
 }  // namespace
 
-std::unique_ptr<GoalFor<ImageObservation>> make_caustic_image_goal(const CausticImageGoalOptions& options) {
-  return std::make_unique<CausticImageGoal>(require_valid(options, "caustic_image"));
+std::unique_ptr<GoalFor<ImageObservation>> make_caustic_image_goal(const CausticImageGoalOptions& options,
+                                                                   const Limits& limits) {
+  return std::make_unique<CausticImageGoal>(require_valid(options, "caustic_image"), limits);
 }
 
 std::unique_ptr<MetricFor<ImageObservation>> make_image_mse() { return std::make_unique<ImageMse>(); }

@@ -58,7 +58,8 @@ struct CausticImageGoalOptions {
 /// The "caustics" simulator of a slab.
 std::unique_ptr<SimulatorFor<ImageObservation>> make_caustic_simulator(const CausticSlabConfig& config);
 /// The "caustic_image" goal.
-std::unique_ptr<GoalFor<ImageObservation>> make_caustic_image_goal(const CausticImageGoalOptions& options);
+std::unique_ptr<GoalFor<ImageObservation>> make_caustic_image_goal(const CausticImageGoalOptions& options,
+                                                                   const Limits& limits);
 /// The "image_mse" metric.
 std::unique_ptr<MetricFor<ImageObservation>> make_image_mse();
 

@@ -21,8 +21,8 @@ namespace {
 
 class CausticSimulator final : public SimulatorFor<ImageObservation> {
  public:
-  CausticSimulator(const Properties& properties, const PartContext& /*context*/)
-      : CausticSimulator(CausticSlabConfig::read(properties)) {}
+  CausticSimulator(const Properties& properties, const PartContext& context)
+      : CausticSimulator(CausticSlabConfig::read(properties, context.limits())) {}
   explicit CausticSimulator(const CausticSlabConfig& config) {
     thickness_mm_ = config.thickness_mm;
     origin_ = config.origin_mm;

@@ -23,16 +23,16 @@
 
 namespace spec2fab {
 
-CausticSlabConfig CausticSlabConfig::read(const Properties& properties) {
+CausticSlabConfig CausticSlabConfig::read(const Properties& properties, const Limits& limits) {
   const Options o = read_options<Options>(properties);
   try {
-    return from(o);
+    return from(o, limits);
   } catch (const InputError& e) {
     options_detail::fail_at_key(properties, e.what());
   }
 }
 
-CausticSlabConfig CausticSlabConfig::from(const Options& o) {
+CausticSlabConfig CausticSlabConfig::from(const Options& o, const Limits& limits) {
   CausticSlabConfig config;
   CausticSetup& s = config.setup;
   s.width_mm = o.size_mm[0];
@@ -66,9 +66,9 @@ CausticSlabConfig CausticSlabConfig::from(const Options& o) {
   // Sizes that set the simulator's memory, checked before it allocates (a
   // fuzzed [120, 312540] image asked for 150 million rays: 4.3 GB).
   const auto check_size = [&](const char* key, const char* what, double count, const char* limit) {
-    if (const double most = limits::get(limit); count > most)
+    if (const double most = limits.get(limit); count > most)
       throw InputError(fmt::format("{}: {:.4g} {}, more than the {:.4g} allowed {}", key, count, what,
-                                   most, limits::how_to_change(limit)));
+                                   most, limits.how_to_change(limit)));
   };
   check_size("vertices", "top-surface vertices", double(s.vertices_x) * s.vertices_y, "caustic_vertices");
   check_size("image", "pixels", double(s.image_width) * s.image_height, "image_pixels");

@@ -14,6 +14,7 @@
 #include <Eigen/SparseCore>
 
 #include "caustics/caustic_tracer.h"
+#include "core/limits.h"
 #include "core/options.h"
 #include "core/search_space.h"
 #include "geometry/mesh.h"
@@ -80,11 +81,11 @@ struct CausticSlabConfig {
     }
   };
   /// Reads the properties; every error names its key's JSON path.
-  static CausticSlabConfig read(const Properties& properties);
+  static CausticSlabConfig read(const Properties& properties, const Limits& limits);
   /// The same from options built in C++ (a translator's); a size past its
   /// resource limit is an InputError "key: problem", which the caller
   /// places (options_detail::fail_at_key).
-  static CausticSlabConfig from(const Options& options);
+  static CausticSlabConfig from(const Options& options, const Limits& limits);
 };
 
 /// Where the tracer's frame (footprint centred on the origin, bottom at

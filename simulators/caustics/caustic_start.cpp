@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <functional>
 #include <cmath>
 #include <numbers>
 #include <numeric>
@@ -81,17 +82,8 @@ SemiDiscreteTransport solve_multiscale(std::span<const Vec2> source, const std::
   return solve_semi_discrete_transport(source, sites, masses, 1e-2, 60, guess);
 }
 
-}  // namespace
-
-TransportStart transport_start(const CausticSetup& s, std::span<const double> goal, double mean_height_mm) {
-  const int width = s.image_width, height = s.image_height;
-  if (goal.size() != static_cast<size_t>(width) * static_cast<size_t>(height))
-    throw std::invalid_argument("transport_start: the goal has the wrong size");
-  TransportStart start;
-  const auto began = Clock::now();
-
-  // The transport in the footprint's and the receiver's half-size units:
-  // the aperture ([-1, 1]² or the unit disc) to the goal's lit pixels.
+/// The aperture in the footprint's half-size units: [-1, 1]² or the unit disc.
+std::vector<Vec2> aperture_outline(const CausticSetup& s) {
   std::vector<Vec2> source;
   if (s.disc_aperture) {
     constexpr int kSides = 256;
@@ -102,16 +94,21 @@ TransportStart transport_start(const CausticSetup& s, std::span<const double> go
   } else {
     source = {Vec2(-1, -1), Vec2(1, -1), Vec2(1, 1), Vec2(-1, 1)};
   }
+  return source;
+}
+
+/// The goal's pixels as masses to transport to, on the receiver as it lies
+/// (columns towards +x: an image seen from behind is mirrored back first).
+/// Every pixel gets at least a trace of light: where black regions get
+/// none, the transport map jumps across them, which a smooth surface can
+/// only follow with streaks of light through the black; the refinement then
+/// darkens them again as far as the surface allows.
+std::vector<double> transport_masses(const CausticSetup& s, std::span<const double> goal) {
+  const int width = s.image_width;
   const double peak = *std::max_element(goal.begin(), goal.end());
   if (!(peak > 0) || !std::isfinite(peak)) throw InputError("caustics: the goal image has no light to transport");
-  // Every pixel gets at least a trace of light: where black regions get
-  // none, the transport map jumps across them, which a smooth surface can
-  // only follow with streaks of light through the black; the refinement
-  // then darkens them again as far as the surface allows.
   const double mean = std::accumulate(goal.begin(), goal.end(), 0.0) / static_cast<double>(goal.size());
   const double floor = kTransportFloor * mean;
-  // The transport works on the receiver as it lies (columns towards +x):
-  // an image seen from behind is mirrored back first.
   std::vector<double> masses(goal.size());
   for (size_t k = 0; k < goal.size(); ++k) {
     if (!std::isfinite(goal[k]) || goal[k] < 0) throw InputError("caustics: the goal image has a negative or undefined pixel");
@@ -119,64 +116,69 @@ TransportStart transport_start(const CausticSetup& s, std::span<const double> go
     const size_t at = s.image_from_behind ? row * static_cast<size_t>(width) + static_cast<size_t>(width) - 1 - col : k;
     masses[at] = std::max(goal[k], floor);
   }
-  std::vector<Vec2> sites;
-  const SemiDiscreteTransport transport = solve_multiscale(source, masses, width, height, sites);
-  start.sites = static_cast<int>(sites.size());
-  start.newton_steps = transport.newton_steps;
-  start.worst_mass_error = transport.worst_mass_error;
-  const int nx = s.vertices_x, ny = s.vertices_y, squares_x = nx - 1, squares_y = ny - 1;
-  const std::vector<Vec2> targets =
-      mean_transport_targets(transport, sites, squares_x, squares_y, Vec2(-1, -1), Vec2(1, 1));
-  start.transport_seconds = seconds_since(began);
+  return masses;
+}
 
-  // Least squares for the heights: each square's two triangles (as the
-  // tracer meshes it) should take its slope; squares the aperture stops
-  // weakly keep flat; h_0 is held. The equations stay; their right-hand
-  // sides change with the heights (the slab's lateral shift), three rounds.
-  const auto integrated = Clock::now();
-  const double dx = s.width_mm / squares_x, dy = s.depth_mm / squares_y;
-  const auto vertex = [nx](int i, int j) { return j * nx + i; };
-  const auto square = [squares_x](int i, int j) {
-    return static_cast<size_t>(j) * static_cast<size_t>(squares_x) + static_cast<size_t>(i);
-  };
-  const auto weight = [&](size_t k) { return targets[k].allFinite() ? 1.0 : 1e-3; };
-  const Eigen::Index rows = 4 * static_cast<Eigen::Index>(targets.size());
+/// The grid's vertices and squares, row by row.
+struct HeightGrid {
+  int nx, ny, squares_x, squares_y;
+  double dx, dy;
+  int vertex(int i, int j) const { return j * nx + i; }
+  size_t square(int i, int j) const { return static_cast<size_t>(j) * static_cast<size_t>(squares_x) + static_cast<size_t>(i); }
+};
+
+/// The least squares for the heights: each square's two triangles (as the
+/// tracer meshes it) should take its slope — x then y of triangle (i, j),
+/// (i+1, j), (i+1, j+1), then of (i, j), (i+1, j+1), (i, j+1); squares the
+/// aperture stops weakly (`weight`); h_0 = 0.
+Eigen::SparseMatrix<double> slope_equations(const HeightGrid& g, const std::function<double(size_t)>& weight) {
+  const Eigen::Index rows = 4 * static_cast<Eigen::Index>(g.squares_x) * g.squares_y;
   std::vector<Eigen::Triplet<double>> entries;
   entries.reserve(2 * static_cast<size_t>(rows) + 1);
-  {
-    int row = 0;
-    const auto difference = [&](int a, int b, double step, double w) {
-      entries.emplace_back(row, b, w / step);
-      entries.emplace_back(row++, a, -w / step);
-    };
-    for (int j = 0; j < squares_y; ++j)
-      for (int i = 0; i < squares_x; ++i) {
-        const double w = weight(square(i, j));
-        // Triangle (i, j), (i+1, j), (i+1, j+1): x then y; triangle (i, j), (i+1, j+1), (i, j+1): x then y.
-        difference(vertex(i, j), vertex(i + 1, j), dx, w);
-        difference(vertex(i + 1, j), vertex(i + 1, j + 1), dy, w);
-        difference(vertex(i, j + 1), vertex(i + 1, j + 1), dx, w);
-        difference(vertex(i, j), vertex(i, j + 1), dy, w);
-      }
-    entries.emplace_back(row, 0, 1.0);  // h_0 = 0
-  }
-  Eigen::SparseMatrix<double> a(rows + 1, static_cast<Eigen::Index>(nx) * ny);
+  int row = 0;
+  const auto difference = [&](int a, int b, double step, double w) {
+    entries.emplace_back(row, b, w / step);
+    entries.emplace_back(row++, a, -w / step);
+  };
+  for (int j = 0; j < g.squares_y; ++j)
+    for (int i = 0; i < g.squares_x; ++i) {
+      const double w = weight(g.square(i, j));
+      difference(g.vertex(i, j), g.vertex(i + 1, j), g.dx, w);
+      difference(g.vertex(i + 1, j), g.vertex(i + 1, j + 1), g.dy, w);
+      difference(g.vertex(i, j + 1), g.vertex(i + 1, j + 1), g.dx, w);
+      difference(g.vertex(i, j), g.vertex(i, j + 1), g.dy, w);
+    }
+  entries.emplace_back(row, 0, 1.0);  // h_0 = 0
+  Eigen::SparseMatrix<double> a(rows + 1, static_cast<Eigen::Index>(g.nx) * g.ny);
   a.setFromTriplets(entries.begin(), entries.end());
+  return a;
+}
+
+/// Heights whose squares send their light to `targets` (receiver half-size
+/// units, one per square; NaN where the aperture stops it), about
+/// `mean_height_mm`. The equations stay; their right-hand sides change with
+/// the heights (the slab's lateral shift), three rounds. Sets the start's
+/// heights and what they could not follow.
+void integrate_heights(const CausticSetup& s, const HeightGrid& g, const std::vector<Vec2>& targets,
+                       double mean_height_mm, TransportStart& start) {
+  const auto weight = [&](size_t k) { return targets[k].allFinite() ? 1.0 : 1e-3; };
+  const Eigen::SparseMatrix<double> a = slope_equations(g, weight);
+  const Eigen::Index rows = a.rows() - 1;
   const Eigen::SparseMatrix<double> at = a.transpose();
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(at * a);
   if (solver.info() != Eigen::Success) throw std::runtime_error("transport_start: the integration is singular");
-  start.heights.assign(static_cast<size_t>(nx) * static_cast<size_t>(ny), mean_height_mm);
+  start.heights.assign(static_cast<size_t>(g.nx) * static_cast<size_t>(g.ny), mean_height_mm);
   Eigen::VectorXd rhs = Eigen::VectorXd::Zero(rows + 1), h;
+  const auto at_vertex = [&](int i, int j) { return start.heights[static_cast<size_t>(g.vertex(i, j))]; };
   for (int round = 0; round < 3; ++round) {
-    for (int j = 0; j < squares_y; ++j)
-      for (int i = 0; i < squares_x; ++i) {
-        const size_t k = square(i, j);
+    for (int j = 0; j < g.squares_y; ++j)
+      for (int i = 0; i < g.squares_x; ++i) {
+        const size_t k = g.square(i, j);
         Vec2 slope = Vec2::Zero();
         if (targets[k].allFinite()) {
-          const Vec2 centre(-0.5 * s.width_mm + (i + 0.5) * dx, -0.5 * s.depth_mm + (j + 0.5) * dy);
+          const Vec2 centre(-0.5 * s.width_mm + (i + 0.5) * g.dx, -0.5 * s.depth_mm + (j + 0.5) * g.dy);
           const Vec2 target = s.receiver_centre_mm + Vec2(0.5 * s.receiver_width_mm * targets[k].x(),
                                                            0.5 * s.receiver_depth_mm * targets[k].y());
-          const auto at_vertex = [&](int a_i, int a_j) { return start.heights[static_cast<size_t>(vertex(a_i, a_j))]; };
           const double here = 0.25 * (at_vertex(i, j) + at_vertex(i + 1, j) + at_vertex(i, j + 1) + at_vertex(i + 1, j + 1));
           slope = slope_towards(s, centre, here, target);
         }
@@ -190,16 +192,50 @@ TransportStart transport_start(const CausticSetup& s, std::span<const double> go
   }
   // What the heights could not follow, over the slope equations (not the pin).
   start.integration_rms_slope_error = std::sqrt((a * h - rhs).head(rows).squaredNorm() / static_cast<double>(rows));
+}
+
+/// |∇h| of the steepest grid square.
+double largest_slope(const HeightGrid& g, const std::vector<double>& heights) {
+  double largest = 0;
+  for (int j = 0; j < g.squares_y; ++j)
+    for (int i = 0; i < g.squares_x; ++i) {
+      const auto h = [&](int a, int b) { return heights[static_cast<size_t>(g.vertex(a, b))]; };
+      const Vec2 slope(0.5 * (h(i + 1, j) - h(i, j) + h(i + 1, j + 1) - h(i, j + 1)) / g.dx,
+                       0.5 * (h(i, j + 1) - h(i, j) + h(i + 1, j + 1) - h(i + 1, j)) / g.dy);
+      largest = std::max(largest, slope.norm());
+    }
+  return largest;
+}
+
+}  // namespace
+
+TransportStart transport_start(const CausticSetup& s, std::span<const double> goal, double mean_height_mm) {
+  const int width = s.image_width, height = s.image_height;
+  if (goal.size() != static_cast<size_t>(width) * static_cast<size_t>(height))
+    throw std::invalid_argument("transport_start: the goal has the wrong size");
+  TransportStart start;
+  const auto began = Clock::now();
+  // The transport in the footprint's and the receiver's half-size units:
+  // the aperture to the goal's lit pixels.
+  const std::vector<Vec2> source = aperture_outline(s);
+  const std::vector<double> masses = transport_masses(s, goal);
+  std::vector<Vec2> sites;
+  const SemiDiscreteTransport transport = solve_multiscale(source, masses, width, height, sites);
+  start.sites = static_cast<int>(sites.size());
+  start.newton_steps = transport.newton_steps;
+  start.worst_mass_error = transport.worst_mass_error;
+  const int nx = s.vertices_x, ny = s.vertices_y;
+  const HeightGrid grid{nx, ny, nx - 1, ny - 1, s.width_mm / (nx - 1), s.depth_mm / (ny - 1)};
+  const std::vector<Vec2> targets =
+      mean_transport_targets(transport, sites, grid.squares_x, grid.squares_y, Vec2(-1, -1), Vec2(1, 1));
+  start.transport_seconds = seconds_since(began);
+
+  const auto integrated = Clock::now();
+  integrate_heights(s, grid, targets, mean_height_mm, start);
   start.integration_seconds = seconds_since(integrated);
   const auto [low, high] = std::minmax_element(start.heights.begin(), start.heights.end());
   start.relief_mm = *high - *low;
-  for (int j = 0; j < squares_y; ++j)
-    for (int i = 0; i < squares_x; ++i) {
-      const auto h = [&](int a, int b) { return start.heights[static_cast<size_t>(vertex(a, b))]; };
-      const Vec2 slope(0.5 * (h(i + 1, j) - h(i, j) + h(i + 1, j + 1) - h(i, j + 1)) / dx,
-                       0.5 * (h(i, j + 1) - h(i, j) + h(i + 1, j + 1) - h(i + 1, j)) / dy);
-      start.largest_slope = std::max(start.largest_slope, slope.norm());
-    }
+  start.largest_slope = largest_slope(grid, start.heights);
   return start;
 }
 

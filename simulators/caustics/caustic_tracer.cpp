@@ -196,19 +196,86 @@ void CausticTracer::update_vertex_buffer() {
   }
 }
 
-void CausticTracer::trace_block(int begin, int end) {
-  constexpr int kBlock = 256;
+bool CausticTracer::launch(int ray, Vec3& origin, Vec3& direction) {
   const CausticSetup& s = setup_;
   // Power through a cell's horizontal area of the light.
   const Vec3 cell_area(0, 0, s.width_mm / s.rays_x * s.depth_mm / s.rays_y);
+  origin = ray_origin(ray);
+  direction = light_towards(s, origin);
+  results_[static_cast<size_t>(ray)] = RayResult{.power = light_through(s, origin, cell_area), .fate = kLost};
+  if (s.disc_aperture) {
+    const double u = origin.x() / (0.5 * s.width_mm), v = origin.y() / (0.5 * s.depth_mm);
+    if (u * u + v * v > 1) {
+      results_[static_cast<size_t>(ray)].power = 0;  // stopped above the slab: carries nothing
+      return false;
+    }
+  }
+  return true;
+}
+
+bool CausticTracer::follow(bool hit, unsigned triangle, double t, int segment, Vec3& o, Vec3& d,
+                           RayResult& result) const {
+  const CausticSetup& s = setup_;
   const double epsilon = 1e-5 * (s.width_mm + s.depth_mm + top_z_);
   const double eta = s.refractive_index;
+  if (!hit) {
+    // In air with nothing ahead (a miss from inside the slab is a crack at
+    // float precision; it leaves the same way).
+    if (d.z() >= 0) {
+      result.fate = kReturned;
+    } else {
+      const double to_receiver = (-s.receiver_distance_mm - o.z()) / d.z();
+      result.x = o.x() + to_receiver * d.x();
+      result.y = o.y() + to_receiver * d.y();
+      result.fate = kReceived;
+      if (segment != 2) result.entry = -1;
+    }
+    return false;
+  }
   // A ray enters the top, leaves by the bottom and nothing else: the path
   // pull_back differentiates.
-  const auto bottom = [this](unsigned triangle) {
-    return static_cast<int>(triangle) >= top_triangles_ && (static_cast<int>(triangle) - top_triangles_) % 3 == 2;
-  };
+  const bool bottom =
+      static_cast<int>(triangle) >= top_triangles_ && (static_cast<int>(triangle) - top_triangles_) % 3 == 2;
+  if (segment == 0) {
+    result.entry = static_cast<int>(triangle) < top_triangles_ ? static_cast<int>(triangle) : -1;
+  } else if (segment != 1 || !bottom) {
+    result.entry = -1;
+  }
+  o += t * d;
+  const Vec3& outward = normals_[triangle];
+  const double cos_outward = d.dot(outward);
+  // Entering when the ray runs against the outward normal.
+  const bool entering = cos_outward < 0;
+  const Vec3 normal = entering ? outward : Vec3(-outward);  // faces the incoming ray
+  const double ratio = entering ? 1.0 / eta : eta;           // n_incident / n_transmitted
+  const double cos_i = std::min(1.0, std::abs(cos_outward));
+  const double sin2_t = ratio * ratio * (1 - cos_i * cos_i);
+  if (sin2_t >= 1) {
+    d += 2 * cos_i * normal;  // total internal reflection
+    result.entry = -1;
+  } else {
+    const double cos_t = std::sqrt(1 - sin2_t);
+    if (s.fresnel) {
+      const double f = entering ? fresnel_reflectance(1, eta, cos_i, cos_t) : fresnel_reflectance(eta, 1, cos_i, cos_t);
+      result.reflected += f * result.power;
+      result.power *= 1 - f;
+    }
+    d = ratio * d + (ratio * cos_i - cos_t) * normal;
+  }
+  d.normalize();
+  // Leaving through the flat bottom: the exit filter takes its share.
+  if (!entering && !s.exit_transmittance.empty() && outward.z() < -0.5 && std::abs(o.z()) < epsilon) {
+    const double kept = exit_transmittance_at(o.x(), o.y());
+    result.absorbed += (1 - kept) * result.power;
+    result.power *= kept;
+  }
+  return true;
+}
 
+void CausticTracer::trace_block(int begin, int end) {
+  constexpr int kBlock = 256;
+  const CausticSetup& s = setup_;
+  const double epsilon = 1e-5 * (s.width_mm + s.depth_mm + top_z_);
   RTCRayHit hits[kBlock];
   Vec3 origin[kBlock], direction[kBlock];
   int active[kBlock];
@@ -219,20 +286,8 @@ void CausticTracer::trace_block(int begin, int end) {
   for (int first = begin; first < end; first += kBlock) {
     const int count = std::min(kBlock, end - first);
     int in_flight = 0;
-    for (int k = 0; k < count; ++k) {
-      const int ray = first + k;
-      origin[k] = ray_origin(ray);
-      direction[k] = light_towards(s, origin[k]);
-      results_[static_cast<size_t>(ray)] = RayResult{.power = light_through(s, origin[k], cell_area), .fate = kLost};
-      if (s.disc_aperture) {
-        const double u = origin[k].x() / (0.5 * s.width_mm), v = origin[k].y() / (0.5 * s.depth_mm);
-        if (u * u + v * v > 1) {
-          results_[static_cast<size_t>(ray)].power = 0;  // stopped above the slab: carries nothing
-          continue;
-        }
-      }
-      active[in_flight++] = k;
-    }
+    for (int k = 0; k < count; ++k)
+      if (launch(first + k, origin[k], direction[k])) active[in_flight++] = k;
     for (int segment = 0; segment < s.max_segments && in_flight > 0; ++segment) {
       for (int n = 0; n < in_flight; ++n) {
         const int k = active[n];
@@ -254,60 +309,10 @@ void CausticTracer::trace_block(int begin, int end) {
       int still = 0;
       for (int n = 0; n < in_flight; ++n) {
         const int k = active[n];
-        RayResult& result = results_[static_cast<size_t>(first + k)];
-        Vec3& o = origin[k];
-        Vec3& d = direction[k];
         const RTCRayHit& hit = hits[n];
-        if (hit.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
-          // In air with nothing ahead (a miss from inside the slab is a crack
-          // at float precision; it leaves the same way).
-          if (d.z() >= 0) {
-            result.fate = kReturned;
-          } else {
-            const double t = (-s.receiver_distance_mm - o.z()) / d.z();
-            result.x = o.x() + t * d.x();
-            result.y = o.y() + t * d.y();
-            result.fate = kReceived;
-            if (segment != 2) result.entry = -1;
-          }
-          continue;
-        }
-        const unsigned triangle = hit.hit.primID;
-        if (segment == 0) {
-          result.entry = static_cast<int>(triangle) < top_triangles_ ? static_cast<int>(triangle) : -1;
-        } else if (segment != 1 || !bottom(triangle)) {
-          result.entry = -1;
-        }
-        o += static_cast<double>(hit.ray.tfar) * d;
-        const Vec3& outward = normals_[triangle];
-        const double cos_outward = d.dot(outward);
-        // Entering when the ray runs against the outward normal.
-        const bool entering = cos_outward < 0;
-        const Vec3 normal = entering ? outward : Vec3(-outward);  // faces the incoming ray
-        const double ratio = entering ? 1.0 / eta : eta;           // n_incident / n_transmitted
-        const double cos_i = std::min(1.0, std::abs(cos_outward));
-        const double sin2_t = ratio * ratio * (1 - cos_i * cos_i);
-        if (sin2_t >= 1) {
-          d += 2 * cos_i * normal;  // total internal reflection
-          result.entry = -1;
-        } else {
-          const double cos_t = std::sqrt(1 - sin2_t);
-          if (s.fresnel) {
-            const double f = entering ? fresnel_reflectance(1, eta, cos_i, cos_t)
-                                      : fresnel_reflectance(eta, 1, cos_i, cos_t);
-            result.reflected += f * result.power;
-            result.power *= 1 - f;
-          }
-          d = ratio * d + (ratio * cos_i - cos_t) * normal;
-        }
-        d.normalize();
-        // Leaving through the flat bottom: the exit filter takes its share.
-        if (!entering && !s.exit_transmittance.empty() && outward.z() < -0.5 && std::abs(o.z()) < epsilon) {
-          const double kept = exit_transmittance_at(o.x(), o.y());
-          result.absorbed += (1 - kept) * result.power;
-          result.power *= kept;
-        }
-        active[still++] = k;
+        if (follow(hit.hit.geomID != RTC_INVALID_GEOMETRY_ID, hit.hit.primID, static_cast<double>(hit.ray.tfar),
+                   segment, origin[k], direction[k], results_[static_cast<size_t>(first + k)]))
+          active[still++] = k;
       }
       in_flight = still;
     }

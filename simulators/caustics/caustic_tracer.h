@@ -254,6 +254,14 @@ class CausticTracer {
   /// Traces rays [begin, end) together: each segment of all rays still in
   /// flight is one coherent Embree stream query.
   void trace_block(int begin, int end);
+  /// Ray `ray`'s start above the slab and the light it carries (none when
+  /// the disc aperture stops it: then false).
+  bool launch(int ray, Eigen::Vector3d& origin, Eigen::Vector3d& direction);
+  /// Segment `segment` of a ray from `origin` along `direction`: what it met
+  /// (`hit`: triangle `triangle` at distance `t`, else the receiver or
+  /// nothing) and where it goes on; false when it is done.
+  bool follow(bool hit, unsigned triangle, double t, int segment, Eigen::Vector3d& origin,
+              Eigen::Vector3d& direction, RayResult& result) const;
   CausticFlux render_rays(std::span<double> irradiance);
   void pull_back_rays(std::span<const double> d_irradiance, std::span<double> d_heights);
   CausticFlux render_triangles(std::span<double> irradiance);

@@ -43,9 +43,14 @@ ElasticBound::ElasticBound(FemSettings settings, const std::string& where, const
     const double e = m.youngs_modulus_pa.value * 1e-6, nu = m.poisson_ratio.value;
     lame_[id] = {lame_lambda(e, nu), lame_mu(e, nu)};
   }
+  find_element_variables(tuner, where);
+  code_values();
+  set_loads();
+}
 
-  // Which variable sets each element's material: try every value of every
-  // variable once from the current assignment, and see which elements change.
+// Which variable sets each element's material: try every value of every
+// variable once from the current assignment, and see which elements change.
+void ElasticBound::find_element_variables(Tuner& tuner, const std::string& where) {
   const size_t tets = mesh_->tets.size();
   centroids_.resize(tets);
   current_.resize(tets);
@@ -97,9 +102,11 @@ ElasticBound::ElasticBound(FemSettings settings, const std::string& where, const
     }
   }
   tuner.set_values(start);
+}
 
-  // Each value's code: is it, on every element of its variable, the
-  // stiffest (largest λ and μ) or the softest of the choices?
+// Each value's code: is it, on every element of its variable, the stiffest
+// (largest λ and μ) or the softest of the choices?
+void ElasticBound::code_values() {
   const size_t variables = admissible_.size();
   value_code_.resize(variables);
   free_stiffest_.assign(variables, kStiffest);
@@ -122,8 +129,10 @@ ElasticBound::ElasticBound(FemSettings settings, const std::string& where, const
     for (size_t k = 0; k < values; ++k)
       value_code_[v].push_back(stiffest[k] ? kStiffest : softest[k] ? kSoftest : static_cast<int>(k));
   }
+}
 
-  // Right-hand sides: the loads, then each probe component's weights.
+// Right-hand sides: the loads, then each probe component's weights.
+void ElasticBound::set_loads() {
   std::vector<std::vector<double>> loads{constraints_.force_n};
   for (const ProbeLocation& probe : probes_) {
     for (int d = 0; d < 3; ++d) {

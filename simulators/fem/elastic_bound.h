@@ -110,6 +110,12 @@ class ElasticBound {
   /// K⁻¹'s products for the matrix `key` names: assembled from the key and
   /// factorised on first need, kept after.
   const std::optional<ElasticSolver::InverseProducts>& products(const MatrixKey& key);
+  /// Setup: which variable sets each element's material and its λ, μ per value.
+  void find_element_variables(Tuner& tuner, const std::string& where);
+  /// Setup: each value's code (kStiffest, kSoftest or itself).
+  void code_values();
+  /// Setup: the loads' and the probes' right-hand sides on the free DOFs.
+  void set_loads();
   FemSettings settings_;
   std::shared_ptr<const ConformedMesh> meshed_;
   const TetMesh* mesh_ = nullptr;

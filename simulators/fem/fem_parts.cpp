@@ -118,7 +118,7 @@ class DeformedShapeGoal final : public GoalFor<DisplacementsObservation> {
     }
   };
 
-  DeformedShapeGoal(const Properties& p, const PartContext& /*context*/) {
+  DeformedShapeGoal(const Properties& p, const PartContext& context) {
     const Options o = read_options<Options>(p);
     std::vector<Vec3> rest, goal;
     if (!o.points.empty()) {
@@ -143,8 +143,8 @@ class DeformedShapeGoal final : public GoalFor<DisplacementsObservation> {
         goal.emplace_back(v[3], v[4], v[5]);
       }
     } else {
-      const Mesh rest_mesh = load_mesh(*o.rest_mesh);
-      const Mesh goal_mesh = load_mesh(*o.deformed_mesh);
+      const Mesh rest_mesh = load_mesh(*o.rest_mesh, 1.0, context.limits());
+      const Mesh goal_mesh = load_mesh(*o.deformed_mesh, 1.0, context.limits());
       if (rest_mesh.vertices.size() != goal_mesh.vertices.size()) {
         p.fail("deformed_mesh", fmt::format("{} vertices, but the rest mesh has {}: give the same surface deformed",
                                             goal_mesh.vertices.size(), rest_mesh.vertices.size()));

@@ -279,7 +279,8 @@ std::vector<ProbeLocation> locate_probes(const TetMesh& mesh, const std::vector<
   return out;
 }
 
-void check_mesh_fits(double solid_volume_mm3, const TetgenOptions& options, const std::string& where) {
+void check_mesh_fits(double solid_volume_mm3, const TetgenOptions& options, const std::string& where,
+                     const Limits& limits) {
   // TetGen's quality meshes hold about 2.5 tets per max-volume of solid.
   // Measured on the 321,191-tet cantilever (benchmarks/RESULTS.md, "FEM
   // against CalculiX"): 1,470 MB peak and 13.5 s for meshing and one
@@ -302,9 +303,9 @@ void check_mesh_fits(double solid_volume_mm3, const TetgenOptions& options, cons
   if (bytes > 0.8 * available)
     throw InputError(where + estimate + fmt::format(", more than the {:.1f} GB of memory available; use larger tets",
                                                     available / 1e9));
-  if (const double max_tets = limits::get("tets"); tets > max_tets)
+  if (const double max_tets = limits.get("tets"); tets > max_tets)
     throw InputError(where + estimate + fmt::format(", more than the {:.3g} allowed; use larger tets {}", max_tets,
-                                                    limits::how_to_change("tets")));
+                                                    limits.how_to_change("tets")));
 }
 
 }  // namespace spec2fab::fem

@@ -11,6 +11,7 @@
 
 #include <Eigen/Geometry>
 
+#include "core/limits.h"
 #include "core/properties.h"
 #include "core/registry.h"
 #include "fem/elastic_solver.h"
@@ -74,6 +75,7 @@ inline Vec3 interpolate(const TetMesh& mesh, const ProbeLocation& at, std::span<
 }
 
 /// Refuses a tet size whose mesh would not fit in memory, before meshing.
-void check_mesh_fits(double solid_volume_mm3, const TetgenOptions& options, const std::string& where);
+void check_mesh_fits(double solid_volume_mm3, const TetgenOptions& options, const std::string& where,
+                     const Limits& limits);
 
 }  // namespace spec2fab::fem

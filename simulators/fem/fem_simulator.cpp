@@ -50,6 +50,7 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
         where_(std::move(where)),
         palette_(&context.palette),
         cache_(context.cache),
+        limits_(context.limits()),
         across_ranks_(context.solve_across_ranks) {
     if (across_ranks_ && settings_.linear_solver != LinearSolver::elastic_multigrid)
       spdlog::warn("fem: under mpirun only the linear solver \"gamg\" spreads its solves over the ranks; "
@@ -75,7 +76,7 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
   void setup(const ReducerNode& /*subtree*/, const SimulationDomain& domain) override {
     const Solid& solid = domain.require_solid(name());
     domain_ = domain;
-    check_mesh_fits(solid.volume(), settings_.mesh, where_ + "/max_tet_volume_mm3");
+    check_mesh_fits(solid.volume(), settings_.mesh, where_ + "/max_tet_volume_mm3", limits_);
     meshed_ = conformed_mesh(solid, domain.tree(), settings_.mesh, settings_.follow_interfaces, cache_, &mesh_reused_);
     mesh_ = &meshed_->mesh;
     conform_ = meshed_->conform;
@@ -186,6 +187,28 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
       largest = std::max(largest, Vec3(u[3 * v], u[3 * v + 1], u[3 * v + 2]).norm());
     }
     record.add("probes", probe_list);
+    record.add("mesh", mesh_record());
+    record.add("solve", solve_record(largest));
+    record.add("stress", FemStressRecord{out.stress_max_mpa, out.stress_p99_mpa});
+    record.add("timing", FemTimingRecord{timings_.mesh, timings_.conform, timings_.assemble_setup, timings_.solve});
+    std::vector<std::string> files{"displacements.csv", "deformed.stl", "deformation.png", "fem.vtu"};
+    if (settings_.write_calculix_deck) {
+      std::vector<double> youngs(mesh_->tets.size(), 0.0), poisson(mesh_->tets.size(), 0.0);
+      for (size_t t = 0; t < mesh_->tets.size(); ++t) {
+        if (!active_[t]) continue;
+        const Material& m = palette_->material(materials_[t]);
+        youngs[t] = m.youngs_modulus_pa.value * 1e-6;
+        poisson[t] = m.poisson_ratio.value;
+      }
+      write_calculix_deck(*mesh_, youngs, poisson, constraints_, settings_.solve.nonlinear,
+                          settings_.solve.load_steps, folder / "calculix.inp");
+      files.push_back("calculix.inp");
+    }
+    return {files, "displacements.csv (nodes) and probes"};
+  }
+
+  /// simulation.json "mesh": the mesh and how it follows the interfaces.
+  FemMeshRecord mesh_record() const {
     FemMeshRecord mesh;
     mesh.nodes = mesh_->nodes.size();
     mesh.tets = mesh_->tets.size();
@@ -203,7 +226,11 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
     mesh.cholesky_factor_nonzeros = solver_->factor_nonzeros();
     mesh.cholesky_factor_flops = solver_->factor_flops();
     mesh.volume_mm3 = mesh_->total_volume();
-    record.add("mesh", mesh);
+    return mesh;
+  }
+
+  /// simulation.json "solve": the last simulate()'s solve.
+  FemSolveRecord solve_record(double max_displacement_mm) const {
     FemSolveRecord solve;
     solve.nonlinear = settings_.solve.nonlinear;
     solve.newton_iterations = report_.newton_iterations;
@@ -218,24 +245,8 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
     solve.cg_iterations = report_.cg_iterations;
     solve.multigrid_operator_complexity = solver_->multigrid_complexity();
     solve.ranks = solver_->solve_ranks();
-    solve.max_displacement_mm = largest;
-    record.add("solve", solve);
-    record.add("stress", FemStressRecord{out.stress_max_mpa, out.stress_p99_mpa});
-    record.add("timing", FemTimingRecord{timings_.mesh, timings_.conform, timings_.assemble_setup, timings_.solve});
-    std::vector<std::string> files{"displacements.csv", "deformed.stl", "deformation.png", "fem.vtu"};
-    if (settings_.write_calculix_deck) {
-      std::vector<double> youngs(mesh_->tets.size(), 0.0), poisson(mesh_->tets.size(), 0.0);
-      for (size_t t = 0; t < mesh_->tets.size(); ++t) {
-        if (!active_[t]) continue;
-        const Material& m = palette_->material(materials_[t]);
-        youngs[t] = m.youngs_modulus_pa.value * 1e-6;
-        poisson[t] = m.poisson_ratio.value;
-      }
-      write_calculix_deck(*mesh_, youngs, poisson, constraints_, settings_.solve.nonlinear,
-                          settings_.solve.load_steps, folder / "calculix.inp");
-      files.push_back("calculix.inp");
-    }
-    return {files, "displacements.csv (nodes) and probes"};
+    solve.max_displacement_mm = max_displacement_mm;
+    return solve;
   }
 
   static TypeDoc doc() {
@@ -261,6 +272,7 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
   std::string where_;
   const MaterialPalette* palette_;
   RunCache* cache_;  ///< the run's: simulators of one run share a mesh
+  Limits limits_;     ///< the run's (the tets limit)
   bool across_ranks_;  ///< every MPI rank runs this simulator alike: spread the solves
   SimulationDomain domain_;
   std::shared_ptr<const ConformedMesh> meshed_;  // shared with the run's other simulators (mesh_cache.h)

@@ -20,9 +20,7 @@ namespace {
 
 using ::testing::HasSubstr;
 
-struct LimitsTest : ::testing::Test {
-  ~LimitsTest() override { limits::reset(); }
-};
+struct LimitsTest : ::testing::Test {};
 
 std::string refusal(const std::function<void()>& f) {
   try {
@@ -34,29 +32,43 @@ std::string refusal(const std::function<void()>& f) {
 }
 
 TEST_F(LimitsTest, TheCommandLineWinsOverTheExperimentWhichWinsOverTheDefault) {
-  EXPECT_EQ(limits::get("tets"), 1e7);
-  limits::set_from_experiment(Properties::parse(R"({"tets": 5000, "census_voxels": 2e9})", "e.json", "."));
-  EXPECT_EQ(limits::get("tets"), 5000);
-  EXPECT_EQ(limits::get("census_voxels"), 2e9);
-  limits::set_from_command_line("tets=7e4");
-  EXPECT_EQ(limits::get("tets"), 7e4);
-  EXPECT_EQ(limits::get("census_voxels"), 2e9);
+  Limits limits;
+  EXPECT_EQ(limits.get("tets"), 1e7);
+  limits.set_from_experiment(Properties::parse(R"({"tets": 5000, "census_voxels": 2e9})", "e.json", "."));
+  EXPECT_EQ(limits.get("tets"), 5000);
+  EXPECT_EQ(limits.get("census_voxels"), 2e9);
+  limits.set_from_command_line("tets=7e4");
+  EXPECT_EQ(limits.get("tets"), 7e4);
+  EXPECT_EQ(limits.get("census_voxels"), 2e9);
   // Another experiment replaces the first's limits, not the command line's.
-  limits::set_from_experiment(Properties::parse(R"({})", "f.json", "."));
-  EXPECT_EQ(limits::get("census_voxels"), 1e9);
-  EXPECT_EQ(limits::get("tets"), 7e4);
-  EXPECT_THAT(limits::how_to_change("tets"), HasSubstr("limit tets = 7e+04; set it with --limit tets="));
+  limits.set_from_experiment(Properties::parse(R"({})", "f.json", "."));
+  EXPECT_EQ(limits.get("census_voxels"), 1e9);
+  EXPECT_EQ(limits.get("tets"), 7e4);
+  EXPECT_THAT(limits.how_to_change("tets"), HasSubstr("limit tets = 7e+04; set it with --limit tets="));
+  EXPECT_THROW(limits.get("tet"), std::logic_error);
+}
+
+// The values travel with a run: one run's limits are not another's (no
+// process state), so runs in one process (Python, threads) keep their own.
+TEST_F(LimitsTest, EachRunHasItsOwn) {
+  Limits first, second;
+  first.set_from_experiment(Properties::parse(R"({"tets": 5000})", "a.json", "."));
+  second.set_from_command_line("tets=7e4");
+  EXPECT_EQ(first.get("tets"), 5000);
+  EXPECT_EQ(second.get("tets"), 7e4);
+  EXPECT_EQ(Limits().get("tets"), 1e7);
 }
 
 TEST_F(LimitsTest, WhatCannotBeALimitIsRefused) {
-  EXPECT_THAT(refusal([] { limits::set_from_command_line("tet=5"); }), HasSubstr("did you mean 'tets'?"));
-  EXPECT_THAT(refusal([] { limits::set_from_command_line("tets"); }), HasSubstr("NAME=VALUE with a positive number"));
-  EXPECT_THAT(refusal([] { limits::set_from_command_line("tets=-1"); }), HasSubstr("positive number"));
-  EXPECT_THAT(refusal([] { limits::set_from_command_line("tets=1e9x"); }), HasSubstr("positive number"));
-  EXPECT_THAT(refusal([] { limits::set_from_command_line("tree_depth=2000"); }), HasSubstr("at most 1000"));
-  EXPECT_THAT(refusal([] { limits::set_from_experiment(Properties::parse(R"({"tets": 0})", "e.json", ".")); }),
+  Limits limits;
+  EXPECT_THAT(refusal([&] { limits.set_from_command_line("tet=5"); }), HasSubstr("did you mean 'tets'?"));
+  EXPECT_THAT(refusal([&] { limits.set_from_command_line("tets"); }), HasSubstr("NAME=VALUE with a positive number"));
+  EXPECT_THAT(refusal([&] { limits.set_from_command_line("tets=-1"); }), HasSubstr("positive number"));
+  EXPECT_THAT(refusal([&] { limits.set_from_command_line("tets=1e9x"); }), HasSubstr("positive number"));
+  EXPECT_THAT(refusal([&] { limits.set_from_command_line("tree_depth=2000"); }), HasSubstr("at most 1000"));
+  EXPECT_THAT(refusal([&] { limits.set_from_experiment(Properties::parse(R"({"tets": 0})", "e.json", ".")); }),
               HasSubstr("e.json: /tets: must be a positive number"));
-  EXPECT_EQ(limits::get("tets"), 1e7);  // nothing refused was kept
+  EXPECT_EQ(limits.get("tets"), 1e7);  // nothing refused was kept
 }
 
 // Each part declares its limits (SPEC2FAB_LIMIT): the program lists them by

@@ -11,5 +11,5 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const auto file = spec2fab::fuzz::input_file(data, size, "experiments/input.json");
-  return spec2fab::fuzz::accept_or_refuse([&] { spec2fab::prepare_experiment(file); });
+  return spec2fab::fuzz::accept_or_refuse([&] { spec2fab::prepare_experiment(file, spec2fab::Limits()); });
 }

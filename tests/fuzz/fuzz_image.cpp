@@ -12,5 +12,5 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const auto file = spec2fab::fuzz::input_file(data, size, "input.png");
-  return spec2fab::fuzz::accept_or_refuse([&] { spec2fab::read_image(file, "/goal/image", cv::IMREAD_UNCHANGED); });
+  return spec2fab::fuzz::accept_or_refuse([&] { spec2fab::read_image(file, "/goal/image", cv::IMREAD_UNCHANGED, spec2fab::default_limits()); });
 }

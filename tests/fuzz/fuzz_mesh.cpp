@@ -29,7 +29,7 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const auto file = spec2fab::fuzz::input_file(data, size, std::string("input") + extension_for(data, size));
   return spec2fab::fuzz::accept_or_refuse([&] {
-    spec2fab::Solid solid(spec2fab::load_mesh(file, 1.0, 0, spec2fab::MeshReaderProcess::this_one),
+    spec2fab::Solid solid(spec2fab::load_mesh(file, 1.0, spec2fab::default_limits(), spec2fab::MeshReaderProcess::this_one),
                           spec2fab::UvSource::planar);
   });
 }

@@ -21,6 +21,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   // dataset files' values are asked for by every input and stay.
   static const auto session = std::make_shared<RunCache>(256);
   for (const std::string& simulator : SimulatorRegistry::instance().names())
-    fuzz::accept_or_refuse([&] { cli::prepare_simulation(file, simulator, session); });
+    fuzz::accept_or_refuse([&] { cli::prepare_simulation(file, simulator, default_limits(), session); });
   return 0;
 }

@@ -63,7 +63,7 @@ TEST_F(TypedNodes, ColumnOfParaboloidsIsTheJsonOne) {
   grid.count = {3, 2};
   grid.domain = {0, 0, 30, 20};
   grid.cells.child.node = make_paraboloid(std::move(lens));
-  const NodePtr typed = make_column(std::move(grid));
+  const NodePtr typed = make_column(std::move(grid), Limits());
   EXPECT_EQ(typed->to_json(*palette_), from_json(R"({"type": "column", "count": [3, 2], "domain": [0, 0, 30, 20],
       "child": {"type": "paraboloid", "axis": "z", "offset_mm": 5,
         "slope_a": {"value": 0, "min": -1, "max": 1}, "slope_b": {"value": 0, "min": -1, "max": 1},
@@ -117,12 +117,12 @@ TEST_F(TypedNodes, OptionsATranslatorGetsWrongAreItsBug) {
   EXPECT_THROW(make_plane(std::move(childless)), std::logic_error);
   ColumnOptions none;
   none.count = {2, 2};
-  EXPECT_THROW(make_column(std::move(none)), std::logic_error) << "neither child nor children";
+  EXPECT_THROW(make_column(std::move(none), Limits()), std::logic_error) << "neither child nor children";
   ColumnOptions empty;
   empty.count = {0, 2};
   empty.cells.child.node = leaf("A");
   try {
-    make_column(std::move(empty));
+    make_column(std::move(empty), Limits());
     ADD_FAILURE() << "a column of 0 x 2 was built";
   } catch (const std::logic_error& e) {
     EXPECT_THAT(e.what(), HasSubstr("column: options built in C++ do not hold: count"));

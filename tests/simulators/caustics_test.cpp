@@ -624,7 +624,7 @@ TEST_F(CausticSimulatorTest, ExportedSlabStlCastsTheSimulatedImage) {
       "vertices": [41, 41], "distance_mm": 60, "receiver_mm": [36, 36], "image": [96, 96], "rays": [240, 240]})";
   const ImageObservation simulated = simulate(*spline, options);
 
-  const CausticSlabConfig config = CausticSlabConfig::read(Properties::parse(options, "options.json"));
+  const CausticSlabConfig config = CausticSlabConfig::read(Properties::parse(options, "options.json"), default_limits());
   const HeightSurface& surface = *spline->height_surface();
   const Mesh slab = caustic_slab_mesh(config.setup, surface, config.origin_mm);
   // In the subtree's coordinates: bottom at w = 1, footprint from (10, 20).

@@ -42,7 +42,7 @@ TEST(DefaultOptimizers, EveryShippedTranslatorBuildsItsDefaults) {
     const fs::path file = copy / "experiments" / entry.path().filename();
     std::ofstream(file) << experiment.dump(2);
     try {
-      prepare_experiment(file);
+      prepare_experiment(file, Limits());
     } catch (const InputError& e) {
       // A build without an optional module says so: the default is then
       // unavailable, not wrong.

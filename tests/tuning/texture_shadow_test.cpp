@@ -109,7 +109,7 @@ TEST_F(TextureShadowTest, FromJsonScalesTheLaterPhasesGoalByTheLightThatPasses) 
   auto p = plan(t, R"([{"name": "texture", "tuners": ["cyan", "magenta"], "fix_after": true},
       {"name": "caustic", "tuners": ["surface"], "coupling": "texture_shadow", "texture_phase": "texture",
        "cells": [2, 1], "depth_mm": 0.5, "step_mm": 0.005}])");
-  p->schedule.run(p->network, 1);
+  p->schedule.run(p->network, 1, Limits());
   const TextureShadow shadow({0, 1}, {2, 1}, 0.5, 0.005, palette_);
   const std::vector<double> kept = shadow.transmittance(p->network);
   const double mean = 0.5 * (kept[0] + kept[1]);

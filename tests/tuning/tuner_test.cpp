@@ -75,7 +75,7 @@ TEST(Schedule, ParallelTunersMustNotOverlap) {
   phase.tuners = {left, whole};
   phase.mode = Phase::Mode::parallel;
   schedule.add(phase);
-  EXPECT_THAT([&] { schedule.run(network, 1); },
+  EXPECT_THAT([&] { schedule.run(network, 1, Limits()); },
               ThrowsMessage<std::invalid_argument>(HasSubstr("runs tuners 'whole' and 'left' in parallel, but their "
                                                              "subtrees overlap")));
 }
@@ -166,7 +166,7 @@ double mean_coverage_error(bool diffuse, int neighbourhood) {
   if (diffuse) phase.coupling = std::make_shared<ErrorDiffusion>(w);
   Schedule schedule;
   schedule.add(phase);
-  schedule.run(network, 1);
+  schedule.run(network, 1, Limits());
   double coverage_sum = 0;
   for (size_t i = 0; i < network.size(); ++i) coverage_sum += network.tuner(i).simulated().values()[0];
   return (coverage_sum - target_sum) / (w * h);
@@ -235,7 +235,7 @@ std::vector<double> tuned_thicknesses(int threads, Phase::Mode mode) {
   phase.sweeps = 2;
   Schedule schedule;
   schedule.add(phase);
-  const RunRecord record = schedule.run(network, 42);
+  const RunRecord record = schedule.run(network, 42, Limits());
   EXPECT_EQ(record.runs.size(), 128u);
   std::vector<double> values;
   for (size_t i = 0; i < network.size(); ++i) values.push_back(network.tuner(i).search_space().parameter(0).value());
@@ -271,7 +271,7 @@ TEST(Schedule, LaterPhaseSeesWhatAnEarlierPhaseFixed) {
   Phase second;
   second.name = "second";
   schedule.add(first).add(second);
-  const RunRecord record = schedule.run(network, 1);
+  const RunRecord record = schedule.run(network, 1, Limits());
   ASSERT_EQ(record.runs.size(), 3u);
   EXPECT_EQ(record.runs[1].summary.message, "no free parameters");  // tuner 0, fixed by phase 1
   EXPECT_EQ(record.runs[2].summary.final_error, 0.0);
@@ -283,7 +283,7 @@ TEST(Schedule, LaterPhaseSeesWhatAnEarlierPhaseFixed) {
   parallel_diffusion.coupling = std::make_shared<ErrorDiffusion>(2);
   Schedule bad;
   bad.add(parallel_diffusion);
-  EXPECT_THROW(bad.run(network, 1), std::invalid_argument);
+  EXPECT_THROW(bad.run(network, 1, Limits()), std::invalid_argument);
 }
 
 // Neighbour swaps: six cells on a chain hold targets 5..0 in reverse; an
@@ -328,7 +328,7 @@ TEST(Schedule, NeighbourSwapsExchangeTargetsAndValuesUntilTheEnergyIsLowest) {
       "swap_probability": 1, "initial_temperature": 0.5, "cooling": 0.9})");
   Schedule schedule;
   schedule.add(phase);
-  const RunRecord record = schedule.run(network, 7);
+  const RunRecord record = schedule.run(network, 7, Limits());
   for (size_t t = 0; t < network.size(); ++t) EXPECT_EQ(target(t), double(t)) << t;
   EXPECT_EQ(swaps->energies().front(), 70.0);
   EXPECT_EQ(swaps->energies().back(), 0.0);

@@ -78,7 +78,7 @@ class AlbedoTranslator final : public TuningTranslator {
       stratum.core.node = make_solid_material(backing);
       set_tree(make_stratum(std::move(stratum)), goal, experiment);
     } else {
-      SurfaceColumnTree columns = surface_column_tree(shell, texture_.columns(), texture_.ink_layers(palette), backing);
+      SurfaceColumnTree columns = surface_column_tree(shell, texture_.columns(), texture_.ink_layers(palette), backing, experiment.limits());
       set_tree(std::move(columns.root), goal, experiment);
       schedule_.add(texture_.add_tuners(
           network_, *tree_,

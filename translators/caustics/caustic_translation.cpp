@@ -55,10 +55,11 @@ CausticSlabConfig::Options CausticGoalSettings::slab_options(std::array<int, 2> 
   return o;
 }
 
-CausticSlabConfig CausticGoalSettings::slab_config(const Properties& goal, const CausticSlabConfig::Options& o) {
+CausticSlabConfig CausticGoalSettings::slab_config(const Properties& goal, const CausticSlabConfig::Options& o,
+                                                   const Limits& limits) {
   require_valid(o, "caustics");
   try {
-    return CausticSlabConfig::from(o);
+    return CausticSlabConfig::from(o, limits);
   } catch (const InputError& e) {
     // The slab's "image" is the goal's "image_size"; "vertices" has no goal key.
     std::string why = e.what();
@@ -87,14 +88,15 @@ double CausticGoalSettings::flux_mm2() const {
   return sum * area / (static_cast<double>(kSteps) * kSteps);
 }
 
-std::unique_ptr<GoalFor<ImageObservation>> CausticGoalSettings::image_goal(const Properties& goal) const {
+std::unique_ptr<GoalFor<ImageObservation>> CausticGoalSettings::image_goal(const Properties& goal,
+                                                                        const Limits& limits) const {
   CausticImageGoalOptions o;
   o.image = image_file;
   o.size = image;
   o.receiver_mm = receiver_mm;
   o.flux_mm2 = flux_mm2();
   try {
-    return make_caustic_image_goal(o);
+    return make_caustic_image_goal(o, limits);
   } catch (const InputError& e) {
     options_detail::fail_at_key(goal, e.what());
   }

@@ -179,13 +179,14 @@ struct CausticGoalSettings {
   /// the estimator or the slab's origin in its subtree's frame).
   CausticSlabConfig::Options slab_options(std::array<int, 2> vertices) const;
   /// The slab the options describe; a size past its limit fails at `goal`.
-  static CausticSlabConfig slab_config(const Properties& goal, const CausticSlabConfig::Options& options);
+  static CausticSlabConfig slab_config(const Properties& goal, const CausticSlabConfig::Options& options,
+                                       const Limits& limits);
   /// The light the aperture lets through, in units of incident irradiance × mm².
   double flux_mm2() const;
   bool point_light() const { return !std::isnan(light_distance_mm); }
   /// The "caustic_image" goal: the picture carrying the light the slab's
   /// aperture lets through (a black one fails at `goal`'s "image").
-  std::unique_ptr<GoalFor<ImageObservation>> image_goal(const Properties& goal) const;
+  std::unique_ptr<GoalFor<ImageObservation>> image_goal(const Properties& goal, const Limits& limits) const;
   /// result.json "caustics": caustic_image_errors of the achieved image,
   /// initial_rmse / initial_ssim of the start's, and the receiver's setup.
   CausticImageReport image_report(std::span<const double> achieved, std::span<const double> initial,

@@ -134,7 +134,7 @@ class CausticsTextureTranslator final : public TuningTranslator {
     require_in(goal, "start_thickness_mm", start, Range::closed(thinnest, size.z()));
     cut_z_ = bounds.upper.z() - texture_mm_;
 
-    set_tree(compose_tree(goal, experiment.palette(), start, thinnest, body), goal, experiment);
+    set_tree(compose_tree(goal, experiment.palette(), experiment.limits(), start, thinnest, body), goal, experiment);
 
     // Texture tuners, 0 … columns − 1: the texture piece over a dark ground
     // (the clear slab under the inks reflects nothing back).
@@ -153,10 +153,10 @@ class CausticsTextureTranslator final : public TuningTranslator {
     slab.origin_mm = {bounds.lower.x(), bounds.lower.y(), -texture_mm_};
     slab.thickness_mm = size.z();
     slab.image_from_behind = true;  // the wall as the room sees it (see the top)
-    slab_ = CausticGoalSettings::slab_config(goal, slab);
+    slab_ = CausticGoalSettings::slab_config(goal, slab, experiment.limits());
     // The goal image first: its problems are the user's to fix before an
     // optimizer this build lacks.
-    auto image_goal = settings_.image_goal(goal);
+    auto image_goal = settings_.image_goal(goal, experiment.limits());
     const OptimizerChoice optimizer(experiment.root(), "optimizer",
                                     {{"type", "nlopt"}, {"algorithm", "LD_LBFGS"}, {"max_evaluations", 1000}});
     optimizer_label_ = optimizer_label(optimizer.spec());
@@ -220,8 +220,8 @@ class CausticsTextureTranslator final : public TuningTranslator {
   /// Plane (z, t under the top) → above: Column (the texture's columns) →
   /// Plane (w, t) with the ink layers over the clear material below it and
   /// void above; below: the B-spline bottom face, heights within the body.
-  NodePtr compose_tree(const Properties& goal, const MaterialPalette& palette, double start, double thinnest,
-               double body) {
+  NodePtr compose_tree(const Properties& goal, const MaterialPalette& palette, const Limits& limits, double start,
+                       double thinnest, double body) {
     const Bounds& bounds = settings_.slab;
     const Parameter clear = fixed_material(palette, settings_.material, goal.where("material"));
     const Parameter empty = fixed_material(palette, "void", goal.where());
@@ -240,7 +240,7 @@ class CausticsTextureTranslator final : public TuningTranslator {
     PlaneOptions cut;
     cut.cut.axis = "z";
     cut.offset_mm = fixed_number(cut_z_, cut.offset_mm);
-    cut.cut.above.node = make_column(std::move(columns));
+    cut.cut.above.node = make_column(std::move(columns), limits);
     cut.cut.below.node = surface_.node("w", {start - texture_mm_, thinnest - texture_mm_, body}, bounds, clear, palette);
     // Kept for the tuners and reports (the tree owns them; they do not move).
     texture_columns_ = cut.cut.above.node.get();

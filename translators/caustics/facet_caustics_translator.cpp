@@ -155,10 +155,10 @@ class FacetCausticsTranslator final : public TuningTranslator {
     read_goal(goal);
     // The caustics simulator's slab and light (its top's vertex grid unused:
     // the faceted slab is meshed exactly).
-    setup_ = CausticGoalSettings::slab_config(goal, settings_.slab_options({2, 2})).setup;
+    setup_ = CausticGoalSettings::slab_config(goal, settings_.slab_options({2, 2}), experiment.limits()).setup;
     setup_.validate();
-    fit_kernels(goal);
-    set_tree(facet_tree(goal, experiment.palette()), goal, experiment);
+    fit_kernels(goal, experiment.limits());
+    set_tree(facet_tree(goal, experiment.palette(), experiment.limits()), goal, experiment);
     const OptimizerChoice aim(root, "optimizer",
                               {{"type", "nlopt"}, {"algorithm", "LN_BOBYQA"}, {"max_evaluations", 200}, {"xtol_rel", 1e-10}});
     add_facet_tuners(aim);
@@ -273,8 +273,8 @@ class FacetCausticsTranslator final : public TuningTranslator {
   }
 
   /// The goal image as irradiance, then as one equal-flux kernel per facet.
-  void fit_kernels(const Properties& goal) {
-    image_goal_ = settings_.image_goal(goal);
+  void fit_kernels(const Properties& goal, const Limits& limits) {
+    image_goal_ = settings_.image_goal(goal, limits);
     raster_.width = settings_.image[0];
     raster_.height = settings_.image[1];
     raster_.size_mm = {settings_.receiver_mm[0], settings_.receiver_mm[1]};
@@ -283,7 +283,7 @@ class FacetCausticsTranslator final : public TuningTranslator {
   }
 
   /// Column (facets) → per column a Plane or Paraboloid, clear below, void above.
-  NodePtr facet_tree(const Properties& goal, const MaterialPalette& palette) const {
+  NodePtr facet_tree(const Properties& goal, const MaterialPalette& palette, const Limits& limits) const {
     const Parameter slope = free_number(0, -max_slope_, max_slope_);
     const auto sides = [&](HeightCut::Options& cut) {
       cut.axis = "z";
@@ -311,7 +311,7 @@ class FacetCausticsTranslator final : public TuningTranslator {
     columns.count = facets_;
     columns.domain = {slab().lower.x(), slab().lower.y(), slab().upper.x(), slab().upper.y()};
     columns.cells.child.node = std::move(facet);
-    return make_column(std::move(columns));
+    return make_column(std::move(columns), limits);
   }
 
   /// One tuner per facet: facet_beam + squared_distance to its kernel (a

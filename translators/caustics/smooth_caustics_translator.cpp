@@ -98,10 +98,10 @@ class SmoothCausticsTranslator final : public TuningTranslator {
 
     CausticSlabConfig::Options slab = settings_.slab_options(surface_.vertices());
     slab.estimator = options.estimator;
-    slab_ = CausticGoalSettings::slab_config(goal, slab);
+    slab_ = CausticGoalSettings::slab_config(goal, slab, experiment.limits());
     // The goal image first: its problems are the user's to fix before an
     // optimizer this build lacks.
-    auto image_goal = settings_.image_goal(goal);
+    auto image_goal = settings_.image_goal(goal, experiment.limits());
     const OptimizerChoice optimizer(experiment.root(), "optimizer",
                                     {{"type", "nlopt"}, {"algorithm", "LD_LBFGS"}, {"max_evaluations", 1000}});
     // Other optimizers run from the same flat start before the main one, for

@@ -115,7 +115,8 @@ class DeformationTextureTranslator final : public TuningTranslator {
     const MaterialPalette& palette = experiment.palette();
     SurfaceColumnTree columns = surface_column_tree(
         texture_.ink_mm() + texture_.step_mm(), texture_.columns(), texture_.ink_layers(palette),
-        fixed_material(palette, options_.backing, goal.where("backing")), elastic_.cell_node(bounds_, palette));
+        fixed_material(palette, options_.backing, goal.where("backing")), experiment.limits(),
+        elastic_.cell_node(bounds_, palette));
     set_tree(std::move(columns.root), goal, experiment);
 
     schedule_.add(texture_.add_tuners(
@@ -167,7 +168,7 @@ class DeformationTextureTranslator final : public TuningTranslator {
   /// surface (no shell), then its assignment printed under the shell.
   ShellComparison compare_without_shell(const ElasticReport& with_shell, const RunContext& context) {
     const Experiment& experiment = context.experiment;
-    ReducerTree paper(elastic_.cell_node(bounds_, experiment.palette()), experiment.palette());
+    ReducerTree paper(elastic_.cell_node(bounds_, experiment.palette()), experiment.palette(), experiment.limits());
     paper.bind(experiment.solid());
     auto [tuner, bound] = elastic_.make_tuner(paper, "", experiment);
     const Summary summary = tuner->tune();

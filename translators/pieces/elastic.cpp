@@ -164,7 +164,7 @@ ElasticPiece::ElasticPiece(const Properties& goal, const Experiment& experiment,
     if (options_.probes) chosen = spread_vertices(rest.vertices, static_cast<size_t>(*options_.probes));
     for (size_t v : chosen) mesh_probes_.push_back(rest.vertices[v]);
     if (options_.deformed_mesh) {
-      const Mesh deformed = load_mesh(*options_.deformed_mesh);
+      const Mesh deformed = load_mesh(*options_.deformed_mesh, 1.0, experiment.limits());
       if (deformed.vertices.size() != rest.vertices.size())
         goal.fail("deformed_mesh", fmt::format("{} vertices, but the shape's mesh has {}: give the same mesh deformed",
                                                deformed.vertices.size(), rest.vertices.size()));
@@ -194,7 +194,7 @@ Phase ElasticPiece::add_tuner(TunerNetwork& network, ReducerTree& tree, const st
   fem_.fixed = {{load.fixed, Vec3::Zero(), where_ + " (the clamped region)"}};
   fem_.loads = {{load.loaded, load.force_n, where_ + " (the loaded region)"}};
   fem_.probes = probes_;
-  const PartContext context{experiment.palette(), &experiment.cache()};
+  const PartContext context = experiment.part_context();
   ReducerNode& cells = tree.node(cells_path);
 
   targets_ = mesh_targets_;
@@ -232,7 +232,7 @@ Phase ElasticPiece::add_tuner(TunerNetwork& network, ReducerTree& tree, const st
 std::pair<std::unique_ptr<Tuner>, std::shared_ptr<fem::ElasticBound>> ElasticPiece::make_tuner(
     ReducerTree& tree, const std::string& cells_path, const Experiment& experiment) const {
   if (!optimizer_) throw std::logic_error("ElasticPiece::make_tuner before add_tuner");
-  const PartContext context{experiment.palette(), &experiment.cache()};
+  const PartContext context = experiment.part_context();
   ReducerNode& cells = tree.node(cells_path);
   auto tuner = spec2fab::make_tuner("cells", fem::make_fem_simulator(fem_, context, where_), fem::make_shape_mse(),
                                     fem::make_deformed_shape_goal(probes_, targets_), optimizer_->build());

@@ -139,7 +139,7 @@ void TexturePiece::read_columns(const Properties& goal, const Experiment& experi
                           "({:.3g}) allows; raise goal.max_columns to go ahead, or give fewer columns",
                           columns_[0], columns_[1], static_cast<double>(column_count()),
                           lookup_seconds(column_count()), lookup_megabytes(column_count()), o.max_columns));
-  image_ = load_goal_image(goal, o.keys.image, columns_);
+  image_ = load_goal_image(goal, o.keys.image, columns_, experiment.limits());
   if (!lookup_ && column_count() > 1'000'000)  // the image's own size, known only now
     goal.fail(o.keys.image, fmt::format("{} x {} pixels, so as many columns: more than a million for tuners "
                                         "(give fewer {})", columns_[0], columns_[1], o.keys.columns));
@@ -216,7 +216,7 @@ std::unique_ptr<Tuner> TexturePiece::column_tuner(const Experiment& experiment, 
   AlbedoSimulatorOptions albedo;
   albedo.depth_mm = ink_mm_ + step_mm_;
   albedo.step_mm = step_mm_ / 8;
-  return make_tuner(name, make_albedo_simulator(albedo, PartContext{experiment.palette(), &experiment.cache()}),
+  return make_tuner(name, make_albedo_simulator(albedo, experiment.part_context()),
                     make_colour_metric(colour_metric(metric_)),
                     make_albedo_goal(target), optimizer_->build());
 }

@@ -48,7 +48,8 @@ struct GoalImage {
 /// Reads the goal image file under `key`, decodes sRGB to linear and then
 /// resamples it to `columns` (by area when shrinking, bilinearly when
 /// enlarging); `columns` {0, 0} takes the image's own size.
-GoalImage load_goal_image(const Properties& goal, const std::string& key, std::array<int, 2>& columns);
+GoalImage load_goal_image(const Properties& goal, const std::string& key, std::array<int, 2>& columns,
+                          const Limits& limits);
 
 /// Columns over the surface's (u, v) ∈ [0, 1]² about one printer voxel wide
 /// (the coarser lateral axis): the mean length of the surface per unit u

@@ -18,9 +18,10 @@
 
 namespace spec2fab {
 
-GoalImage load_goal_image(const Properties& goal, const std::string& key, std::array<int, 2>& columns) {
+GoalImage load_goal_image(const Properties& goal, const std::string& key, std::array<int, 2>& columns,
+                          const Limits& limits) {
   const std::filesystem::path file = goal.existing_file(key);
-  const cv::Mat image = read_image(file, goal.where(key), cv::IMREAD_COLOR);
+  const cv::Mat image = read_image(file, goal.where(key), cv::IMREAD_COLOR, limits);
   if (columns[0] == 0) columns = {image.cols, image.rows};
   // Decoded first: resampling averages light, which sRGB codes do not.
   cv::Mat linear(image.rows, image.cols, CV_32FC3);

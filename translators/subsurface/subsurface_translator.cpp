@@ -177,7 +177,8 @@ class SubsurfaceTranslator final : public TuningTranslator {
       layer.thickness_mm = number_choice(thicknesses.front(), thicknesses);
     }
     SurfaceColumnTree surface_tree =
-        surface_column_tree(shell, columns_, std::move(layers), fixed_material(palette, backing_, goal.where("backing")));
+        surface_column_tree(shell, columns_, std::move(layers), fixed_material(palette, backing_, goal.where("backing")),
+                            experiment.limits());
     set_tree(std::move(surface_tree.root), goal, experiment);
 
     SubsurfaceSimulatorOptions simulator;
@@ -193,7 +194,7 @@ class SubsurfaceTranslator final : public TuningTranslator {
     bound_ = std::make_shared<StackBound>(model_, options, palette.id(backing_, goal.where("backing")));
     const OptimizerChoice optimizer(experiment.root(), "optimizer",
                                     {{"type", "branch_and_bound"}, {"value_order", "best_bound_first"}});
-    const PartContext context{palette, &experiment.cache()};
+    const PartContext context = experiment.part_context();
     for (int j = 0; j < columns_[1]; ++j) {
       for (int i = 0; i < columns_[0]; ++i) {
         auto tuner = make_tuner(fmt::format("column_{}_{}", i, j), make_subsurface_simulator(simulator, context),

@@ -22,10 +22,10 @@ class TreeTranslator final : public TuningTranslator {
  public:
   TreeTranslator(const Properties& /*root*/, const Experiment& experiment) {
     const Properties goal = experiment.goal();
-    set_tree(std::make_unique<ReducerTree>(goal.object("tree"), experiment.palette()), goal, experiment);
+    set_tree(std::make_unique<ReducerTree>(goal.object("tree"), experiment.palette(), experiment.limits()), goal, experiment);
     report_final_errors_ = true;  // its only figures: each tuner's error against its goal at the end
     if (goal.has("tuners")) {
-      const auto plan = build_tuning_plan(goal, *tree_, PartContext{experiment.palette(), &experiment.cache()});
+      const auto plan = build_tuning_plan(goal, *tree_, experiment.part_context());
       network_ = std::move(plan->network);
       schedule_ = std::move(plan->schedule);
     } else if (const SearchSpace free = tree_->search_space(); free.dimension() > 0) {

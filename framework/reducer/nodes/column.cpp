@@ -23,16 +23,16 @@ class ColumnNode final : public ClonableNode<ColumnNode, GeometryNode> {
   using Options = ColumnOptions;
 
   ColumnNode(const Properties& properties, const NodeContext& context)
-      : ColumnNode(read_options<Options>(properties, context), properties.where("children")) {}
-  /// `where` names the node in the error for too many cells.
-  ColumnNode(Options o, const std::string& where) {
+      : ColumnNode(read_options<Options>(properties, context), properties.where("children"), context.limits()) {}
+  /// `where` names the node in the error for too many cells (`limits`' "column_cells").
+  ColumnNode(Options o, const std::string& where, const Limits& limits) {
     counts_ = o.count;
     if (!std::isnan(o.domain[0])) {
       lower_ = {o.domain[0], o.domain[1]};
       upper_ = {o.domain[2], o.domain[3]};
       explicit_domain_ = true;
     }
-    children_ = o.cells.take(static_cast<size_t>(counts_[0]) * counts_[1], where);
+    children_ = o.cells.take(static_cast<size_t>(counts_[0]) * counts_[1], where, limits);
   }
 
   std::string type_name() const override { return "column"; }
@@ -111,9 +111,9 @@ class ColumnNode final : public ClonableNode<ColumnNode, GeometryNode> {
 
 }  // namespace
 
-NodePtr make_column(ColumnOptions options) {
+NodePtr make_column(ColumnOptions options, const Limits& limits) {
   require_valid(options, "column");
-  return std::make_unique<ColumnNode>(std::move(options), "column");
+  return std::make_unique<ColumnNode>(std::move(options), "column", limits);
 }
 
 }  // namespace spec2fab

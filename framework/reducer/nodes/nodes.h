@@ -118,7 +118,8 @@ struct ColumnOptions {
   }
   bool check(std::string* why) const;
 };
-NodePtr make_column(ColumnOptions options);
+/// More cells than `limits`' "column_cells" (the run's) are refused.
+NodePtr make_column(ColumnOptions options, const Limits& limits);
 
 /// "bspline": a uniform bicubic B-spline height surface.
 struct BSplineOptions {

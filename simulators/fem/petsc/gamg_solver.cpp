@@ -110,6 +110,12 @@ struct GamgSolver::Impl {
   bool set_up = false;
 
   bool owned(PetscInt row) const { return row >= first_row && row < end_row; }
+  // The constructor's steps.
+  void number_rows(const std::vector<int>& dof_of_free, std::span<const int> node_order);
+  void local_pattern(const Matrix& lower);
+  void create_matrix();
+  void set_rigid_body_modes(std::span<const Vec3> nodes, std::span<const int> node_order);
+  void create_krylov(double tolerance, int max_iterations);
 
   // Visits the lower triangle's entries in column order as the full
   // matrix's (slot, column, index in `lower`) on this rank's rows: column
@@ -159,108 +165,128 @@ GamgSolver::GamgSolver(const Matrix& lower, const std::vector<int>& dof_of_free,
   if (distributed) m.comm = PETSC_COMM_WORLD;  // this process alone if PETSc was started so
   MPI_Comm_rank(m.comm, &m.rank);
   MPI_Comm_size(m.comm, &m.size);
-  const size_t node_count = nodes.size();
-  m.rows = static_cast<PetscInt>(3 * node_count);
+  m.number_rows(dof_of_free, node_order);
+  m.local_pattern(lower);
+  [[maybe_unused]] const IgnoreThirdPartyLeaks ignore;
+  m.create_matrix();
+  m.set_rigid_body_modes(nodes, node_order);
+  m.create_krylov(tolerance, max_iterations);
+}
 
+/// PETSc's rows: each node's three, in node_order (a space-filling curve);
+/// this rank's, a contiguous run of the curve (a space-filling-curve
+/// partition).
+void GamgSolver::Impl::number_rows(const std::vector<int>& dof_of_free, std::span<const int> node_order) {
+  const size_t node_count = node_order.size();
+  rows = static_cast<PetscInt>(3 * node_count);
   std::vector<PetscInt> row_of_dof(3 * node_count);
   for (size_t place = 0; place < node_count; ++place)
     for (size_t axis = 0; axis < 3; ++axis)
       row_of_dof[3 * static_cast<size_t>(node_order[place]) + axis] = static_cast<PetscInt>(3 * place + axis);
-  m.row_of_free.resize(dof_of_free.size());
+  row_of_free.resize(dof_of_free.size());
   for (size_t i = 0; i < dof_of_free.size(); ++i) {
-    m.row_of_free[i] = row_of_dof[static_cast<size_t>(dof_of_free[i])];
-    if (i > 0 && m.row_of_free[i] <= m.row_of_free[i - 1])
+    row_of_free[i] = row_of_dof[static_cast<size_t>(dof_of_free[i])];
+    if (i > 0 && row_of_free[i] <= row_of_free[i - 1])
       throw std::logic_error("GamgSolver: the free DOFs must be numbered along node_order");
   }
-  // A contiguous run of the curve per rank: a space-filling-curve partition.
   const auto count = static_cast<long long>(node_count);
-  const long long first_node = count * m.rank / m.size, end_node = count * (m.rank + 1) / m.size;
-  m.first_row = static_cast<PetscInt>(3 * first_node);
-  m.end_row = static_cast<PetscInt>(3 * end_node);
-  const auto local_rows = static_cast<size_t>(m.end_row - m.first_row);
+  const long long first_node = count * rank / size, end_node = count * (rank + 1) / size;
+  first_row = static_cast<PetscInt>(3 * first_node);
+  end_row = static_cast<PetscInt>(3 * end_node);
+}
 
+void GamgSolver::Impl::local_pattern(const Matrix& lower) {
+  const auto local_rows = static_cast<size_t>(end_row - first_row);
   // This rank's rows: a prescribed row is its diagonal (the identity);
   // a free row has its lower column's entries and their mirrors.
   std::vector<char> prescribed(local_rows, 1);
-  for (PetscInt row : m.row_of_free)
-    if (m.owned(row)) prescribed[static_cast<size_t>(row - m.first_row)] = 0;
-  m.row_start.assign(local_rows + 1, 0);
-  for (size_t r = 0; r < local_rows; ++r) m.row_start[r + 1] = prescribed[r];
+  for (PetscInt row : row_of_free)
+    if (owned(row)) prescribed[static_cast<size_t>(row - first_row)] = 0;
+  row_start.assign(local_rows + 1, 0);
+  for (size_t r = 0; r < local_rows; ++r) row_start[r + 1] = prescribed[r];
   {
     const int* outer = lower.outerIndexPtr();
     const int* inner = lower.innerIndexPtr();
     for (int c = 0; c < static_cast<int>(lower.cols()); ++c) {
-      const PetscInt column = m.row_of_free[static_cast<size_t>(c)];
+      const PetscInt column = row_of_free[static_cast<size_t>(c)];
       for (int k = outer[c]; k < outer[c + 1]; ++k) {
-        const PetscInt row = m.row_of_free[static_cast<size_t>(inner[k])];
-        if (m.owned(column)) ++m.row_start[static_cast<size_t>(column - m.first_row) + 1];
-        if (inner[k] != c && m.owned(row)) ++m.row_start[static_cast<size_t>(row - m.first_row) + 1];
+        const PetscInt row = row_of_free[static_cast<size_t>(inner[k])];
+        if (owned(column)) ++row_start[static_cast<size_t>(column - first_row) + 1];
+        if (inner[k] != c && owned(row)) ++row_start[static_cast<size_t>(row - first_row) + 1];
       }
     }
   }
-  std::partial_sum(m.row_start.begin(), m.row_start.end(), m.row_start.begin());
-  const auto entries = static_cast<size_t>(m.row_start.back());
-  m.columns.resize(entries);
-  m.values.assign(entries, 0.0);
+  std::partial_sum(row_start.begin(), row_start.end(), row_start.begin());
+  const auto entries = static_cast<size_t>(row_start.back());
+  columns.resize(entries);
+  values.assign(entries, 0.0);
   for (size_t r = 0; r < local_rows; ++r) {
     if (!prescribed[r]) continue;
-    m.columns[static_cast<size_t>(m.row_start[r])] = m.first_row + static_cast<PetscInt>(r);
-    m.values[static_cast<size_t>(m.row_start[r])] = 1.0;
+    columns[static_cast<size_t>(row_start[r])] = first_row + static_cast<PetscInt>(r);
+    values[static_cast<size_t>(row_start[r])] = 1.0;
   }
-  m.for_each_entry(lower, [&](PetscInt slot, PetscInt column, int) { m.columns[static_cast<size_t>(slot)] = column; });
+  for_each_entry(lower, [&](PetscInt slot, PetscInt column, int) { columns[static_cast<size_t>(slot)] = column; });
+}
 
-  [[maybe_unused]] const IgnoreThirdPartyLeaks ignore;
-  const auto local = static_cast<PetscInt>(local_rows);
-  if (m.size > 1) {
-    check(MatCreate(m.comm, &m.matrix), "matrix create");
-    check(MatSetSizes(m.matrix, local, local, m.rows, m.rows), "matrix sizes");
-    check(MatSetBlockSize(m.matrix, 3), "matrix block size");
-    check(MatSetType(m.matrix, MATMPIAIJ), "matrix type");
-    check(MatMPIAIJSetPreallocationCSR(m.matrix, m.row_start.data(), m.columns.data(), m.values.data()), "matrix pattern");
-    m.columns = {};  // PETSc has its own copy; `values` stays, for the updates
+void GamgSolver::Impl::create_matrix() {
+  const auto local = static_cast<PetscInt>(end_row - first_row);
+  if (size > 1) {
+    check(MatCreate(comm, &matrix), "matrix create");
+    check(MatSetSizes(matrix, local, local, rows, rows), "matrix sizes");
+    check(MatSetBlockSize(matrix, 3), "matrix block size");
+    check(MatSetType(matrix, MATMPIAIJ), "matrix type");
+    check(MatMPIAIJSetPreallocationCSR(matrix, row_start.data(), columns.data(), values.data()), "matrix pattern");
+    columns = {};  // PETSc has its own copy; `values` stays, for the updates
   } else {
-    check(MatCreateSeqAIJWithArrays(PETSC_COMM_SELF, local, local, m.row_start.data(), m.columns.data(),
-                                    m.values.data(), &m.matrix),
+    check(MatCreateSeqAIJWithArrays(PETSC_COMM_SELF, local, local, row_start.data(), columns.data(),
+                                    values.data(), &matrix),
           "matrix create");
-    check(MatSetBlockSize(m.matrix, 3), "matrix block size");
+    check(MatSetBlockSize(matrix, 3), "matrix block size");
   }
-  check(MatSetOption(m.matrix, MAT_NEW_NONZERO_LOCATION_ERR, PETSC_TRUE), "matrix option");
-  check(MatSetOption(m.matrix, MAT_SPD, PETSC_TRUE), "matrix option");
-  check(MatSetOption(m.matrix, MAT_SPD_ETERNAL, PETSC_TRUE), "matrix option");
+  check(MatSetOption(matrix, MAT_NEW_NONZERO_LOCATION_ERR, PETSC_TRUE), "matrix option");
+  check(MatSetOption(matrix, MAT_SPD, PETSC_TRUE), "matrix option");
+  check(MatSetOption(matrix, MAT_SPD_ETERNAL, PETSC_TRUE), "matrix option");
+}
 
-  // The near-nullspace: the six rigid-body modes of this rank's nodes.
+/// The near-nullspace: the six rigid-body modes of this rank's nodes; the
+/// vectors made like their coordinates.
+void GamgSolver::Impl::set_rigid_body_modes(std::span<const Vec3> nodes, std::span<const int> node_order) {
+  const auto local = static_cast<PetscInt>(end_row - first_row);
+  const auto first_node = static_cast<size_t>(first_row / 3), end_node = static_cast<size_t>(end_row / 3);
   Vec coordinates = nullptr;
-  check(VecCreate(m.comm, &coordinates), "vector create");
-  check(VecSetSizes(coordinates, local, m.rows), "vector sizes");
+  check(VecCreate(comm, &coordinates), "vector create");
+  check(VecSetSizes(coordinates, local, rows), "vector sizes");
   check(VecSetBlockSize(coordinates, 3), "vector block size");
-  check(VecSetType(coordinates, m.size > 1 ? VECMPI : VECSEQ), "vector type");
+  check(VecSetType(coordinates, size > 1 ? VECMPI : VECSEQ), "vector type");
   PetscScalar* xyz = nullptr;
   check(VecGetArray(coordinates, &xyz), "vector access");
-  for (auto place = static_cast<size_t>(first_node); place < static_cast<size_t>(end_node); ++place)
+  for (size_t place = first_node; place < end_node; ++place)
     for (size_t axis = 0; axis < 3; ++axis)
-      xyz[3 * (place - static_cast<size_t>(first_node)) + axis] =
+      xyz[3 * (place - first_node) + axis] =
           nodes[static_cast<size_t>(node_order[place])][static_cast<long>(axis)];
   check(VecRestoreArray(coordinates, &xyz), "vector access");
   MatNullSpace modes = nullptr;
   check(MatNullSpaceCreateRigidBody(coordinates, &modes), "rigid-body modes");
-  check(MatSetNearNullSpace(m.matrix, modes), "near-nullspace");
+  check(MatSetNearNullSpace(matrix, modes), "near-nullspace");
   MatNullSpaceDestroy(&modes);
-  check(VecDuplicate(coordinates, &m.rhs), "vector create");
-  check(VecDuplicate(coordinates, &m.solution), "vector create");
+  check(VecDuplicate(coordinates, &rhs), "vector create");
+  check(VecDuplicate(coordinates, &solution), "vector create");
   VecDestroy(&coordinates);
-  if (m.size > 1) check(VecScatterCreateToAll(m.solution, &m.to_all, &m.gathered), "scatter create");
+  if (size > 1) check(VecScatterCreateToAll(solution, &to_all, &gathered), "scatter create");
+}
 
-  check(KSPCreate(m.comm, &m.ksp), "KSP create");
-  check(KSPSetOptionsPrefix(m.ksp, "spec2fab_fem_"), "KSP prefix");
-  check(KSPSetType(m.ksp, KSPCG), "KSP type");
+void GamgSolver::Impl::create_krylov(double tolerance, int max_iterations) {
+  check(KSPCreate(comm, &ksp), "KSP create");
+  check(KSPSetOptionsPrefix(ksp, "spec2fab_fem_"), "KSP prefix");
+  check(KSPSetType(ksp, KSPCG), "KSP type");
   // ‖b − Ax‖ / ‖b‖, as the other solvers measure it, not the preconditioned norm.
-  check(KSPSetNormType(m.ksp, KSP_NORM_UNPRECONDITIONED), "KSP norm");
-  check(KSPSetTolerances(m.ksp, tolerance, 0.0, PETSC_DEFAULT, max_iterations), "KSP tolerances");
+  check(KSPSetNormType(ksp, KSP_NORM_UNPRECONDITIONED), "KSP norm");
+  check(KSPSetTolerances(ksp, tolerance, 0.0, PETSC_DEFAULT, max_iterations), "KSP tolerances");
   PC pc = nullptr;
-  check(KSPGetPC(m.ksp, &pc), "PC");
+  check(KSPGetPC(ksp, &pc), "PC");
   check(PCSetType(pc, PCGAMG), "PC type");
   check(PCGAMGSetType(pc, PCGAMGAGG), "GAMG type");
-  check(KSPSetFromOptions(m.ksp), "KSP options");
+  check(KSPSetFromOptions(ksp), "KSP options");
 }
 
 GamgSolver::~GamgSolver() {

@@ -1,0 +1,109 @@
+#include "fem/stiffness_pattern.h"
+
+#include <algorithm>
+
+namespace spec2fab::fem {
+
+namespace {
+
+/// Each node's neighbours, itself included, sorted: compressed rows (no
+/// triplet list: at 10⁵–10⁶ tets that would be the largest allocation of the
+/// whole setup).
+struct NodeGraph {
+  std::vector<int> start, neighbours;
+};
+
+NodeGraph node_graph(const TetMesh& mesh) {
+  const size_t node_count = mesh.nodes.size();
+  NodeGraph graph{std::vector<int>(node_count + 1, 0), std::vector<int>(16 * mesh.tets.size())};
+  std::vector<int>& start = graph.start;
+  std::vector<int>& adjacency = graph.neighbours;
+  for (const Tet& tet : mesh.tets)
+    for (int a : tet) start[static_cast<size_t>(a) + 1] += 4;
+  for (size_t v = 0; v < node_count; ++v) start[v + 1] += start[v];
+  std::vector<int> cursor(start.begin(), start.end() - 1);
+  for (const Tet& tet : mesh.tets)
+    for (int a : tet)
+      for (int b : tet) adjacency[static_cast<size_t>(cursor[static_cast<size_t>(a)]++)] = b;
+  int kept = 0;
+  for (size_t v = 0; v < node_count; ++v) {
+    const auto begin = adjacency.begin() + start[v], end = adjacency.begin() + start[v + 1];
+    std::sort(begin, end);
+    const auto unique_end = std::unique(begin, end);
+    start[v] = kept;
+    kept = static_cast<int>(std::copy(begin, unique_end, adjacency.begin() + kept) - adjacency.begin());
+  }
+  start[node_count] = kept;
+  adjacency.resize(static_cast<size_t>(kept));
+  adjacency.shrink_to_fit();
+  return graph;
+}
+
+/// Column c of the lower triangle: the free DOFs of c's node's neighbours
+/// numbered c or above, in order.
+void lower_pattern(const NodeGraph& graph, const std::vector<int>& dof_index, int free_count,
+                   Eigen::SparseMatrix<double, Eigen::ColMajor, int>& lower) {
+  const size_t node_count = graph.start.size() - 1;
+  std::vector<int> column_start(static_cast<size_t>(free_count) + 1, 0);
+  auto for_each_row = [&](size_t v, int column, auto&& visit) {
+    for (int k = graph.start[v]; k < graph.start[v + 1]; ++k) {
+      const auto w = static_cast<size_t>(graph.neighbours[static_cast<size_t>(k)]);
+      for (size_t e = 0; e < 3; ++e) {
+        if (const int row = dof_index[3 * w + e]; row >= column) visit(row);
+      }
+    }
+  };
+  for (size_t v = 0; v < node_count; ++v) {
+    for (size_t d = 0; d < 3; ++d) {
+      if (const int column = dof_index[3 * v + d]; column >= 0) {
+        for_each_row(v, column, [&](int) { ++column_start[static_cast<size_t>(column) + 1]; });
+      }
+    }
+  }
+  for (size_t c = 0; c < static_cast<size_t>(free_count); ++c) column_start[c + 1] += column_start[c];
+  lower.resize(free_count, free_count);
+  lower.resizeNonZeros(column_start.back());
+  std::copy(column_start.begin(), column_start.end(), lower.outerIndexPtr());
+  int* rows = lower.innerIndexPtr();
+  for (size_t v = 0; v < node_count; ++v) {
+    for (size_t d = 0; d < 3; ++d) {
+      if (const int column = dof_index[3 * v + d]; column >= 0) {
+        int* at = rows + column_start[static_cast<size_t>(column)];
+        for_each_row(v, column, [&](int row) { *at++ = row; });
+        std::sort(rows + column_start[static_cast<size_t>(column)], at);
+      }
+    }
+  }
+  std::fill(lower.valuePtr(), lower.valuePtr() + lower.nonZeros(), 0.0);
+}
+
+}  // namespace
+
+StiffnessPattern stiffness_pattern(const TetMesh& mesh, const std::vector<int>& dof_index, int free_count) {
+  StiffnessPattern pattern;
+  lower_pattern(node_graph(mesh), dof_index, free_count, pattern.lower);
+  const int* outer = pattern.lower.outerIndexPtr();
+  const int* inner = pattern.lower.innerIndexPtr();
+  auto position = [&](int row, int col) {
+    const int* begin = inner + outer[col];
+    const int* end = inner + outer[col + 1];
+    return static_cast<int>(std::lower_bound(begin, end, row) - inner);
+  };
+  pattern.diagonal.resize(static_cast<size_t>(free_count));
+  for (int i = 0; i < free_count; ++i) pattern.diagonal[static_cast<size_t>(i)] = position(i, i);
+  pattern.scatter.assign(kElementPairs * mesh.tets.size(), -1);
+  for (size_t t = 0; t < mesh.tets.size(); ++t) {
+    const Tet& tet = mesh.tets[t];
+    int* map = &pattern.scatter[kElementPairs * t];
+    for (int j = 0; j < 12; ++j) {
+      const int gj = dof_index[3 * static_cast<size_t>(tet[static_cast<size_t>(j / 3)]) + static_cast<size_t>(j % 3)];
+      for (int i = 0; i <= j; ++i, ++map) {
+        const int gi = dof_index[3 * static_cast<size_t>(tet[static_cast<size_t>(i / 3)]) + static_cast<size_t>(i % 3)];
+        if (gi >= 0 && gj >= 0) *map = position(std::max(gi, gj), std::min(gi, gj));
+      }
+    }
+  }
+  return pattern;
+}
+
+}  // namespace spec2fab::fem

@@ -1,0 +1,84 @@
+// Limits travel with a run (core/limits.h): an experiment's "limits" bind
+// that experiment only, and the command line's win over them — so several
+// experiments prepared in one process (the Python module, a notebook) do
+// not leak their limits into each other, in either order.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <unistd.h>
+
+#include "core/error.h"
+#include "core/limits.h"
+#include "spec/translator.h"
+
+namespace spec2fab {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+class RunLimits : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("spec2fab_run_limits_" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  // A tree experiment on the 40 x 30 x 20 mm box; `limits` is its "limits" object, or "".
+  fs::path experiment(const std::string& name, const std::string& limits) const {
+    const fs::path datasets = fs::absolute(SPEC2FAB_DATASETS_DIR);
+    const fs::path file = dir_ / (name + ".json");
+    std::ofstream(file) << R"({"translator": "tree", "geometry": {"mesh": ")" << (datasets / "meshes/box_40x30x20.stl").string()
+                        << R"(", "uv": "planar"}, "goal": {"tree": {"type": "layered", "material": "VeroWhitePlus"}}, "materials": ")"
+                        << (datasets / "materials/polyjet.json").string() << R"(", "printer": ")"
+                        << (datasets / "printers/j750.json").string() << R"(")"
+                        << (limits.empty() ? "" : R"(, "limits": )" + limits) << "}";
+    return file;
+  }
+
+  static std::string refusal(const fs::path& file, const Limits& command_line) {
+    try {
+      prepare_experiment(file, command_line);
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "prepared";
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(RunLimits, AnExperimentsLimitsBindItAloneInEitherOrder) {
+  // The census of the default 40/128 mm voxels has ~1.3e6 voxels: 1000 refuses it.
+  const fs::path tight = experiment("tight", R"({"census_voxels": 1000})");
+  const fs::path plain = experiment("plain", "");
+  EXPECT_EQ(refusal(plain, Limits()), "prepared");
+  EXPECT_THAT(refusal(tight, Limits()), HasSubstr("census_voxel_mm"));
+  EXPECT_EQ(refusal(plain, Limits()), "prepared") << "the tight experiment's limit leaked into the next one";
+  // Two prepared at once keep their own: the first's parts still go by its
+  // limits when it runs after the second was prepared.
+  const PreparedExperiment roomy = prepare_experiment(experiment("roomy", R"({"census_voxels": 5e6})"), Limits());
+  const PreparedExperiment a = prepare_experiment(plain, Limits());
+  EXPECT_EQ(roomy.experiment->limits().get("census_voxels"), 5e6);
+  EXPECT_EQ(a.experiment->limits().get("census_voxels"), 1e9);
+}
+
+TEST_F(RunLimits, TheCommandLineWinsOverTheExperiment) {
+  const fs::path tight = experiment("tight", R"({"census_voxels": 1000})");
+  Limits command_line;
+  command_line.set_from_command_line("census_voxels=1e8");
+  const PreparedExperiment prepared = prepare_experiment(tight, command_line);
+  EXPECT_EQ(prepared.experiment->limits().get("census_voxels"), 1e8);
+  Limits strict;
+  strict.set_from_command_line("census_voxels=10");
+  EXPECT_THAT(refusal(experiment("plain", ""), strict), HasSubstr("limit census_voxels = 10"));
+}
+
+}  // namespace
+}  // namespace spec2fab
