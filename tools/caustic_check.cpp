@@ -279,105 +279,97 @@ Options parse(int argc, char** argv) {
   return o;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) try {
-  const Options o = parse(argc, argv);
-  std::vector<Triangle> all = read_stl(o.stl);
-  // The footprint and the lowest point, from the mesh.
+/// The slab's box and the receiver, from the mesh and the options.
+struct Setup {
   double low[3] = {1e300, 1e300, 1e300}, high[3] = {-1e300, -1e300, -1e300};
-  for (const Triangle& t : all)
-    for (const V3* p : {&t.a, &t.b, &t.c})
-      for (int k = 0; k < 3; ++k) {
-        low[k] = std::min(low[k], (*p)[k]);
-        high[k] = std::max(high[k], (*p)[k]);
-      }
-  const size_t triangle_count = all.size();
-  const Bvh bvh(std::move(all));
-  const double width = high[0] - low[0], depth = high[1] - low[1];
-  const double cx = 0.5 * (low[0] + high[0]), cy = 0.5 * (low[1] + high[1]);
-  const double rw = o.receiver[0] > 0 ? o.receiver[0] : width, rd = o.receiver[1] > 0 ? o.receiver[1] : depth;
-  const double receiver_z = low[2] - o.distance;
-  const int nx = o.rays[0], ny = o.rays[1], w = o.image[0], h = o.image[1];
-  // Each ray carries its stratum's share of a beam of unit irradiance, or of
-  // the point light's: I cos(angle) / r² on the plane above the slab.
-  const double cell = width / nx * depth / ny;
-  const double start_z = high[2] + 1;
-  if (o.point && !(o.point_at.z > start_z)) throw std::runtime_error("--point: the light must lie above the slab");
-  const double intensity = (o.point_at.z - low[2]) * (o.point_at.z - low[2]);
-
-  struct Landing { int pixel = -1; double power = 0, emitted_power = 0; bool emitted = false; };
-  std::vector<Landing> landings(static_cast<size_t>(nx) * static_cast<size_t>(ny));
-  tbb::parallel_for(tbb::blocked_range<int>(0, nx * ny, 4096), [&](const tbb::blocked_range<int>& range) {
-    for (int r = range.begin(); r != range.end(); ++r) {
-      // Stratified, jittered by a hash of the ray index (reproducible).
-      uint64_t key = static_cast<uint64_t>(r) * 0x9E3779B97F4A7C15ull + 12345;
-      const auto next = [&key] {
-        key ^= key >> 33; key *= 0xff51afd7ed558ccdull; key ^= key >> 33; key *= 0xc4ceb9fe1a85ec53ull; key ^= key >> 33;
-        return static_cast<double>(key >> 11) * 0x1.0p-53;
-      };
-      const double sx = low[0] + (r % nx + next()) * width / nx, sy = low[1] + (r / nx + next()) * depth / ny;
-      Landing& landing = landings[static_cast<size_t>(r)];
-      if (o.disc) {
-        const double u = (sx - cx) / (0.5 * width), v = (sy - cy) / (0.5 * depth);
-        if (u * u + v * v > 1) continue;
-      }
-      landing.emitted = true;
-      V3 origin{sx, sy, start_z};  // the beam's cross-section above the slab is the footprint
-      V3 direction = o.light;
-      double power = cell * -o.light.z;
-      if (o.point) {
-        const V3 away = origin - o.point_at;
-        const double r = std::sqrt(away.dot(away));
-        direction = away * (1 / r);
-        power = cell * intensity * (o.point_at.z - start_z) / (r * r * r);
-      }
-      landing.emitted_power = power;
-      double t;
-      uint32_t hit;
-      bool done = false;
-      for (int segment = 0; segment < 32 && !done; ++segment) {
-        if (!bvh.intersect(origin, direction, segment == 0 ? 0 : 1e-7, t, hit)) {
-          if (direction.z < 0) {
-            const double s = (receiver_z - origin.z) / direction.z;
-            const double px = origin.x + s * direction.x, py = origin.y + s * direction.y;
-            const int col = static_cast<int>(std::floor((px - (cx - 0.5 * rw)) / rw * w));
-            const int row = static_cast<int>(std::floor(((cy + 0.5 * rd) - py) / rd * h));
-            if (col >= 0 && row >= 0 && col < w && row < h) landing.pixel = row * w + col;
-            landing.power = power;
-          }
-          done = true;
-          break;
+  double width = 0, depth = 0, cx = 0, cy = 0, rw = 0, rd = 0, receiver_z = 0, start_z = 0, cell = 0, intensity = 0;
+  Setup(const Options& o, const std::vector<Triangle>& all) {
+    for (const Triangle& t : all)
+      for (const V3* p : {&t.a, &t.b, &t.c})
+        for (int k = 0; k < 3; ++k) {
+          low[k] = std::min(low[k], (*p)[k]);
+          high[k] = std::max(high[k], (*p)[k]);
         }
-        origin = origin + direction * t;
-        const V3 n = bvh.triangle(hit).normal;
-        const double cos_n = direction.dot(n);
-        const bool entering = cos_n < 0;
-        const V3 facing = entering ? n : n * -1;
-        const double eta = entering ? 1 / o.index : o.index;
-        const double cos_i = std::abs(cos_n);
-        const double k = 1 - eta * eta * (1 - cos_i * cos_i);
-        direction = k < 0 ? direction + facing * (2 * cos_i)  // total internal reflection
-                          : direction * eta + facing * (eta * cos_i - std::sqrt(k));
-        direction = direction.unit();
-      }
-    }
-  });
-
-  cv::Mat traced(h, w, CV_64F, cv::Scalar(0));
-  double emitted = 0, received = 0;
-  const double pixel_area = rw / w * rd / h;
-  for (const Landing& l : landings) {
-    if (!l.emitted) continue;
-    emitted += l.emitted_power;
-    if (l.pixel >= 0) {
-      traced.at<double>(l.pixel / w, l.pixel % w) += l.power / pixel_area;
-      received += l.power;
-    }
+    width = high[0] - low[0];
+    depth = high[1] - low[1];
+    cx = 0.5 * (low[0] + high[0]);
+    cy = 0.5 * (low[1] + high[1]);
+    rw = o.receiver[0] > 0 ? o.receiver[0] : width;
+    rd = o.receiver[1] > 0 ? o.receiver[1] : depth;
+    receiver_z = low[2] - o.distance;
+    // Each ray carries its stratum's share of a beam of unit irradiance, or
+    // of the point light's: I cos(angle) / r² on the plane above the slab.
+    cell = width / o.rays[0] * depth / o.rays[1];
+    start_z = high[2] + 1;
+    if (o.point && !(o.point_at.z > start_z)) throw std::runtime_error("--point: the light must lie above the slab");
+    intensity = (o.point_at.z - low[2]) * (o.point_at.z - low[2]);
   }
+};
 
-  // The goal: grey levels decoded from sRGB, area-resized, scaled so that
-  // it carries all the light the aperture lets through.
+struct Landing {
+  int pixel = -1;
+  double power = 0, emitted_power = 0;
+  bool emitted = false;
+};
+
+/// Ray r: stratified, jittered by a hash of the ray index (reproducible),
+/// refracted through the slab to the receiver.
+Landing trace(const Options& o, const Setup& g, const Bvh& bvh, int r) {
+  const int nx = o.rays[0], ny = o.rays[1], w = o.image[0], h = o.image[1];
+  uint64_t key = static_cast<uint64_t>(r) * 0x9E3779B97F4A7C15ull + 12345;
+  const auto next = [&key] {
+    key ^= key >> 33; key *= 0xff51afd7ed558ccdull; key ^= key >> 33; key *= 0xc4ceb9fe1a85ec53ull; key ^= key >> 33;
+    return static_cast<double>(key >> 11) * 0x1.0p-53;
+  };
+  const double sx = g.low[0] + (r % nx + next()) * g.width / nx, sy = g.low[1] + (r / nx + next()) * g.depth / ny;
+  Landing landing;
+  if (o.disc) {
+    const double u = (sx - g.cx) / (0.5 * g.width), v = (sy - g.cy) / (0.5 * g.depth);
+    if (u * u + v * v > 1) return landing;
+  }
+  landing.emitted = true;
+  V3 origin{sx, sy, g.start_z};  // the beam's cross-section above the slab is the footprint
+  V3 direction = o.light;
+  double power = g.cell * -o.light.z;
+  if (o.point) {
+    const V3 away = origin - o.point_at;
+    const double distance = std::sqrt(away.dot(away));
+    direction = away * (1 / distance);
+    power = g.cell * g.intensity * (o.point_at.z - g.start_z) / (distance * distance * distance);
+  }
+  landing.emitted_power = power;
+  double t;
+  uint32_t hit;
+  for (int segment = 0; segment < 32; ++segment) {
+    if (!bvh.intersect(origin, direction, segment == 0 ? 0 : 1e-7, t, hit)) {
+      if (direction.z < 0) {
+        const double s = (g.receiver_z - origin.z) / direction.z;
+        const double px = origin.x + s * direction.x, py = origin.y + s * direction.y;
+        const int col = static_cast<int>(std::floor((px - (g.cx - 0.5 * g.rw)) / g.rw * w));
+        const int row = static_cast<int>(std::floor(((g.cy + 0.5 * g.rd) - py) / g.rd * h));
+        if (col >= 0 && row >= 0 && col < w && row < h) landing.pixel = row * w + col;
+        landing.power = power;
+      }
+      break;
+    }
+    origin = origin + direction * t;
+    const V3 n = bvh.triangle(hit).normal;
+    const double cos_n = direction.dot(n);
+    const bool entering = cos_n < 0;
+    const V3 facing = entering ? n : n * -1;
+    const double eta = entering ? 1 / o.index : o.index;
+    const double cos_i = std::abs(cos_n);
+    const double k = 1 - eta * eta * (1 - cos_i * cos_i);
+    direction = k < 0 ? direction + facing * (2 * cos_i)  // total internal reflection
+                      : direction * eta + facing * (eta * cos_i - std::sqrt(k));
+    direction = direction.unit();
+  }
+  return landing;
+}
+
+/// The goal: grey levels decoded from sRGB, area-resized, scaled so that it
+/// carries `emitted` (all the light the aperture lets through).
+cv::Mat goal_image(const Options& o, double emitted, double pixel_area) {
   cv::Mat picture = cv::imread(o.goal, cv::IMREAD_GRAYSCALE | cv::IMREAD_ANYDEPTH);
   if (picture.empty()) throw std::runtime_error("cannot read " + o.goal);
   cv::Mat linear(picture.rows, picture.cols, CV_64F);
@@ -386,21 +378,52 @@ int main(int argc, char** argv) try {
     for (int c = 0; c < picture.cols; ++c)
       linear.at<double>(r, c) = srgb_to_linear((picture.depth() == CV_16U ? picture.at<uint16_t>(r, c) : picture.at<uint8_t>(r, c)) / full);
   cv::Mat goal;
-  cv::resize(linear, goal, cv::Size(w, h), 0, 0, cv::INTER_AREA);
+  cv::resize(linear, goal, cv::Size(o.image[0], o.image[1]), 0, 0, cv::INTER_AREA);
   goal *= emitted / (cv::sum(goal)[0] * pixel_area);
+  return goal;
+}
 
+/// The traced image on the goal's peak, sRGB grey.
+void write_traced(const std::string& file, const cv::Mat& traced, double peak) {
+  cv::Mat grey;
+  cv::Mat scaled = traced / peak;
+  cv::min(scaled, 1.0, scaled);
+  scaled.forEach<double>([](double& v, const int*) { v = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055; });
+  scaled.convertTo(grey, CV_8U, 255);
+  cv::imwrite(file, grey);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) try {
+  const Options o = parse(argc, argv);
+  std::vector<Triangle> all = read_stl(o.stl);
+  const Setup g(o, all);
+  const size_t triangle_count = all.size();
+  const Bvh bvh(std::move(all));
+  const int nx = o.rays[0], ny = o.rays[1], w = o.image[0], h = o.image[1];
+  std::vector<Landing> landings(static_cast<size_t>(nx) * static_cast<size_t>(ny));
+  tbb::parallel_for(tbb::blocked_range<int>(0, nx * ny, 4096), [&](const tbb::blocked_range<int>& range) {
+    for (int r = range.begin(); r != range.end(); ++r) landings[static_cast<size_t>(r)] = trace(o, g, bvh, r);
+  });
+
+  cv::Mat traced(h, w, CV_64F, cv::Scalar(0));
+  double emitted = 0, received = 0;
+  const double pixel_area = g.rw / w * g.rd / h;
+  for (const Landing& l : landings) {
+    if (!l.emitted) continue;
+    emitted += l.emitted_power;
+    if (l.pixel >= 0) {
+      traced.at<double>(l.pixel / w, l.pixel % w) += l.power / pixel_area;
+      received += l.power;
+    }
+  }
+  const cv::Mat goal = goal_image(o, emitted, pixel_area);
   const double rmse = std::sqrt(cv::norm(traced - goal, cv::NORM_L2SQR) / (w * h));
   const double rms_goal = std::sqrt(cv::norm(goal, cv::NORM_L2SQR) / (w * h));
   double peak;
   cv::minMaxLoc(goal, nullptr, &peak);
-  if (!o.write.empty()) {
-    cv::Mat grey;
-    cv::Mat scaled = traced / peak;
-    cv::min(scaled, 1.0, scaled);
-    scaled.forEach<double>([](double& v, const int*) { v = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055; });
-    scaled.convertTo(grey, CV_8U, 255);
-    cv::imwrite(o.write, grey);
-  }
+  if (!o.write.empty()) write_traced(o.write, traced, peak);
   const double psnr = 20 * std::log10(peak / rmse);
   std::printf("{\"ssim\": %.9g, \"psnr_db\": %s, \"rmse\": %.9g, \"relative_rmse\": %.9g, \"light_off_receiver\": %.9g, "
               "\"rays\": %d, \"triangles\": %zu}\n",

@@ -201,16 +201,7 @@ class CeresAdapter final : public Optimizer {
         least_squares.SetParameterUpperBound(x.data(), i, d.largest());
     }
 
-    ceres::Solver::Options solver;
-    solver.max_num_iterations = options_.max_iterations;
-    solver.function_tolerance = options_.function_tolerance;
-    solver.gradient_tolerance = options_.gradient_tolerance;
-    solver.parameter_tolerance = options_.parameter_tolerance;
-    ceres::StringToLinearSolverType(options_.linear_solver, &solver.linear_solver_type);
-    ceres::StringToTrustRegionStrategyType(options_.trust_region,
-                                           &solver.trust_region_strategy_type);
-    solver.logging_type = ceres::SILENT;
-    solver.minimizer_progress_to_stdout = false;
+    ceres::Solver::Options solver = solver_options();
     Progress progress(problem, summary, callback);
     solver.callbacks.push_back(&progress);
     std::string invalid;
@@ -256,6 +247,21 @@ class CeresAdapter final : public Optimizer {
   }
 
  private:
+  /// Ceres' options from ours, silent (progress goes through the callback).
+  ceres::Solver::Options solver_options() const {
+    ceres::Solver::Options solver;
+    solver.max_num_iterations = options_.max_iterations;
+    solver.function_tolerance = options_.function_tolerance;
+    solver.gradient_tolerance = options_.gradient_tolerance;
+    solver.parameter_tolerance = options_.parameter_tolerance;
+    ceres::StringToLinearSolverType(options_.linear_solver, &solver.linear_solver_type);
+    ceres::StringToTrustRegionStrategyType(options_.trust_region,
+                                           &solver.trust_region_strategy_type);
+    solver.logging_type = ceres::SILENT;
+    solver.minimizer_progress_to_stdout = false;
+    return solver;
+  }
+
   Options options_;
 };
 

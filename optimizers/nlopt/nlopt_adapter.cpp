@@ -226,6 +226,15 @@ class NloptAdapter final : public Optimizer {
       summary.message = "NLopt " + algorithm_ + ": max_evaluations reached";
       return;
     }
+    if (!read_result(result, opt, summary)) return;
+    for (unsigned i = 0; i < n; ++i)
+      x[i] = problem.domain(static_cast<int>(i)).nearest_admissible(x[i]);
+  }
+
+
+ private:
+  /// NLopt's result as a termination (its message appended); false when it failed.
+  static bool read_result(nlopt_result result, nlopt_opt opt, Summary& summary) {
     switch (result) {
       case NLOPT_SUCCESS:
       case NLOPT_STOPVAL_REACHED:
@@ -249,15 +258,12 @@ class NloptAdapter final : public Optimizer {
         summary.termination = Termination::failure;
         const char* why = nlopt_get_errmsg(opt);
         if (why) summary.message += std::string(": ") + why;
-        return;
+        return false;
       }
     }
-    for (unsigned i = 0; i < n; ++i)
-      x[i] = problem.domain(static_cast<int>(i)).nearest_admissible(x[i]);
+    return true;
   }
 
-
- private:
   bool gradient_based() const { return starts_with_any(algorithm_, {"LD_", "GD_"}); }
   bool global() const { return starts_with_any(algorithm_, {"GN_", "GD_", "G_MLSL"}); }
 

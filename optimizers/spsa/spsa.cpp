@@ -23,6 +23,32 @@
 
 namespace spec2fab {
 
+/// Scaled coordinates u: x = offset + scale·u, u in [0, 1] for bounded
+/// variables (the perturbation and the first step are fractions of a range).
+struct ScaledCoordinates {
+  std::vector<double> offset, scale, lower, upper;
+  explicit ScaledCoordinates(const Problem& problem) {
+    for (int i = 0; i < problem.dimension(); ++i) {
+      const VariableDomain& d = problem.domain(i);
+      const double lo = d.smallest(), hi = d.largest();
+      const bool bounded = std::isfinite(lo) && std::isfinite(hi) && hi > lo;
+      offset.push_back(bounded ? lo : 0.0);
+      scale.push_back(bounded ? hi - lo : 1.0);
+      lower.push_back(bounded ? 0.0 : (lo - offset.back()) / scale.back());
+      upper.push_back(bounded ? 1.0 : (hi - offset.back()) / scale.back());
+    }
+  }
+  std::vector<double> of(const std::vector<double>& x) const {
+    std::vector<double> u(x.size());
+    for (size_t i = 0; i < x.size(); ++i) u[i] = (x[i] - offset[i]) / scale[i];
+    return u;
+  }
+  void to_x(Problem& problem, const std::vector<double>& u, std::vector<double>& x) const {
+    for (size_t i = 0; i < u.size(); ++i)
+      x[i] = problem.domain(static_cast<int>(i)).nearest_admissible(offset[i] + scale[i] * u[i]);
+  }
+};
+
 class Spsa final : public Optimizer {
  public:
   struct Options {
@@ -94,24 +120,11 @@ class Spsa final : public Optimizer {
            const IterationCallback& callback) override {
     const auto n = static_cast<size_t>(problem.dimension());
     Random random(random_seed(options_.seed));
-    // Scaled coordinates u: x = offset + scale·u, u in [0, 1] for bounded variables.
-    std::vector<double> offset(n), scale(n), u(n), lower(n), upper(n);
-    for (size_t i = 0; i < n; ++i) {
-      const VariableDomain& d = problem.domain(static_cast<int>(i));
-      const double lo = d.smallest(), hi = d.largest();
-      const bool bounded = std::isfinite(lo) && std::isfinite(hi) && hi > lo;
-      offset[i] = bounded ? lo : 0.0;
-      scale[i] = bounded ? hi - lo : 1.0;
-      lower[i] = bounded ? 0.0 : (lo - offset[i]) / scale[i];
-      upper[i] = bounded ? 1.0 : (hi - offset[i]) / scale[i];
-      u[i] = (x[i] - offset[i]) / scale[i];
-    }
-    const auto to_x = [&](const std::vector<double>& v, std::vector<double>& out) {
-      for (size_t i = 0; i < n; ++i) {
-        out[i] =
-            problem.domain(static_cast<int>(i)).nearest_admissible(offset[i] + scale[i] * v[i]);
-      }
-    };
+    const ScaledCoordinates scaled(problem);
+    const std::vector<double>& lower = scaled.lower;
+    const std::vector<double>& upper = scaled.upper;
+    std::vector<double> u = scaled.of(x);
+    const auto to_x = [&](const std::vector<double>& v, std::vector<double>& out) { scaled.to_x(problem, v, out); };
 
     double best = std::isnan(summary.initial_error) ? HUGE_VAL : summary.initial_error;
     std::vector<double> best_x = x;

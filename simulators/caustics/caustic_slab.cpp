@@ -261,6 +261,145 @@ int fill_pinched_corners(int nx, int ny, std::vector<std::array<double, 4>>& hei
   return filled;
 }
 
+/// The faceted slab as it is meshed: the facets' tops with the points where
+/// neighbours' top edges cross, the walls between them and round the slab,
+/// and the flat bottom.
+class FacetedSlab {
+ public:
+  FacetedSlab(const CausticSetup& setup, int nx, int ny, const std::vector<std::array<double, 4>>& corner_heights)
+      : setup_(setup), nx_(nx), ny_(ny), heights_(corner_heights), lines_(nx, ny, corner_heights),
+        east_(static_cast<size_t>(nx) * static_cast<size_t>(ny)), north_(east_.size()) {
+    find_crossings();
+  }
+
+  Mesh mesh() && {
+    for (int j = 0; j < ny_; ++j)
+      for (int i = 0; i < nx_; ++i) {
+        top(i, j);
+        walls(i, j);
+      }
+    bottom();
+    return std::move(soup_.mesh);
+  }
+
+ private:
+  static Vec3 at(const Vec2& xy, double z) { return Vec3(xy.x(), xy.y(), z); }
+  Vec2 corner(int i, int j) const {
+    return Vec2(setup_.width_mm * (static_cast<double>(i) / nx_ - 0.5), setup_.depth_mm * (static_cast<double>(j) / ny_ - 0.5));
+  }
+  const std::array<double, 4>& facet(int i, int j) const {
+    return heights_[static_cast<size_t>(i) + static_cast<size_t>(nx_) * static_cast<size_t>(j)];
+  }
+  size_t index(int i, int j) const { return static_cast<size_t>(i + nx_ * j); }
+
+  /// Where two neighbours' top edges cross, their wall narrows to a point on
+  /// both: computed once per edge, so that the tops and the wall share it
+  /// exactly. east_[i + nx·j]: the edge east of facet (i, j); north_ likewise.
+  void find_crossings() {
+    const auto crossing = [](const Vec2& p, const Vec2& q, double a_p, double a_q, double b_p,
+                             double b_q) -> std::optional<Vec3> {
+      const double dp = a_p - b_p, dq = a_q - b_q;
+      if (dp * dq >= 0) return std::nullopt;
+      const double t = dp / (dp - dq);
+      return at(p + t * (q - p), a_p + t * (a_q - a_p));
+    };
+    for (int j = 0; j < ny_; ++j) {
+      for (int i = 0; i < nx_; ++i) {
+        const auto& h = facet(i, j);
+        if (i + 1 < nx_) {
+          const auto& e = facet(i + 1, j);
+          east_[index(i, j)] = crossing(corner(i + 1, j), corner(i + 1, j + 1), h[1], h[2], e[0], e[3]);
+        }
+        if (j + 1 < ny_) {
+          const auto& n = facet(i, j + 1);
+          north_[index(i, j)] = crossing(corner(i, j + 1), corner(i + 1, j + 1), h[3], h[2], n[0], n[1]);
+        }
+      }
+    }
+  }
+
+  static void edge_point(const std::vector<std::optional<Vec3>>& edges, size_t k, std::vector<Vec3>& polygon) {
+    if (edges[k]) polygon.push_back(*edges[k]);
+  }
+
+  /// The top's two triangles, (00, 10, 11) and (00, 11, 01), with the
+  /// crossing points on their outer edges.
+  void top(int i, int j) {
+    const Vec3 up(0, 0, 1);
+    const auto& h = facet(i, j);
+    const Vec3 c00 = at(corner(i, j), h[0]), c10 = at(corner(i + 1, j), h[1]), c11 = at(corner(i + 1, j + 1), h[2]),
+               c01 = at(corner(i, j + 1), h[3]);
+    const size_t k = index(i, j);
+    std::vector<Vec3> first{c00};
+    if (j > 0) edge_point(north_, index(i, j - 1), first);
+    first.push_back(c10);
+    if (i + 1 < nx_) edge_point(east_, k, first);
+    first.push_back(c11);
+    soup_.polygon(first, up);
+    std::vector<Vec3> second{c00, c11};
+    if (j + 1 < ny_) edge_point(north_, k, second);
+    second.push_back(c01);
+    if (i > 0) edge_point(east_, index(i - 1, j), second);
+    soup_.polygon(second, up);
+  }
+
+  /// The wall over grid edge (pi, pj) → (qi, qj) between side A (tops a_p,
+  /// a_q) and side B (b_p, b_q), facing from A to B where A is higher.
+  void wall(int pi, int pj, int qi, int qj, double a_p, double a_q, double b_p, double b_q,
+            const std::optional<Vec3>& cross, const Vec3& a_to_b) {
+    const Vec2 p = corner(pi, pj), q = corner(qi, qj);
+    const std::vector<Vec3> at_p = lines_.chain(pi, pj, p, a_p, b_p), at_q = lines_.chain(qi, qj, q, a_q, b_q);
+    if (!cross) {
+      soup_.ladder(at_p, at_q, (a_p - b_p) + (a_q - b_q) >= 0 ? a_to_b : Vec3(-a_to_b));
+      return;
+    }
+    // Two triangles' worth, each a fan from the crossing to one end's chain.
+    for (const auto& [chain, higher] : {std::pair{&at_p, a_p > b_p}, std::pair{&at_q, a_q > b_q}}) {
+      for (size_t k = 0; k + 1 < chain->size(); ++k)
+        soup_.add((*chain)[k], (*chain)[k + 1], *cross, higher ? a_to_b : Vec3(-a_to_b));
+    }
+  }
+
+  /// East and north: against the next facet, or the slab's side (height 0
+  /// beyond); west and south on the slab's sides.
+  void walls(int i, int j) {
+    const Vec3 to_east(1, 0, 0), to_north(0, 1, 0);
+    const auto& h = facet(i, j);
+    const size_t k = index(i, j);
+    if (i + 1 < nx_) {
+      const auto& e = facet(i + 1, j);
+      wall(i + 1, j, i + 1, j + 1, h[1], h[2], e[0], e[3], east_[k], to_east);
+    } else {
+      wall(i + 1, j, i + 1, j + 1, h[1], h[2], 0, 0, std::nullopt, to_east);
+    }
+    if (j + 1 < ny_) {
+      const auto& n = facet(i, j + 1);
+      wall(i, j + 1, i + 1, j + 1, h[3], h[2], n[0], n[1], north_[k], to_north);
+    } else {
+      wall(i, j + 1, i + 1, j + 1, h[3], h[2], 0, 0, std::nullopt, to_north);
+    }
+    if (i == 0) wall(i, j, i, j + 1, h[0], h[3], 0, 0, std::nullopt, -to_east);
+    if (j == 0) wall(i, j, i + 1, j, h[0], h[1], 0, 0, std::nullopt, -to_north);
+  }
+
+  /// The flat bottom as one polygon through the side walls' lowest points.
+  void bottom() {
+    std::vector<Vec3> outline;
+    for (int i = 0; i < nx_; ++i) outline.push_back(at(corner(i, 0), 0));
+    for (int j = 0; j < ny_; ++j) outline.push_back(at(corner(nx_, j), 0));
+    for (int i = nx_; i > 0; --i) outline.push_back(at(corner(i, ny_), 0));
+    for (int j = ny_; j > 0; --j) outline.push_back(at(corner(0, j), 0));
+    soup_.polygon(outline, Vec3(0, 0, -1));
+  }
+
+  const CausticSetup& setup_;
+  const int nx_, ny_;
+  const std::vector<std::array<double, 4>>& heights_;
+  const CornerLines lines_;
+  std::vector<std::optional<Vec3>> east_, north_;
+  TriangleSoup soup_;
+};
+
 }  // namespace
 
 Mesh faceted_slab_mesh(const CausticSetup& setup, int nx, int ny,
@@ -271,112 +410,7 @@ Mesh faceted_slab_mesh(const CausticSetup& setup, int nx, int ny,
   std::vector<std::array<double, 4>> corner_heights(corner_heights_in.begin(), corner_heights_in.end());
   const int filled = fill_pinched_corners(nx, ny, corner_heights);
   if (pinches_filled != nullptr) *pinches_filled = filled;
-  const auto x = [&](int i) { return setup.width_mm * (static_cast<double>(i) / nx - 0.5); };
-  const auto y = [&](int j) { return setup.depth_mm * (static_cast<double>(j) / ny - 0.5); };
-  const auto corner = [&](int i, int j) { return Vec2(x(i), y(j)); };
-  const auto facet = [&](int i, int j) -> const std::array<double, 4>& {
-    return corner_heights[static_cast<size_t>(i) +
-                          static_cast<size_t>(nx) * static_cast<size_t>(j)];
-  };
-  const CornerLines lines(nx, ny, corner_heights);
-  const auto at = [](const Vec2& xy, double z) { return Vec3(xy.x(), xy.y(), z); };
-
-  // Where two neighbours' top edges cross, their wall narrows to a point on
-  // both: computed once per edge, so that the tops and the wall share it
-  // exactly. east[i + nx·j]: the edge east of facet (i, j); north likewise.
-  const size_t count = static_cast<size_t>(nx) * static_cast<size_t>(ny);
-  std::vector<std::optional<Vec3>> east(count), north(count);
-  const auto crossing = [&](const Vec2& p, const Vec2& q, double a_p, double a_q, double b_p,
-                            double b_q) -> std::optional<Vec3> {
-    const double dp = a_p - b_p, dq = a_q - b_q;
-    if (dp * dq >= 0) return std::nullopt;
-    const double t = dp / (dp - dq);
-    return at(p + t * (q - p), a_p + t * (a_q - a_p));
-  };
-  for (int j = 0; j < ny; ++j) {
-    for (int i = 0; i < nx; ++i) {
-      const auto& h = facet(i, j);
-      if (i + 1 < nx) {
-        const auto& e = facet(i + 1, j);
-        east[static_cast<size_t>(i + nx * j)] =
-            crossing(corner(i + 1, j), corner(i + 1, j + 1), h[1], h[2], e[0], e[3]);
-      }
-      if (j + 1 < ny) {
-        const auto& n = facet(i, j + 1);
-        north[static_cast<size_t>(i + nx * j)] =
-            crossing(corner(i, j + 1), corner(i + 1, j + 1), h[3], h[2], n[0], n[1]);
-      }
-    }
-  }
-  const auto edge_point = [](const std::vector<std::optional<Vec3>>& edges, size_t k,
-                             std::vector<Vec3>& polygon) {
-    if (edges[k]) polygon.push_back(*edges[k]);
-  };
-
-  // The wall over grid edge (pi, pj) → (qi, qj) between side A (tops a_p,
-  // a_q) and side B (b_p, b_q), facing from A to B where A is higher.
-  const Vec3 up(0, 0, 1), down(0, 0, -1), to_east(1, 0, 0), to_north(0, 1, 0);
-  TriangleSoup soup;
-  const auto wall = [&](int pi, int pj, int qi, int qj, double a_p, double a_q, double b_p,
-                        double b_q, const std::optional<Vec3>& cross, const Vec3& a_to_b) {
-    const Vec2 p = corner(pi, pj), q = corner(qi, qj);
-    const std::vector<Vec3> at_p = lines.chain(pi, pj, p, a_p, b_p),
-                            at_q = lines.chain(qi, qj, q, a_q, b_q);
-    if (!cross) {
-      soup.ladder(at_p, at_q, (a_p - b_p) + (a_q - b_q) >= 0 ? a_to_b : Vec3(-a_to_b));
-      return;
-    }
-    // Two triangles' worth, each a fan from the crossing to one end's chain.
-    for (const auto& [chain, higher] : {std::pair{&at_p, a_p > b_p}, std::pair{&at_q, a_q > b_q}}) {
-      for (size_t k = 0; k + 1 < chain->size(); ++k)
-        soup.add((*chain)[k], (*chain)[k + 1], *cross, higher ? a_to_b : Vec3(-a_to_b));
-    }
-  };
-
-  for (int j = 0; j < ny; ++j) {
-    for (int i = 0; i < nx; ++i) {
-      const auto& h = facet(i, j);
-      const Vec3 c00 = at(corner(i, j), h[0]), c10 = at(corner(i + 1, j), h[1]),
-                 c11 = at(corner(i + 1, j + 1), h[2]), c01 = at(corner(i, j + 1), h[3]);
-      const size_t k = static_cast<size_t>(i + nx * j);
-      // The top's two triangles, (00, 10, 11) and (00, 11, 01), with the
-      // crossing points on their outer edges.
-      std::vector<Vec3> first{c00};
-      if (j > 0) edge_point(north, static_cast<size_t>(i + nx * (j - 1)), first);
-      first.push_back(c10);
-      if (i + 1 < nx) edge_point(east, k, first);
-      first.push_back(c11);
-      soup.polygon(first, up);
-      std::vector<Vec3> second{c00, c11};
-      if (j + 1 < ny) edge_point(north, k, second);
-      second.push_back(c01);
-      if (i > 0) edge_point(east, static_cast<size_t>(i - 1 + nx * j), second);
-      soup.polygon(second, up);
-      // East and north: against the next facet, or the slab's side (height 0 beyond).
-      if (i + 1 < nx) {
-        const auto& e = facet(i + 1, j);
-        wall(i + 1, j, i + 1, j + 1, h[1], h[2], e[0], e[3], east[k], to_east);
-      } else {
-        wall(i + 1, j, i + 1, j + 1, h[1], h[2], 0, 0, std::nullopt, to_east);
-      }
-      if (j + 1 < ny) {
-        const auto& n = facet(i, j + 1);
-        wall(i, j + 1, i + 1, j + 1, h[3], h[2], n[0], n[1], north[k], to_north);
-      } else {
-        wall(i, j + 1, i + 1, j + 1, h[3], h[2], 0, 0, std::nullopt, to_north);
-      }
-      if (i == 0) wall(i, j, i, j + 1, h[0], h[3], 0, 0, std::nullopt, -to_east);
-      if (j == 0) wall(i, j, i + 1, j, h[0], h[1], 0, 0, std::nullopt, -to_north);
-    }
-  }
-  // The flat bottom as one polygon through the side walls' lowest points.
-  std::vector<Vec3> bottom;
-  for (int i = 0; i < nx; ++i) bottom.push_back(at(corner(i, 0), 0));
-  for (int j = 0; j < ny; ++j) bottom.push_back(at(corner(nx, j), 0));
-  for (int i = nx; i > 0; --i) bottom.push_back(at(corner(i, ny), 0));
-  for (int j = ny; j > 0; --j) bottom.push_back(at(corner(0, j), 0));
-  soup.polygon(bottom, down);
-  return std::move(soup.mesh);
+  return FacetedSlab(setup, nx, ny, corner_heights).mesh();
 }
 
 }  // namespace spec2fab

@@ -152,6 +152,87 @@ struct PowerDiagram {
   }
 };
 
+/// The source and sites about the source's centre, where the start below
+/// holds: ψ_i = (1 - λ)|y_i|² makes the cells the Voronoi cells of the sites
+/// shrunk by λ about the origin, all inside the source when λ is small
+/// enough (the source holds the origin).
+struct CentredProblem {
+  Vec2 centre = Vec2::Zero();
+  std::vector<Vec2> source, sites;
+  double inner = std::numeric_limits<double>::infinity();  ///< the source's edges' least distance from the centre
+  std::vector<double> start;                                ///< ψ of the shrunk Voronoi cells
+
+  CentredProblem(const std::vector<Vec2>& polygon, std::span<const Vec2> targets) : source(polygon), sites(targets.size()) {
+    for (const Vec2& p : polygon) centre += p;
+    centre /= static_cast<double>(polygon.size());
+    for (size_t i = 0; i < sites.size(); ++i) sites[i] = targets[i] - centre;
+    for (Vec2& p : source) p -= centre;
+    double reach = 0;
+    for (const Vec2& y : sites) reach = std::max(reach, y.norm());
+    for (size_t k = 0; k < source.size(); ++k) {
+      const Vec2 a = source[k], b = source[(k + 1) % source.size()];
+      const Vec2 edge = (b - a).normalized();
+      inner = std::min(inner, std::abs(a.x() * edge.y() - a.y() * edge.x()));  // distance of the line from the centre
+    }
+    const double lambda = std::min(1.0, 0.9 * inner / std::max(reach, 1e-300));
+    start.resize(sites.size());
+    for (size_t i = 0; i < sites.size(); ++i) start[i] = (1 - lambda) * sites[i].squaredNorm();
+  }
+  std::unique_ptr<PowerDiagram> diagram(const std::vector<double>& psi) const {
+    return std::make_unique<PowerDiagram>(source, inner, sites, psi);
+  }
+};
+
+/// The first diagram: from the guessed weights where they leave no cell
+/// empty (blended towards the start where they do), else from the start.
+/// The weights do not change with the shift of origin: |x - y|² - ψ
+/// compares the same way for x and y moved together. Sets `psi` to its.
+std::unique_ptr<PowerDiagram> first_diagram(const CentredProblem& problem, std::span<const double> initial_weights,
+                                            std::vector<double>& psi) {
+  const size_t n = problem.sites.size();
+  psi = problem.start;
+  if (initial_weights.size() == n) {
+    for (double blend : {0.0, 0.25, 0.5}) {
+      std::vector<double> guess(n);
+      for (size_t i = 0; i < n; ++i) guess[i] = (1 - blend) * initial_weights[i] + blend * psi[i];
+      std::unique_ptr<PowerDiagram> diagram = problem.diagram(guess);
+      if (*std::min_element(diagram->areas.begin(), diagram->areas.end()) > 0) {
+        psi = std::move(guess);
+        return diagram;
+      }
+    }
+  }
+  return problem.diagram(psi);
+}
+
+/// ∂area_i/∂ψ: a graph Laplacian over neighbouring cells, ψ_0 held (the
+/// weights are defined up to a constant).
+Eigen::SparseMatrix<double> area_hessian(const PowerDiagram& diagram, size_t n) {
+  std::vector<Eigen::Triplet<double>> entries;
+  entries.reserve(2 * diagram.edges.size() + n);
+  std::vector<double> diagonal(n, 0.0);
+  for (const auto& e : diagram.edges) {
+    diagonal[static_cast<size_t>(e.row())] += e.value();
+    if (e.row() > 0 && e.col() > 0) entries.emplace_back(e.row() - 1, e.col() - 1, -e.value());
+  }
+  for (size_t i = 1; i < n; ++i) entries.emplace_back(static_cast<int>(i) - 1, static_cast<int>(i) - 1, diagonal[i]);
+  Eigen::SparseMatrix<double> hessian(static_cast<Eigen::Index>(n - 1), static_cast<Eigen::Index>(n - 1));
+  hessian.setFromTriplets(entries.begin(), entries.end());
+  return hessian;
+}
+
+/// The masses as areas of the source (they sum to its area).
+std::vector<double> target_areas(std::span<const double> masses, double source_area) {
+  double total = 0;
+  for (double m : masses) {
+    if (!(m > 0) || !std::isfinite(m)) throw InputError("optimal transport: every mass must be positive and finite");
+    total += m;
+  }
+  std::vector<double> nu(masses.size());
+  for (size_t i = 0; i < masses.size(); ++i) nu[i] = masses[i] * source_area / total;
+  return nu;
+}
+
 }  // namespace
 
 SemiDiscreteTransport solve_semi_discrete_transport(std::span<const Vec2> source, std::span<const Vec2> sites,
@@ -162,54 +243,13 @@ SemiDiscreteTransport solve_semi_discrete_transport(std::span<const Vec2> source
   std::vector<Vec2> polygon(source.begin(), source.end());
   const double source_area = polygon_area(polygon);
   if (polygon.size() < 3 || !(source_area > 0)) throw InputError("optimal transport: the source must be a counter-clockwise polygon");
-  double total = 0;
-  for (double m : masses) {
-    if (!(m > 0) || !std::isfinite(m)) throw InputError("optimal transport: every mass must be positive and finite");
-    total += m;
-  }
-  std::vector<double> nu(n);
-  for (size_t i = 0; i < n; ++i) nu[i] = masses[i] * source_area / total;
+  const std::vector<double> nu = target_areas(masses, source_area);
   const double mean_mass = source_area / static_cast<double>(n);
-
-  // Start where every cell is non-empty: ψ_i = (1 - λ)|y_i|² makes the cells
-  // the Voronoi cells of the sites shrunk by λ about the origin, all inside
-  // the source when λ is small enough (the source holds the origin).
-  Vec2 centre = Vec2::Zero();
-  for (const Vec2& p : polygon) centre += p;
-  centre /= static_cast<double>(polygon.size());
-  std::vector<Vec2> moved(n);
-  for (size_t i = 0; i < n; ++i) moved[i] = sites[i] - centre;
-  std::vector<Vec2> shifted_source = polygon;
-  for (Vec2& p : shifted_source) p -= centre;
-  double reach = 0, inner = std::numeric_limits<double>::infinity();
-  for (const Vec2& y : moved) reach = std::max(reach, y.norm());
-  for (size_t k = 0; k < shifted_source.size(); ++k) {
-    const Vec2 a = shifted_source[k], b = shifted_source[(k + 1) % shifted_source.size()];
-    const Vec2 edge = (b - a).normalized();
-    inner = std::min(inner, std::abs(a.x() * edge.y() - a.y() * edge.x()));  // distance of the line from the centre
-  }
-  const double lambda = std::min(1.0, 0.9 * inner / std::max(reach, 1e-300));
-  std::vector<double> psi(n);
-  for (size_t i = 0; i < n; ++i) psi[i] = (1 - lambda) * moved[i].squaredNorm();
+  const CentredProblem problem(polygon, sites);
 
   SemiDiscreteTransport result;
-  std::unique_ptr<PowerDiagram> diagram;
-  if (initial_weights.size() == n) {
-    // The weights do not change with the shift of origin: |x - y|² - ψ
-    // compares the same way for x and y moved together. Where the guess
-    // leaves cells empty, it is blended towards the start above.
-    for (double blend : {0.0, 0.25, 0.5}) {
-      std::vector<double> guess(n);
-      for (size_t i = 0; i < n; ++i) guess[i] = (1 - blend) * initial_weights[i] + blend * psi[i];
-      diagram = std::make_unique<PowerDiagram>(shifted_source, inner, moved, guess);
-      if (*std::min_element(diagram->areas.begin(), diagram->areas.end()) > 0) {
-        psi = std::move(guess);
-        break;
-      }
-      diagram.reset();
-    }
-  }
-  if (!diagram) diagram = std::make_unique<PowerDiagram>(shifted_source, inner, moved, psi);
+  std::vector<double> psi;
+  std::unique_ptr<PowerDiagram> diagram = first_diagram(problem, initial_weights, psi);
   const auto residual = [&](const PowerDiagram& d) {
     Eigen::VectorXd g(static_cast<Eigen::Index>(n));
     for (size_t i = 0; i < n; ++i) g[static_cast<Eigen::Index>(i)] = nu[i] - d.areas[i];
@@ -226,20 +266,7 @@ SemiDiscreteTransport solve_semi_discrete_transport(std::span<const Vec2> source
     if (step == max_steps)
       throw std::runtime_error("optimal transport: Newton did not converge in " + std::to_string(max_steps) +
                                " steps (worst cell " + std::to_string(result.worst_mass_error) + " of the mean mass off)");
-    // ∂area_i/∂ψ: a graph Laplacian over neighbouring cells; ψ_0 is held
-    // (the weights are defined up to a constant).
-    std::vector<Eigen::Triplet<double>> entries;
-    entries.reserve(2 * diagram->edges.size() + n);
-    std::vector<double> diagonal(n, 0.0);
-    for (const auto& e : diagram->edges) {
-      diagonal[static_cast<size_t>(e.row())] += e.value();
-      if (e.row() > 0 && e.col() > 0) entries.emplace_back(e.row() - 1, e.col() - 1, -e.value());
-    }
-    for (size_t i = 1; i < n; ++i)
-      entries.emplace_back(static_cast<int>(i) - 1, static_cast<int>(i) - 1, diagonal[i]);
-    Eigen::SparseMatrix<double> hessian(static_cast<Eigen::Index>(n - 1), static_cast<Eigen::Index>(n - 1));
-    hessian.setFromTriplets(entries.begin(), entries.end());
-    solver.compute(hessian);  // the pattern follows the diagram's adjacency: analysed anew
+    solver.compute(area_hessian(*diagram, n));  // the pattern follows the diagram's adjacency: analysed anew
     if (solver.info() != Eigen::Success) throw std::runtime_error("optimal transport: the Newton system is singular");
     const Eigen::VectorXd direction = solver.solve(g.tail(static_cast<Eigen::Index>(n - 1)));
     // Damping: halve the step until no cell shrinks below the floor and the
@@ -249,7 +276,7 @@ SemiDiscreteTransport solve_semi_discrete_transport(std::span<const Vec2> source
       if (t < 1e-10) throw std::runtime_error("optimal transport: the Newton step cannot be damped enough");
       std::vector<double> trial = psi;
       for (size_t i = 1; i < n; ++i) trial[i] += t * direction[static_cast<Eigen::Index>(i - 1)];
-      auto next = std::make_unique<PowerDiagram>(shifted_source, inner, moved, trial);
+      auto next = problem.diagram(trial);
       const Eigen::VectorXd trial_g = residual(*next);
       if (*std::min_element(next->areas.begin(), next->areas.end()) >= floor_area &&
           trial_g.norm() <= (1 - 0.5 * t) * error) {
@@ -265,7 +292,7 @@ SemiDiscreteTransport solve_semi_discrete_transport(std::span<const Vec2> source
   result.cells.resize(n);
   for (size_t i = 0; i < n; ++i) {
     result.cells[i] = std::move(diagram->cells[i].corners);
-    for (Vec2& p : result.cells[i]) p += centre;
+    for (Vec2& p : result.cells[i]) p += problem.centre;
   }
   return result;
 }

@@ -98,54 +98,37 @@ StressSummary summarize_stress(const std::vector<double>& von_mises_mpa, const s
   return summary;
 }
 
-void write_vtu(const fs::path& path, const TetMesh& mesh, const std::vector<int>& material_ids,
-               const std::vector<std::string>& material_names_by_id, const std::vector<double>& displacement_mm,
-               const std::vector<double>& von_mises_mpa) {
-  const size_t tets = mesh.tets.size(), points = mesh.nodes.size();
-  if (material_ids.size() != tets || von_mises_mpa.size() != tets || displacement_mm.size() != 3 * points) {
-    throw std::invalid_argument("write_vtu " + path.string() +
-                                ": need one material and stress per tet and 3 displacements per node");
-  }
-  std::vector<double> positions;
-  positions.reserve(3 * points);
-  for (const Vec3& x : mesh.nodes) positions.insert(positions.end(), {x.x(), x.y(), x.z()});
+namespace {
+
+/// The non-void tets as VTK cells, with their material and stress.
+struct VtuCells {
   std::vector<std::int64_t> connectivity, offsets;
   std::vector<std::uint8_t> types;
   std::vector<std::int32_t> materials;
   std::vector<double> stress;
-  for (size_t t = 0; t < tets; ++t) {
-    if (material_ids[t] == kVoid) continue;
-    for (int corner : mesh.tets[t]) connectivity.push_back(corner);
-    offsets.push_back(static_cast<std::int64_t>(connectivity.size()));
-    types.push_back(10);  // VTK_TETRA; its corner order is the mesh's (positive orientation)
-    materials.push_back(material_ids[t]);
-    stress.push_back(von_mises_mpa[t]);
-  }
-  const size_t cells = types.size();
+};
 
-  // Document order. The data is laid out in reverse: meshio finds each raw
-  // block by the offset attribute while rewriting offsets it has already
-  // read, and with blocks in reverse the block it looks for always comes
-  // first in the document, even where a rewritten offset repeats a raw one.
-  std::vector<AppendedArray> arrays{
-      {R"(type="Float64" Name="displacement_mm" NumberOfComponents="3")", displacement_mm.data(), 8 * displacement_mm.size()},
-      {R"(type="Int32" Name="material")", materials.data(), 4 * materials.size()},
-      {R"(type="Float64" Name="von_mises_mpa")", stress.data(), 8 * stress.size()},
-      {R"(type="Float64" Name="Points" NumberOfComponents="3")", positions.data(), 8 * positions.size()},
-      {R"(type="Int64" Name="connectivity")", connectivity.data(), 8 * connectivity.size()},
-      {R"(type="Int64" Name="offsets")", offsets.data(), 8 * offsets.size()},
-      {R"(type="UInt8" Name="types")", types.data(), types.size()},
-  };
-  std::uint64_t next_offset = 0;
-  for (auto a = arrays.rbegin(); a != arrays.rend(); ++a) {
-    a->offset = next_offset;
-    next_offset += sizeof(std::uint64_t) + a->bytes;  // each block: its byte count (header_type), then the bytes
+VtuCells solid_cells(const TetMesh& mesh, const std::vector<int>& material_ids, const std::vector<double>& von_mises_mpa) {
+  VtuCells cells;
+  for (size_t t = 0; t < mesh.tets.size(); ++t) {
+    if (material_ids[t] == kVoid) continue;
+    for (int corner : mesh.tets[t]) cells.connectivity.push_back(corner);
+    cells.offsets.push_back(static_cast<std::int64_t>(cells.connectivity.size()));
+    cells.types.push_back(10);  // VTK_TETRA; its corner order is the mesh's (positive orientation)
+    cells.materials.push_back(material_ids[t]);
+    cells.stress.push_back(von_mises_mpa[t]);
   }
+  return cells;
+}
+
+/// The XML up to the raw data: the material names in a comment, and each
+/// array by its offset into the appended data.
+std::string vtu_document(const std::vector<AppendedArray>& arrays, size_t points, size_t cells,
+                         const std::vector<std::string>& material_names_by_id) {
   const auto element = [&](size_t index) {
     return "<DataArray " + arrays[index].attributes + R"( format="appended" offset=")" +
            std::to_string(arrays[index].offset) + "\"/>\n";
   };
-
   std::ostringstream xml;
   xml << "<?xml version=\"1.0\"?>\n";
   if (!material_names_by_id.empty()) {
@@ -164,11 +147,14 @@ void write_vtu(const fs::path& path, const TetMesh& mesh, const std::vector<int>
       << "<Points>\n" << element(3) << "</Points>\n"
       << "<Cells>\n" << element(4) << element(5) << element(6) << "</Cells>\n"
       << "</Piece>\n</UnstructuredGrid>\n<AppendedData encoding=\"raw\">\n_";
+  return xml.str();
+}
 
+/// The document, then the arrays' raw blocks in reverse, all or nothing.
+void write_document(const fs::path& path, const std::string& head, const std::vector<AppendedArray>& arrays) {
   const fs::path partial = fs::path(path).concat(".partial");
   try {
     CheckedFile out(partial);
-    const std::string head = xml.str();
     out.write(head.data(), head.size());
     for (auto a = arrays.rbegin(); a != arrays.rend(); ++a) {
       out.write(&a->bytes, sizeof a->bytes);
@@ -186,6 +172,42 @@ void write_vtu(const fs::path& path, const TetMesh& mesh, const std::vector<int>
   std::error_code error;
   fs::rename(partial, path, error);
   if (error) throw WriteError("cannot write " + path.string() + ": cannot rename " + partial.string() + ": " + error.message());
+}
+
+}  // namespace
+
+void write_vtu(const fs::path& path, const TetMesh& mesh, const std::vector<int>& material_ids,
+               const std::vector<std::string>& material_names_by_id, const std::vector<double>& displacement_mm,
+               const std::vector<double>& von_mises_mpa) {
+  const size_t tets = mesh.tets.size(), points = mesh.nodes.size();
+  if (material_ids.size() != tets || von_mises_mpa.size() != tets || displacement_mm.size() != 3 * points) {
+    throw std::invalid_argument("write_vtu " + path.string() +
+                                ": need one material and stress per tet and 3 displacements per node");
+  }
+  std::vector<double> positions;
+  positions.reserve(3 * points);
+  for (const Vec3& x : mesh.nodes) positions.insert(positions.end(), {x.x(), x.y(), x.z()});
+  const VtuCells cells = solid_cells(mesh, material_ids, von_mises_mpa);
+
+  // Document order. The data is laid out in reverse: meshio finds each raw
+  // block by the offset attribute while rewriting offsets it has already
+  // read, and with blocks in reverse the block it looks for always comes
+  // first in the document, even where a rewritten offset repeats a raw one.
+  std::vector<AppendedArray> arrays{
+      {R"(type="Float64" Name="displacement_mm" NumberOfComponents="3")", displacement_mm.data(), 8 * displacement_mm.size()},
+      {R"(type="Int32" Name="material")", cells.materials.data(), 4 * cells.materials.size()},
+      {R"(type="Float64" Name="von_mises_mpa")", cells.stress.data(), 8 * cells.stress.size()},
+      {R"(type="Float64" Name="Points" NumberOfComponents="3")", positions.data(), 8 * positions.size()},
+      {R"(type="Int64" Name="connectivity")", cells.connectivity.data(), 8 * cells.connectivity.size()},
+      {R"(type="Int64" Name="offsets")", cells.offsets.data(), 8 * cells.offsets.size()},
+      {R"(type="UInt8" Name="types")", cells.types.data(), cells.types.size()},
+  };
+  std::uint64_t next_offset = 0;
+  for (auto a = arrays.rbegin(); a != arrays.rend(); ++a) {
+    a->offset = next_offset;
+    next_offset += sizeof(std::uint64_t) + a->bytes;  // each block: its byte count (header_type), then the bytes
+  }
+  write_document(path, vtu_document(arrays, points, cells.types.size(), material_names_by_id), arrays);
 }
 
 }  // namespace spec2fab::fem

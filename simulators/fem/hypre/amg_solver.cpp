@@ -54,6 +54,10 @@ void check(HYPRE_Int code, const char* what) {
 }  // namespace
 
 struct AmgSolver::Impl {
+  // The constructor's steps.
+  void create_matrix(const Matrix& lower);
+  void create_boomer_amg();
+  void create_pcg();
   HYPRE_Int n = 0;  // rows of the preconditioned system: every node DOF
   double tolerance = 1e-10;
   int max_iterations = 1000;
@@ -130,80 +134,90 @@ AmgSolver::AmgSolver(const Matrix& lower, std::vector<int> dof_of_free, size_t n
   m.tolerance = tolerance;
   m.max_iterations = max_iterations;
   m.dof_of_free = std::move(dof_of_free);
-  const auto n = static_cast<size_t>(m.n);
+  m.create_matrix(lower);
+  m.create_boomer_amg();
+  m.create_pcg();
+}
 
+void AmgSolver::Impl::create_matrix(const Matrix& lower) {
+  const auto rows = static_cast<size_t>(n);
   // Row sizes: a prescribed DOF's row is its diagonal (the identity).
-  std::vector<HYPRE_Int> row_sizes(n, 1);
-  for (int dof : m.dof_of_free) row_sizes[static_cast<size_t>(dof)] = 0;
+  std::vector<HYPRE_Int> row_sizes(rows, 1);
+  for (int dof : dof_of_free) row_sizes[static_cast<size_t>(dof)] = 0;
   const int* outer = lower.outerIndexPtr();
   const int* inner = lower.innerIndexPtr();
   for (int c = 0; c < static_cast<int>(lower.cols()); ++c) {
     for (int k = outer[c]; k < outer[c + 1]; ++k) {
-      ++row_sizes[static_cast<size_t>(m.dof_of_free[static_cast<size_t>(c)])];
-      if (inner[k] != c) ++row_sizes[static_cast<size_t>(m.dof_of_free[static_cast<size_t>(inner[k])])];
+      ++row_sizes[static_cast<size_t>(dof_of_free[static_cast<size_t>(c)])];
+      if (inner[k] != c) ++row_sizes[static_cast<size_t>(dof_of_free[static_cast<size_t>(inner[k])])];
     }
   }
   HYPRE_Int entries = 0;
   for (HYPRE_Int size : row_sizes) entries += size;
-  HYPRE_BigInt partition[2] = {0, m.n};
-  m.matrix = hypre_ParCSRMatrixCreate(MPI_COMM_SELF, m.n, m.n, partition, partition, 0, entries, 0);
-  check(hypre_ParCSRMatrixInitialize(m.matrix), "matrix initialise");
-  HYPRE_Int* row_start = hypre_CSRMatrixI(m.storage());
-  HYPRE_Int* columns = hypre_CSRMatrixJ(m.storage());
-  double* values = hypre_CSRMatrixData(m.storage());
+  HYPRE_BigInt partition[2] = {0, n};
+  matrix = hypre_ParCSRMatrixCreate(MPI_COMM_SELF, n, n, partition, partition, 0, entries, 0);
+  check(hypre_ParCSRMatrixInitialize(matrix), "matrix initialise");
+  HYPRE_Int* row_start = hypre_CSRMatrixI(storage());
+  HYPRE_Int* columns = hypre_CSRMatrixJ(storage());
+  double* values = hypre_CSRMatrixData(storage());
   row_start[0] = 0;
-  for (size_t r = 0; r < n; ++r) {
+  for (size_t r = 0; r < rows; ++r) {
     row_start[r + 1] = row_start[r] + row_sizes[r];
     columns[row_start[r]] = static_cast<HYPRE_Int>(r);  // the diagonal first
     values[row_start[r]] = 1.0;                           // stays 1 on prescribed rows
   }
-  m.cursor.resize(n);
-  m.for_each_entry(lower, [&](HYPRE_Int slot, int column, int) { columns[slot] = column; });
-  hypre_ParCSRMatrixSetNumNonzeros(m.matrix);
-  check(hypre_MatvecCommPkgCreate(m.matrix), "matrix communication");
-  m.rhs = m.make_vector();
-  m.solution = m.make_vector();
+  cursor.resize(rows);
+  for_each_entry(lower, [&](HYPRE_Int slot, int column, int) { columns[slot] = column; });
+  hypre_ParCSRMatrixSetNumNonzeros(matrix);
+  check(hypre_MatvecCommPkgCreate(matrix), "matrix communication");
+  rhs = make_vector();
+  solution = make_vector();
+}
 
-  // Systems AMG, "unknown" approach (each displacement component coarsened
-  // on its own couplings), with the settings hypre advises for 3-D problems
-  // (HMIS coarsening, extended+i interpolation truncated to 4 entries, one
-  // level of aggressive coarsening). Measured on the 321,191-tet cantilever
-  // of benchmarks/fem_vs_ccx.sh: operator complexity 1.29, ~150 CG
-  // iterations to 1e-10. Interpolating the rigid rotations as well (GM
-  // variant, nodal coarsening) cut the iterations to 43-106 but raised the
-  // complexity to 3.4-5.8: more memory and no faster.
-  check(HYPRE_BoomerAMGCreate(&m.amg), "BoomerAMG create");
-  HYPRE_BoomerAMGSetPrintLevel(m.amg, 0);
-  HYPRE_BoomerAMGSetMaxIter(m.amg, 1);  // one V-cycle per CG iteration
-  HYPRE_BoomerAMGSetTol(m.amg, 0.0);
-  HYPRE_BoomerAMGSetNumFunctions(m.amg, 3);  // x, y, z of each node, interleaved
+// Systems AMG, "unknown" approach (each displacement component coarsened
+// on its own couplings), with the settings hypre advises for 3-D problems
+// (HMIS coarsening, extended+i interpolation truncated to 4 entries, one
+// level of aggressive coarsening). Measured on the 321,191-tet cantilever
+// of benchmarks/fem_vs_ccx.sh: operator complexity 1.29, ~150 CG
+// iterations to 1e-10. Interpolating the rigid rotations as well (GM
+// variant, nodal coarsening) cut the iterations to 43-106 but raised the
+// complexity to 3.4-5.8: more memory and no faster.
+void AmgSolver::Impl::create_boomer_amg() {
+  const auto rows = static_cast<size_t>(n);
+  check(HYPRE_BoomerAMGCreate(&amg), "BoomerAMG create");
+  HYPRE_BoomerAMGSetPrintLevel(amg, 0);
+  HYPRE_BoomerAMGSetMaxIter(amg, 1);  // one V-cycle per CG iteration
+  HYPRE_BoomerAMGSetTol(amg, 0.0);
+  HYPRE_BoomerAMGSetNumFunctions(amg, 3);  // x, y, z of each node, interleaved
   // BoomerAMG takes the array and frees it with hypre's allocator.
-  auto* function_of_row = hypre_CTAlloc(HYPRE_Int, n, HYPRE_MEMORY_HOST);
-  for (size_t r = 0; r < n; ++r) function_of_row[r] = static_cast<HYPRE_Int>(r % 3);
-  HYPRE_BoomerAMGSetDofFunc(m.amg, function_of_row);
-  HYPRE_BoomerAMGSetCoarsenType(m.amg, 10);  // HMIS
-  HYPRE_BoomerAMGSetInterpType(m.amg, 6);    // extended+i
-  HYPRE_BoomerAMGSetPMaxElmts(m.amg, 4);
-  HYPRE_BoomerAMGSetStrongThreshold(m.amg, 0.5);
-  HYPRE_BoomerAMGSetAggNumLevels(m.amg, 1);
+  auto* function_of_row = hypre_CTAlloc(HYPRE_Int, rows, HYPRE_MEMORY_HOST);
+  for (size_t r = 0; r < rows; ++r) function_of_row[r] = static_cast<HYPRE_Int>(r % 3);
+  HYPRE_BoomerAMGSetDofFunc(amg, function_of_row);
+  HYPRE_BoomerAMGSetCoarsenType(amg, 10);  // HMIS
+  HYPRE_BoomerAMGSetInterpType(amg, 6);    // extended+i
+  HYPRE_BoomerAMGSetPMaxElmts(amg, 4);
+  HYPRE_BoomerAMGSetStrongThreshold(amg, 0.5);
+  HYPRE_BoomerAMGSetAggNumLevels(amg, 1);
   // Forward Gauss-Seidel going down and backward coming up: the V-cycle is
   // symmetric, as CG needs, at half the sweeps of symmetric Gauss-Seidel
   // on both legs. With nodal coarsening (a node's 3 unknowns coarsened
   // together, strength from the row-sum norm of its 3x3 blocks): 203 CG
   // iterations instead of 149, each cheaper; the 321k-tet cantilever's
   // solve 13.46 -> 10.69 s beside ccx's 27.1 s (benchmarks/RESULTS.md).
-  HYPRE_BoomerAMGSetCycleRelaxType(m.amg, 3, 1);
-  HYPRE_BoomerAMGSetCycleRelaxType(m.amg, 4, 2);
-  HYPRE_BoomerAMGSetNodal(m.amg, 4);
-  HYPRE_BoomerAMGSetCycleRelaxType(m.amg, 9, 3);  // Gaussian elimination on the coarsest grid
+  HYPRE_BoomerAMGSetCycleRelaxType(amg, 3, 1);
+  HYPRE_BoomerAMGSetCycleRelaxType(amg, 4, 2);
+  HYPRE_BoomerAMGSetNodal(amg, 4);
+  HYPRE_BoomerAMGSetCycleRelaxType(amg, 9, 3);  // Gaussian elimination on the coarsest grid
+}
 
-  check(HYPRE_ParCSRPCGCreate(MPI_COMM_SELF, &m.pcg), "PCG create");
-  HYPRE_PCGSetTol(m.pcg, m.tolerance);
-  HYPRE_PCGSetTwoNorm(m.pcg, 1);
-  HYPRE_PCGSetMaxIter(m.pcg, m.max_iterations);
-  HYPRE_PCGSetPrintLevel(m.pcg, 0);
-  HYPRE_PCGSetPrecond(m.pcg, reinterpret_cast<HYPRE_PtrToSolverFcn>(HYPRE_BoomerAMGSolve),
-                      reinterpret_cast<HYPRE_PtrToSolverFcn>(HYPRE_BoomerAMGSetup), m.amg);
+void AmgSolver::Impl::create_pcg() {
+  check(HYPRE_ParCSRPCGCreate(MPI_COMM_SELF, &pcg), "PCG create");
+  HYPRE_PCGSetTol(pcg, tolerance);
+  HYPRE_PCGSetTwoNorm(pcg, 1);
+  HYPRE_PCGSetMaxIter(pcg, max_iterations);
+  HYPRE_PCGSetPrintLevel(pcg, 0);
+  HYPRE_PCGSetPrecond(pcg, reinterpret_cast<HYPRE_PtrToSolverFcn>(HYPRE_BoomerAMGSolve),
+                      reinterpret_cast<HYPRE_PtrToSolverFcn>(HYPRE_BoomerAMGSetup), amg);
 }
 
 AmgSolver::~AmgSolver() {
