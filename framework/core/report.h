@@ -33,6 +33,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/options_detail.h"
 #include "core/properties.h"
 
 namespace spec2fab {
@@ -48,10 +49,6 @@ template <class T>
 struct is_optional : std::false_type {};
 template <class T>
 struct is_optional<std::optional<T>> : std::true_type {};
-template <class T>
-struct is_vector : std::false_type {};
-template <class T>
-struct is_vector<std::vector<T>> : std::true_type {};
 template <class T>
 struct is_name_map : std::false_type {};
 template <class T>
@@ -212,24 +209,18 @@ void document(std::vector<ReportFieldDoc>& rows, const std::string& prefix) {
   S::fields(documenter, section);
 }
 
+/// A field's type as documented: sections and maps of them here, values as
+/// options document theirs (core/options_detail.h).
 template <class T>
 std::string type_text() {
-  if constexpr (std::is_same_v<T, bool>) {
-    return "bool";
-  } else if constexpr (std::is_integral_v<T>) {
-    return "integer";
-  } else if constexpr (std::is_arithmetic_v<T>) {
-    return "number";
-  } else if constexpr (std::is_same_v<T, std::string>) {
-    return "string";
-  } else if constexpr (ReportSection<T>) {
-    return "object";
-  } else if constexpr (is_vector<T>::value || requires { std::tuple_size<T>::value; }) {
-    return "array of " + type_text<typename T::value_type>();
+  if constexpr (ReportSection<T> || std::is_same_v<T, nlohmann::json>) {
+    return "object";  // nlohmann::json: a helper's figures
+  } else if constexpr (is_section_vector<T>) {
+    return "array of objects";
   } else if constexpr (is_name_map<T>::value) {
     return "object: name → " + type_text<typename T::mapped_type>();
   } else {
-    return "object";  // nlohmann::json: a helper's figures
+    return options_detail::type_text<T>();
   }
 }
 

@@ -117,9 +117,9 @@ TEST(ReportSection, DocumentsEveryFieldByItsDottedName) {
                                             "leaves[].size_mm", "by_name", "by_name.<name>.count",
                                             "by_name.<name>.size_mm", "extra", "grid"));
   EXPECT_EQ(types[2], "integer");
-  EXPECT_EQ(types[4], "array of object");
+  EXPECT_EQ(types[4], "array of objects");
   EXPECT_EQ(types[10], "number, optional");
-  EXPECT_EQ(types[11], "array of integer");
+  EXPECT_EQ(types[11], "[integer, integer]");
 }
 
 TEST(ReportSection, SpreadIsMeanLargestAndSmallest) {
