@@ -30,7 +30,7 @@ void TuningTranslator::run(RunContext& context) {
     prepare(context);
     RunRecord record;
     if (network_.size() > 0) {
-      record = schedule_.run(network_, context.seed, context.experiment.limits(), context.checkpoint);
+      record = schedule_.run(network_, context.seed, *limits_, context.checkpoint);
       context.tuner_runs_here += record.tuner_runs_here;
       tree_->evaluate();
       write_tuning_outputs(record, network_, context, report_final_errors_);

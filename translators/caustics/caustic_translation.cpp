@@ -243,8 +243,12 @@ PrintSurface caustic_print_surface(const CausticSlabConfig& slab, std::array<int
   return {"surface", std::move(mesh)};
 }
 
-// path("print"), not path(kSurfaceStl), which would make the folder print/.
-bool surface_stl_written(RunFolder& folder) { return std::filesystem::exists(folder.path("print") / "surface.stl"); }
+bool surface_stl_written(const RunReport& report) {
+  if (!report.files.print || !report.files.print->contains("stl")) return false;
+  for (const nlohmann::json& file : (*report.files.print)["stl"])
+    if (file == kSurfaceStl) return true;
+  return false;
+}
 
 SurfaceStlReport check_caustic_surface_stl(const CausticSlabConfig& slab, std::array<int, 2> print_vertices,
                                            const HeightSurface& surface, const Mesh& printed,

@@ -22,6 +22,7 @@
 #include "fabrication/fabricate.h"
 #include "geometry/mesh.h"
 #include "reducer/node.h"
+#include "spec/run_report.h"
 #include "caustics/caustic_parts.h"
 #include "tuning/observation.h"
 #include "tuning/parts.h"
@@ -265,9 +266,9 @@ SurfaceStlReport check_caustic_surface_stl(const CausticSlabConfig& slab, std::a
                                            const std::function<void(Mesh&)>& to_print,
                                            const GridField* exit_filter, RunFolder& folder);
 
-/// Whether fabrication wrote print/surface.stl (its "stl" writer on, on the
-/// rank that writes the run's files).
-bool surface_stl_written(RunFolder& folder);
+/// Whether fabrication wrote print/surface.stl: the "stl" print writer lists
+/// it among the run's print files (on the rank that writes them).
+bool surface_stl_written(const RunReport& report);
 
 /// Moves `tuner` — the caustics simulator of `slab` on `surface`, its goal
 /// the image to cast — to the surface optimal transport gives

@@ -316,7 +316,7 @@ class CausticsTextureTranslator final : public TuningTranslator {
 
   /// print/surface.stl as written, traced through the texture.
   void after_print(RunContext& context) override {
-    if (surface_stl_written(context.folder)) {
+    if (surface_stl_written(context.report)) {
       const Mesh& printed = print_surfaces_.front().mesh;
       SurfaceStlReport& stl = report_.surface_stl.emplace(check_caustic_surface_stl(
           slab_, surface_.print_vertices(), *caustic_surface_->height_surface(), printed, cast_, target_, mirror(),

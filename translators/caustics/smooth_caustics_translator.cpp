@@ -204,7 +204,7 @@ class SmoothCausticsTranslator final : public TuningTranslator {
 
   /// print/surface.stl as written, traced.
   void after_print(RunContext& context) override {
-    if (surface_stl_written(context.folder)) {
+    if (surface_stl_written(context.report)) {
       report_.surface_stl = check_caustic_surface_stl(slab_, surface_.print_vertices(), surface(),
                                                       print_surfaces_.front().mesh, achieved_, target_, {}, nullptr,
                                                       context.folder);
