@@ -268,8 +268,12 @@ std::set<std::string> reserved_names(const SimulationHeader& header) {
 
 PreparedSimulation prepare_simulation(const fs::path& config_file, const std::string& simulator,
                                       const Limits& limits, const std::shared_ptr<RunCache>& session) {
+  return prepare_simulation(Properties::load(config_file), simulator, limits, session);
+}
+
+PreparedSimulation prepare_simulation(const Properties& config, const std::string& simulator, const Limits& limits,
+                                      const std::shared_ptr<RunCache>& session) {
   PreparedSimulation prepared;
-  const Properties config = Properties::load(config_file);
   prepared.cache = session ? session : std::make_shared<RunCache>();
   RunCache& cache = *prepared.cache;
   const fs::path materials_file = config.existing_file("materials"), printer_file = config.existing_file("printer");
@@ -299,25 +303,41 @@ PreparedSimulation prepare_simulation(const fs::path& config_file, const std::st
   prepared.subtree_location = config.where("subtree");
   if (prepared.solid) prepared.tree->bind(*prepared.solid);
   const auto options = config.optional_object("simulator");
-  const Properties no_options = Properties::wrap(nlohmann::json::object(), config_file.string() + " (simulator)");
+  const Properties no_options = Properties::wrap(nlohmann::json::object(), config.origin() + " (simulator)");
   prepared.simulator = simulators.create_named(simulator, options ? *options : no_options, "simulator", context);
   config.check_all_read();
   return prepared;
 }
 
+double set_up(PreparedSimulation& prepared) {
+  const auto start = std::chrono::steady_clock::now();
+  const ReducerNode& subtree = prepared.tree->root();
+  prepared.simulator->setup(subtree, prepared.solid ? SimulationDomain(*prepared.tree, subtree) : SimulationDomain());
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void simulate_checked(PreparedSimulation& prepared, Observation& out) {
+  Simulator& simulator = *prepared.simulator;
+  simulator.simulate(prepared.tree->root(), out);
+  // The config is all the simulator was given: an answer it cannot give is the config's problem.
+  for (double v : out.values()) {
+    if (!std::isfinite(v)) {
+      const std::string why = simulator.failure();
+      throw InputError(prepared.subtree_location + ": the " + simulator.name() + " simulator gives no finite answer for it" +
+                       (why.empty() ? std::string() : ": " + why));
+    }
+  }
+}
+
 int simulate_command(const SimulateArguments& arguments) {
-  const PreparedSimulation prepared = prepare_simulation(arguments.config, arguments.simulator, arguments.limits);
+  PreparedSimulation prepared = prepare_simulation(arguments.config, arguments.simulator, arguments.limits);
   const MaterialPalette& palette = *prepared.palette;
   const PrinterProfile& printer = *prepared.printer;
-  ReducerTree& tree = *prepared.tree;
-  const ReducerNode& subtree = tree.root();
+  const ReducerNode& subtree = prepared.tree->root();
   Simulator* simulator = prepared.simulator.get();
-  const bool solid = prepared.solid != nullptr;
 
   using Clock = std::chrono::steady_clock;
-  const auto setup_start = Clock::now();
-  simulator->setup(subtree, solid ? SimulationDomain(tree, subtree) : SimulationDomain());
-  const double setup_seconds = std::chrono::duration<double>(Clock::now() - setup_start).count();
+  const double setup_seconds = set_up(prepared);
   auto observation = simulator->make_observation();
   const auto simulate_start = Clock::now();
   int evaluations = 0;
@@ -330,18 +350,10 @@ int simulate_command(const SimulateArguments& arguments) {
     return ranks::size() > 1 ? ranks::broadcast(mine ? "1" : "0") == "1" : mine;
   };
   do {
-    simulator->simulate(subtree, *observation);
+    simulate_checked(prepared, *observation);
     ++evaluations;
   } while (again());
   const double simulate_seconds = elapsed() / evaluations;
-  // The config is all the simulator was given: an answer it cannot give is the config's problem.
-  for (double v : observation->values()) {
-    if (!std::isfinite(v)) {
-      const std::string why = simulator->failure();
-      throw InputError(prepared.subtree_location + ": the " + simulator->name() + " simulator gives no finite answer for it" +
-                       (why.empty() ? std::string() : ": " + why));
-    }
-  }
 
   // Under mpirun every rank holds the same answer; rank 0's folder is the
   // one kept (RunFolder).

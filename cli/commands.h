@@ -79,6 +79,14 @@ struct PreparedSimulation {
 /// one, everything is made afresh and lives as long as the simulation.
 PreparedSimulation prepare_simulation(const std::filesystem::path& config, const std::string& simulator,
                                       const Limits& limits, const std::shared_ptr<RunCache>& session = nullptr);
+/// The same for a config already parsed (a dict from the Python module).
+PreparedSimulation prepare_simulation(const Properties& config, const std::string& simulator, const Limits& limits,
+                                      const std::shared_ptr<RunCache>& session = nullptr);
+/// The simulator's one-time setup on the prepared subtree; returns its seconds.
+double set_up(PreparedSimulation& prepared);
+/// One simulation of the prepared subtree into `out`; an answer that is not
+/// finite is the config's problem (InputError naming its subtree).
+void simulate_checked(PreparedSimulation& prepared, Observation& out);
 
 int run_command(const RunArguments& arguments);
 /// Runs the optimizer x problem matrix and writes its report (docs/benchmarking.md).

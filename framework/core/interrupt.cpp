@@ -24,6 +24,8 @@ std::set<std::filesystem::path>& registry() {
 }
 
 std::atomic<bool> stop_requested{false};
+std::atomic<bool> cooperative_stop{false};
+static_assert(std::atomic<bool>::is_always_lock_free, "request_stop runs in a signal handler");
 
 // Writers on other threads keep going while a folder is removed: a file
 // they create in it makes removal fail, and a folder they create brings it
@@ -46,6 +48,12 @@ void remove_partial(const std::filesystem::path& folder) {
 
 void wait_if_stopping() {
   while (stop_requested.load()) pause();  // the signal thread ends the process
+}
+
+void request_stop() noexcept { cooperative_stop.store(true, std::memory_order_relaxed); }
+void clear_stop_request() noexcept { cooperative_stop.store(false, std::memory_order_relaxed); }
+void throw_if_stop_requested() {
+  if (cooperative_stop.load(std::memory_order_relaxed)) throw Stopped();
 }
 
 void exit_cleanly_on_signals() {

@@ -7,6 +7,7 @@
 /// leftovers on the next run into the same parent folder.
 
 #include <filesystem>
+#include <stdexcept>
 
 namespace spec2fab::interrupt {
 
@@ -23,5 +24,19 @@ void release_partial(const std::filesystem::path& folder);
 /// process is about to exit). Code that creates folders calls it first, so
 /// that it cannot re-create a partial folder being removed.
 void wait_if_stopping();
+
+/// A cooperative stop, for a host whose process goes on after the run (the
+/// Python module on Ctrl-C): request_stop() — safe in a signal handler —
+/// asks long work to stop, and the work calls throw_if_stop_requested()
+/// between its units (every tuner evaluation), which throws Stopped; the
+/// run folder's writing() then removes what it wrote, as for any error.
+class Stopped : public std::runtime_error {
+ public:
+  Stopped() : std::runtime_error("stopped on request (Ctrl-C)") {}
+};
+void request_stop() noexcept;
+/// Forgets an earlier request; a host calls it before it starts a run.
+void clear_stop_request() noexcept;
+void throw_if_stop_requested();
 
 }  // namespace spec2fab::interrupt

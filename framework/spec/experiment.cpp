@@ -43,8 +43,17 @@ std::vector<PropertyDoc> ExperimentKeys::docs() {
   return rows;
 }
 
+ExperimentSource ExperimentSource::read(const std::filesystem::path& file) {
+  return ExperimentSource{Properties::load(file), file};
+}
+
 Experiment Experiment::load(const std::filesystem::path& file, const Limits& command_line) {
-  Experiment experiment(Properties::load(file));
+  return load(ExperimentSource::read(file), command_line);
+}
+
+Experiment Experiment::load(ExperimentSource source, const Limits& command_line) {
+  const std::filesystem::path file = source.file;
+  Experiment experiment(std::move(source.root));
   const Properties& root = experiment.root_;
   experiment.file_ = file;
   // Before anything they bound is read: the mesh, images, trees.

@@ -84,11 +84,25 @@ struct GeometrySpec {
   double field_voxel_mm = 0;  ///< 0: chosen from the bounds
 };
 
+/// An experiment's text, parsed, and the file it stands for: read from
+/// disk, or handed over in memory (a dict from the Python module), whose
+/// Properties name it in messages and resolve its relative paths.
+struct ExperimentSource {
+  Properties root;
+  /// What the run report records as the experiment; its stem is the
+  /// default name.
+  std::filesystem::path file;
+  /// Parses `file` (InputError for a missing file or malformed JSON).
+  static ExperimentSource read(const std::filesystem::path& file);
+};
+
 class Experiment {
  public:
   /// Reads the file and loads the shared inputs, under `command_line`'s
   /// limits (which win over the experiment's "limits"). Throws InputError.
   static Experiment load(const std::filesystem::path& file, const Limits& command_line);
+  /// The same for an experiment already parsed.
+  static Experiment load(ExperimentSource source, const Limits& command_line);
 
   const std::filesystem::path& file() const { return file_; }
   const std::string& name() const { return name_; }

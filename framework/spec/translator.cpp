@@ -2,8 +2,6 @@
 #include "core/file_write.h"
 
 #include <chrono>
-#include <fstream>
-#include <iterator>
 #include <thread>
 
 #include <spdlog/spdlog.h>
@@ -18,8 +16,12 @@
 namespace spec2fab {
 
 PreparedExperiment prepare_experiment(const std::filesystem::path& file, const Limits& limits) {
+  return prepare_experiment(ExperimentSource::read(file), limits);
+}
+
+PreparedExperiment prepare_experiment(ExperimentSource source, const Limits& limits) {
   PreparedExperiment prepared;
-  prepared.experiment = std::make_unique<Experiment>(Experiment::load(file, limits));
+  prepared.experiment = std::make_unique<Experiment>(Experiment::load(std::move(source), limits));
   const Experiment& experiment = *prepared.experiment;
   prepared.translator = TranslatorRegistry::instance().create(experiment.root(), "translator",
                                                               experiment, "translator");
@@ -41,18 +43,14 @@ class FolderCheckpoint final : public PhaseCheckpoint {
   const RunFolder& folder_;
 };
 
-std::string file_text(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
 /// What a checkpoint was made from: a resumed run must have the same.
 nlohmann::json run_identity(const Experiment& experiment, const RunHeader& header) {
   const nlohmann::json written = write_section(header);
   return {{"spec2fab_version", written["spec2fab_version"]},
           {"seed", written["seed"]},
           {"inputs", written["inputs"]},
-          {"experiment_text", file_text(experiment.file())}};
+          // The experiment as parsed: a file or a dict, whitespace aside.
+          {"experiment_text", experiment.root().value().dump()}};
 }
 
 /// Refuses to resume a run of other inputs; records this run's for a later resume.
@@ -79,8 +77,12 @@ void check_run_identity(RunFolder& folder, const nlohmann::json& identity) {
 }  // namespace
 
 std::filesystem::path run_experiment(const std::filesystem::path& file, const RunOptions& options) {
+  return run_experiment(ExperimentSource::read(file), options);
+}
+
+std::filesystem::path run_experiment(ExperimentSource source, const RunOptions& options) {
   const auto start = std::chrono::steady_clock::now();
-  PreparedExperiment prepared = prepare_experiment(file, options.limits);
+  PreparedExperiment prepared = prepare_experiment(std::move(source), options.limits);
   const Experiment& experiment = *prepared.experiment;
 
   const int threads = options.threads > 0

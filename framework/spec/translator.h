@@ -74,6 +74,7 @@ struct PreparedExperiment {
 /// Throws InputError for any problem in the file or the inputs it names.
 /// `limits`: the command line's (which win over the experiment's "limits").
 PreparedExperiment prepare_experiment(const std::filesystem::path& file, const Limits& limits);
+PreparedExperiment prepare_experiment(ExperimentSource source, const Limits& limits);
 
 struct RunOptions {
   std::filesystem::path out;  ///< empty: out/<experiment name>
@@ -89,5 +90,6 @@ struct RunOptions {
 /// Prepares and runs an experiment, writing the run folder all-or-nothing.
 /// Returns the folder written.
 std::filesystem::path run_experiment(const std::filesystem::path& file, const RunOptions& options);
+std::filesystem::path run_experiment(ExperimentSource source, const RunOptions& options);
 
 }  // namespace spec2fab

@@ -25,6 +25,10 @@ class TuningTranslator : public Translator {
   void run(RunContext& context) final;
   std::string check_limits() final;
   long long estimated_output_bytes() const final { return outputs_.estimated_bytes; }
+  /// The tuners as the constructor built and bound them, before the
+  /// schedule's first phase: what the Python module's tuner_problem hands
+  /// to outside optimizers.
+  TunerNetwork& tuners() { return network_; }
 
  protected:
   /// Takes the tree, binds it to the experiment's solid and reads the

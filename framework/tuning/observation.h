@@ -15,6 +15,7 @@
 /// (subsurface/radial_profile.h, fem/displacements.h).
 
 #include <array>
+#include <cstddef>
 #include <filesystem>
 #include <memory>
 #include <span>
@@ -34,6 +35,14 @@ class Observation {
   /// Writes the observation into `folder` in the format that fits it and
   /// returns the file names; by default its values as values.csv.
   virtual std::vector<std::string> write_files(const std::filesystem::path& folder) const;
+  /// The values' shape, outermost axis first; values() is their row-major
+  /// flat form (an image's height × width × channels). How the Python module
+  /// hands them over as arrays; by default one axis.
+  virtual std::vector<std::size_t> shape() const { return {values().size()}; }
+  /// Makes room for values of `shape` (as shape() gives it), for parts
+  /// written outside C++ that hand values over (a Python simulator or goal);
+  /// false when the type cannot take that shape (the default: none).
+  virtual bool reshape(std::span<const std::size_t> /*shape*/) { return false; }
 };
 
 template <class Derived>
@@ -52,6 +61,9 @@ struct ImageObservation final : ObservationOf<ImageObservation> {
   std::vector<double> pixels;
   std::span<const double> values() const override { return pixels; }
   std::span<double> values() override { return pixels; }
+  /// height × width, × channels when there are several.
+  std::vector<std::size_t> shape() const override;
+  bool reshape(std::span<const std::size_t> shape) override;
   /// image.png (sRGB, 8 bit; scaled so the brightest is white when values exceed 1).
   std::vector<std::string> write_files(const std::filesystem::path& folder) const override;
 };
@@ -64,6 +76,7 @@ struct VectorObservation final : ObservationOf<VectorObservation> {
   std::vector<double> data;
   std::span<const double> values() const override { return data; }
   std::span<double> values() override { return data; }
+  bool reshape(std::span<const std::size_t> shape) override;
 };
 
 /// The linear RGB albedo of one surface patch.
@@ -72,6 +85,7 @@ struct AlbedoObservation final : ObservationOf<AlbedoObservation> {
   std::array<double, 3> rgb{};
   std::span<const double> values() const override { return rgb; }
   std::span<double> values() override { return rgb; }
+  bool reshape(std::span<const std::size_t> shape) override { return shape.size() == 1 && shape[0] == 3; }
   /// albedo.csv (linear and 8-bit sRGB) and an sRGB swatch, albedo.png.
   std::vector<std::string> write_files(const std::filesystem::path& folder) const override;
 };

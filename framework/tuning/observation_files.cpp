@@ -42,6 +42,31 @@ cv::Mat to_png_image(int width, int height, int channels, std::span<const double
 
 }  // namespace
 
+std::vector<std::size_t> ImageObservation::shape() const {
+  const auto h = static_cast<std::size_t>(height), w = static_cast<std::size_t>(width);
+  if (channels == 1) return {h, w};
+  return {h, w, static_cast<std::size_t>(channels)};
+}
+
+bool ImageObservation::reshape(std::span<const std::size_t> shape) {
+  constexpr std::size_t kSide = 1 << 16;  // what an int and the PNG writer take
+  if (shape.size() < 2 || shape.size() > 3 || shape[0] == 0 || shape[1] == 0 || shape[0] > kSide || shape[1] > kSide)
+    return false;
+  const std::size_t c = shape.size() == 3 ? shape[2] : 1;
+  if (c != 1 && c != 3) return false;
+  height = static_cast<int>(shape[0]);
+  width = static_cast<int>(shape[1]);
+  channels = static_cast<int>(c);
+  pixels.assign(shape[0] * shape[1] * c, 0.0);
+  return true;
+}
+
+bool VectorObservation::reshape(std::span<const std::size_t> shape) {
+  if (shape.size() != 1) return false;
+  data.assign(shape[0], 0.0);
+  return true;
+}
+
 std::vector<std::string> ImageObservation::write_files(const fs::path& folder) const {
   if (channels != 1 && channels != 3) {
     throw std::runtime_error("an image observation with " + std::to_string(channels) +

@@ -1,5 +1,7 @@
 #include "tuning/tuner.h"
 
+#include "core/interrupt.h"
+
 #include <algorithm>
 #include <functional>
 #include <stdexcept>
@@ -161,6 +163,7 @@ void Tuner::collect_search_space() {
 }
 
 double Tuner::error() {
+  interrupt::throw_if_stop_requested();  // a relaxed load: nothing beside a simulation
   simulator_->simulate(*node_, *simulated_);
   return metric_->error(*simulated_, *effective_target_);
 }

@@ -28,6 +28,8 @@ struct DisplacementsObservation final : ObservationOf<DisplacementsObservation> 
   std::span<const double> probes() const { return {xyz_mm.data(), 3 * static_cast<size_t>(probe_count)}; }
   std::span<const double> values() const override { return xyz_mm; }
   std::span<double> values() override { return xyz_mm; }
+  /// One row of x, y, z per point: the probes, then the mesh's nodes.
+  std::vector<std::size_t> shape() const override { return {xyz_mm.size() / 3, 3}; }
   /// observation.csv: probes first, then nodes.
   std::vector<std::string> write_files(const std::filesystem::path& folder) const override;
 };

@@ -36,6 +36,8 @@ struct RadialProfileObservation final : ObservationOf<RadialProfileObservation> 
   }
   std::span<const double> values() const override { return coefficients; }
   std::span<double> values() override { return coefficients; }
+  /// One row of R, G, B coefficients per basis function.
+  std::vector<std::size_t> shape() const override { return {coefficients.size() / 3, 3}; }
   /// profile.csv: R(r) in 1/mm² at the basis's radii.
   std::vector<std::string> write_files(const std::filesystem::path& folder) const override;
 };

@@ -1,0 +1,49 @@
+"""Ctrl-C stops a run cleanly: KeyboardInterrupt, no partial folder, and the
+interpreter goes on."""
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+
+from conftest import ROOT
+
+SCRIPT = textwrap.dedent("""
+    import json, sys, time
+    import numpy as np
+    import spec2fab
+
+    class Slow(spec2fab.Metric):
+        compares = "albedo"
+        def error(self, simulated, target):
+            print("evaluating", flush=True)
+            time.sleep(0.05)
+            return float(np.mean((simulated - target) ** 2))
+
+    spec2fab.register(Slow, "slow")
+    experiment = json.load(open("datasets/experiments/colour_patches_box.json"))
+    for tuner in experiment["goal"]["tuners"]:
+        tuner["metric"] = {"type": "slow"}
+    try:
+        spec2fab.run(experiment, out=sys.argv[1], threads=1, origin="datasets/experiments/colour_patches_box.json")
+    except KeyboardInterrupt as stopped:
+        print("stopped:", type(stopped).__name__, stopped, flush=True)
+    print("after:", spec2fab.simulate("albedo", "datasets/simulations/albedo_cyan_over_white.json").shape, flush=True)
+""")
+
+
+def test_ctrl_c_stops_the_run_and_leaves_nothing(tmp_path):
+    out = tmp_path / "run"
+    process = subprocess.Popen([sys.executable, "-c", SCRIPT, str(out)], cwd=ROOT, stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True, env=os.environ.copy())
+    assert process.stdout.readline().strip() == "evaluating"
+    time.sleep(0.2)
+    process.send_signal(signal.SIGINT)
+    stdout, stderr = process.communicate(timeout=120)
+    assert process.returncode == 0, stderr
+    assert "stopped: Stopped stopped on request (Ctrl-C)" in stdout
+    assert "after: (3,)" in stdout
+    assert not out.exists()
+    assert [p.name for p in tmp_path.iterdir()] == []  # no partial folder either

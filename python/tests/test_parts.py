@@ -1,0 +1,120 @@
+"""Parts written in Python: registered by name, they tune shipped experiments
+and join the bench beside the C++ parts, with the same checks."""
+
+import json
+
+import numpy as np
+import pytest
+
+import spec2fab
+from conftest import ROOT
+
+EXPERIMENT = "datasets/experiments/colour_patches_box.json"
+
+
+class NumpyRgbMse(spec2fab.Metric):
+    """Mean squared difference of linear RGB albedos, in numpy."""
+
+    compares = "albedo"
+
+    def error(self, simulated, target):
+        return float(np.mean((simulated - target) ** 2))
+
+
+class RandomSearch(spec2fab.Optimizer):
+    """Uniform random search within the bounds."""
+
+    stochastic = True
+
+    def __init__(self, samples=1_000_000):
+        super().__init__()
+        self.samples = samples
+
+    def minimize(self, problem, x, seed):
+        rng = np.random.default_rng(seed)
+        lower, upper = np.array(problem.lower), np.array(problem.upper)
+        for _ in range(self.samples):
+            problem(rng.uniform(lower, upper))  # raises OptimizationStopped once the budget is spent
+        return None
+
+
+spec2fab.register(NumpyRgbMse, "numpy_rgb_mse")
+spec2fab.register(RandomSearch, "random_search")
+
+
+def with_metric(metric):
+    experiment = json.loads((ROOT / EXPERIMENT).read_text())
+    for tuner in experiment["goal"]["tuners"]:
+        tuner["metric"] = {"type": metric}
+    return experiment
+
+
+def test_a_numpy_metric_tunes_a_shipped_experiment_as_its_cpp_twin_does(tmp_path):
+    cpp = spec2fab.run(with_metric("rgb_mse"), out=tmp_path / "cpp", threads=2, origin=EXPERIMENT)
+    python = spec2fab.run(with_metric("numpy_rgb_mse"), out=tmp_path / "python", threads=2, origin=EXPERIMENT)
+    assert python.tree == cpp.tree  # the same inks and thicknesses chosen
+    runs = zip(python.result["tuning"]["tuner_runs"], cpp.result["tuning"]["tuner_runs"])
+    for a, b in runs:
+        assert a["tuner"] == b["tuner"] and a["evaluations"] == b["evaluations"]
+        assert a["final_error"] == pytest.approx(b["final_error"], rel=1e-12)
+
+
+def test_parts_are_checked_like_cpp_ones():
+    class ImageOnly(spec2fab.Metric):
+        """Compares images."""
+        compares = "image"
+
+        def error(self, simulated, target):
+            return 0.0
+
+    spec2fab.register(ImageOnly, "image_only_metric")
+    with pytest.raises(spec2fab.InputError, match=r"image_only_metric.*image|albedo.*image"):
+        spec2fab.validate(with_metric("image_only_metric"), origin=EXPERIMENT)
+    with pytest.raises(ValueError, match="already registered"):
+        spec2fab.register(NumpyRgbMse, "ciede2000")
+    with pytest.raises(TypeError):
+        spec2fab.register(object, "nothing")
+    assert "numpy_rgb_mse" in spec2fab.list("metric")
+
+
+def test_a_python_metric_and_optimizer_join_the_bench(tmp_path):
+    spec = {
+        "materials": "materials/polyjet.json",
+        "printer": "printers/j750.json",
+        "subtree": {"type": "layered", "layers": [
+            {"material": ink, "thickness_mm": {"value": 0.0, "min": 0.0, "max": 0.135, "step": 0.027}}
+            for ink in ("VeroCyan", "VeroMagenta", "VeroYellow")] + [{"material": "VeroWhitePlus"}]},
+        "simulator": {"type": "albedo", "depth_mm": 0.5},
+        "metric": {"type": "numpy_rgb_mse"},
+        "reference": [0.054, 0.0, 0.108],
+    }
+    spec2fab.register_bench_problem("albedo_numpy", spec, "three inks over white, a numpy metric")
+    report = spec2fab.bench(problems=["albedo_numpy"], optimizers=["exhaustive", "random_search"], seeds=2,
+                            budget="100d", out=tmp_path / "bench")
+    assert (tmp_path / "bench" / "report.md").exists()
+    [problem] = [p for p in report["problems"] if p["name"] == "albedo_numpy"]
+    entrants = {e["entrant"]: e for e in problem["entrants"]}
+    assert set(entrants) == {"exhaustive", "random_search"}
+    # 6^3 = 216 stacks within the budget of 300: the hidden reference is found.
+    assert entrants["exhaustive"]["final_error"]["median"] == pytest.approx(0, abs=1e-12)
+    random_runs = entrants["random_search"]["run_list"]
+    assert entrants["random_search"]["stochastic"] and len(random_runs) == 2
+    assert all(r["evaluations"] == 300 and r["termination"] == "user_terminate" for r in random_runs)
+    assert [r["seed"] for r in random_runs] == [1, 2]
+
+
+def test_scipy_drives_a_tuner_problem():
+    scipy_optimize = pytest.importorskip("scipy.optimize")
+    names = spec2fab.tuner_names(EXPERIMENT)
+    assert names == ["sky", "rose", "lemon", "teal"]
+    problem = spec2fab.tuner_problem(EXPERIMENT, tuner="rose")
+    assert problem.dimension == 2 and problem.kinds == ["choice", "discrete"]
+    start = problem.error(problem.snap([0, 0.135]))
+    found = scipy_optimize.differential_evolution(problem, problem.bounds, seed=1, maxiter=20, polish=False)
+    assert problem.best_error <= found.fun + 1e-12
+    assert problem.best_error < start
+    batch = problem.ask(8, seed=3)
+    assert len(batch) == 8 and all(problem.bounds[1][0] <= x[1] <= problem.bounds[1][1] for x in batch)
+    assert len(problem.tell(batch)) == 8
+    with pytest.raises(spec2fab.InputError, match="name one with tuner="):
+        spec2fab.tuner_problem(EXPERIMENT)
