@@ -15,6 +15,7 @@ import shlex
 import shutil
 import subprocess
 import sys
+import sysconfig
 
 from setuptools import Extension, setup
 from setuptools.command.build_ext import build_ext
@@ -32,15 +33,21 @@ class CMakeBuild(build_ext):
         build_dir = pathlib.Path(os.environ.get("SPEC2FAB_BUILD_DIR", ROOT / "build-python"))
         if not build_dir.is_absolute():
             build_dir = ROOT / build_dir
-        configure = ["cmake", "-S", str(ROOT), "-B", str(build_dir), "-G", "Ninja", "-DCMAKE_BUILD_TYPE=Release",
-                     "-DSPEC2FAB_WITH_PYTHON=ON", f"-DPython3_EXECUTABLE={sys.executable}"]
+        configure = ["cmake", "-S", str(ROOT), "-B", str(build_dir), "-G", "Ninja", "-DSPEC2FAB_WITH_PYTHON=ON"]
         if not (build_dir / "CMakeCache.txt").exists():
-            configure += ["-DSPEC2FAB_BUILD_TESTS=OFF", "-DSPEC2FAB_BUILD_BENCHMARKS=OFF"]
+            # A folder of its own: this interpreter, the library alone. A
+            # folder reused keeps its interpreter (checked below).
+            configure += ["-DCMAKE_BUILD_TYPE=Release", f"-DPython3_EXECUTABLE={sys.executable}",
+                          "-DSPEC2FAB_BUILD_TESTS=OFF", "-DSPEC2FAB_BUILD_BENCHMARKS=OFF"]
         configure += shlex.split(os.environ.get("SPEC2FAB_CMAKE_ARGS", ""))
         subprocess.run(configure, check=True)
         jobs = os.environ.get("SPEC2FAB_JOBS", str(os.cpu_count() or 1))
         subprocess.run(["cmake", "--build", str(build_dir), "--target", "spec2fab_python", "-j", jobs], check=True)
-        built = next((build_dir / "python" / "spec2fab").glob("_spec2fab*.so"))
+        suffix = sysconfig.get_config_var("EXT_SUFFIX")
+        built = build_dir / "python" / "spec2fab" / f"_spec2fab{suffix}"
+        if not built.exists():
+            raise RuntimeError(f"{build_dir} builds the module for another Python than {sys.executable} "
+                               f"(no {built.name}); unset SPEC2FAB_BUILD_DIR to build in a folder of its own")
         target = pathlib.Path(self.get_ext_fullpath(ext.name))
         target.parent.mkdir(parents=True, exist_ok=True)
         shutil.copy2(built, target)
