@@ -268,8 +268,11 @@ class Simulator:
     """A simulator written in Python: ``produces`` names the observation
     type ("image", "vector" or "albedo"); ``setup(subtree)`` is called once
     with the subtree in the tree format (a dict), ``simulate(parameters)`` at
-    every evaluation with the subtree's parameters by name, and returns the
-    observation as an array."""
+    every evaluation with the subtree's parameters by path
+    ({"layers/0/thickness_mm": 0.135, "layers/0/material": 1.0, ...}), and
+    returns the observation as an array. A material parameter's value is an
+    index into ``self.materials``, the run's material names (set before
+    setup)."""
 
     produces = "vector"
 

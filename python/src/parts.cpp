@@ -118,6 +118,7 @@ class PythonSimulator final : public Simulator {
     py::gil_scoped_acquire gil;
     produces_ = type_attribute(held_.get(), "produces");
     observation_of_type(produces_, properties.where());  // refuses a type it cannot fill, now
+    held_.get().attr("materials") = context.palette.names();  // what material parameters' ids name
   }
   std::string name() const override { return name_; }
   std::string_view produces() const override { return produces_; }

@@ -118,3 +118,68 @@ def test_scipy_drives_a_tuner_problem():
     assert len(problem.tell(batch)) == 8
     with pytest.raises(spec2fab.InputError, match="name one with tuner="):
         spec2fab.tuner_problem(EXPERIMENT)
+
+
+# A toy layered-albedo model (Beer-Lambert through one ink layer over white),
+# its goal in numpy too: the tree translator's exhaustive search must pick
+# the stack a brute force over the same model picks.
+ABSORPTION = {"VeroCyan": [9.0, 1.0, 0.4], "VeroMagenta": [1.0, 9.0, 1.5], "VeroYellow": [0.3, 1.2, 9.0]}
+
+
+def toy_albedo(ink, thickness_mm):
+    return np.exp(-2 * thickness_mm * np.array(ABSORPTION[ink]))
+
+
+class ToyAlbedo(spec2fab.Simulator):
+    """One ink layer over white, Beer-Lambert, there and back."""
+
+    produces = "albedo"
+
+    def setup(self, subtree):
+        assert subtree["type"] == "layered"
+
+    def simulate(self, parameters):
+        ink = self.materials[int(parameters["layers/0/material"])]
+        return toy_albedo(ink, parameters["layers/0/thickness_mm"])
+
+
+class RgbGoal(spec2fab.Goal):
+    """A linear RGB albedo."""
+
+    describes = "albedo"
+
+    def __init__(self, rgb):
+        super().__init__()
+        self.rgb = rgb
+
+    def target(self):
+        return np.array(self.rgb, dtype=float)
+
+
+def test_a_python_simulator_and_goal_tune_a_tree(tmp_path):
+    spec2fab.register(ToyAlbedo, "toy_albedo")
+    spec2fab.register(RgbGoal, "rgb_goal")
+    experiment = json.loads((ROOT / EXPERIMENT).read_text())
+    targets = {"sky": [0.3, 0.7, 0.8], "rose": [0.7, 0.2, 0.6], "lemon": [0.8, 0.75, 0.1], "teal": [0.1, 0.6, 0.7]}
+    for tuner in experiment["goal"]["tuners"]:
+        tuner["simulator"] = {"type": "toy_albedo"}
+        tuner["metric"] = {"type": "rgb_mse"}
+        tuner["goal"] = {"type": "rgb_goal", "rgb": targets[tuner["name"]]}
+    experiment["goal"]["schedule"] = [{"name": "patches", "mode": "serial"}]  # no coupling: each on its own
+    run = spec2fab.run(experiment, out=tmp_path / "toy", origin=EXPERIMENT)
+    thicknesses = 0.027 * np.arange(21)
+    for index, name in enumerate(["sky", "rose", "lemon", "teal"]):
+        ink, t = min(((ink, t) for ink in ABSORPTION for t in thicknesses),
+                     key=lambda c: np.mean((toy_albedo(*c) - targets[name]) ** 2))
+        layer = run.tree["shell"]["children"][index]["layers"][0]
+        assert layer["material"]["value"] == ink
+        assert layer["thickness_mm"]["value"] == pytest.approx(t, abs=1e-12)
+        record = next(r for r in run.result["tuning"]["tuner_runs"] if r["tuner"] == name)
+        assert record["final_error"] == pytest.approx(np.mean((toy_albedo(ink, t) - targets[name]) ** 2), rel=1e-9)
+
+
+def test_a_python_metric_run_is_deterministic_for_1_and_2_threads(tmp_path):
+    from conftest import assert_same_folders
+    one = spec2fab.run(with_metric("numpy_rgb_mse"), out=tmp_path / "one", threads=1, origin=EXPERIMENT)
+    two = spec2fab.run(with_metric("numpy_rgb_mse"), out=tmp_path / "two", threads=2, origin=EXPERIMENT)
+    assert_same_folders(one.folder, two.folder)

@@ -65,3 +65,24 @@ def test_list_names_the_registered_parts():
 def test_help_answers_questions():
     assert "byte-identical to the command's" in spec2fab.run.__doc__
     assert "InputError" in spec2fab.__doc__
+
+
+def test_long_work_releases_the_gil(tmp_path):
+    import threading
+    counted = [0]
+    stop = threading.Event()
+
+    def count():
+        while not stop.is_set():
+            counted[0] += 1
+
+    thread = threading.Thread(target=count)
+    thread.start()
+    try:
+        before = counted[0]
+        spec2fab.run(EXPERIMENT, out=tmp_path / "run", threads=1)
+        during = counted[0] - before
+    finally:
+        stop.set()
+        thread.join()
+    assert during > 10_000  # the counting thread ran while the C++ run did
