@@ -6,6 +6,7 @@
 #include "bindings.h"
 #include "bench/harness.h"
 #include "commands.h"
+#include "core/interrupt.h"
 #include "core/registry.h"
 #include "core/run_folder.h"
 #include "core/strings.h"
@@ -25,8 +26,13 @@ std::string run(py::handle experiment, std::optional<std::string> out, std::opti
   }
   options.seed = seed;
   options.resume = resume;
-  LongCall call;
-  return run_experiment(std::move(source), options).string();
+  std::string folder;
+  {
+    LongCall call;
+    folder = run_experiment(std::move(source), options).string();
+  }
+  interrupt::throw_if_stop_requested();  // Ctrl-C after the last evaluation
+  return folder;
 }
 
 py::dict validate(py::handle experiment, std::optional<std::string> origin) {
@@ -35,6 +41,7 @@ py::dict validate(py::handle experiment, std::optional<std::string> origin) {
     LongCall call;  // loading a mesh and building its field takes a while
     return prepare_experiment(std::move(source), Limits());
   }();
+  interrupt::throw_if_stop_requested();
   const Experiment& e = *prepared.experiment;
   py::dict summary;
   summary["name"] = e.name();
@@ -59,6 +66,7 @@ py::array_t<double> simulate(const std::string& simulator, py::handle config, st
     cli::set_up(prepared);
     cli::simulate_checked(prepared, *observation);
   }
+  interrupt::throw_if_stop_requested();
   return to_array(*observation);
 }
 
@@ -91,8 +99,11 @@ std::string bench(std::vector<std::string> problems, std::vector<std::string> op
   arguments.quick = quick;
   arguments.datasets = datasets_folder();
   if (entrants) arguments.entrants = *entrants;
-  LongCall call;
-  cli::bench_command(arguments);
+  {
+    LongCall call;
+    cli::bench_command(arguments);
+  }
+  interrupt::throw_if_stop_requested();
   return out;
 }
 

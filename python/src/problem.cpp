@@ -9,6 +9,7 @@
 
 #include "bindings.h"
 #include "core/error.h"
+#include "core/interrupt.h"
 #include "core/strings.h"
 #include "spec/translator.h"
 #include "spec/tuning_translator.h"
@@ -236,6 +237,7 @@ ProblemView tuner_problem(py::handle experiment, std::optional<std::string> tune
     LongCall call;
     owner->prepared = prepare_experiment(std::move(source), Limits());
   }
+  interrupt::throw_if_stop_requested();
   auto* tuning = dynamic_cast<TuningTranslator*>(owner->prepared.translator.get());
   const std::string& translator = owner->prepared.experiment->translator();
   if (tuning == nullptr || tuning->tuners().size() == 0)
@@ -265,6 +267,7 @@ std::vector<std::string> tuner_names(py::handle experiment, std::optional<std::s
     LongCall call;
     prepared = prepare_experiment(std::move(source), Limits());
   }
+  interrupt::throw_if_stop_requested();
   std::vector<std::string> names;
   if (auto* tuning = dynamic_cast<TuningTranslator*>(prepared.translator.get()))
     for (size_t i = 0; i < tuning->tuners().size(); ++i) names.push_back(tuning->tuners().tuner(i).name());
