@@ -28,6 +28,12 @@ namespace py = pybind11;
 /// hold (NaN, an object of another type) is an InputError naming `origin`.
 nlohmann::json to_json(py::handle value, const std::string& origin);
 py::object from_json(const nlohmann::json& value);
+/// A part's JSON object, every key but "type", as keyword arguments for its
+/// Python class; every key counts as read (the class says what it refuses).
+py::dict keyword_options(const Properties& properties);
+/// The class registered from Python as a `kind` named `name`, made with the
+/// options of `properties` (InputError, naming them, when it refuses them).
+py::object make_registered(const std::string& kind, const std::string& name, const Properties& properties);
 
 /// A path, or a dict in the file's format: the dict's relative paths
 /// resolve against `origin`'s folder (default: the current one), and

@@ -73,6 +73,26 @@ py::object from_json(const nlohmann::json& value) {
   }
 }
 
+py::dict keyword_options(const Properties& properties) {
+  py::dict options;
+  for (const std::string& key : properties.keys()) {
+    if (key == "type") continue;
+    options[py::str(key)] = from_json(properties.raw(key));
+  }
+  return options;
+}
+
+py::object make_registered(const std::string& kind, const std::string& name, const Properties& properties) {
+  py::gil_scoped_acquire gil;
+  // The package's table (spec2fab._parts): registering a name again replaces its class.
+  const py::object cls = py::module_::import("spec2fab").attr("_parts")[py::str(kind)][py::str(name)];
+  try {
+    return cls(**keyword_options(properties));
+  } catch (py::error_already_set& e) {
+    throw InputError(properties.where() + ": the Python " + kind + " '" + name + "' refused its options: " + e.what());
+  }
+}
+
 namespace {
 
 bool is_path(py::handle value) { return py::isinstance<py::str>(value) || py::hasattr(value, "__fspath__"); }

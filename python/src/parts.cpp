@@ -18,27 +18,6 @@
 namespace spec2fab::python {
 namespace {
 
-/// The package's table of registered classes: spec2fab._parts[kind][name].
-py::object registered_class(const std::string& kind, const std::string& name) {
-  return py::module_::import("spec2fab").attr("_parts")[py::str(kind)][py::str(name)];
-}
-
-/// Builds the instance: the part's JSON object, but "type", as keyword
-/// arguments; every key counts as read (the class says what it refuses).
-py::object make_instance(const std::string& kind, const std::string& name, const Properties& properties) {
-  py::gil_scoped_acquire gil;
-  py::dict options;
-  for (const std::string& key : properties.keys()) {
-    if (key == "type") continue;
-    options[py::str(key)] = from_json(properties.raw(key));
-  }
-  try {
-    return registered_class(kind, name)(**options);
-  } catch (py::error_already_set& e) {
-    throw InputError(properties.where() + ": the Python " + kind + " '" + name + "' refused its options: " + e.what());
-  }
-}
-
 /// An observation of a type a Python part names: one a Python part can fill.
 std::unique_ptr<Observation> observation_of_type(const std::string& type, const std::string& who) {
   if (type == ImageObservation::kType) return std::make_unique<ImageObservation>();
@@ -70,7 +49,7 @@ class Held {
 class PythonMetric final : public ErrorMetric {
  public:
   PythonMetric(const std::string& name, const Properties& properties)
-      : name_(name), held_(make_instance("metric", name, properties)) {
+      : name_(name), held_(make_registered("metric", name, properties)) {
     py::gil_scoped_acquire gil;
     compares_ = type_attribute(held_.get(), "compares");
   }
@@ -89,7 +68,7 @@ class PythonMetric final : public ErrorMetric {
 class PythonGoal final : public Goal {
  public:
   PythonGoal(const std::string& name, const Properties& properties)
-      : name_(name), held_(make_instance("goal", name, properties)) {
+      : name_(name), held_(make_registered("goal", name, properties)) {
     py::gil_scoped_acquire gil;
     describes_ = type_attribute(held_.get(), "describes");
     target_ = observation_of_type(describes_, properties.where());
@@ -114,7 +93,7 @@ class PythonGoal final : public Goal {
 class PythonSimulator final : public Simulator {
  public:
   PythonSimulator(const std::string& name, const Properties& properties, const PartContext& context)
-      : name_(name), palette_(context.palette), held_(make_instance("simulator", name, properties)) {
+      : name_(name), palette_(context.palette), held_(make_registered("simulator", name, properties)) {
     py::gil_scoped_acquire gil;
     produces_ = type_attribute(held_.get(), "produces");
     observation_of_type(produces_, properties.where());  // refuses a type it cannot fill, now

@@ -152,26 +152,13 @@ class ProblemView {
 
 namespace {
 
-py::object make_instance_of_optimizer(const std::string& name, const Properties& properties) {
-  py::dict options;
-  for (const std::string& key : properties.keys()) {
-    if (key == "type") continue;
-    options[py::str(key)] = from_json(properties.raw(key));
-  }
-  try {
-    return py::module_::import("spec2fab").attr("_parts")["optimizer"][py::str(name)](**options);
-  } catch (py::error_already_set& e) {
-    throw InputError(properties.where() + ": the Python optimizer '" + name + "' refused its options: " + e.what());
-  }
-}
-
 /// A Python optimizer: minimize(problem, x) returns the best point; every
 /// evaluation is one iteration of the trace.
 class PythonOptimizer final : public Optimizer {
  public:
   PythonOptimizer(const std::string& name, const Properties& properties) : name_(name) {
     py::gil_scoped_acquire gil;
-    instance_ = make_instance_of_optimizer(name, properties);
+    instance_ = make_registered("optimizer", name, properties);
     stochastic_ = py::bool_(instance_.attr("stochastic")).cast<bool>();
     option_seed_ = properties.has("seed") ? properties.get<int>("seed") : 1;
     for (py::handle need : instance_.attr("requirements")) {
