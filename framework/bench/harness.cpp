@@ -1,5 +1,7 @@
 #include "bench/harness.h"
 
+#include "core/interrupt.h"
+
 #include <algorithm>
 #include <cctype>
 #include <chrono>
@@ -256,6 +258,8 @@ BuiltProblems build_problems(const BenchOptions& options, const BenchmarkContext
       const auto instance = built.back()->instantiate();
       std::vector<double> x = instance->start();
       problem.start_error = instance->problem().error(x);
+    } catch (const interrupt::Stopped&) {
+      throw;
     } catch (const std::exception& e) {
       // A module this build left out: say so, run the rest.
       if (built.size() > result.problems.size()) built.pop_back();
@@ -328,6 +332,8 @@ void perform_run(const BenchOptions& options, const BuiltProblems& built, const 
     run.termination = summary.usable() ? to_string(summary.termination)
                                        : to_string(summary.termination) + ": " + summary.message;
     run.best_x = x;
+  } catch (const interrupt::Stopped&) {
+    throw;  // Ctrl-C: no report of runs cut short
   } catch (const std::exception& e) {
     run.termination = std::string("error: ") + e.what();
   }

@@ -52,6 +52,7 @@ void wait_if_stopping() {
 
 void request_stop() noexcept { cooperative_stop.store(true, std::memory_order_relaxed); }
 void clear_stop_request() noexcept { cooperative_stop.store(false, std::memory_order_relaxed); }
+bool take_stop_request() noexcept { return cooperative_stop.exchange(false, std::memory_order_relaxed); }
 void throw_if_stop_requested() {
   if (cooperative_stop.load(std::memory_order_relaxed)) throw Stopped();
 }

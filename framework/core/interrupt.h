@@ -37,6 +37,8 @@ class Stopped : public std::runtime_error {
 void request_stop() noexcept;
 /// Forgets an earlier request; a host calls it before it starts a run.
 void clear_stop_request() noexcept;
+/// Whether a stop was asked for since the last clear, forgetting it.
+bool take_stop_request() noexcept;
 void throw_if_stop_requested();
 
 }  // namespace spec2fab::interrupt

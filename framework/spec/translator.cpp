@@ -8,6 +8,7 @@
 #include <tbb/global_control.h>
 
 #include "core/error.h"
+#include "core/interrupt.h"
 #include "core/ranks.h"
 #include "core/version.h"
 #include "reducer/reducer_tree.h"
@@ -110,6 +111,7 @@ std::filesystem::path run_experiment(ExperimentSource source, const RunOptions& 
   spdlog::info("running '{}' ({}) on {} thread(s)", experiment.name(), experiment.translator(), threads);
   folder.writing([&] {
     prepared.translator->run(context);
+    interrupt::throw_if_stop_requested();  // a stop during the print: nothing committed
     folder.write_json("tree.json", prepared.translator->tree().to_json());
     folder.write_json("result.json", report.to_json());
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -1,5 +1,7 @@
 #include "spec/tuning_translator.h"
 
+#include "core/interrupt.h"
+
 #include "reducer/reducer_tree.h"
 #include "spec/tuning_outputs.h"
 
@@ -37,6 +39,7 @@ void TuningTranslator::run(RunContext& context) {
     }
     report(record, context);
   }
+  interrupt::throw_if_stop_requested();  // before the print, often most of a run's time
   write_tree_outputs(*tree_, outputs_, context, print_surfaces_);
   after_print(context);
 }

@@ -1,5 +1,7 @@
 #include "tuning/optimizer.h"
 
+#include "core/interrupt.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -104,6 +106,8 @@ Summary Optimizer::minimize(Problem& problem, std::vector<double>& x,
   CountingProblem counted(problem);
   try {
     run(counted, x, summary, callback);
+  } catch (const interrupt::Stopped&) {
+    throw;  // a stop asked for the whole run, not this search's failure
   } catch (const std::exception& e) {
     summary.termination = Termination::failure;
     summary.message = e.what();

@@ -30,10 +30,11 @@ from typing import Any, Iterable, Mapping, Optional, Sequence, Union
 import numpy as np
 
 from . import _spec2fab
-from ._spec2fab import InputError, Problem, Stopped, WriteError
+from ._spec2fab import InputError, OptimizationStopped, Problem, Stopped, WriteError
 
+# `list` is left out: `from spec2fab import *` would hide the builtin.
 __all__ = [
-    "run", "validate", "simulate", "list", "bench", "tuner_problem", "tuner_names",
+    "run", "validate", "simulate", "bench", "tuner_problem", "tuner_names",
     "register", "register_bench_problem", "set_log_level",
     "Run", "Metric", "Goal", "Simulator", "Optimizer", "Problem",
     "InputError", "WriteError", "Stopped", "OptimizationStopped", "datasets",
@@ -47,16 +48,12 @@ Experiment = Union[str, os.PathLike, Mapping[str, Any]]
 datasets = pathlib.Path(_spec2fab._datasets())
 
 
-class OptimizationStopped(Exception):
-    """Raised by ``problem(x)`` inside a Python optimizer's ``minimize`` when
-    the run must end (the bench's budget is spent, a callback ended it). Let
-    it propagate: the run keeps the best point evaluated."""
-
-
-# Classes registered from Python, by kind and name: the C++ registries'
-# factories look them up here each time they build a part.
-_parts: dict = {"metric": {}, "goal": {}, "simulator": {}, "optimizer": {}}
-_bench_problems: dict = {}
+# Classes registered from Python, by kind and name, and bench problems' specs:
+# the C++ registries' factories look them up there each time they build a
+# part. They live on the extension, so that a reload of this package keeps
+# them (the C++ registries keep the names).
+_parts: dict = _spec2fab._parts
+_bench_problems: dict = _spec2fab._bench_problems
 
 
 class Run:
@@ -158,6 +155,9 @@ def list(kind: Optional[str] = None) -> dict:  # noqa: A001 - the command's name
     kinds: dict = {}
     for registry_kind, _heading, entries in _spec2fab._registries():
         kinds[registry_kind] = {name: summary for name, summary in entries}
+    for kind_name, classes in _parts.items():  # the summary of the class registered last
+        for name, cls in classes.items():
+            kinds[kind_name][name] = _summary(cls) + " (written in Python)"
     kinds["material"] = _dataset_names("materials")
     kinds["printer"] = _dataset_names("printers")
     if kind is None:
@@ -317,8 +317,8 @@ def register(cls: type, name: str) -> type:
     (a registered optimizer joins bench's entrants), with the same checks
     (observation types must agree). Registering a name again replaces the
     class (a notebook cell run twice); a C++ part's name is refused.
-    Returns cls, so it can be used as ``@spec2fab.register(..., name)``'s
-    plain-call form: ``register(MyMetric, "my_metric")``."""
+    Returns cls. Register before a run starts, not from another thread
+    during one."""
     if not inspect.isclass(cls):
         raise TypeError("register: pass the class, not an instance")
     kinds = [kind for base, kind in _BASES.items() if issubclass(cls, base)]
@@ -328,10 +328,15 @@ def register(cls: type, name: str) -> type:
     if not name or not all(c.isalnum() or c in "_-." for c in name):
         raise ValueError(f"register: '{name}': use letters, digits, '_', '-' and '.'")
     if name not in _parts[kind]:
-        summary = (inspect.getdoc(cls) or cls.__name__).splitlines()[0]
-        _spec2fab._add_to_registry(kind, name, summary)
+        _spec2fab._add_to_registry(kind, name, _summary(cls))
     _parts[kind][name] = cls
     return cls
+
+
+def _summary(cls: type) -> str:
+    """The first line of the class's own docstring (not its base's)."""
+    doc = cls.__dict__.get("__doc__")
+    return inspect.cleandoc(doc).splitlines()[0] if doc else cls.__name__
 
 
 def register_bench_problem(name: str, spec: Mapping[str, Any], summary: str = "") -> None:

@@ -8,11 +8,13 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <type_traits>
 
 #include <nlohmann/json.hpp>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include "core/interrupt.h"
 #include "core/limits.h"
 #include "core/properties.h"
 #include "spec/experiment.h"
@@ -48,21 +50,71 @@ py::array_t<double> to_array(const Observation& observation);
 /// std::invalid_argument naming `who` when the type cannot take that shape.
 void assign(Observation& observation, py::handle array, const std::string& who);
 
-/// Held around long C++ work called from Python: releases the GIL (so that
-/// parts written in Python can run on the work's threads) and turns Ctrl-C
-/// into a cooperative stop (core/interrupt.h) for its length; a stopped run
-/// raises KeyboardInterrupt once the GIL is back.
-class LongCall {
+/// Ctrl-C during long C++ work called from Python: the outermost such call
+/// on Python's main thread, while Python's own SIGINT handler is in place,
+/// takes SIGINT for its length and turns it into a cooperative stop
+/// (core/interrupt.h: the work throws interrupt::Stopped at its next tuner
+/// evaluation, raised in Python as spec2fab.Stopped, a KeyboardInterrupt).
+/// Other calls (nested ones, other threads, a handler of the user's) leave
+/// signals alone. The request is forgotten when the owning scope ends, so a
+/// later evaluation outside any call is not stopped by it.
+class StopScope {
  public:
-  LongCall();
-  ~LongCall();
-  LongCall(const LongCall&) = delete;
-  LongCall& operator=(const LongCall&) = delete;
+  StopScope();  // with the GIL held
+  ~StopScope();
+  StopScope(const StopScope&) = delete;
+  StopScope& operator=(const StopScope&) = delete;
+  /// Whether a stop was asked for during the work (it was not thrown), forgetting it.
+  bool take_request();
 
  private:
-  struct sigaction previous_{};
-  bool handler_installed_;  // after previous_, before release_: made with the GIL held
-  py::gil_scoped_release release_;
+  struct sigaction previous_ {};
+  bool owner_ = false;
+};
+
+/// Runs `work` with the GIL released (parts written in Python can run on the
+/// work's threads meanwhile) under a StopScope. A Ctrl-C that came after
+/// the work's last check raises Stopped afterwards, unless `late_stop_keeps`
+/// — work whose result is complete (a committed run folder).
+template <class Work>
+auto long_call(Work&& work, bool late_stop_keeps = false) {
+  StopScope scope;
+  const auto after = [&] {
+    if (scope.take_request() && !late_stop_keeps) throw interrupt::Stopped();
+  };
+  if constexpr (std::is_void_v<decltype(work())>) {
+    {
+      py::gil_scoped_release release;
+      work();
+    }
+    after();
+  } else {
+    auto result = [&] {
+      py::gil_scoped_release release;
+      return work();
+    }();
+    after();
+    return result;
+  }
+}
+
+/// A Python object held by a C++ part that may be dropped on a thread
+/// without the GIL (a tuner's parts end with the run): it takes the GIL.
+class Held {
+ public:
+  Held() = default;
+  explicit Held(py::object instance) : instance_(std::move(instance)) {}
+  ~Held() {
+    if (!instance_) return;
+    py::gil_scoped_acquire gil;
+    instance_ = py::object();
+  }
+  Held(const Held&) = delete;
+  Held& operator=(const Held&) = delete;
+  const py::object& get() const { return instance_; }
+
+ private:
+  py::object instance_;
 };
 
 /// The datasets folder: $SPEC2FAB_DATASETS, else the source tree's.

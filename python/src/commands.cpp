@@ -26,22 +26,14 @@ std::string run(py::handle experiment, std::optional<std::string> out, std::opti
   }
   options.seed = seed;
   options.resume = resume;
-  std::string folder;
-  {
-    LongCall call;
-    folder = run_experiment(std::move(source), options).string();
-  }
-  interrupt::throw_if_stop_requested();  // Ctrl-C after the last evaluation
-  return folder;
+  // A Ctrl-C after the folder was committed leaves a complete run: it is returned.
+  return long_call([&] { return run_experiment(std::move(source), options).string(); }, true);
 }
 
 py::dict validate(py::handle experiment, std::optional<std::string> origin) {
   ExperimentSource source = experiment_source(experiment, origin);
-  const PreparedExperiment prepared = [&] {
-    LongCall call;  // loading a mesh and building its field takes a while
-    return prepare_experiment(std::move(source), Limits());
-  }();
-  interrupt::throw_if_stop_requested();
+  // Loading a mesh and building its field takes a while.
+  const PreparedExperiment prepared = long_call([&] { return prepare_experiment(std::move(source), Limits()); });
   const Experiment& e = *prepared.experiment;
   py::dict summary;
   summary["name"] = e.name();
@@ -59,14 +51,13 @@ py::dict validate(py::handle experiment, std::optional<std::string> origin) {
 
 py::array_t<double> simulate(const std::string& simulator, py::handle config, std::optional<std::string> origin) {
   const Properties properties = properties_of(config, origin);
-  cli::PreparedSimulation prepared = cli::prepare_simulation(properties, simulator, Limits());
-  std::unique_ptr<Observation> observation = prepared.simulator->make_observation();
-  {
-    LongCall call;
+  const std::unique_ptr<Observation> observation = long_call([&] {
+    cli::PreparedSimulation prepared = cli::prepare_simulation(properties, simulator, Limits());
+    std::unique_ptr<Observation> out = prepared.simulator->make_observation();
     cli::set_up(prepared);
-    cli::simulate_checked(prepared, *observation);
-  }
-  interrupt::throw_if_stop_requested();
+    cli::simulate_checked(prepared, *out);
+    return out;
+  });
   return to_array(*observation);
 }
 
@@ -83,9 +74,8 @@ py::list registries() {
   return out;
 }
 
-/// bench's matrix: `problems` names registered problems (empty: all);
-/// `extra_problems` are (name, spec) pairs of TunerBenchmark specs made
-/// here (a Python metric's problem); `optimizers` are entrant labels.
+/// bench's matrix: `problems` names registered problems (empty: all), those
+/// registered from Python included; `optimizers` are entrant labels.
 std::string bench(std::vector<std::string> problems, std::vector<std::string> optimizers, int seeds,
                   const std::string& budget, const std::string& out, std::optional<int> threads, bool quick,
                   std::optional<std::string> entrants) {
@@ -99,11 +89,7 @@ std::string bench(std::vector<std::string> problems, std::vector<std::string> op
   arguments.quick = quick;
   arguments.datasets = datasets_folder();
   if (entrants) arguments.entrants = *entrants;
-  {
-    LongCall call;
-    cli::bench_command(arguments);
-  }
-  interrupt::throw_if_stop_requested();
+  long_call([&] { cli::bench_command(arguments); });
   return out;
 }
 

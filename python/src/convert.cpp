@@ -1,7 +1,5 @@
 #include "bindings.h"
 
-#include <pthread.h>
-
 #include <cmath>
 #include <cstdlib>
 #include <vector>
@@ -84,8 +82,13 @@ py::dict keyword_options(const Properties& properties) {
 
 py::object make_registered(const std::string& kind, const std::string& name, const Properties& properties) {
   py::gil_scoped_acquire gil;
-  // The package's table (spec2fab._parts): registering a name again replaces its class.
-  const py::object cls = py::module_::import("spec2fab").attr("_parts")[py::str(kind)][py::str(name)];
+  // The table spec2fab.register fills (kept on the extension, so that it
+  // outlives a reload of the package): registering a name again replaces its class.
+  const py::dict kinds = py::module_::import("spec2fab._spec2fab").attr("_parts");
+  const py::dict classes = kinds[py::str(kind)];
+  if (!classes.contains(name))
+    throw InputError(properties.where() + ": the Python " + kind + " '" + name + "' is not registered in this process");
+  const py::object cls = classes[py::str(name)];
   try {
     return cls(**keyword_options(properties));
   } catch (py::error_already_set& e) {
@@ -144,27 +147,37 @@ void assign(Observation& observation, py::handle value, const std::string& who) 
 
 namespace {
 
-bool on_main_thread() {
-  const py::object threading = py::module_::import("threading");
-  return threading.attr("current_thread")().is(threading.attr("main_thread")());
-}
+bool scope_active = false;  // read and written with the GIL held
 
-bool install_stop_handler(struct sigaction& previous) {
-  interrupt::clear_stop_request();
-  if (!on_main_thread()) return false;  // Python takes signals on its main thread only
-  struct sigaction action {};
-  action.sa_handler = [](int) { interrupt::request_stop(); };
-  sigemptyset(&action.sa_mask);
-  return sigaction(SIGINT, &action, &previous) == 0;
+/// Python's main thread, with Python's own Ctrl-C handler in place.
+bool python_takes_sigint_as_usual() {
+  const py::object threading = py::module_::import("threading");
+  if (!threading.attr("current_thread")().is(threading.attr("main_thread")())) return false;
+  const py::object signal = py::module_::import("signal");
+  return signal.attr("getsignal")(signal.attr("SIGINT")).is(signal.attr("default_int_handler"));
 }
 
 }  // namespace
 
-LongCall::LongCall() : handler_installed_(install_stop_handler(previous_)) {}
-
-LongCall::~LongCall() {
-  if (handler_installed_) sigaction(SIGINT, &previous_, nullptr);
+StopScope::StopScope() {
+  if (scope_active || !python_takes_sigint_as_usual()) return;
+  interrupt::clear_stop_request();
+  struct sigaction action {};
+  action.sa_handler = [](int) { interrupt::request_stop(); };
+  action.sa_flags = SA_RESTART | SA_ONSTACK;
+  sigemptyset(&action.sa_mask);
+  owner_ = sigaction(SIGINT, &action, &previous_) == 0;
+  scope_active = owner_;
 }
+
+StopScope::~StopScope() {
+  if (!owner_) return;
+  sigaction(SIGINT, &previous_, nullptr);
+  interrupt::clear_stop_request();
+  scope_active = false;  // the GIL is held again: long_call's release ended first
+}
+
+bool StopScope::take_request() { return owner_ && interrupt::take_stop_request(); }
 
 std::filesystem::path datasets_folder() {
   if (const char* env = std::getenv("SPEC2FAB_DATASETS")) return env;

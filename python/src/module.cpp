@@ -19,6 +19,19 @@ PYBIND11_MODULE(_spec2fab, m) {
   py::register_exception<WriteError>(m, "WriteError", PyExc_OSError);
   // Ctrl-C during a run: the run's partial folder is gone.
   py::register_exception<interrupt::Stopped>(m, "Stopped", PyExc_KeyboardInterrupt);
+  // Raised by problem(x) inside a Python optimizer when the run must end; a
+  // BaseException, so that an optimizer's `except Exception` lets it through.
+  m.attr("OptimizationStopped") = py::reinterpret_steal<py::object>(PyErr_NewExceptionWithDoc(
+      "spec2fab.OptimizationStopped",
+      "Raised by problem(x) inside a Python optimizer's minimize when the run must end (the bench's budget "
+      "is spent, a callback ended it). Let it propagate: the run keeps the best point evaluated.",
+      PyExc_BaseException, nullptr));
+  // What spec2fab.register and register_bench_problem fill, here so that a
+  // reload of the package keeps them (the C++ registries keep the names).
+  py::dict parts;
+  for (const char* kind : {"metric", "goal", "simulator", "optimizer"}) parts[kind] = py::dict();
+  m.attr("_parts") = parts;
+  m.attr("_bench_problems") = py::dict();
   configure_logging(Verbosity::normal);
   m.def("_version", [] { return std::string(version()); });
   m.def("_set_log_level", [](const std::string& level) {

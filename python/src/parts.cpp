@@ -2,7 +2,7 @@
 // Simulator or Optimizer, registered by name (spec2fab.register), is built
 // by the C++ registry like any other part, through an adapter here that
 // holds the Python instance and takes the GIL for every call (runs release
-// it: LongCall). The registry's factory looks the class up by name in the
+// it: long_call). The registry's factory looks the class up by name in the
 // package's table at each creation, so registering a name again (a notebook
 // cell run twice) replaces the class.
 #include <pybind11/stl.h>
@@ -29,22 +29,6 @@ std::unique_ptr<Observation> observation_of_type(const std::string& type, const 
 std::string type_attribute(const py::object& instance, const char* attribute) {
   return py::str(instance.attr(attribute)).cast<std::string>();
 }
-
-/// Holds the Python instance; dropping it takes the GIL.
-class Held {
- public:
-  explicit Held(py::object instance) : instance_(std::move(instance)) {}
-  ~Held() {
-    py::gil_scoped_acquire gil;
-    instance_ = py::object();
-  }
-  Held(const Held&) = delete;
-  Held& operator=(const Held&) = delete;
-  const py::object& get() const { return instance_; }
-
- private:
-  py::object instance_;
-};
 
 class PythonMetric final : public ErrorMetric {
  public:
@@ -166,7 +150,7 @@ void bind_parts(py::module_& m) {
           nlohmann::json spec;
           {
             py::gil_scoped_acquire gil;
-            spec = to_json(py::module_::import("spec2fab").attr("_bench_problems")[py::str(name)],
+            spec = to_json(py::module_::import("spec2fab._spec2fab").attr("_bench_problems")[py::str(name)],
                            "bench problem '" + name + "'");
           }
           return std::make_unique<TunerBenchmark>(spec, description, context);

@@ -111,8 +111,12 @@ def test_scipy_drives_a_tuner_problem():
     assert problem.dimension == 2 and problem.kinds == ["choice", "discrete"]
     start = problem.error(problem.snap([0, 0.135]))
     found = scipy_optimize.differential_evolution(problem, problem.bounds, seed=1, maxiter=20, polish=False)
-    assert problem.best_error <= found.fun + 1e-12
-    assert problem.best_error < start
+    assert found.fun < start
+    assert problem.evaluations >= found.nfev + 1
+    # Every one of the tuner's 63 stacks (inks are palette ids 1-3: cyan, magenta, yellow).
+    exhaustive = min(problem.error([ink, 0.027 * k]) for ink in (1.0, 2.0, 3.0) for k in range(21))
+    assert found.fun == pytest.approx(exhaustive, rel=1e-9)
+    assert problem.best_error == pytest.approx(exhaustive, rel=1e-9)
     batch = problem.ask(8, seed=3)
     assert len(batch) == 8 and all(problem.bounds[1][0] <= x[1] <= problem.bounds[1][1] for x in batch)
     assert len(problem.tell(batch)) == 8
@@ -183,3 +187,107 @@ def test_a_python_metric_run_is_deterministic_for_1_and_2_threads(tmp_path):
     one = spec2fab.run(with_metric("numpy_rgb_mse"), out=tmp_path / "one", threads=1, origin=EXPERIMENT)
     two = spec2fab.run(with_metric("numpy_rgb_mse"), out=tmp_path / "two", threads=2, origin=EXPERIMENT)
     assert_same_folders(one.folder, two.folder)
+
+
+def test_a_python_part_that_raises_raises_through_the_run(tmp_path):
+    class Broken(spec2fab.Metric):
+        """Raises."""
+        compares = "albedo"
+
+        def error(self, simulated, target):
+            raise ZeroDivisionError("metric bug")
+
+    spec2fab.register(Broken, "broken_metric")
+    with pytest.raises(ZeroDivisionError, match="metric bug"):
+        spec2fab.run(with_metric("broken_metric"), out=tmp_path / "out", threads=2, origin=EXPERIMENT)
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_python_optimizer_with_bad_requirements_is_refused(tmp_path):
+    class NeedsText(spec2fab.Optimizer):
+        """requirements as a string, a missing comma."""
+        requirements = ("gradient")
+
+    class NeedsNothingKnown(spec2fab.Optimizer):
+        """An unknown capability."""
+        requirements = ("telepathy",)
+
+    spec2fab.register(NeedsText, "needs_text")
+    spec2fab.register(NeedsNothingKnown, "needs_telepathy")
+    experiment = with_metric("rgb_mse")
+    experiment["goal"]["tuners"][0]["optimizer"] = {"type": "needs_text"}
+    with pytest.raises(spec2fab.InputError, match=r"/goal/tuners/0/optimizer.*requirements is a string"):
+        spec2fab.validate(experiment, origin=EXPERIMENT)
+    experiment["goal"]["tuners"][0]["optimizer"] = {"type": "needs_telepathy"}
+    with pytest.raises(spec2fab.InputError, match=r"'telepathy' is no capability \(gradient, residuals"):
+        spec2fab.validate(experiment, origin=EXPERIMENT)
+    experiment["goal"]["tuners"][0]["optimizer"] = {"type": "random_search", "samples": 10, "colour": "red"}
+    with pytest.raises(spec2fab.InputError, match=r"random_search' refused its options.*colour"):
+        spec2fab.validate(experiment, origin=EXPERIMENT)
+
+
+def test_registering_a_name_again_replaces_the_class(tmp_path):
+    class Zero(spec2fab.Metric):
+        """Always 0."""
+        compares = "albedo"
+
+        def error(self, simulated, target):
+            return 0.0
+
+    class One(spec2fab.Metric):
+        """Always 1."""
+        compares = "albedo"
+
+        def error(self, simulated, target):
+            return 1.0
+
+    spec2fab.register(Zero, "constant_metric")
+    assert spec2fab.list("metric")["constant_metric"].startswith("Always 0.")
+    spec2fab.register(One, "constant_metric")
+    assert spec2fab.list("metric")["constant_metric"].startswith("Always 1.")
+    problem = spec2fab.tuner_problem(with_metric("constant_metric"), tuner="sky", origin=EXPERIMENT)
+    assert problem([1.0, 0.027]) == 1.0
+
+
+def test_a_problem_kept_past_minimize_refuses_to_be_used(tmp_path):
+    kept = []
+
+    class Keeper(spec2fab.Optimizer):
+        """Keeps the problem."""
+
+        def minimize(self, problem, x, seed):
+            kept.append(problem)
+            problem(x)
+            return x
+
+    spec2fab.register(Keeper, "keeper")
+    experiment = with_metric("rgb_mse")
+    for tuner in experiment["goal"]["tuners"]:
+        tuner["optimizer"] = {"type": "keeper"}
+    spec2fab.run(experiment, out=tmp_path / "out", threads=1, origin=EXPERIMENT)
+    assert len(kept) == 4
+    with pytest.raises(RuntimeError, match="minimize\\(\\), which has returned"):
+        kept[0]([1.0, 0.0])
+    with pytest.raises(RuntimeError):
+        kept[0].dimension
+
+
+def test_optimization_stopped_gets_through_except_exception(tmp_path):
+    class Stubborn(spec2fab.Optimizer):
+        """Swallows every Exception."""
+        stochastic = True
+
+        def minimize(self, problem, x, seed):
+            rng = np.random.default_rng(seed)
+            for _ in range(10_000):
+                try:
+                    problem(rng.uniform(problem.lower, problem.upper))
+                except Exception:
+                    pass
+            return None
+
+    spec2fab.register(Stubborn, "stubborn")
+    report = spec2fab.bench(problems=["albedo_column"], optimizers=["stubborn"], seeds=1, budget="10d",
+                            out=tmp_path / "bench")
+    [entrant] = report["problems"][0]["entrants"]
+    assert entrant["run_list"][0]["evaluations"] == 40
