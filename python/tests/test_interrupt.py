@@ -6,11 +6,11 @@ import signal
 import subprocess
 import sys
 import textwrap
-import time
 
 from conftest import ROOT
 
-SCRIPT = textwrap.dedent("""
+# A run whose every evaluation takes 50 ms and says so, to be interrupted.
+SLOW_RUN = textwrap.dedent("""
     import json, sys, time
     import numpy as np
     import spec2fab
@@ -26,92 +26,65 @@ SCRIPT = textwrap.dedent("""
     experiment = json.load(open("datasets/experiments/colour_patches_box.json"))
     for tuner in experiment["goal"]["tuners"]:
         tuner["metric"] = {"type": "slow"}
-    try:
-        spec2fab.run(experiment, out=sys.argv[1], threads=1, origin="datasets/experiments/colour_patches_box.json")
-    except KeyboardInterrupt as stopped:
-        print("stopped:", type(stopped).__name__, stopped, flush=True)
-    print("after:", spec2fab.simulate("albedo", "datasets/simulations/albedo_cyan_over_white.json").shape, flush=True)
+
+    def slow_run():
+        try:
+            spec2fab.run(experiment, out=sys.argv[1], threads=1, origin="datasets/experiments/colour_patches_box.json")
+        except KeyboardInterrupt as stopped:
+            print("stopped:", type(stopped).__name__, stopped, flush=True)
 """)
+
+
+def interrupted(script, out):
+    """Runs `script` (argv[1] = out), sends SIGINT once it has evaluated
+    once, and returns what it printed."""
+    process = subprocess.Popen([sys.executable, "-c", script, str(out)], cwd=ROOT, stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True, env=os.environ.copy())
+    assert process.stdout.readline().strip() == "evaluating"
+    process.send_signal(signal.SIGINT)
+    stdout, stderr = process.communicate(timeout=120)
+    assert process.returncode == 0, stderr
+    return stdout
 
 
 def test_ctrl_c_stops_the_run_and_leaves_nothing(tmp_path):
-    out = tmp_path / "run"
-    process = subprocess.Popen([sys.executable, "-c", SCRIPT, str(out)], cwd=ROOT, stdout=subprocess.PIPE,
-                               stderr=subprocess.PIPE, text=True, env=os.environ.copy())
-    assert process.stdout.readline().strip() == "evaluating"
-    time.sleep(0.2)
-    process.send_signal(signal.SIGINT)
-    stdout, stderr = process.communicate(timeout=120)
-    assert process.returncode == 0, stderr
+    stdout = interrupted(SLOW_RUN + textwrap.dedent("""
+        slow_run()
+        print("after:", spec2fab.simulate("albedo", "datasets/simulations/albedo_cyan_over_white.json").shape)
+    """), tmp_path / "run")
     assert "stopped: Stopped stopped on request (Ctrl-C)" in stdout
     assert "after: (3,)" in stdout
-    assert not out.exists()
     assert [p.name for p in tmp_path.iterdir()] == []  # no partial folder either
 
 
-BENCH_SCRIPT = textwrap.dedent("""
-    import sys, time
-    import spec2fab
-
-    class Slow(spec2fab.Optimizer):
-        stochastic = True
-        def minimize(self, problem, x, seed):
-            while True:
-                print("evaluating", flush=True)
-                time.sleep(0.05)
-                problem(x)
-
-    spec2fab.register(Slow, "slow")
-    try:
-        spec2fab.bench(problems=["albedo_column"], optimizers=["slow"], seeds=50, budget="100d", out=sys.argv[1], threads=1)
-    except KeyboardInterrupt as stopped:
-        print("stopped:", type(stopped).__name__, flush=True)
-""")
+def test_a_problem_made_before_a_ctrl_c_still_evaluates_after_it(tmp_path):
+    stdout = interrupted(SLOW_RUN + textwrap.dedent("""
+        before = spec2fab.tuner_problem("datasets/experiments/colour_patches_box.json", tuner="sky")
+        slow_run()
+        print("after:", before([1.0, 0.027]) >= 0)
+    """), tmp_path / "run")
+    assert "stopped: Stopped" in stdout and "after: True" in stdout
 
 
 def test_ctrl_c_stops_the_bench_and_leaves_no_report(tmp_path):
-    out = tmp_path / "bench"
-    process = subprocess.Popen([sys.executable, "-c", BENCH_SCRIPT, str(out)], cwd=ROOT, stdout=subprocess.PIPE,
-                               stderr=subprocess.PIPE, text=True, env=os.environ.copy())
-    assert process.stdout.readline().strip() == "evaluating"
-    time.sleep(0.2)
-    process.send_signal(signal.SIGINT)
-    stdout, stderr = process.communicate(timeout=120)
-    assert process.returncode == 0, stderr
+    stdout = interrupted(textwrap.dedent("""
+        import sys, time
+        import spec2fab
+
+        class Slow(spec2fab.Optimizer):
+            stochastic = True
+            def minimize(self, problem, x, seed):
+                while True:
+                    print("evaluating", flush=True)
+                    time.sleep(0.05)
+                    problem(x)
+
+        spec2fab.register(Slow, "slow")
+        try:
+            spec2fab.bench(problems=["albedo_column"], optimizers=["slow"], seeds=50, budget="100d",
+                           out=sys.argv[1], threads=1)
+        except KeyboardInterrupt as stopped:
+            print("stopped:", type(stopped).__name__, flush=True)
+    """), tmp_path / "bench")
     assert "stopped: Stopped" in stdout
     assert [p.name for p in tmp_path.iterdir()] == []
-
-
-STALE_SCRIPT = textwrap.dedent("""
-    import json, sys, time
-    import numpy as np
-    import spec2fab
-
-    class Slow(spec2fab.Metric):
-        compares = "albedo"
-        def error(self, simulated, target):
-            print("evaluating", flush=True)
-            time.sleep(0.05)
-            return float(np.mean((simulated - target) ** 2))
-
-    spec2fab.register(Slow, "slow")
-    before = spec2fab.tuner_problem("datasets/experiments/colour_patches_box.json", tuner="sky")
-    experiment = json.load(open("datasets/experiments/colour_patches_box.json"))
-    for tuner in experiment["goal"]["tuners"]:
-        tuner["metric"] = {"type": "slow"}
-    try:
-        spec2fab.run(experiment, out=sys.argv[1], threads=1, origin="datasets/experiments/colour_patches_box.json")
-    except KeyboardInterrupt:
-        print("stopped", flush=True)
-    print("after:", before([1.0, 0.027]) >= 0, flush=True)
-""")
-
-
-def test_a_problem_made_before_a_ctrl_c_still_evaluates_after_it(tmp_path):
-    process = subprocess.Popen([sys.executable, "-c", STALE_SCRIPT, str(tmp_path / "run")], cwd=ROOT,
-                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=os.environ.copy())
-    assert process.stdout.readline().strip() == "evaluating"
-    process.send_signal(signal.SIGINT)
-    stdout, stderr = process.communicate(timeout=120)
-    assert process.returncode == 0, stderr
-    assert "stopped" in stdout and "after: True" in stdout
