@@ -257,13 +257,6 @@ struct SimulationHeader {
   }
 };
 
-std::set<std::string> reserved_names(const SimulationHeader& header) {
-  std::set<std::string> names;
-  const nlohmann::json written = write_section(header);  // alive while items() walks it
-  for (const auto& item : written.items()) names.insert(item.key());
-  return names;
-}
-
 }  // namespace
 
 PreparedSimulation prepare_simulation(const fs::path& config_file, const std::string& simulator,
@@ -361,7 +354,7 @@ int simulate_command(const SimulateArguments& arguments) {
   SimulationHeader header{simulator->name(), std::string(simulator->produces()), arguments.config.string(),
                           printer.name, subtree.to_json(palette), setup_seconds, simulate_seconds, evaluations,
                           {}, {}};
-  ReportSections sections(reserved_names(header));
+  ReportSections sections(section_keys(header));
   const std::vector<std::string> files = folder.writing([&] {
     const SimulatorFiles written = simulator->write_report(*observation, folder.path("."), sections);
     header.values = written.values_in.empty()

@@ -252,6 +252,16 @@ S read_section(const Properties& properties) {
   return report_detail::read<S>(properties);
 }
 
+/// The keys write_section writes for `section`: what a report's header
+/// takes for itself (ReportSections' reserved names).
+template <ReportSection S>
+std::set<std::string> section_keys(const S& section) {
+  std::set<std::string> keys;
+  const nlohmann::json written = write_section(section);  // alive while items() walks it
+  for (const auto& item : written.items()) keys.insert(item.key());
+  return keys;
+}
+
 /// The section's fields, nested ones by dotted names, for docs/run-report.md.
 template <ReportSection S>
 std::vector<ReportFieldDoc> section_docs(const std::string& prefix = {}) {

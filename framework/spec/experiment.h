@@ -113,8 +113,7 @@ class Experiment {
   /// The sections translators read.
   const Properties& root() const { return root_; }
   Properties goal() const { return root_.object("goal"); }
-  std::optional<Properties> optimizer() const { return root_.optional_object("optimizer"); }
-  // A translator's tuners take the "optimizer" section, or its default,
+  // The "optimizer" section, or a translator's default, reaches its tuners
   // through OptimizerChoice (tuning/optimizer.h).
   std::optional<Properties> output() const { return root_.optional_object("output"); }
 

@@ -36,13 +36,10 @@ namespace {
 
 /// The names the header and the files take.
 std::set<std::string> reserved_names(const RunHeader& header) {
-  std::set<std::string> names{"files"};
-  const nlohmann::json written = write_section(header);  // alive while items() walks it
-  for (const auto& item : written.items()) names.insert(item.key());
+  std::set<std::string> names = section_keys(header);
+  names.insert("files");
   return names;
 }
-
-}  // namespace
 
 RunReport::RunReport(RunHeader header) : header_(std::move(header)), sections_(reserved_names(header_)) {}
 
