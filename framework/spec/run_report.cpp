@@ -41,6 +41,8 @@ std::set<std::string> reserved_names(const RunHeader& header) {
   return names;
 }
 
+}  // namespace
+
 RunReport::RunReport(RunHeader header) : header_(std::move(header)), sections_(reserved_names(header_)) {}
 
 nlohmann::json RunReport::to_json() const {
