@@ -28,6 +28,7 @@
 #include "materials/printer_profile.h"
 #include "reducer/node.h"
 #include "reducer/reducer_tree.h"
+#include "report/html_report.h"
 #include "spec/experiment.h"
 #include "spec/run_report.h"
 #include "core/run_folder.h"
@@ -47,8 +48,29 @@ int run_command(const RunArguments& arguments) {
   options.seed = arguments.seed;
   options.resume = arguments.resume;
   options.limits = arguments.limits;
+  options.report_html = arguments.report_html;
   const fs::path folder = run_experiment(arguments.experiment, options);
-  if (ranks::root()) std::cout << "wrote " << folder.string() << "/ (result.json, tree.json, preview/, print/)\n";
+  if (ranks::root())
+    std::cout << "wrote " << folder.string() << "/ (" << (options.report_html ? "report.html, " : "")
+              << "result.json, tree.json, preview/, print/)\n";
+  return 0;
+}
+
+int report_command(const fs::path& folder) {
+  if (report_folder_kind(folder) == ReportFolderKind::bench) {
+    write_bench_report_html(folder);
+  } else {
+    // What the run was for: its translator's summary, where this build has the translator.
+    std::ifstream file(folder / "result.json");
+    const nlohmann::json result = nlohmann::json::parse(file, nullptr, false);
+    std::string purpose;
+    if (result.is_object() && result.value("translator", "") != "" &&
+        TranslatorRegistry::instance().contains(result["translator"].get<std::string>()))
+      purpose = TranslatorRegistry::instance().doc(result["translator"].get<std::string>()).summary;
+    write_run_report_html(folder, purpose);
+  }
+  std::cout << "wrote " << (folder / "report.html").string() << " ("
+            << fmt::format("{:.1f}", static_cast<double>(fs::file_size(folder / "report.html")) / (1 << 20)) << " MB)\n";
   return 0;
 }
 

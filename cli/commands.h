@@ -24,6 +24,7 @@ struct RunArguments {
   int threads = 0;
   std::optional<std::uint64_t> seed;
   bool resume = false;
+  bool report_html = true;  ///< false: --no-report
   Limits limits;  ///< --limit's
 };
 
@@ -95,6 +96,8 @@ int bench_command(BenchArguments arguments);
 int export_command(const ExportArguments& arguments);
 /// Runs one simulator standalone on a subtree and writes its observation.
 int simulate_command(const SimulateArguments& arguments);
+/// `spec2fab report FOLDER`: writes report.html again for a run or bench folder.
+int report_command(const std::filesystem::path& folder);
 int validate_command(const std::filesystem::path& experiment, const Limits& limits);
 int list_command(const std::string& kind, bool verbose, const std::filesystem::path& datasets);
 /// docs/parts.md: every registered part, its options and an example, as

@@ -47,13 +47,13 @@ struct CommandLine {
   cli::ExportArguments export_arguments;
   cli::SimulateArguments simulate;
   cli::BenchArguments bench;
-  std::filesystem::path validate_file;
+  std::filesystem::path validate_file, report_folder;
   std::vector<std::string> limit_assignments;
   std::string kind;
   bool list_verbose = false, list_markdown = false;
   std::filesystem::path datasets = default_datasets(), update_doc;
   CLI::App *run_cmd = nullptr, *export_cmd = nullptr, *simulate_cmd = nullptr, *bench_cmd = nullptr,
-           *validate_cmd = nullptr, *list_cmd = nullptr;
+           *validate_cmd = nullptr, *list_cmd = nullptr, *report_cmd = nullptr;
 
   CommandLine() {
     app.require_subcommand(1);
@@ -67,6 +67,7 @@ struct CommandLine {
     add_simulate();
     add_bench();
     add_validate();
+    add_report();
     add_limits();
     add_list();
   }
@@ -83,12 +84,15 @@ struct CommandLine {
                       "same experiment, "
                       "seed and --out finished; without one, start afresh");
     run_cmd->add_flag("-q,--quiet", quiet, "only warnings and errors");
+    run_cmd->add_flag("!--no-report", run.report_html,
+                      "leave out report.html (write it later with `spec2fab report FOLDER`)");
     run_cmd->footer(
-        "Writes <out>/result.json (inputs, goal metrics), tree.json (the tuned tree; `export` "
+        "Writes <out>/report.html (open it in a browser: goal beside achieved, figures, a 3D view of the\n"
+        "print), result.json (inputs, goal metrics), tree.json (the tuned tree; `export` "
         "reads it),\ntiming.json (wall time, threads), preview/*.png and print/ (slices/, "
         "<material>.stl, model.3mf).\nThe folder appears only when the run completes. The same "
         "experiment and seed give\n"
-        "byte-identical files for any thread count, except timing.json.\n"
+        "byte-identical files for any thread count, except timing.json (and report.html's copy of it).\n"
         "Stopped by Ctrl-C or SIGTERM, a run removes its partial folder and exits with 130 or "
         "143;\n"
         "what a killed run (SIGKILL) left is removed by the next run into the same parent folder,\n"
@@ -208,6 +212,17 @@ struct CommandLine {
     validate_cmd->add_option("experiment", validate_file, "experiment file (JSON)")->required();
   }
 
+  void add_report() {
+    report_cmd = app.add_subcommand("report", "write report.html again for a run folder or a bench folder");
+    report_cmd->add_option("folder", report_folder, "a folder `spec2fab run` or `spec2fab bench` wrote")->required();
+    report_cmd->footer(
+        "report.html is one self-contained page (no network needed): what the run was for, goal beside\n"
+        "achieved at full resolution, the figures with their meaning, convergence, material census,\n"
+        "timings, inputs, and a 3D view of the print (material regions, the FEM's deformed shape, a\n"
+        "caustic slab). Runs write it themselves unless `run --no-report`; this command rebuilds it\n"
+        "from the folder's files (after `--no-report`, or for a folder an older version wrote).");
+  }
+
   void add_limits() {
     // Resource limits (core/limits.h): the same option on every command that reads user input.
     std::string limit_help =
@@ -270,6 +285,7 @@ struct CommandLine {
     run.limits = simulate.limits = export_arguments.limits = limits;
     if (*run_cmd) return cli::run_command(run);
     if (*validate_cmd) return cli::validate_command(validate_file, limits);
+    if (*report_cmd) return cli::report_command(report_folder);
     if (*bench_cmd) return cli::bench_command(bench);
     if (*simulate_cmd) return cli::simulate_command(simulate);
     if (*export_cmd) return cli::export_command(export_arguments);

@@ -165,4 +165,16 @@ void write_heat_map(const std::string& title, const std::vector<std::string>& la
   write_png(image, file);
 }
 
+nlohmann::json chart_json(const Axes& axes, const std::vector<Series>& series) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const Series& one : series) {
+    nlohmann::json entry = {{"label", one.label}, {"points", one.points}, {"steps", one.steps}};
+    if (!one.band.empty()) entry["band"] = one.band;
+    list.push_back(std::move(entry));
+  }
+  return {{"title", axes.title}, {"x_label", axes.x_label}, {"y_label", axes.y_label}, {"x_min", axes.x_min},
+          {"x_max", axes.x_max}, {"y_min", axes.y_min}, {"y_max", axes.y_max}, {"log_x", axes.log_x},
+          {"log_y", axes.log_y}, {"series", std::move(list)}};
+}
+
 }  // namespace spec2fab::plot

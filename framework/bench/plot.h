@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 namespace spec2fab::plot {
 
 /// One series: points (x, y) in data units, and optionally a band below and
@@ -27,6 +29,10 @@ struct Axes {
 /// Writes a line chart of `series` on `axes` into `file` (PNG).
 void write_chart(const Axes& axes, const std::vector<Series>& series,
                  const std::filesystem::path& file);
+
+/// The same chart as data, for report.html's interactive copy (report.json
+/// "charts"): the axes' fields and each series' label, points, band, steps.
+nlohmann::json chart_json(const Axes& axes, const std::vector<Series>& series);
 
 /// Writes a square table of values in [0, 1] as a heat map (rows won against
 /// columns); NaN cells are left blank.

@@ -14,6 +14,7 @@
 #include "bench/harness.h"
 #include "bench/plot.h"
 #include "bench/report_impl.h"
+#include "report/html_report.h"
 #include "core/file_write.h"
 #include "core/strings.h"
 #include "tuning/problem.h"
@@ -260,9 +261,10 @@ void write_problem_rows(std::ostringstream& md, const BenchResult& result, size_
                     file_name(problem.name));
   entry["entrants"] = entrants;
   entry["incompatible"] = left_out;
-  write_convergence(result, p, by_pair,
-                    folder / "plots" / ("convergence_" + file_name(problem.name) + ".png"));
-  write_ecdf(result, p, by_pair, folder / "plots" / ("ecdf_" + file_name(problem.name) + ".png"));
+  entry["charts"] = {
+      {"convergence", write_convergence(result, p, by_pair,
+                                        folder / "plots" / ("convergence_" + file_name(problem.name) + ".png"))},
+      {"ecdf", write_ecdf(result, p, by_pair, folder / "plots" / ("ecdf_" + file_name(problem.name) + ".png"))}};
 }
 
 /// The fight matrix: each entrant's win rate against each other, and its plot.
@@ -366,6 +368,7 @@ void write_bench_report(const BenchResult& result, const fs::path& folder) {
   write_report_file(folder / "report.md", md.str());
   write_report_file(folder / "report.json", report.dump(1) + "\n");
   write_timing(result, folder);
+  write_bench_report_html(folder);
 }
 
 }  // namespace spec2fab

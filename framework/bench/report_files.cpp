@@ -131,7 +131,7 @@ void write_ioh(const BenchResult& result, const std::vector<std::vector<const Be
 
 /// Fixed-budget convergence: best-so-far relative precision against
 /// evaluations, median over runs with the quartiles as a band.
-void write_convergence(const BenchResult& result, size_t p,
+nlohmann::json write_convergence(const BenchResult& result, size_t p,
                        const std::vector<std::vector<const BenchRun*>>& by_pair,
                        const fs::path& file) {
   const BenchProblem& problem = result.problems[p];
@@ -182,11 +182,12 @@ void write_convergence(const BenchResult& result, size_t p,
                   true,
                   true};
   plot::write_chart(axes, series, file);
+  return plot::chart_json(axes, series);
 }
 
 /// Runtime ECDF: the share of (run, target) pairs of the ladder reached
 /// within x evaluations.
-void write_ecdf(const BenchResult& result, size_t p,
+nlohmann::json write_ecdf(const BenchResult& result, size_t p,
                 const std::vector<std::vector<const BenchRun*>>& by_pair, const fs::path& file) {
   const BenchProblem& problem = result.problems[p];
   long long longest = 1;
@@ -224,6 +225,7 @@ void write_ecdf(const BenchResult& result, size_t p,
                   true,
                   false};
   plot::write_chart(axes, series, file);
+  return plot::chart_json(axes, series);
 }
 
 }  // namespace spec2fab::bench_report

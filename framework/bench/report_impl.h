@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "bench/harness.h"
 
 namespace spec2fab::bench_report {
@@ -31,11 +33,12 @@ double relative_precision(const BenchProblem& problem, double error);
 /// ioh/: IOHprofiler's format, which IOHanalyzer reads as it is.
 void write_ioh(const BenchResult& result, const RunsByPair& by_pair,
                const std::filesystem::path& root);
-/// Problem p's convergence plot (median and quartile band of the best so far).
-void write_convergence(const BenchResult& result, size_t p, const RunsByPair& by_pair,
+/// Problem p's convergence plot (median and quartile band of the best so far);
+/// returns the chart as data (plot::chart_json) for report.html.
+nlohmann::json write_convergence(const BenchResult& result, size_t p, const RunsByPair& by_pair,
                        const std::filesystem::path& file);
-/// Problem p's runtime ECDF over the target ladder.
-void write_ecdf(const BenchResult& result, size_t p, const RunsByPair& by_pair,
+/// Problem p's runtime ECDF over the target ladder; returns it as data.
+nlohmann::json write_ecdf(const BenchResult& result, size_t p, const RunsByPair& by_pair,
                 const std::filesystem::path& file);
 
 }  // namespace spec2fab::bench_report

@@ -12,6 +12,7 @@
 #include "core/ranks.h"
 #include "core/version.h"
 #include "reducer/reducer_tree.h"
+#include "report/html_report.h"
 #include "tuning/schedule.h"
 
 namespace spec2fab {
@@ -125,6 +126,11 @@ std::filesystem::path run_experiment(ExperimentSource source, const RunOptions& 
       timing["tuner_runs_per_rank"] = runs;
     }
     folder.write_json("timing.json", timing);
+    // The page people open first, built from the files above (as `spec2fab report` builds it again).
+    if (ranks::root() && options.report_html) {
+      interrupt::throw_if_stop_requested();
+      write_run_report_html(folder.path("."), TranslatorRegistry::instance().doc(experiment.translator()).summary);
+    }
   });
   folder.commit();
   return out;

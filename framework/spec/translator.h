@@ -85,6 +85,10 @@ struct RunOptions {
   /// run writes; with none, start from the beginning.
   bool resume = false;
   Limits limits;  ///< the command line's, over the experiment's "limits"
+  /// Write report.html (report/html_report.h) beside result.json; `run
+  /// --no-report` turns it off (a batch of runs, one page written later
+  /// with `spec2fab report`).
+  bool report_html = true;
 };
 
 /// Prepares and runs an experiment, writing the run folder all-or-nothing.

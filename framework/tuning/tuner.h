@@ -113,6 +113,12 @@ class Tuner {
   /// Whether its simulator reads the tree beyond this tuner's node (Simulator::reads_beyond_subtree).
   bool reads_beyond_its_node() const { return simulator_->reads_beyond_subtree(); }
   std::string simulator_name() const { return simulator_->name(); }
+  /// The simulator's files for the last simulation (Simulator::write_report)
+  /// into `folder`, its sections into `record`: what `spec2fab simulate`
+  /// writes, for a run that keeps its solved state (the FEM's fem.vtu).
+  SimulatorFiles write_simulation_files(const std::filesystem::path& folder, ReportSections& record) const {
+    return simulator_->write_report(*simulated_, folder, record);
+  }
   Optimizer& optimizer() { return *optimizer_; }
   /// Puts `optimizer` in place of the tuner's own and returns the one it had
   /// (a schedule phase may tune with another optimizer; Phase::optimizer).

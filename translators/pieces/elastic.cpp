@@ -252,6 +252,28 @@ std::vector<std::string> ElasticPiece::assignment(TunerNetwork& network, const R
   return names;
 }
 
+namespace {
+
+/// fem/ in the run folder: the tuned print's solved mesh (fem.vtu for
+/// ParaView, displacements.csv, deformed.stl) and its probes, which
+/// report.html's 3D view draws.
+void write_solved_mesh(const Tuner& tuner, const DisplacementsObservation& achieved, std::span<const double> goal_u,
+                       RunContext& context) {
+  const std::filesystem::path folder = context.folder.path("fem/probes.json").parent_path();
+  ReportSections unused;
+  tuner.write_simulation_files(folder, unused);
+  nlohmann::json probes = nlohmann::json::array();
+  const std::span<const double> rest = achieved.probe_rest_mm, at = achieved.probes();
+  for (size_t p = 0; 3 * p + 2 < rest.size(); ++p) {
+    probes.push_back({{"rest", {rest[3 * p], rest[3 * p + 1], rest[3 * p + 2]}},
+                      {"goal", {goal_u[3 * p], goal_u[3 * p + 1], goal_u[3 * p + 2]}},
+                      {"achieved", {at[3 * p], at[3 * p + 1], at[3 * p + 2]}}});
+  }
+  context.folder.write_json("fem/probes.json", probes);
+}
+
+}  // namespace
+
 ElasticReport ElasticPiece::report(TunerNetwork& network, const ReducerTree& tree, const Summary& summary,
                                    RunContext& context) const {
   Tuner& tuner = network.tuner(tuner_);
@@ -288,6 +310,7 @@ ElasticReport ElasticPiece::report(TunerNetwork& network, const ReducerTree& tre
   const double scale = largest > 0 ? 0.15 * bounds_.sizes().x() / largest : 1.0;
   write_probe_picture(achieved.probe_rest_mm, goal_u, achieved.probes(), bounds_, load_, scale,
                       context.folder.path("preview/goal_vs_achieved.png"));
+  write_solved_mesh(tuner, achieved, goal_u, context);
   return report;
 }
 

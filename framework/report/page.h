@@ -1,0 +1,32 @@
+#pragma once
+// What the run and bench pages share: the HTML around their data, the
+// embedded script, base64 and the folder's files. Internal to report/.
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <string_view>
+
+#include <nlohmann/json.hpp>
+
+namespace spec2fab::html_report {
+
+/// The bundled page script (web/src, built by esbuild), embedded at build time.
+std::string_view page_script();
+
+/// The page: `data` and `timing` inlined as JSON blocks, then the script.
+std::string html_page(const std::string& title, const nlohmann::json& data, const nlohmann::json& timing);
+
+std::string base64(std::string_view bytes);
+std::string read_bytes(const std::filesystem::path& file);
+/// The JSON in `file`; an InputError naming it when it cannot be read or parsed.
+nlohmann::json read_json(const std::filesystem::path& file);
+
+/// Width and height of a PNG from its header; {0, 0} when it is not one.
+std::pair<int, int> png_size(std::string_view bytes);
+
+/// Every regular file under `folder` (relative path, bytes), a folder of
+/// many (print/slices) summed up as one row; report.html itself left out.
+nlohmann::json file_list(const std::filesystem::path& folder);
+
+}  // namespace spec2fab::html_report

@@ -1,0 +1,194 @@
+// The page of a run folder or a bench folder, built from the JSON that
+// `spec2fab` inlined into report.html (element #spec2fab-data; wall times in
+// #spec2fab-timing, kept apart so the rest is byte-identical across reruns).
+import css from './report.css';
+import { el, fmt, bytes, seconds, section, table, words } from './util.js';
+import { lineChart } from './charts.js';
+import { viewerSection } from './viewer.js';
+import { benchPage } from './bench.js';
+
+// What the headline figures mean; any other figure is shown by its name.
+const MEANINGS = {
+  ssim: 'structural similarity of the cast image to the goal (1 = same)',
+  psnr_db: 'peak signal-to-noise ratio of the cast image (dB)',
+  relative_rmse: 'RMS of image minus goal over the goal’s RMS',
+  initial_ssim: 'SSIM at the start (flat surface)',
+  delta_e00: 'CIEDE2000 colour difference between goal and achieved (1 ≈ just noticeable)',
+  low_pass_delta_e00: 'mean ΔE00 after a blur: what the eye sees from afar',
+  in_gamut: 'over pixels whose goal is printable',
+  out_of_gamut: 'over pixels whose goal lies outside the printable gamut',
+  shape_mse_mm2: 'mean squared distance of the probes from their goal positions',
+  probe_rms_mm: 'RMS distance of the probes from their goal positions',
+  nodes_pruned: 'subtrees branch and bound pruned by the bound',
+  leaves_evaluated: 'complete assignments simulated',
+  leaves_evaluated_total: 'stacks branch and bound simulated, all columns',
+  fraction_of_exhaustive: 'share of an exhaustive search branch and bound needed',
+  exhaustive: 'assignments an exhaustive search would simulate',
+  profile_relative_rms: 'RMS of achieved minus goal scattering profile, relative to the goal',
+  final_error: 'the tuner’s error at its end',
+  initial_error: 'the tuner’s error at its start',
+};
+const HEADLINE = ['ssim', 'psnr_db', 'relative_rmse', 'mean', 'p95', 'low_pass_delta_e00', 'shape_mse_mm2', 'probe_rms_mm',
+  'nodes_pruned', 'leaves_evaluated', 'fraction_of_exhaustive', 'profile_relative_rms'];
+const SHARED = new Set(['spec2fab_version', 'experiment', 'translator', 'seed', 'inputs', 'tree', 'material_census', 'tuning',
+  'fabrication', 'files', 'warnings']);
+
+function data(id) {
+  const node = document.getElementById(id);
+  return node ? JSON.parse(node.textContent) : null;
+}
+
+/// Figures of one section, flattened: [dotted path, value].
+function flatten(value, prefix, out) {
+  if (value && typeof value === 'object' && !Array.isArray(value)) {
+    for (const [k, v] of Object.entries(value)) flatten(v, prefix ? `${prefix}.${k}` : k, out);
+  } else {
+    out.push([prefix, value]);
+  }
+  return out;
+}
+
+function headlineCards(result) {
+  const cards = [];
+  for (const [name, value] of Object.entries(result)) {
+    if (SHARED.has(name)) continue;
+    for (const [path, v] of flatten(value, name, [])) {
+      const leaf = path.split('.').pop();
+      if (!HEADLINE.includes(leaf) || typeof v !== 'number' || cards.length >= 8) continue;
+      if (path.includes('initial') || path.includes('nearest_only')) continue;
+      const parts = path.split('.');
+      cards.push(el('div', { class: 'card', title: MEANINGS[leaf] || '' },
+        el('div', { class: 'v', text: fmt(v) }), el('div', { class: 'k', text: parts.slice(-3).map(words).join(' › ') })));
+    }
+  }
+  return cards;
+}
+
+function figuresSection(result) {
+  const blocks = [];
+  for (const [name, value] of Object.entries(result)) {
+    if (SHARED.has(name) || value === null || typeof value !== 'object') continue;
+    const rows = flatten(value, '', []).map(([path, v]) => {
+      const leaf = path.split('.').pop();
+      return [path, v, MEANINGS[leaf] || ''];
+    });
+    blocks.push(el('h3', { text: name }), table(['figure', 'value', 'meaning'], rows, [1]));
+  }
+  const tuners = result.tuning?.tuners;
+  if (tuners) blocks.push(el('h3', { text: 'tuners' }), table(['tuner', 'final error'], tuners.map((t) => [t.name, t.final_error]), [1]));
+  const phases = result.tuning?.phases;
+  if (phases) {
+    blocks.push(el('h3', { text: 'tuning phases' }), table(['phase', 'tuner runs', 'evaluations', 'error at start (sum)', 'at end'],
+      phases.map((p) => [p.name, p.tuner_runs, p.evaluations, p.sum_initial_error, p.sum_final_error]), [1, 2, 3, 4]));
+  }
+  return section('figures', 'Figures', ...blocks);
+}
+
+function picturesSection(images) {
+  if (!images.length) return null;
+  const figures = images.map((image) => el('figure', {},
+    el('img', { src: image.data, alt: image.name, width: String(image.width), height: String(image.height) }),
+    el('figcaption', {}, el('b', { text: image.name }), ` — ${image.width} × ${image.height} px. ${image.caption || ''}`)));
+  return section('pictures', 'Goal and achieved, at full resolution',
+    el('p', { class: 'muted', text: 'Each picture at its own size, one screen pixel per pixel; scroll sideways for wide ones.' }),
+    el('div', { class: 'pair' }, figures));
+}
+
+/// convergence.csv: one line per (phase, sweep, tuner) run; a few as lines, the rest summed up.
+function convergenceSection(csv) {
+  if (!csv) return null;
+  const lines = csv.trim().split('\n').slice(1).map((l) => l.split(','));
+  const runs = new Map();
+  for (const [phase, sweep, tuner, , evaluations, , best] of lines) {
+    const key = `${phase} · sweep ${sweep} · ${tuner}`;
+    if (!runs.has(key)) runs.set(key, []);
+    runs.get(key).push([Math.max(1, Number(evaluations)), Number(best)]);
+  }
+  const keys = [...runs.keys()];
+  const shown = keys.filter((k) => runs.get(k).length > 1).slice(0, 10);
+  const children = [el('p', { class: 'muted', text: `${keys.length} tuner run(s) in convergence.csv; the best error so far against evaluations${shown.length < keys.length ? `, ${shown.length} runs with a trace drawn` : ''}.` })];
+  if (shown.length) {
+    const values = shown.flatMap((k) => runs.get(k).map((p) => p[1])).filter((v) => v > 0);
+    const logY = values.length > 0 && Math.max(...values) / Math.min(...values) > 100;
+    children.push(lineChart({ title: 'best error so far', x_label: 'evaluations', y_label: 'error', log_x: true, log_y: logY,
+      series: shown.map((k) => ({ label: k, points: runs.get(k).filter((p) => !logY || p[1] > 0) })) }).element);
+  }
+  return section('convergence', 'Convergence', ...children);
+}
+
+function censusSection(result) {
+  const census = result.material_census;
+  const fabricated = result.fabrication?.materials;
+  if (!census && !fabricated) return null;
+  const rows = [];
+  for (const [name, m] of Object.entries(census?.materials || {})) rows.push([name, m.volume_mm3, (100 * m.fraction).toFixed(1) + ' %']);
+  const children = [];
+  if (rows.length) children.push(el('p', { class: 'muted', text: `Census on a ${fmt(census.voxel_mm)} mm grid.` }),
+    table(['material', 'volume (mm³)', 'share'], rows, [1, 2]));
+  if (fabricated) {
+    const frows = Object.entries(fabricated).map(([name, m]) => [name, m.voxels, m.volume_mm3]);
+    children.push(el('h3', { text: 'in the print' }), table(['material', 'print voxels', 'volume (mm³)'], frows, [1, 2]));
+  }
+  return section('materials', 'Material census', ...children);
+}
+
+function timingSection(timing) {
+  if (!timing) return null;
+  const rows = flatten(timing, '', []).filter(([, v]) => typeof v === 'number')
+    .map(([k, v]) => [k, k.endsWith('seconds') || k.includes('seconds') ? seconds(v) : fmt(v)]);
+  return section('timing', 'Timings', el('p', { class: 'muted', text: 'From timing.json (wall times; they vary between runs).' }),
+    table(['step', 'time'], rows, [1]));
+}
+
+function inputsSection(result, experiment) {
+  const inputs = result.inputs || {};
+  const rows = flatten(inputs, '', []);
+  return section('inputs', 'Inputs', table(['input', 'value'], rows),
+    experiment ? el('details', {}, el('summary', { text: 'the experiment as run' }), el('pre', { text: JSON.stringify(experiment, null, 2) })) : null);
+}
+
+function filesSection(files) {
+  const rows = files.map((f) => [el('a', { href: f.path, text: f.path }), bytes(f.bytes)]);
+  return section('files', 'Files of the run',
+    el('p', { class: 'muted', text: 'Beside this report in the run folder; the 3D view shows decimated copies of the meshes.' }),
+    table(['file', 'size'], rows, [1]));
+}
+
+function runPage(d, timing) {
+  const result = d.result;
+  const images = d.images || [];
+  const header = el('header', {}, el('h1', { text: `${result.experiment} — ${result.translator}` }),
+    el('p', { text: d.purpose || '' }),
+    el('p', { text: `spec2fab ${result.spec2fab_version} · seed ${result.seed} · printer ${result.inputs?.printer?.name || '—'}` }));
+  const sections = [];
+  const lead = section('summary', 'What the run was for, and what it reached',
+    el('p', { class: 'lead', text: d.purpose || '' }), el('div', { class: 'cards' }, headlineCards(result)));
+  if (result.warnings?.length) lead.append(el('h3', { class: 'warn', text: 'warnings' }), el('ul', {}, result.warnings.map((w) => el('li', { text: w }))));
+  sections.push(lead);
+  sections.push(picturesSection(images));
+  let viewer = null;
+  if (d.viewer) {
+    viewer = viewerSection(d.viewer, images);
+    sections.push(section('view', '3D view of the print', viewer.element));
+  }
+  sections.push(figuresSection(result), convergenceSection(d.convergence_csv), censusSection(result), timingSection(timing),
+    inputsSection(result, d.experiment), filesSection(d.files || []));
+  const present = sections.filter(Boolean);
+  const nav = el('nav', {}, present.map((s) => el('a', { href: '#' + s.id, text: s.querySelector('h2').textContent.split(',')[0] })));
+  document.body.append(header, nav, el('main', {}, present));
+  if (viewer) viewer.start();
+}
+
+function start() {
+  document.head.append(el('style', { text: css }));
+  const d = data('spec2fab-data');
+  const timing = data('spec2fab-timing');
+  try {
+    if (d.kind === 'bench') benchPage(d, timing);
+    else runPage(d, timing);
+  } finally {
+    document.body.dataset.ready = 'true';
+  }
+}
+
+start();
