@@ -127,7 +127,7 @@ int bench_command(BenchArguments arguments) {
   folder.commit();
   size_t ran = 0, incompatible = 0;
   for (const BenchPair& pair : result.pairs) (pair.missing.empty() ? ran : incompatible) += 1;
-  std::cout << "wrote " << arguments.out.string() << "/ (report.md, report.json, ioh/, plots/, timing/): "
+  std::cout << "wrote " << arguments.out.string() << "/ (report.html, report.md, report.json, ioh/, plots/, timing/): "
             << result.runs.size() << " runs of " << ran << " pairs (" << incompatible
             << " incompatible pairs listed) in " << format_seconds(result.wall_seconds) << "\n";
   for (const BenchProblem& problem : result.problems) {

@@ -9,6 +9,7 @@ find_package(embree 3 REQUIRED)
 find_package(assimp REQUIRED)
 # CGAL (header-only): regular triangulations for the caustics' optimal transport.
 find_package(CGAL 5.5 REQUIRED)
+find_package(meshoptimizer 0.18 REQUIRED CONFIG)  # decimates meshes for report.html
 if(SPEC2FAB_WITH_CERES)
   find_package(Ceres REQUIRED)
 endif()

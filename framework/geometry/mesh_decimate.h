@@ -1,7 +1,9 @@
 #pragma once
-/// Fewer triangles for viewing: a mesh simplified by edge collapse with
-/// Lindstrom–Turk costs (CGAL's Surface_mesh_simplification), so a
-/// report can carry a print's surfaces at a few MB.
+/// Fewer triangles for viewing: a mesh simplified with meshoptimizer's
+/// quadric edge collapse (meshopt_simplify), falling back to its vertex
+/// clustering (meshopt_simplifySloppy) where topology blocks the target —
+/// so a report carries a print's surfaces at a few MB. Fast enough for the
+/// 1.8 M-triangle caustic slab (CGAL's edge collapse took 470 s there).
 
 #include <cstddef>
 
@@ -10,9 +12,7 @@
 namespace spec2fab {
 
 /// `mesh` with at most about `target_triangles` triangles (itself when it has
-/// no more). Open or non-manifold meshes are decimated too: the soup is
-/// repaired and oriented first (CGAL's polygon soup processing), which may
-/// duplicate vertices at non-manifold points. Corner uvs are dropped.
+/// no more), unused vertices dropped. Corner uvs are dropped.
 Mesh decimate_for_viewing(const Mesh& mesh, std::size_t target_triangles);
 
 }  // namespace spec2fab

@@ -26,7 +26,8 @@ nlohmann::json read_json(const std::filesystem::path& file);
 std::pair<int, int> png_size(std::string_view bytes);
 
 /// Every regular file under `folder` (relative path, bytes), a folder of
-/// many (print/slices) summed up as one row; report.html itself left out.
+/// many (print/slices) summed up as one row; report.html and checkpoint/
+/// left out, timing.json without its size (it varies).
 nlohmann::json file_list(const std::filesystem::path& folder);
 
 }  // namespace spec2fab::html_report

@@ -34,7 +34,7 @@ std::string caption(const std::string& path) {
       {"optimizer_comparison", "the optimizers compared on this goal"},
       {"search", "branch and bound: what it evaluated and pruned"},
       {"render", "the print rendered from its slices' materials"},
-      {"cross_section", "a cross-section of the tuned tree's materials"},
+      {"section_", "a cross-section through the middle of the tuned tree's materials"},
       {"goal", "the goal"},
       {"achieved", "what the tuned print gives"},
       {"simulated", "the simulated result"},
@@ -63,6 +63,15 @@ nlohmann::json images(const fs::path& folder, const nlohmann::json& result, size
   }
   std::sort(others.begin(), others.end());
   paths.insert(paths.end(), others.begin(), others.end());
+  // Goal beside achieved first, the print's render next, cross-sections last.
+  const auto rank = [](const std::string& path) {
+    const std::string stem = fs::path(path).stem().string();
+    if (stem.find("goal_vs") != std::string::npos || stem.find("traced") != std::string::npos) return 0;
+    if (stem == "render") return 1;
+    if (stem.rfind("section_", 0) == 0) return 3;
+    return 2;
+  };
+  std::stable_sort(paths.begin(), paths.end(), [&](const auto& a, const auto& b) { return rank(a) < rank(b); });
   nlohmann::json list = nlohmann::json::array();
   size_t used = 0;
   for (const std::string& path : paths) {
@@ -151,6 +160,17 @@ nlohmann::json print_meshes(const fs::path& folder, const nlohmann::json& result
     entry["file"] = fs::relative(stls[i], folder).generic_string();
     list.push_back(std::move(entry));
   }
+  // A caustic slab's smooth surface (surface.stl) and its voxel print overlap:
+  // the surface is shown, the material regions one click away.
+  const bool smooth_surface = std::any_of(list.begin(), list.end(), [](const auto& m) { return m["name"] == "surface"; });
+  if (smooth_surface)
+    for (auto& entry : list) {
+      if (entry["name"] == "surface") {
+        entry["color"] = {0.72, 0.84, 0.92};
+      } else {
+        entry["visible"] = false;
+      }
+    }
   return list;
 }
 
@@ -166,6 +186,30 @@ nlohmann::json fem_entry(const fs::path& folder, std::vector<std::string>& notes
   fem["probes"] = nlohmann::json::array();
   if (fs::is_regular_file(folder / "fem" / "probes.json")) fem["probes"] = read_json(folder / "fem" / "probes.json");
   return fem;
+}
+
+/// A caustic run's receiver: where the slab casts its image (a section with
+/// distance_mm, receiver_mm and image_size, as the caustic translators
+/// write) and the traced picture of the exported surface, cropped to the
+/// cast image (the picture is the goal beside it).
+nlohmann::json receiver_entry(const nlohmann::json& result, const nlohmann::json& images) {
+  for (const auto& [name, section] : result.items()) {
+    if (!section.is_object() || !section.contains("distance_mm") || !section.contains("receiver_mm") ||
+        !section.contains("image_size"))
+      continue;
+    std::string picture;
+    if (section.contains("surface_stl") && section["surface_stl"].contains("preview"))
+      picture = section["surface_stl"]["preview"].get<std::string>();
+    for (size_t i = 0; i < images.size(); ++i) {
+      if (images[i]["name"] != picture || !images[i].contains("data")) continue;
+      const int width = images[i]["width"], height = images[i]["height"];
+      const int w = section["image_size"][0], h = section["image_size"][1];
+      if (w > width || h > height) return nullptr;
+      return {{"image", i}, {"crop", {width - w, 0, w, h}}, {"distance_mm", section["distance_mm"]},
+              {"size_mm", section["receiver_mm"]}, {"caption", "the exported surface traced on the receiver"}};
+    }
+  }
+  return nullptr;
 }
 
 }  // namespace
@@ -186,6 +230,8 @@ void write_run_report_html(const fs::path& folder, const std::string& purpose, c
     viewer["fem"] = std::move(fem);
     for (auto& mesh : viewer["meshes"]) mesh["visible"] = false;  // the print's regions stay one click away
   }
+  if (nlohmann::json receiver = receiver_entry(result, data["images"]); !receiver.is_null())
+    viewer["receiver"] = std::move(receiver);
   if (!viewer["meshes"].empty() || viewer.contains("fem")) data["viewer"] = std::move(viewer);
   data["notes"] = notes;
   data["files"] = file_list(folder);

@@ -326,7 +326,25 @@ TEST(BenchCli, QuickMatrixWritesLogsThatParseAndAddUp) {
     }
     EXPECT_TRUE(fs::exists(out / "plots" / ("convergence_" + name + ".png")));
     EXPECT_TRUE(fs::exists(out / "plots" / ("ecdf_" + name + ".png")));
+    // report.html's copy of the curves: one series per entrant that ran, the
+    // convergence with its quartile band where there are several seeds.
+    const nlohmann::json& charts = problem["charts"];
+    EXPECT_EQ(charts["convergence"]["series"].size(), problem["entrants"].size());
+    EXPECT_EQ(charts["ecdf"]["series"].size(), problem["entrants"].size());
+    for (size_t e = 0; e < problem["entrants"].size(); ++e) {
+      const nlohmann::json& series = charts["convergence"]["series"][e];
+      EXPECT_EQ(series.contains("band"), problem["entrants"][e]["runs"].get<int>() > 1);
+      EXPECT_TRUE(charts["ecdf"]["series"][e]["steps"].get<bool>());
+    }
   }
+  // report.html: the page holds report.json as it is.
+  std::ifstream html_file(out / "report.html");
+  const std::string html(std::istreambuf_iterator<char>(html_file), {});
+  const std::string open = R"(<script type="application/json" id="spec2fab-data">)";
+  const size_t start = html.find(open);
+  ASSERT_NE(start, std::string::npos);
+  const size_t end = html.find("</script>", start);
+  EXPECT_EQ(nlohmann::json::parse(html.substr(start + open.size(), end - start - open.size()))["report"], report);
   EXPECT_GE(problems_run, 4);
   EXPECT_TRUE(fs::exists(out / "plots" / "fight.png"));
   std::ifstream md(out / "report.md");

@@ -82,12 +82,25 @@ inline std::string read(const fs::path& file) {
   return s.str();
 }
 
-/// Every file under `folder` but timing.json (wall times), by relative path.
+/// report.html without its copy of timing.json (the one block that may
+/// differ between reruns).
+inline std::string without_timing_block(std::string page) {
+  const std::string open = R"(<script type="application/json" id="spec2fab-timing">)";
+  const size_t start = page.find(open);
+  if (start == std::string::npos) return page;
+  const size_t end = page.find("</script>", start);
+  return page.erase(start + open.size(), end - start - open.size());
+}
+
+/// Every file under `folder` but timing.json (wall times), by relative path;
+/// report.html without its timing block.
 inline std::map<std::string, std::string> files_of(const fs::path& folder) {
   std::map<std::string, std::string> files;
   for (const auto& entry : fs::recursive_directory_iterator(folder)) {
     if (!entry.is_regular_file() || entry.path().filename() == "timing.json") continue;
-    files[fs::relative(entry.path(), folder).string()] = read(entry.path());
+    std::string bytes = read(entry.path());
+    if (entry.path().filename() == "report.html") bytes = without_timing_block(std::move(bytes));
+    files[fs::relative(entry.path(), folder).string()] = std::move(bytes);
   }
   return files;
 }

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
@@ -15,6 +16,7 @@
 
 #include "fem/corotated_tet.h"
 #include "fem/vtu_writer.h"
+#include "report/fem_view.h"
 
 namespace spec2fab::fem {
 namespace {
@@ -197,6 +199,70 @@ TEST(VtuWriter, ThrowsNamingTheFileWhenItCannotBeWritten) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find(file.string()), std::string::npos) << e.what();
   }
+}
+
+
+// report.html's FEM view reads the .vtu back: the cube's 12 boundary
+// triangles, each facing outwards, with each surface node's displacement
+// and the stress of its tets.
+std::string decode_base64(const std::string& text) {
+  const std::string alphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  int bits = 0, value = 0;
+  for (char c : text) {
+    if (c == '=') break;
+    value = (value << 6) | static_cast<int>(alphabet.find(c));
+    bits += 6;
+    if (bits >= 8) {
+      bits -= 8;
+      out += static_cast<char>((value >> bits) & 0xff);
+    }
+  }
+  return out;
+}
+
+template <class T>
+std::vector<T> decode_array(const nlohmann::json& value) {
+  const std::string bytes = decode_base64(value.get<std::string>());
+  std::vector<T> out(bytes.size() / sizeof(T));
+  std::memcpy(out.data(), bytes.data(), bytes.size());
+  return out;
+}
+
+TEST(FemVtu, ReportViewReadsTheBoundaryOutwardsWithItsFields) {
+  const TetMesh mesh = cube_mesh(2.0);
+  const auto map = [](const Vec3& x) { return Vec3(x.x() + 0.01 * x.z(), x.y(), 1.02 * x.z()); };
+  const std::vector<double> u = displacement_of(mesh, map);
+  const std::vector<double> stress = stress_of(mesh, u, false);
+  const fs::path dir = fs::temp_directory_path() / ("fem_view_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  write_vtu(dir / "cube.vtu", mesh, std::vector<int>(mesh.tets.size(), 1), {"void", "stiff"}, u, stress);
+  std::string why_not;
+  const nlohmann::json view = html_report::fem_view(dir / "cube.vtu", why_not);
+  fs::remove_all(dir);
+  ASSERT_FALSE(view.is_null()) << why_not;
+  const auto positions = decode_array<float>(view["positions"]);
+  const auto indices = decode_array<std::uint32_t>(view["indices"]);
+  const auto displacement = decode_array<float>(view["displacement"]);
+  const auto von_mises = decode_array<float>(view["von_mises_mpa"]);
+  ASSERT_EQ(indices.size(), 36u);  // 6 faces x 2 triangles
+  ASSERT_EQ(positions.size(), 24u);  // all 8 corners lie on the boundary
+  ASSERT_EQ(displacement.size(), positions.size());
+  ASSERT_EQ(von_mises.size(), 8u);
+  const auto at = [&](std::uint32_t v) { return Vec3(positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]); };
+  for (size_t t = 0; t < indices.size(); t += 3) {
+    const Vec3 a = at(indices[t]), b = at(indices[t + 1]), c = at(indices[t + 2]);
+    const Vec3 normal = (b - a).cross(c - a);
+    EXPECT_GT(normal.dot((a + b + c) / 3 - Vec3(1, 1, 1)), 0) << "triangle " << t / 3 << " faces inwards";
+  }
+  for (size_t v = 0; v < 8; ++v) {
+    const Vec3 expected = map(at(static_cast<std::uint32_t>(v)).cast<double>()) - at(static_cast<std::uint32_t>(v));
+    for (int d = 0; d < 3; ++d) EXPECT_NEAR(displacement[3 * v + d], expected[d], 1e-6);
+    EXPECT_NEAR(von_mises[v], stress[0], 1e-4 * stress[0]);  // a linear map: every tet has the same stress
+  }
+  EXPECT_NEAR(view["max_von_mises_mpa"].get<double>(), stress[0], 1e-4 * stress[0]);
+  EXPECT_NEAR(view["p99_von_mises_mpa"].get<double>(), stress[0], 1e-9 * stress[0]);
+  EXPECT_EQ(view["tets"], 6);
 }
 
 }  // namespace

@@ -59,7 +59,7 @@ function fightSection(fights) {
 export function benchPage(d, timing) {
   const report = d.report;
   const header = el('header', {}, el('h1', { text: 'Optimizer × problem matrix' }),
-    el('p', { text: `budget ${report.budget} evaluations · ${report.seeds} seeds for stochastic entrants · ${report.problems.length} problems` }));
+    el('p', { text: `budget ${report.budget} · ${report.seeds} seeds for stochastic entrants · ${report.problems.length} problems` }));
   const sections = [glance(report), ...report.problems.map(problemSection), fightSection(report.fights)];
   if (timing?.wall_seconds !== undefined) sections.push(section('timing', 'Timings', table(['', ''], [['whole bench (wall)', seconds(timing.wall_seconds)], ['threads', timing.threads]], [1])));
   const present = sections.filter(Boolean);

@@ -1,10 +1,17 @@
 // Line charts with hover read-outs (Chart.js): convergence with quartile
 // bands, ECDF staircases, a run's error per evaluation.
-import { Chart, LineController, LineElement, PointElement, LinearScale, LogarithmicScale, Tooltip, Legend, Filler }
+import { Chart, LineController, LineElement, PointElement, LinearScale, LogarithmicScale, Tooltip, Legend, Filler, Title }
   from 'chart.js';
 import { el, fmt } from './util.js';
 
-Chart.register(LineController, LineElement, PointElement, LinearScale, LogarithmicScale, Tooltip, Legend, Filler);
+Chart.register(LineController, LineElement, PointElement, LinearScale, LogarithmicScale, Tooltip, Legend, Filler, Title);
+
+/// Log axes label their decades only (1e-4, not 1.000e-4 and its neighbours).
+function logTick(value) {
+  const exponent = Math.log10(value);
+  if (Math.abs(exponent - Math.round(exponent)) > 1e-9) return '';
+  return Math.abs(exponent) < 4 ? String(Number(value.toPrecision(1))) : `1e${Math.round(exponent)}`;
+}
 
 const PALETTE = ['#1f77b4', '#d62728', '#2ca02c', '#ff7f0e', '#9467bd', '#8c564b', '#e377c2', '#17becf', '#7f7f7f', '#bcbd22'];
 
@@ -26,7 +33,7 @@ export function lineChart(chart) {
       pointRadius: 0, pointHitRadius: 6, stepped: series.steps ? 'after' : false, fill: false });
   });
   const scale = (log, title, min, max) => ({ type: log ? 'logarithmic' : 'linear', title: { display: true, text: title },
-    min: min ?? undefined, max: max ?? undefined, ticks: { callback: (v) => fmt(v) } });
+    min: min ?? undefined, max: max ?? undefined, ticks: { callback: (v) => (log ? logTick(v) : fmt(v)) } });
   const instance = new Chart(canvas, {
     type: 'line',
     data: { datasets },

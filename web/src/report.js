@@ -87,7 +87,8 @@ function figuresSection(result) {
 function picturesSection(images) {
   if (!images.length) return null;
   const figures = images.map((image) => el('figure', {},
-    el('img', { src: image.data, alt: image.name, width: String(image.width), height: String(image.height) }),
+    image.data ? el('img', { src: image.data, alt: image.name, width: String(image.width), height: String(image.height) })
+      : el('a', { href: image.name, text: `open ${image.name}` }),
     el('figcaption', {}, el('b', { text: image.name }), ` — ${image.width} × ${image.height} px. ${image.caption || ''}`)));
   return section('pictures', 'Goal and achieved, at full resolution',
     el('p', { class: 'muted', text: 'Each picture at its own size, one screen pixel per pixel; scroll sideways for wide ones.' }),
@@ -148,7 +149,7 @@ function inputsSection(result, experiment) {
 }
 
 function filesSection(files) {
-  const rows = files.map((f) => [el('a', { href: f.path, text: f.path }), bytes(f.bytes)]);
+  const rows = files.map((f) => [el('a', { href: f.path, text: f.path }), f.bytes === undefined ? '' : bytes(f.bytes) + (f.count ? ` in ${f.count} files` : '')]);
   return section('files', 'Files of the run',
     el('p', { class: 'muted', text: 'Beside this report in the run folder; the 3D view shows decimated copies of the meshes.' }),
     table(['file', 'size'], rows, [1]));
@@ -158,11 +159,11 @@ function runPage(d, timing) {
   const result = d.result;
   const images = d.images || [];
   const header = el('header', {}, el('h1', { text: `${result.experiment} — ${result.translator}` }),
-    el('p', { text: d.purpose || '' }),
     el('p', { text: `spec2fab ${result.spec2fab_version} · seed ${result.seed} · printer ${result.inputs?.printer?.name || '—'}` }));
   const sections = [];
   const lead = section('summary', 'What the run was for, and what it reached',
     el('p', { class: 'lead', text: d.purpose || '' }), el('div', { class: 'cards' }, headlineCards(result)));
+  if (d.notes?.length) lead.append(el('ul', { class: 'muted' }, d.notes.map((n) => el('li', { text: n }))));
   if (result.warnings?.length) lead.append(el('h3', { class: 'warn', text: 'warnings' }), el('ul', {}, result.warnings.map((w) => el('li', { text: w }))));
   sections.push(lead);
   sections.push(picturesSection(images));

@@ -47,12 +47,17 @@ class Viewer {
     this.container.prepend(renderer.domElement);
     const scene = new THREE.Scene();
     this.scene = scene;
-    scene.add(new THREE.HemisphereLight(0xffffff, 0x667080, 1.6));
-    const sun = new THREE.DirectionalLight(0xffffff, 1.8);
+    scene.add(new THREE.HemisphereLight(0xffffff, 0x667080, 1.2));
+    const sun = new THREE.DirectionalLight(0xffffff, 1.2);
     sun.position.set(1, 1.5, 2);
     scene.add(sun);
     const camera = new THREE.PerspectiveCamera(35, 1, 0.01, 1e6);
     camera.up.set(0, 0, 1);
+    // A light that turns with the view, so no face the reader looks at is in the dark.
+    const headlight = new THREE.DirectionalLight(0xffffff, 0.9);
+    headlight.position.set(0.3, 0.5, 1);
+    camera.add(headlight);
+    scene.add(camera);
     this.camera = camera;
     this.controls = new OrbitControls(camera, renderer.domElement);
     this.controls.addEventListener('change', () => this.render());
@@ -167,19 +172,34 @@ class Viewer {
     update();
   }
 
+  /// The receiver plane `distance_mm` below the slab's bottom, centred under
+  /// it, with the traced image (cropped out of its picture) on it.
   addReceiver(receiver) {
     const image = this.images[receiver.image];
-    if (!image) return;
-    const [a, b, c, d] = receiver.corners;
-    const geometry = new THREE.BufferGeometry();
-    geometry.setAttribute('position', new THREE.BufferAttribute(new Float32Array([...a, ...b, ...c, ...d]), 3));
-    geometry.setAttribute('uv', new THREE.BufferAttribute(new Float32Array([0, 0, 1, 0, 1, 1, 0, 1]), 2));
-    geometry.setIndex([0, 1, 2, 0, 2, 3]);
-    const texture = new THREE.TextureLoader().load(image.data, () => this.render());
+    if (!image || !image.data) return;
+    const slab = new THREE.Box3();
+    for (const { object } of this.objects) slab.expandByObject(object);
+    const centre = slab.getCenter(new THREE.Vector3());
+    const z = slab.min.z - receiver.distance_mm;
+    const [w, h] = receiver.size_mm;
+    const geometry = new THREE.PlaneGeometry(w, h);
+    geometry.translate(centre.x, centre.y, z);
+    const canvas = document.createElement('canvas');
+    const [cx, cy, cw, ch] = receiver.crop;
+    canvas.width = cw;
+    canvas.height = ch;
+    const texture = new THREE.CanvasTexture(canvas);
     texture.colorSpace = THREE.SRGBColorSpace;
+    const picture = new Image();
+    picture.onload = () => {
+      canvas.getContext('2d').drawImage(picture, cx, cy, cw, ch, 0, 0, cw, ch);
+      texture.needsUpdate = true;
+      this.render();
+    };
+    picture.src = image.data;
     const object = new THREE.Mesh(geometry, new THREE.MeshBasicMaterial({ map: texture, side: THREE.DoubleSide }));
     this.scene.add(object);
-    this.toggle(`receiver: ${image.caption || image.name}`, object, null);
+    this.toggle(`receiver ${receiver.distance_mm} mm below: ${receiver.caption}`, object, null);
   }
 
   addSectionControl() {

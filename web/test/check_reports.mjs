@@ -89,7 +89,10 @@ for (const report of reports) {
     problems.push('no 3D view');
   }
   const charts = await page.$$eval('.chart canvas', (list) => list.length);
-  if (shots) await page.screenshot({ path: path.join(shots, `${name}_page.png`), fullPage: false });
+  if (shots) {
+    await page.evaluate(() => window.scrollTo(0, 0));
+    await page.screenshot({ path: path.join(shots, `${name}_page.png`), fullPage: false });
+  }
   await page.close();
   results.push({ report: file, kind, bytes, ready_ms: readyMs, images: images.length, charts, canvas, problems });
   const status = problems.length ? 'FAIL' : 'ok';
