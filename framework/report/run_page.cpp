@@ -3,6 +3,8 @@
 // caustic slab's receiver.
 #include <algorithm>
 #include <array>
+#include <map>
+#include <fstream>
 #include <set>
 #include <string>
 #include <vector>
@@ -41,6 +43,7 @@ std::string caption(const std::string& path) {
       {"traced", "the exported surface traced independently"},
       {"profile", "scattering profiles: goal and achieved"},
       {"deformation", "the deformed shape"},
+      {"look", "the predicted colours in the shape's surface coordinates (the 3D view's texture)"},
   };
   const std::string stem = fs::path(path).stem().string();
   for (const auto& [key, text] : kCaptions)
@@ -188,6 +191,88 @@ nlohmann::json fem_entry(const fs::path& folder, std::vector<std::string>& notes
   return fem;
 }
 
+/// A texture's predicted look on the shape (preview/look.obj and look.png,
+/// the albedo translator's): corners welded where position and uv agree.
+nlohmann::json look_entry(const fs::path& folder, const nlohmann::json& images, std::vector<std::string>& notes) {
+  constexpr size_t kLargest = 200000;  // triangles; beyond, the look is left to preview/render.png
+  if (!fs::is_regular_file(folder / "preview" / "look.obj")) return nullptr;
+  size_t texture = images.size();
+  for (size_t i = 0; i < images.size(); ++i)
+    if (images[i]["name"] == "preview/look.png" && images[i].contains("data")) texture = i;
+  if (texture == images.size()) return nullptr;
+  const Mesh mesh = load_mesh(folder / "preview" / "look.obj", 1.0, default_limits(), MeshReaderProcess::this_one);
+  if (!mesh.has_uv() || mesh.triangles.size() > kLargest) {
+    notes.push_back(fmt::format("the predicted look is not drawn on the shape: {}", mesh.has_uv() ? "over 200,000 triangles" : "no surface coordinates"));
+    return nullptr;
+  }
+  std::map<std::pair<int, std::pair<float, float>>, std::uint32_t> welded;
+  std::vector<float> positions, uv;
+  std::vector<std::uint32_t> indices;
+  for (size_t t = 0; t < mesh.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      const int v = mesh.triangles[t][k];
+      const Vec2& c = mesh.corner_uv[3 * t + static_cast<size_t>(k)];
+      const auto key = std::make_pair(v, std::make_pair(static_cast<float>(c.x()), static_cast<float>(c.y())));
+      auto [at, fresh] = welded.emplace(key, static_cast<std::uint32_t>(positions.size() / 3));
+      if (fresh) {
+        const Vec3& p = mesh.vertices[static_cast<size_t>(v)];
+        positions.insert(positions.end(), {static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z())});
+        uv.insert(uv.end(), {key.second.first, key.second.second});
+      }
+      indices.push_back(at->second);
+    }
+  return {{"name", "predicted look"}, {"positions", packed(positions)}, {"indices", packed(indices)}, {"uv", packed(uv)},
+          {"texture", texture}, {"triangles", mesh.triangles.size()}, {"source_triangles", mesh.triangles.size()},
+          {"file", "preview/look.obj"}};
+}
+
+/// convergence.csv for the page: how many tuner runs it holds and the
+/// traces of the first few (best error so far against evaluations, at most
+/// kPoints each). A texture's thousands of column runs make a file of
+/// hundreds of MB, which the page only counts.
+nlohmann::json convergence(const fs::path& csv) {
+  constexpr size_t kTraces = 10, kPoints = 400;
+  std::ifstream in(csv);
+  std::string line;
+  std::getline(in, line);  // the header
+  std::vector<std::pair<std::string, std::vector<std::array<double, 2>>>> traces;
+  size_t runs = 0;
+  std::string last_key;
+  while (std::getline(in, line)) {
+    // phase,sweep,tuner,iteration,evaluations,error,best_error
+    std::array<std::string_view, 7> field;
+    size_t at = 0;
+    for (size_t k = 0; k < 7; ++k) {
+      const size_t comma = k < 6 ? line.find(',', at) : line.size();
+      if (comma == std::string::npos) break;
+      field[k] = std::string_view(line).substr(at, comma - at);
+      at = comma + 1;
+    }
+    const std::string key = std::string(field[0]) + " · sweep " + std::string(field[1]) + " · " + std::string(field[2]);
+    if (key != last_key) {
+      ++runs;
+      last_key = key;
+      if (traces.size() < kTraces) traces.push_back({key, {}});
+    }
+    if (runs <= kTraces && traces.back().first == key) {
+      try {
+        traces.back().second.push_back({std::max(1.0, std::stod(std::string(field[4]))), std::stod(std::string(field[6]))});
+      } catch (const std::exception&) {
+      }
+    }
+  }
+  nlohmann::json shown = nlohmann::json::array();
+  for (auto& [key, points] : traces) {
+    if (points.size() < 2) continue;
+    std::vector<std::array<double, 2>> kept;
+    const size_t step = (points.size() + kPoints - 1) / kPoints;
+    for (size_t i = 0; i < points.size(); i += step) kept.push_back(points[i]);
+    if (kept.back() != points.back()) kept.push_back(points.back());
+    shown.push_back({{"label", key}, {"points", kept}});
+  }
+  return {{"runs", runs}, {"traces", shown}};
+}
+
 /// A caustic run's receiver: where the slab casts its image (a section with
 /// distance_mm, receiver_mm and image_size, as the caustic translators
 /// write) and the traced picture of the exported surface, cropped to the
@@ -221,7 +306,7 @@ void write_run_report_html(const fs::path& folder, const std::string& purpose, c
   if (!result.is_object() || !result.contains("experiment") || !result.contains("translator"))
     throw InputError((folder / "result.json").string() + ": not a run's result.json (no experiment or translator)");
   nlohmann::json data = {{"kind", "run"}, {"purpose", purpose}, {"result", result}};
-  if (fs::is_regular_file(folder / "convergence.csv")) data["convergence_csv"] = read_bytes(folder / "convergence.csv");
+  if (fs::is_regular_file(folder / "convergence.csv")) data["convergence"] = convergence(folder / "convergence.csv");
   if (fs::is_regular_file(folder / "experiment.json")) data["experiment"] = read_json(folder / "experiment.json");
   data["images"] = images(folder, result, budget.inline_image_bytes);
   std::vector<std::string> notes;
@@ -229,6 +314,10 @@ void write_run_report_html(const fs::path& folder, const std::string& purpose, c
   if (nlohmann::json fem = fem_entry(folder, notes); !fem.is_null()) {
     viewer["fem"] = std::move(fem);
     for (auto& mesh : viewer["meshes"]) mesh["visible"] = false;  // the print's regions stay one click away
+  }
+  if (nlohmann::json look = look_entry(folder, data["images"], notes); !look.is_null()) {
+    for (auto& mesh : viewer["meshes"]) mesh["visible"] = false;  // the look first, the material regions a click away
+    viewer["meshes"].insert(viewer["meshes"].begin(), std::move(look));
   }
   if (nlohmann::json receiver = receiver_entry(result, data["images"]); !receiver.is_null())
     viewer["receiver"] = std::move(receiver);

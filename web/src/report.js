@@ -95,24 +95,17 @@ function picturesSection(images) {
     el('div', { class: 'pair' }, figures));
 }
 
-/// convergence.csv: one line per (phase, sweep, tuner) run; a few as lines, the rest summed up.
-function convergenceSection(csv) {
-  if (!csv) return null;
-  const lines = csv.trim().split('\n').slice(1).map((l) => l.split(','));
-  const runs = new Map();
-  for (const [phase, sweep, tuner, , evaluations, , best] of lines) {
-    const key = `${phase} · sweep ${sweep} · ${tuner}`;
-    if (!runs.has(key)) runs.set(key, []);
-    runs.get(key).push([Math.max(1, Number(evaluations)), Number(best)]);
-  }
-  const keys = [...runs.keys()];
-  const shown = keys.filter((k) => runs.get(k).length > 1).slice(0, 10);
-  const children = [el('p', { class: 'muted', text: `${keys.length} tuner run(s) in convergence.csv; the best error so far against evaluations${shown.length < keys.length ? `, ${shown.length} runs with a trace drawn` : ''}.` })];
-  if (shown.length) {
-    const values = shown.flatMap((k) => runs.get(k).map((p) => p[1])).filter((v) => v > 0);
+/// convergence.csv, as the writer summed it up: the tuner runs it holds and the first few traces.
+function convergenceSection(convergence) {
+  if (!convergence) return null;
+  const traces = convergence.traces;
+  const children = [el('p', { class: 'muted', text: `${fmt(convergence.runs)} tuner run(s) in convergence.csv` +
+    (traces.length ? `; the best error so far against evaluations of ${traces.length === convergence.runs ? 'each' : `the first ${traces.length} with a trace`}.` : '; none kept a trace (each made one evaluation).') })];
+  if (traces.length) {
+    const values = traces.flatMap((t) => t.points.map((p) => p[1])).filter((v) => v > 0);
     const logY = values.length > 0 && Math.max(...values) / Math.min(...values) > 100;
     children.push(lineChart({ title: 'best error so far', x_label: 'evaluations', y_label: 'error', log_x: true, log_y: logY,
-      series: shown.map((k) => ({ label: k, points: runs.get(k).filter((p) => !logY || p[1] > 0) })) }).element);
+      series: traces.map((t) => ({ label: t.label, points: t.points.filter((p) => !logY || p[1] > 0) })) }).element);
   }
   return section('convergence', 'Convergence', ...children);
 }
@@ -172,7 +165,7 @@ function runPage(d, timing) {
     viewer = viewerSection(d.viewer, images);
     sections.push(section('view', '3D view of the print', viewer.element));
   }
-  sections.push(figuresSection(result), convergenceSection(d.convergence_csv), censusSection(result), timingSection(timing),
+  sections.push(figuresSection(result), convergenceSection(d.convergence), censusSection(result), timingSection(timing),
     inputsSection(result, d.experiment), filesSection(d.files || []));
   const present = sections.filter(Boolean);
   const nav = el('nav', {}, present.map((s) => el('a', { href: '#' + s.id, text: s.querySelector('h2').textContent.split(',')[0] })));
