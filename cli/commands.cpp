@@ -56,7 +56,7 @@ int run_command(const RunArguments& arguments) {
   return 0;
 }
 
-int report_command(const fs::path& folder) {
+fs::path write_report(const fs::path& folder) {
   if (report_folder_kind(folder) == ReportFolderKind::bench) {
     write_bench_report_html(folder);
   } else {
@@ -69,8 +69,13 @@ int report_command(const fs::path& folder) {
       purpose = TranslatorRegistry::instance().doc(result["translator"].get<std::string>()).summary;
     write_run_report_html(folder, purpose);
   }
-  std::cout << "wrote " << (folder / "report.html").string() << " ("
-            << fmt::format("{:.1f}", static_cast<double>(fs::file_size(folder / "report.html")) / (1 << 20)) << " MB)\n";
+  return folder / "report.html";
+}
+
+int report_command(const fs::path& folder) {
+  const fs::path page = write_report(folder);
+  std::cout << "wrote " << page.string() << " ("
+            << fmt::format("{:.1f}", static_cast<double>(fs::file_size(page)) / (1 << 20)) << " MB)\n";
   return 0;
 }
 

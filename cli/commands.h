@@ -96,7 +96,9 @@ int bench_command(BenchArguments arguments);
 int export_command(const ExportArguments& arguments);
 /// Runs one simulator standalone on a subtree and writes its observation.
 int simulate_command(const SimulateArguments& arguments);
-/// `spec2fab report FOLDER`: writes report.html again for a run or bench folder.
+/// Writes report.html again for a run or bench folder; returns its path.
+std::filesystem::path write_report(const std::filesystem::path& folder);
+/// `spec2fab report FOLDER`: write_report, and a line saying so.
 int report_command(const std::filesystem::path& folder);
 int validate_command(const std::filesystem::path& experiment, const Limits& limits);
 int list_command(const std::string& kind, bool verbose, const std::filesystem::path& datasets);

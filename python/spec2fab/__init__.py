@@ -34,7 +34,7 @@ from ._spec2fab import InputError, OptimizationStopped, Problem, Stopped, WriteE
 
 # `list` is left out: `from spec2fab import *` would hide the builtin.
 __all__ = [
-    "run", "validate", "simulate", "bench", "tuner_problem", "tuner_names",
+    "run", "validate", "simulate", "bench", "report", "tuner_problem", "tuner_names",
     "register", "register_bench_problem", "set_log_level",
     "Run", "Metric", "Goal", "Simulator", "Optimizer", "Problem",
     "InputError", "WriteError", "Stopped", "OptimizationStopped", "datasets",
@@ -73,6 +73,19 @@ class Run:
         is byte-identical whatever the machine)."""
         return json.loads((self.folder / "timing.json").read_text())
 
+    @property
+    def report(self) -> pathlib.Path:
+        """report.html: the page to open first (goal beside achieved, figures,
+        a 3D view of the print); self-contained, it works offline. Written by
+        the run unless ``run(..., report=False)``; ``spec2fab.report(folder)``
+        writes it again."""
+        return self.file("report.html")
+
+    def open_report(self) -> None:
+        """Opens report.html in the system's web browser."""
+        import webbrowser
+        webbrowser.open(self.report.resolve().as_uri())
+
     def file(self, name: str) -> pathlib.Path:
         """A file of the run folder, e.g. ``run.file("preview/render.png")``."""
         path = self.folder / name
@@ -92,7 +105,7 @@ def _origin(experiment: Experiment, origin: Optional[Union[str, os.PathLike]]) -
 
 def run(experiment: Experiment, out: Optional[Union[str, os.PathLike]] = None, threads: Optional[int] = None,
         seed: Optional[int] = None, *, origin: Optional[Union[str, os.PathLike]] = None,
-        resume: bool = False) -> Run:
+        resume: bool = False, report: bool = True) -> Run:
     """Runs an experiment and writes its run folder, as ``spec2fab run`` does.
 
     experiment: a path to an experiment file, or a dict in the same format
@@ -106,14 +119,23 @@ def run(experiment: Experiment, out: Optional[Union[str, os.PathLike]] = None, t
         report records origin as the experiment. With the experiment file's
         own path, the run folder is byte-identical to the command's.
     resume: go on from the checkpoint of a killed run into the same folder.
+    report: write report.html (``Run.report``); False leaves it out, as
+        ``spec2fab run --no-report`` does.
 
     Returns a Run (``.folder``, ``.result``, ``.tree``). Raises InputError for
     bad input (the command's one line), WriteError when the system refuses a
     write, Stopped on Ctrl-C.
     """
     folder = _spec2fab._run(_experiment(experiment), None if out is None else os.fspath(out), threads, seed,
-                            _origin(experiment, origin), resume)
+                            _origin(experiment, origin), resume, report)
     return Run(pathlib.Path(folder))
+
+
+def report(folder: Union[str, os.PathLike]) -> pathlib.Path:
+    """Writes report.html again for a run folder or a bench folder (as
+    ``spec2fab report FOLDER``) and returns its path. Raises InputError for a
+    folder that is neither."""
+    return pathlib.Path(_spec2fab._report(os.fspath(folder)))
 
 
 def _experiment(experiment: Experiment):
@@ -182,7 +204,7 @@ def bench(problems: Optional[Sequence[str]] = None, optimizers: Optional[Sequenc
           budget: str = "100d", out: Union[str, os.PathLike] = "out/bench", *, threads: Optional[int] = None,
           quick: bool = False, entrants: Optional[Union[str, os.PathLike]] = None) -> dict:
     """Runs the optimizer x problem matrix, as ``spec2fab bench``, writes its
-    report into ``out`` (report.md, report.json, ioh/, plots/) and returns
+    report into ``out`` (report.html, report.md, report.json, ioh/, plots/) and returns
     report.json as a dict.
 
     problems: registered bench problems (default: all), including those

@@ -16,7 +16,7 @@ namespace spec2fab::python {
 namespace {
 
 std::string run(py::handle experiment, std::optional<std::string> out, std::optional<int> threads,
-                std::optional<std::uint64_t> seed, std::optional<std::string> origin, bool resume) {
+                std::optional<std::uint64_t> seed, std::optional<std::string> origin, bool resume, bool report) {
   ExperimentSource source = experiment_source(experiment, origin);
   RunOptions options;
   if (out) options.out = *out;
@@ -26,6 +26,7 @@ std::string run(py::handle experiment, std::optional<std::string> out, std::opti
   }
   options.seed = seed;
   options.resume = resume;
+  options.report_html = report;
   // A Ctrl-C after the folder was committed leaves a complete run: it is returned.
   return long_call([&] { return run_experiment(std::move(source), options).string(); }, true);
 }
@@ -97,13 +98,15 @@ std::string bench(std::vector<std::string> problems, std::vector<std::string> op
 
 void bind_commands(py::module_& m) {
   m.def("_run", &run, py::arg("experiment"), py::arg("out"), py::arg("threads"), py::arg("seed"), py::arg("origin"),
-        py::arg("resume"));
+        py::arg("resume"), py::arg("report"));
   m.def("_validate", &validate, py::arg("experiment"), py::arg("origin"));
   m.def("_simulate", &simulate, py::arg("simulator"), py::arg("config"), py::arg("origin"));
   m.def("_registries", &registries);
   m.def("_bench", &bench, py::arg("problems"), py::arg("optimizers"), py::arg("seeds"), py::arg("budget"),
         py::arg("out"), py::arg("threads"), py::arg("quick"), py::arg("entrants"));
   m.def("_datasets", [] { return datasets_folder().string(); });
+  m.def("_report", [](const std::string& folder) { return long_call([&] { return cli::write_report(folder).string(); }); },
+        py::arg("folder"));
 }
 
 }  // namespace spec2fab::python

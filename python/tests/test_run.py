@@ -32,6 +32,19 @@ def test_run_is_deterministic_for_1_and_2_threads(tmp_path):
     assert_same_folders(one.folder, two.folder)
 
 
+def test_report_is_written_and_written_again(tmp_path):
+    run = spec2fab.run(EXPERIMENT, out=tmp_path / "run", threads=2)
+    page = run.report.read_bytes()
+    assert page.startswith(b"<!doctype html>")
+    run.report.unlink()
+    assert spec2fab.report(run.folder) == run.folder / "report.html"
+    assert run.report.read_bytes() == page
+    bare = spec2fab.run(EXPERIMENT, out=tmp_path / "bare", threads=2, report=False)
+    assert not (bare.folder / "report.html").exists()
+    with pytest.raises(spec2fab.InputError, match="neither a run folder"):
+        spec2fab.report(tmp_path)
+
+
 def test_a_dict_without_origin_resolves_paths_from_the_current_folder(tmp_path):
     experiment = experiment_dict()
     for key in ("materials", "printer"):
@@ -89,7 +102,7 @@ def test_long_work_releases_the_gil(tmp_path):
         time.sleep(0.5)
         free_rate = (counted[0] - before) / (time.perf_counter() - start)  # main thread asleep: no contention
         start, before = time.perf_counter(), counted[0]
-        _spec2fab._run(EXPERIMENT, str(tmp_path / "run"), 1, None, None, False)
+        _spec2fab._run(EXPERIMENT, str(tmp_path / "run"), 1, None, None, False, True)
         during_rate = (counted[0] - before) / (time.perf_counter() - start)
     finally:
         stop.set()
