@@ -64,7 +64,7 @@ fs::path write_report(const fs::path& folder) {
     std::ifstream file(folder / "result.json");
     const nlohmann::json result = nlohmann::json::parse(file, nullptr, false);
     std::string purpose;
-    if (result.is_object() && result.value("translator", "") != "" &&
+    if (result.is_object() && result.contains("translator") && result["translator"].is_string() &&
         TranslatorRegistry::instance().contains(result["translator"].get<std::string>()))
       purpose = TranslatorRegistry::instance().doc(result["translator"].get<std::string>()).summary;
     write_run_report_html(folder, purpose);

@@ -11,7 +11,9 @@ namespace fs = std::filesystem;
 
 namespace spec2fab {
 
-void write_bench_report_html(const fs::path& folder) {
+namespace {
+
+void write_bench_page(const fs::path& folder) {
   using namespace html_report;
   const nlohmann::json report = read_json(folder / "report.json");
   if (!report.is_object() || !report.contains("problems"))
@@ -24,6 +26,16 @@ void write_bench_report_html(const fs::path& folder) {
       if (all.contains(key)) timing[key] = all[key];
   }
   write_file(folder / "report.html", html_page("spec2fab bench report", data, timing));
+}
+
+}  // namespace
+
+void write_bench_report_html(const fs::path& folder) {
+  try {
+    write_bench_page(folder);
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError((folder / "report.json").string() + ": a field of unexpected type (" + e.what() + ")");
+  }
 }
 
 }  // namespace spec2fab

@@ -1,5 +1,6 @@
 #include "report/page.h"
 
+#include <algorithm>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -121,13 +122,16 @@ nlohmann::json file_list(const fs::path& folder) {
   // Folders of more than this many files are one row (the slice stack).
   constexpr size_t kManyFiles = 40;
   std::map<std::string, std::vector<std::pair<std::string, std::uintmax_t>>> by_folder;
-  for (const auto& entry : fs::recursive_directory_iterator(folder)) {
-    if (!entry.is_regular_file()) continue;
-    const fs::path relative = fs::relative(entry.path(), folder);
+  std::error_code error;
+  for (auto entry = fs::recursive_directory_iterator(folder, error); !error && entry != fs::recursive_directory_iterator();
+       entry.increment(error)) {
+    if (!entry->is_regular_file()) continue;
+    const fs::path relative = fs::relative(entry->path(), folder);
     // The page itself, and what a run keeps only until it commits (checkpoint/), are not the run's files.
     if (relative == "report.html" || *relative.begin() == "checkpoint") continue;
-    by_folder[relative.parent_path().generic_string()].emplace_back(relative.generic_string(), entry.file_size());
+    by_folder[relative.parent_path().generic_string()].emplace_back(relative.generic_string(), entry->file_size());
   }
+  if (error) throw InputError(folder.string() + ": cannot list its files (" + error.message() + ")");
   nlohmann::json files = nlohmann::json::array();
   for (auto& [sub, entries] : by_folder) {
     std::sort(entries.begin(), entries.end());
@@ -138,8 +142,8 @@ nlohmann::json file_list(const fs::path& folder) {
       continue;
     }
     for (const auto& [path, bytes] : entries) {
-      // timing.json's size changes with its wall times: left out, so the page stays byte-identical.
-      if (path == "timing.json") {
+      // Wall times change these files' sizes: left out, so the page stays byte-identical.
+      if (path == "timing.json" || path.rfind("timing/", 0) == 0) {
         files.push_back({{"path", path}});
       } else {
         files.push_back({{"path", path}, {"bytes", bytes}});

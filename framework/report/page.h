@@ -27,7 +27,7 @@ std::pair<int, int> png_size(std::string_view bytes);
 
 /// Every regular file under `folder` (relative path, bytes), a folder of
 /// many (print/slices) summed up as one row; report.html and checkpoint/
-/// left out, timing.json without its size (it varies).
+/// left out, timing.json and timing/ without their sizes (they vary).
 nlohmann::json file_list(const std::filesystem::path& folder);
 
 }  // namespace spec2fab::html_report

@@ -3,6 +3,7 @@
 // caustic slab's receiver.
 #include <algorithm>
 #include <array>
+#include <optional>
 #include <map>
 #include <fstream>
 #include <set>
@@ -54,7 +55,8 @@ std::string caption(const std::string& path) {
 nlohmann::json images(const fs::path& folder, const nlohmann::json& result, size_t budget) {
   std::vector<std::string> paths;
   if (result.contains("files") && result["files"].contains("previews"))
-    for (const auto& p : result["files"]["previews"]) paths.push_back(p.get<std::string>());
+    for (const auto& p : result["files"]["previews"])
+      if (p.is_string()) paths.push_back(p.get<std::string>());
   std::set<std::string> listed(paths.begin(), paths.end());
   std::vector<std::string> others;
   for (const fs::path& sub : {fs::path("preview"), fs::path("")}) {
@@ -194,13 +196,19 @@ nlohmann::json fem_entry(const fs::path& folder, std::vector<std::string>& notes
 /// A texture's predicted look on the shape (preview/look.obj and look.png,
 /// the albedo translator's): corners welded where position and uv agree.
 nlohmann::json look_entry(const fs::path& folder, const nlohmann::json& images, std::vector<std::string>& notes) {
-  constexpr size_t kLargest = 200000;  // triangles; beyond, the look is left to preview/render.png
+  constexpr size_t kLargest = 200000;  // triangles (the albedo translator's limit too); beyond, preview/render.png
   if (!fs::is_regular_file(folder / "preview" / "look.obj")) return nullptr;
   size_t texture = images.size();
   for (size_t i = 0; i < images.size(); ++i)
     if (images[i]["name"] == "preview/look.png" && images[i].contains("data")) texture = i;
   if (texture == images.size()) return nullptr;
-  const Mesh mesh = load_mesh(folder / "preview" / "look.obj", 1.0, default_limits(), MeshReaderProcess::this_one);
+  Mesh mesh;
+  try {
+    mesh = load_mesh(folder / "preview" / "look.obj", 1.0, default_limits(), MeshReaderProcess::this_one);
+  } catch (const std::exception& e) {
+    notes.push_back(std::string("the predicted look is not drawn on the shape: preview/look.obj: ") + e.what());
+    return nullptr;
+  }
   if (!mesh.has_uv() || mesh.triangles.size() > kLargest) {
     notes.push_back(fmt::format("the predicted look is not drawn on the shape: {}", mesh.has_uv() ? "over 200,000 triangles" : "no surface coordinates"));
     return nullptr;
@@ -282,16 +290,24 @@ nlohmann::json receiver_entry(const nlohmann::json& result, const nlohmann::json
     if (!section.is_object() || !section.contains("distance_mm") || !section.contains("receiver_mm") ||
         !section.contains("image_size"))
       continue;
-    std::string picture;
-    if (section.contains("surface_stl") && section["surface_stl"].contains("preview"))
+    // The exported surface traced where the run traced it, else the estimator's image.
+    const nlohmann::json& size = section["image_size"];
+    if (!size.is_array() || size.size() != 2 || !size[0].is_number_integer() || !size[1].is_number_integer() ||
+        !section["distance_mm"].is_number() || !section["receiver_mm"].is_array())
+      continue;
+    std::string picture = "preview/goal_vs_simulated.png", caption = "the simulated image (the estimator's)";
+    if (section.contains("surface_stl") && section["surface_stl"].is_object() &&
+        section["surface_stl"].value("preview", nlohmann::json()).is_string()) {
       picture = section["surface_stl"]["preview"].get<std::string>();
+      caption = "the exported surface traced on the receiver";
+    }
     for (size_t i = 0; i < images.size(); ++i) {
       if (images[i]["name"] != picture || !images[i].contains("data")) continue;
       const int width = images[i]["width"], height = images[i]["height"];
-      const int w = section["image_size"][0], h = section["image_size"][1];
+      const int w = size[0], h = size[1];
       if (w > width || h > height) return nullptr;
       return {{"image", i}, {"crop", {width - w, 0, w, h}}, {"distance_mm", section["distance_mm"]},
-              {"size_mm", section["receiver_mm"]}, {"caption", "the exported surface traced on the receiver"}};
+              {"size_mm", section["receiver_mm"]}, {"caption", caption}};
     }
   }
   return nullptr;
@@ -300,7 +316,9 @@ nlohmann::json receiver_entry(const nlohmann::json& result, const nlohmann::json
 }  // namespace
 }  // namespace html_report
 
-void write_run_report_html(const fs::path& folder, const std::string& purpose, const HtmlReportBudget& budget) {
+namespace {
+
+void write_run_page(const fs::path& folder, const std::string& purpose, const HtmlReportBudget& budget) {
   using namespace html_report;
   const nlohmann::json result = read_json(folder / "result.json");
   if (!result.is_object() || !result.contains("experiment") || !result.contains("translator"))
@@ -327,6 +345,17 @@ void write_run_report_html(const fs::path& folder, const std::string& purpose, c
   const nlohmann::json timing = fs::is_regular_file(folder / "timing.json") ? read_json(folder / "timing.json") : nlohmann::json();
   const std::string title = fmt::format("{} — spec2fab report", result["experiment"].get<std::string>());
   write_file(folder / "report.html", html_page(title, data, timing));
+}
+
+}  // namespace
+
+void write_run_report_html(const fs::path& folder, const std::string& purpose, const HtmlReportBudget& budget) {
+  try {
+    write_run_page(folder, purpose, budget);
+  } catch (const nlohmann::json::exception& e) {
+    // A result.json (or probes.json) edited or written by another version: the user's file, not a bug.
+    throw InputError((folder / "result.json").string() + ": a field of unexpected type (" + e.what() + ")");
+  }
 }
 
 ReportFolderKind report_folder_kind(const fs::path& folder) {

@@ -129,7 +129,17 @@ std::filesystem::path run_experiment(ExperimentSource source, const RunOptions& 
     // The page people open first, built from the files above (as `spec2fab report` builds it again).
     if (ranks::root() && options.report_html) {
       interrupt::throw_if_stop_requested();
-      write_run_report_html(folder.path("."), TranslatorRegistry::instance().doc(experiment.translator()).summary);
+      try {
+        write_run_report_html(folder.path("."), TranslatorRegistry::instance().doc(experiment.translator()).summary);
+      } catch (const WriteError&) {
+        throw;  // a full disk fails the run, as any of its writes does
+      } catch (const interrupt::Stopped&) {
+        throw;
+      } catch (const std::exception& e) {
+        // A finished run is not thrown away for its page; the command writes it later.
+        spdlog::warn("report.html not written ({}); `spec2fab report {}` writes it", folder.as_destination(e.what()),
+                     out.string());
+      }
     }
   });
   folder.commit();

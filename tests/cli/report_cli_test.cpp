@@ -75,6 +75,12 @@ TEST_F(Cli, ReportRefusesWhatIsNoRunOrBenchInOneLine) {
   EXPECT_EQ(broken.code, 2);
   EXPECT_THAT(single_line(broken.out), HasSubstr("result.json: not JSON"));
   EXPECT_FALSE(fs::exists(dir_ / "broken" / "report.html"));
+  // A field of another type than a run writes: the file named, not an internal error.
+  std::ofstream(dir_ / "broken" / "result.json") << R"({"experiment": 5, "translator": "tree"})";
+  const Result typed = run_spec2fab("report " + (dir_ / "broken").string());
+  EXPECT_EQ(typed.code, 2);
+  EXPECT_THAT(single_line(typed.out), HasSubstr("result.json: a field of unexpected type"));
+  EXPECT_FALSE(fs::exists(dir_ / "broken" / "report.html"));
 }
 
 }  // namespace

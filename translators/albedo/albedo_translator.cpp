@@ -177,7 +177,8 @@ class AlbedoTranslator final : public TuningTranslator {
   /// report.html's 3D view draws the predicted look on the shape from these.
   void write_look_for_viewer(const std::vector<Rgb>& achieved, RunContext& context) const {
     const Mesh& mesh = solid_.mesh();
-    if (!mesh.has_uv()) return;
+    constexpr size_t kMostTriangles = 200000;  // beyond, the page would outgrow its budget (report/run_page.cpp)
+    if (!mesh.has_uv() || mesh.triangles.size() > kMostTriangles) return;
     const std::array<int, 2> columns = texture_.columns();
     cv::Mat look(columns[1], columns[0], CV_8UC3);
     for (int j = 0; j < columns[1]; ++j)
@@ -186,9 +187,9 @@ class AlbedoTranslator final : public TuningTranslator {
         // Row 0 of the image is v = 1 (images run top down, v up); OpenCV stores BGR.
         look.at<cv::Vec3b>(columns[1] - 1 - j, i) = {linear_to_srgb8(c[2]), linear_to_srgb8(c[1]), linear_to_srgb8(c[0])};
       }
-    constexpr int kLargest = 1024;
-    if (std::max(columns[0], columns[1]) > kLargest) {
-      const double f = static_cast<double>(kLargest) / std::max(columns[0], columns[1]);
+    constexpr int kLargestSide = 1024;
+    if (std::max(columns[0], columns[1]) > kLargestSide) {
+      const double f = static_cast<double>(kLargestSide) / std::max(columns[0], columns[1]);
       cv::resize(look, look, cv::Size(std::max(1, static_cast<int>(columns[0] * f)), std::max(1, static_cast<int>(columns[1] * f))),
                  0, 0, cv::INTER_AREA);
     }

@@ -87,7 +87,8 @@ function figuresSection(result) {
 function picturesSection(images) {
   if (!images.length) return null;
   const figures = images.map((image) => el('figure', {},
-    image.data ? el('img', { src: image.data, alt: image.name, width: String(image.width), height: String(image.height) })
+    image.data ? el('img', { src: image.data, alt: image.name, width: image.width ? String(image.width) : null,
+      height: image.height ? String(image.height) : null })
       : el('a', { href: image.name, text: `open ${image.name}` }),
     el('figcaption', {}, el('b', { text: image.name }), ` — ${image.width} × ${image.height} px. ${image.caption || ''}`)));
   return section('pictures', 'Goal and achieved, at full resolution',

@@ -89,6 +89,13 @@ for (const report of reports) {
     problems.push('no 3D view');
   }
   const charts = await page.$$eval('.chart canvas', (list) => list.length);
+  // The charts the data calls for: a bench's two per problem that ran, a run's convergence when it kept traces.
+  const expectedCharts = await page.evaluate(() => {
+    const d = JSON.parse(document.getElementById('spec2fab-data').textContent);
+    if (d.kind === 'bench') return 2 * d.report.problems.filter((p) => p.charts).length;
+    return d.convergence?.traces?.length ? 1 : 0;
+  });
+  if (charts !== expectedCharts) problems.push(`${charts} charts drawn, ${expectedCharts} expected`);
   if (shots) {
     await page.evaluate(() => window.scrollTo(0, 0));
     await page.screenshot({ path: path.join(shots, `${name}_page.png`), fullPage: false });
