@@ -17,7 +17,8 @@ Mesh decimate_for_viewing(const Mesh& mesh, std::size_t target_triangles) {
   std::vector<float> positions;
   positions.reserve(3 * mesh.vertices.size());
   for (const Vec3& v : mesh.vertices)
-    positions.insert(positions.end(), {static_cast<float>(v.x()), static_cast<float>(v.y()), static_cast<float>(v.z())});
+    positions.insert(positions.end(), {static_cast<float>(v.x()), static_cast<float>(v.y()),
+                                       static_cast<float>(v.z())});
   std::vector<unsigned int> indices;
   indices.reserve(3 * mesh.triangles.size());
   for (const Eigen::Vector3i& t : mesh.triangles)
@@ -27,11 +28,13 @@ Mesh decimate_for_viewing(const Mesh& mesh, std::size_t target_triangles) {
   std::vector<unsigned int> simplified(indices.size());
   // Up to 2 % of the mesh's extent of geometric error: what a page shows at screen size.
   constexpr float kError = 0.02f;
-  size_t count = meshopt_simplify(simplified.data(), indices.data(), indices.size(), positions.data(),
-                                  mesh.vertices.size(), 3 * sizeof(float), target_indices, kError);
+  size_t count =
+      meshopt_simplify(simplified.data(), indices.data(), indices.size(), positions.data(),
+                       mesh.vertices.size(), 3 * sizeof(float), target_indices, kError);
   if (count > target_indices + target_indices / 4) {
-    count = meshopt_simplifySloppy(simplified.data(), indices.data(), indices.size(), positions.data(),
-                                   mesh.vertices.size(), 3 * sizeof(float), target_indices, 1.0f);
+    count =
+        meshopt_simplifySloppy(simplified.data(), indices.data(), indices.size(), positions.data(),
+                               mesh.vertices.size(), 3 * sizeof(float), target_indices, 1.0f);
   }
   simplified.resize(count);
   // Keep only the vertices the triangles use, in first-use order.

@@ -34,7 +34,8 @@ void write_bench_report_html(const fs::path& folder) {
   try {
     write_bench_page(folder);
   } catch (const nlohmann::json::exception& e) {
-    throw InputError((folder / "report.json").string() + ": a field of unexpected type (" + e.what() + ")");
+    throw InputError((folder / "report.json").string() + ": a field of unexpected type (" +
+                     e.what() + ")");
   }
 }
 

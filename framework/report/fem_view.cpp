@@ -36,7 +36,8 @@ struct VtuArrays {
 template <class T>
 std::vector<T> read_array(const std::string& file, size_t data_start, const ArrayRef& ref) {
   const size_t size = file.size();
-  if (data_start > size || ref.offset > size - data_start || size - data_start - ref.offset < 8) return {};
+  if (data_start > size || ref.offset > size - data_start || size - data_start - ref.offset < 8)
+    return {};
   const size_t at = data_start + static_cast<size_t>(ref.offset);
   std::uint64_t bytes = 0;
   std::memcpy(&bytes, file.data() + at, 8);
@@ -64,15 +65,19 @@ VtuArrays read_vtu(const fs::path& vtu, std::string& why_not) {
   }
   std::map<std::string, ArrayRef> arrays;
   const std::string header = file.substr(0, appended);
-  static const std::regex kArray(R"re(<DataArray type="(\w+)" Name="(\w+)"[^>]*offset="(\d{1,19})")re");
-  for (auto it = std::sregex_iterator(header.begin(), header.end(), kArray); it != std::sregex_iterator(); ++it) {
+  static const std::regex kArray(
+      R"re(<DataArray type="(\w+)" Name="(\w+)"[^>]*offset="(\d{1,19})")re");
+  for (auto it = std::sregex_iterator(header.begin(), header.end(), kArray);
+       it != std::sregex_iterator(); ++it) {
     ArrayRef ref{(*it)[1], 0};
     const std::string digits = (*it)[3];
     std::from_chars(digits.data(), digits.data() + digits.size(), ref.offset);
     arrays[(*it)[2]] = ref;
   }
-  const std::pair<const char*, const char*> needed[] = {
-      {"Points", "Float64"}, {"connectivity", "Int64"}, {"displacement_mm", "Float64"}, {"von_mises_mpa", "Float64"}};
+  const std::pair<const char*, const char*> needed[] = {{"Points", "Float64"},
+                                                        {"connectivity", "Int64"},
+                                                        {"displacement_mm", "Float64"},
+                                                        {"von_mises_mpa", "Float64"}};
   for (const auto& [array, type] : needed) {
     if (!arrays.count(array) || arrays[array].type != type) {
       why_not = fmt_missing(name, array, type);
@@ -80,12 +85,13 @@ VtuArrays read_vtu(const fs::path& vtu, std::string& why_not) {
     }
   }
   const size_t data = underscore + 1;
-  VtuArrays out{read_array<double>(file, data, arrays["Points"]), read_array<double>(file, data, arrays["displacement_mm"]),
+  VtuArrays out{read_array<double>(file, data, arrays["Points"]),
+                read_array<double>(file, data, arrays["displacement_mm"]),
                 read_array<double>(file, data, arrays["von_mises_mpa"]),
                 read_array<std::int64_t>(file, data, arrays["connectivity"])};
   const size_t nodes = out.points.size() / 3, tets = out.connectivity.size() / 4;
-  if (nodes == 0 || tets == 0 || out.displacement.size() != out.points.size() || out.stress.size() != tets ||
-      out.connectivity.size() != 4 * tets) {
+  if (nodes == 0 || tets == 0 || out.displacement.size() != out.points.size() ||
+      out.stress.size() != tets || out.connectivity.size() != 4 * tets) {
     why_not = name + ": no solid tets, or array sizes that do not match (points, tets, fields)";
     return {};
   }
@@ -128,7 +134,9 @@ Surface boundary_surface(const VtuArrays& vtu) {
   }
   Surface out;
   std::vector<std::int64_t> surface_of(nodes, -1);
-  const auto p = [&](std::int64_t n, int k) { return vtu.points[3 * static_cast<size_t>(n) + static_cast<size_t>(k)]; };
+  const auto p = [&](std::int64_t n, int k) {
+    return vtu.points[3 * static_cast<size_t>(n) + static_cast<size_t>(k)];
+  };
   const auto surface_node = [&](std::int64_t n) {
     const size_t i = static_cast<size_t>(n);
     if (surface_of[i] < 0) {
@@ -137,7 +145,8 @@ Surface boundary_surface(const VtuArrays& vtu) {
         out.positions.push_back(static_cast<float>(vtu.points[3 * i + d]));
         out.displacement.push_back(static_cast<float>(vtu.displacement[3 * i + d]));
       }
-      out.von_mises.push_back(static_cast<float>(node_tets[i] > 0 ? node_stress[i] / node_tets[i] : 0.0));
+      out.von_mises.push_back(
+          static_cast<float>(node_tets[i] > 0 ? node_stress[i] / node_tets[i] : 0.0));
     }
     return static_cast<std::uint32_t>(surface_of[i]);
   };
@@ -145,11 +154,14 @@ Surface boundary_surface(const VtuArrays& vtu) {
     if (entry.first != 1) continue;
     const auto& [a, b, c, d] = entry.second;
     double e1[3], e2[3], e3[3];
-    for (int k = 0; k < 3; ++k) e1[k] = p(b, k) - p(a, k), e2[k] = p(c, k) - p(a, k), e3[k] = p(d, k) - p(a, k);
-    const double det = e3[0] * (e1[1] * e2[2] - e1[2] * e2[1]) - e3[1] * (e1[0] * e2[2] - e1[2] * e2[0]) +
+    for (int k = 0; k < 3; ++k)
+      e1[k] = p(b, k) - p(a, k), e2[k] = p(c, k) - p(a, k), e3[k] = p(d, k) - p(a, k);
+    const double det = e3[0] * (e1[1] * e2[2] - e1[2] * e2[1]) -
+                       e3[1] * (e1[0] * e2[2] - e1[2] * e2[0]) +
                        e3[2] * (e1[0] * e2[1] - e1[1] * e2[0]);
     // Outward: the fourth node lies behind the face's normal.
-    for (std::int64_t n : det > 0 ? std::array<std::int64_t, 3>{a, c, b} : std::array<std::int64_t, 3>{a, b, c})
+    for (std::int64_t n :
+         det > 0 ? std::array<std::int64_t, 3>{a, c, b} : std::array<std::int64_t, 3>{a, b, c})
       out.indices.push_back(surface_node(n));
   }
   return out;
@@ -158,7 +170,9 @@ Surface boundary_surface(const VtuArrays& vtu) {
 /// The 99th percentile of the finite stresses, nearest rank (as
 /// fem::summarize_stress counts it: the smallest value at least 99 % do not exceed).
 double p99(std::vector<double> values) {
-  values.erase(std::remove_if(values.begin(), values.end(), [](double v) { return !std::isfinite(v); }), values.end());
+  values.erase(
+      std::remove_if(values.begin(), values.end(), [](double v) { return !std::isfinite(v); }),
+      values.end());
   if (values.empty()) return 0.0;
   const size_t rank = (99 * values.size() + 99) / 100;  // ceil(0.99 n), in integers
   std::nth_element(values.begin(), values.begin() + static_cast<long>(rank - 1), values.end());
@@ -167,7 +181,8 @@ double p99(std::vector<double> values) {
 
 template <class T>
 std::string packed(const std::vector<T>& values) {
-  return base64(std::string_view(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(T)));
+  return base64(
+      std::string_view(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(T)));
 }
 
 }  // namespace

@@ -15,7 +15,8 @@ namespace spec2fab::html_report {
 std::string_view page_script();
 
 /// The page: `data` and `timing` inlined as JSON blocks, then the script.
-std::string html_page(const std::string& title, const nlohmann::json& data, const nlohmann::json& timing);
+std::string html_page(const std::string& title, const nlohmann::json& data,
+                      const nlohmann::json& timing);
 
 std::string base64(std::string_view bytes);
 std::string read_bytes(const std::filesystem::path& file);

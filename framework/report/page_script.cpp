@@ -8,17 +8,19 @@
 #error "SPEC2FAB_REPORT_BUNDLE names the bundled page script (set by CMake)"
 #endif
 
-__asm__(".section .rodata\n"
-        ".balign 16\n"
-        ".hidden spec2fab_report_bundle_begin\n"
-        ".globl spec2fab_report_bundle_begin\n"
-        "spec2fab_report_bundle_begin:\n"
-        ".incbin \"" SPEC2FAB_REPORT_BUNDLE "\"\n"
-        ".hidden spec2fab_report_bundle_end\n"
-        ".globl spec2fab_report_bundle_end\n"
-        "spec2fab_report_bundle_end:\n"
-        ".byte 0\n"
-        ".previous\n");
+__asm__(
+    ".section .rodata\n"
+    ".balign 16\n"
+    ".hidden spec2fab_report_bundle_begin\n"
+    ".globl spec2fab_report_bundle_begin\n"
+    "spec2fab_report_bundle_begin:\n"
+    ".incbin \"" SPEC2FAB_REPORT_BUNDLE
+    "\"\n"
+    ".hidden spec2fab_report_bundle_end\n"
+    ".globl spec2fab_report_bundle_end\n"
+    "spec2fab_report_bundle_end:\n"
+    ".byte 0\n"
+    ".previous\n");
 
 extern "C" const char spec2fab_report_bundle_begin[];
 extern "C" const char spec2fab_report_bundle_end[];
@@ -26,7 +28,8 @@ extern "C" const char spec2fab_report_bundle_end[];
 namespace spec2fab::html_report {
 
 std::string_view page_script() {
-  return {spec2fab_report_bundle_begin, static_cast<std::size_t>(spec2fab_report_bundle_end - spec2fab_report_bundle_begin)};
+  return {spec2fab_report_bundle_begin,
+          static_cast<std::size_t>(spec2fab_report_bundle_end - spec2fab_report_bundle_begin)};
 }
 
 }  // namespace spec2fab::html_report

@@ -107,6 +107,22 @@ TEST_F(Cli, AlbedoRenderShowsThePredictedColours) {
     std::printf("channel %d: render %.4f, simulated albedos %.4f\n", c, sum[c] / total, mean[c] / expected);
     EXPECT_NEAR(sum[c] / total, mean[c] / expected, 0.003) << "channel " << c;
   }
+  // report.html's look on the shape: one pixel per column, the columns' simulated albedos.
+  const cv::Mat look = cv::imread((dir_ / "run" / "preview" / "look.png").string(), cv::IMREAD_COLOR);
+  ASSERT_EQ(look.cols, 96);
+  ASSERT_EQ(look.rows, 48);
+  double look_sum[3] = {0, 0, 0};
+  for (int y = 0; y < look.rows; ++y)
+    for (int x = 0; x < look.cols; ++x)
+      for (int c = 0; c < 3; ++c) look_sum[c] += srgb8_to_linear(look.at<cv::Vec3b>(y, x)[2 - c]) / (96 * 48);
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(look_sum[c], mean[c], 0.004) << "channel " << c;  // 8-bit rounding
+  const std::string page = read(dir_ / "run" / "report.html");
+  const std::string open = R"(<script type="application/json" id="spec2fab-data">)";
+  const size_t start = page.find(open) + open.size();
+  const auto data = nlohmann::json::parse(page.substr(start, page.find("</script>", start) - start));
+  const auto& first = data["viewer"]["meshes"][0];
+  EXPECT_EQ(first["name"], "predicted look");
+  EXPECT_EQ(data["images"][first["texture"].get<size_t>()]["name"], "preview/look.png");
 }
 
 TEST_F(Cli, AlbedoRefusesMoreColumnsThanItsLimitBeforeTuning) {

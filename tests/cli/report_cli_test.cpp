@@ -36,15 +36,26 @@ TEST_F(Cli, ReportIsWrittenByTheRunAndAgainByTheCommand) {
   ASSERT_TRUE(data.is_object());
   EXPECT_EQ(data["kind"], "run");
   EXPECT_EQ(data["result"], nlohmann::json::parse(read(out / "result.json")));
-  EXPECT_THAT(data["purpose"].get<std::string>(), HasSubstr("A reducer tree"));  // the tree translator's summary
+  EXPECT_THAT(data["purpose"].get<std::string>(),
+              HasSubstr("A reducer tree"));  // the tree translator's summary
   // The print's material regions, one mesh per STL, in the 3D view.
   ASSERT_TRUE(data["viewer"].is_object());
   std::set<std::string> meshes;
   for (const auto& mesh : data["viewer"]["meshes"]) meshes.insert(mesh["name"].get<std::string>());
   EXPECT_EQ(meshes, (std::set<std::string>{"VeroCyan", "VeroWhitePlus"}));
+  // Each in its display colour, as the slice stack's palette gives it.
+  const nlohmann::json manifest = nlohmann::json::parse(read(out / "print/slices/manifest.json"));
+  for (const auto& mesh : data["viewer"]["meshes"]) {
+    for (const auto& entry : manifest["palette"]) {
+      if (entry["material"] != mesh["name"]) continue;
+      for (int k = 0; k < 3; ++k)
+        EXPECT_DOUBLE_EQ(mesh["color"][k].get<double>(), entry["srgb"][k].get<double>() / 255) << mesh["name"];
+    }
+  }
   // Every picture the run lists is inlined, with its size.
   for (const auto& image : data["images"]) {
-    EXPECT_THAT(image["data"].get<std::string>(), ::testing::StartsWith("data:image/png;base64,")) << image["name"];
+    EXPECT_THAT(image["data"].get<std::string>(), ::testing::StartsWith("data:image/png;base64,"))
+        << image["name"];
     EXPECT_GT(image["width"].get<int>(), 0);
   }
   EXPECT_GE(data["images"].size(), 4u);  // three cross-sections and the render
@@ -56,7 +67,10 @@ TEST_F(Cli, ReportIsWrittenByTheRunAndAgainByTheCommand) {
   EXPECT_EQ(read(out / "report.html"), page);
 
   // --no-report leaves it out.
-  ASSERT_EQ(run_spec2fab("run -q --no-report " + file.string() + " --out " + (dir_ / "bare").string()).code, 0);
+  ASSERT_EQ(
+      run_spec2fab("run -q --no-report " + file.string() + " --out " + (dir_ / "bare").string())
+          .code,
+      0);
   EXPECT_FALSE(fs::exists(dir_ / "bare" / "report.html"));
   EXPECT_TRUE(fs::exists(dir_ / "bare" / "result.json"));
 }
@@ -68,7 +82,8 @@ TEST_F(Cli, ReportRefusesWhatIsNoRunOrBenchInOneLine) {
   fs::create_directories(dir_ / "empty");
   const Result empty = run_spec2fab("report " + (dir_ / "empty").string());
   EXPECT_EQ(empty.code, 2);
-  EXPECT_THAT(single_line(empty.out), HasSubstr("neither a run folder (result.json) nor a bench folder"));
+  EXPECT_THAT(single_line(empty.out),
+              HasSubstr("neither a run folder (result.json) nor a bench folder"));
   fs::create_directories(dir_ / "broken");
   std::ofstream(dir_ / "broken" / "result.json") << "{\"experiment\": ";
   const Result broken = run_spec2fab("report " + (dir_ / "broken").string());

@@ -20,9 +20,14 @@ namespace spec2fab::html_report {
 namespace {
 
 TEST(ReportPage, Base64MatchesRfc4648Vectors) {
-  const std::pair<std::string, std::string> vectors[] = {
-      {"", ""},         {"f", "Zg=="},         {"fo", "Zm8="},         {"foo", "Zm9v"},
-      {"foob", "Zm9vYg=="}, {"fooba", "Zm9vYmE="}, {"foobar", "Zm9vYmFy"}, {std::string("\xff\x00\x80", 3), "/wCA"}};
+  const std::pair<std::string, std::string> vectors[] = {{"", ""},
+                                                         {"f", "Zg=="},
+                                                         {"fo", "Zm8="},
+                                                         {"foo", "Zm9v"},
+                                                         {"foob", "Zm9vYg=="},
+                                                         {"fooba", "Zm9vYmE="},
+                                                         {"foobar", "Zm9vYmFy"},
+                                                         {std::string("\xff\x00\x80", 3), "/wCA"}};
   for (const auto& [bytes, text] : vectors) EXPECT_EQ(base64(bytes), text) << bytes;
 }
 
@@ -36,14 +41,17 @@ TEST(ReportPage, PngSizeFromItsHeader) {
 // Strings that would end a <script> element or open a comment inside it come
 // back as they were, and the page holds exactly its three scripts.
 TEST(ReportPage, DataBlockSurvivesAnyString) {
-  const nlohmann::json data = {{"kind", "run"}, {"note", "</script><script>alert(1)</script><!-- x"}, {"unicode", "ΔE00 ≤ 2"}};
+  const nlohmann::json data = {{"kind", "run"},
+                               {"note", "</script><script>alert(1)</script><!-- x"},
+                               {"unicode", "ΔE00 ≤ 2"}};
   const std::string page = html_page("a <title> & more", data, {{"wall_seconds", 1.5}});
   const std::string open = R"(<script type="application/json" id="spec2fab-data">)";
   const size_t start = page.find(open) + open.size();
   const size_t end = page.find("</script>", start);
   EXPECT_EQ(nlohmann::json::parse(page.substr(start, end - start)), data);
   size_t scripts = 0;
-  for (size_t at = page.find("<script"); at != std::string::npos; at = page.find("<script", at + 1)) ++scripts;
+  for (size_t at = page.find("<script"); at != std::string::npos; at = page.find("<script", at + 1))
+    ++scripts;
   EXPECT_EQ(scripts, 3u);
   EXPECT_NE(page.find("<title>a &lt;title&gt; &amp; more</title>"), std::string::npos);
 }
@@ -53,7 +61,8 @@ TEST(ReportPage, DataBlockSurvivesAnyString) {
 TEST(ReportPage, EmbeddedScriptIsWholeAndInlinable) {
   std::string script(page_script());
   EXPECT_GT(script.size(), 300000u);
-  std::transform(script.begin(), script.end(), script.begin(), [](unsigned char c) { return std::tolower(c); });
+  std::transform(script.begin(), script.end(), script.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
   EXPECT_EQ(script.find("</script"), std::string::npos);
   EXPECT_NE(script.find("three.js authors"), std::string::npos);  // three's licence comment
   EXPECT_NE(script.find("chart.js"), std::string::npos);
@@ -68,7 +77,8 @@ TEST(MeshDecimate, KeepsTheSphereWithinAFewPerCent) {
   EXPECT_GE(shown.triangles.size(), 2000u);
   for (const Vec3& v : shown.vertices) EXPECT_NEAR(v.norm(), radius, 0.03 * radius);
   // Closed and facing outwards still: the enclosed volume is the sphere's.
-  EXPECT_NEAR(shown.signed_volume(), 4.0 / 3.0 * M_PI * radius * radius * radius, 0.03 * 4.0 / 3.0 * M_PI * std::pow(radius, 3));
+  EXPECT_NEAR(shown.signed_volume(), 4.0 / 3.0 * M_PI * radius * radius * radius,
+              0.03 * 4.0 / 3.0 * M_PI * std::pow(radius, 3));
   // A small mesh comes back as it is.
   const Mesh small = make_sphere(radius, 16, 8);
   EXPECT_EQ(decimate_for_viewing(small, 4000).triangles, small.triangles);
