@@ -1,10 +1,13 @@
 #include "core/log.h"
 
+#include <algorithm>
+
 #include <unistd.h>
 
 #include <cstdio>
 
 #include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/sinks/ringbuffer_sink.h>
 #include <spdlog/spdlog.h>
 
 namespace spec2fab {
@@ -23,6 +26,28 @@ void configure_logging(Verbosity verbosity) {
   spdlog::set_level(verbosity == Verbosity::quiet     ? spdlog::level::warn
                     : verbosity == Verbosity::verbose ? spdlog::level::debug
                                                       : spdlog::level::info);
+}
+
+struct WarningRecorder::Sink {
+  std::shared_ptr<spdlog::sinks::ringbuffer_sink_mt> ring = std::make_shared<spdlog::sinks::ringbuffer_sink_mt>(1000);
+};
+
+WarningRecorder::WarningRecorder() : sink_(std::make_shared<Sink>()) {
+  sink_->ring->set_level(spdlog::level::warn);
+  sink_->ring->set_pattern("%v");
+  spdlog::default_logger()->sinks().push_back(sink_->ring);
+}
+
+WarningRecorder::~WarningRecorder() {
+  auto& sinks = spdlog::default_logger()->sinks();
+  sinks.erase(std::remove(sinks.begin(), sinks.end(), sink_->ring), sinks.end());
+}
+
+std::vector<std::string> WarningRecorder::messages() const {
+  std::vector<std::string> out = sink_->ring->last_formatted();
+  for (std::string& line : out)
+    while (!line.empty() && (line.back() == '\n' || line.back() == '\r')) line.pop_back();
+  return out;
 }
 
 Progress::Progress(std::string phase, long long total)

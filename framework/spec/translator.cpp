@@ -9,6 +9,7 @@
 
 #include "core/error.h"
 #include "core/interrupt.h"
+#include "core/log.h"
 #include "core/ranks.h"
 #include "core/version.h"
 #include "reducer/reducer_tree.h"
@@ -84,6 +85,7 @@ std::filesystem::path run_experiment(const std::filesystem::path& file, const Ru
 
 std::filesystem::path run_experiment(ExperimentSource source, const RunOptions& options) {
   const auto start = std::chrono::steady_clock::now();
+  const WarningRecorder warnings;  // for timing.json and the page: what this execution warned of
   PreparedExperiment prepared = prepare_experiment(std::move(source), options.limits);
   const Experiment& experiment = *prepared.experiment;
 
@@ -125,6 +127,7 @@ std::filesystem::path run_experiment(ExperimentSource source, const RunOptions& 
       timing["ranks"] = ranks::size();
       timing["tuner_runs_per_rank"] = runs;
     }
+    if (const auto messages = warnings.messages(); !messages.empty()) timing["warnings"] = messages;
     folder.write_json("timing.json", timing);
     // The page people open first, built from the files above (as `spec2fab report` builds it again).
     if (ranks::root() && options.report_html) {

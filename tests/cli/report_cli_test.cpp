@@ -75,6 +75,24 @@ TEST_F(Cli, ReportIsWrittenByTheRunAndAgainByTheCommand) {
   EXPECT_TRUE(fs::exists(dir_ / "bare" / "result.json"));
 }
 
+// What the run warned of goes to timing.json (how this execution went) and
+// from there to the page's summary.
+TEST_F(Cli, WarningsOfTheRunReachTheReport) {
+  const char* free_shell =
+      R"({"type": "stratum", "depth_mm": {"value": 1, "min": 0.5, "max": 2}, "shell": {"type": "layered", "material": "VeroCyan"}, "core": {"type": "layered", "material": "VeroWhitePlus"}})";
+  const fs::path out = dir_ / "warned";
+  const Result run = run_spec2fab("run -q " + experiment("warned", valid_body(free_shell)).string() + " --out " + out.string());
+  ASSERT_EQ(run.code, 0) << run.out;
+  EXPECT_THAT(run.out, HasSubstr("stay at their values"));
+  const nlohmann::json timing = nlohmann::json::parse(read(out / "timing.json"));
+  ASSERT_EQ(timing["warnings"].size(), 1u);
+  EXPECT_THAT(timing["warnings"][0].get<std::string>(), HasSubstr("1 free parameter(s)"));
+  const std::string page = read(out / "report.html");
+  const std::string open = R"(<script type="application/json" id="spec2fab-timing">)";
+  const size_t start = page.find(open) + open.size();
+  EXPECT_EQ(nlohmann::json::parse(page.substr(start, page.find("</script>", start) - start)), timing);
+}
+
 TEST_F(Cli, ReportRefusesWhatIsNoRunOrBenchInOneLine) {
   const Result missing = run_spec2fab("report " + (dir_ / "nowhere").string());
   EXPECT_EQ(missing.code, 2);

@@ -158,7 +158,11 @@ function runPage(d, timing) {
   const lead = section('summary', 'What the run was for, and what it reached',
     el('p', { class: 'lead', text: d.purpose || '' }), el('div', { class: 'cards' }, headlineCards(result)));
   if (d.notes?.length) lead.append(el('ul', { class: 'muted' }, d.notes.map((n) => el('li', { text: n }))));
-  if (result.warnings?.length) lead.append(el('h3', { class: 'warn', text: 'warnings' }), el('ul', {}, result.warnings.map((w) => el('li', { text: w }))));
+  const warnings = timing?.warnings || [];
+  if (warnings.length) {
+    lead.append(el('h3', { class: 'warn', text: `warnings (${warnings.length})` }),
+      el('ul', { class: 'warn' }, warnings.map((w) => el('li', { text: w }))));
+  }
   sections.push(lead);
   sections.push(picturesSection(images));
   let viewer = null;
