@@ -29,6 +29,7 @@
 #include "reducer/node.h"
 #include "reducer/reducer_tree.h"
 #include "report/html_report.h"
+#include "spec/report_fields.h"
 #include "spec/experiment.h"
 #include "spec/run_report.h"
 #include "core/run_folder.h"
@@ -64,10 +65,14 @@ fs::path write_report(const fs::path& folder) {
     std::ifstream file(folder / "result.json");
     const nlohmann::json result = nlohmann::json::parse(file, nullptr, false);
     std::string purpose;
+    std::map<std::string, std::string> meanings;
     if (result.is_object() && result.contains("translator") && result["translator"].is_string() &&
-        TranslatorRegistry::instance().contains(result["translator"].get<std::string>()))
-      purpose = TranslatorRegistry::instance().doc(result["translator"].get<std::string>()).summary;
-    write_run_report_html(folder, purpose);
+        TranslatorRegistry::instance().contains(result["translator"].get<std::string>())) {
+      const std::string translator = result["translator"].get<std::string>();
+      purpose = TranslatorRegistry::instance().doc(translator).summary;
+      meanings = report_meanings(translator);
+    }
+    write_run_report_html(folder, purpose, meanings);
   }
   return folder / "report.html";
 }

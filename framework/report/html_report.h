@@ -10,6 +10,7 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <map>
 #include <string>
 
 namespace spec2fab {
@@ -29,10 +30,12 @@ enum class ReportFolderKind { run, bench };
 ReportFolderKind report_folder_kind(const std::filesystem::path& folder);
 
 /// Writes `folder`/report.html for a run; `purpose` is the translator's
-/// one-line summary (what the run was for). Throws InputError when
+/// one-line summary (what the run was for), `meanings` what its figures
+/// mean by dotted name (spec/report_fields.h). Throws InputError when
 /// result.json is missing or malformed, WriteError when the page cannot be
 /// written (all or nothing).
 void write_run_report_html(const std::filesystem::path& folder, const std::string& purpose,
+                           const std::map<std::string, std::string>& meanings = {},
                            const HtmlReportBudget& budget = {});
 
 /// Writes `folder`/report.html for `spec2fab bench` from its report.json.

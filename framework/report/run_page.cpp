@@ -381,13 +381,14 @@ nlohmann::json receiver_entry(const nlohmann::json& result, const nlohmann::json
 namespace {
 
 void write_run_page(const fs::path& folder, const std::string& purpose,
-                    const HtmlReportBudget& budget) {
+                    const std::map<std::string, std::string>& meanings, const HtmlReportBudget& budget) {
   using namespace html_report;
   const nlohmann::json result = read_json(folder / "result.json");
   if (!result.is_object() || !result.contains("experiment") || !result.contains("translator"))
     throw InputError((folder / "result.json").string() +
                      ": not a run's result.json (no experiment or translator)");
-  nlohmann::json data = {{"kind", "run"}, {"purpose", purpose}, {"result", result}};
+  nlohmann::json data = {
+      {"kind", "run"}, {"purpose", purpose}, {"result", result}, {"meanings", meanings}};
   if (fs::is_regular_file(folder / "convergence.csv"))
     data["convergence"] = convergence(folder / "convergence.csv");
   if (fs::is_regular_file(folder / "experiment.json"))
@@ -421,9 +422,10 @@ void write_run_page(const fs::path& folder, const std::string& purpose,
 }  // namespace
 
 void write_run_report_html(const fs::path& folder, const std::string& purpose,
+                           const std::map<std::string, std::string>& meanings,
                            const HtmlReportBudget& budget) {
   try {
-    write_run_page(folder, purpose, budget);
+    write_run_page(folder, purpose, meanings, budget);
   } catch (const nlohmann::json::exception& e) {
     // A result.json (or probes.json) edited or written by another version: the user's file, not a
     // bug.

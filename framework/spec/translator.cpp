@@ -14,6 +14,7 @@
 #include "core/version.h"
 #include "reducer/reducer_tree.h"
 #include "report/html_report.h"
+#include "spec/report_fields.h"
 #include "tuning/schedule.h"
 
 namespace spec2fab {
@@ -133,7 +134,8 @@ std::filesystem::path run_experiment(ExperimentSource source, const RunOptions& 
     if (ranks::root() && options.report_html) {
       interrupt::throw_if_stop_requested();
       try {
-        write_run_report_html(folder.path("."), TranslatorRegistry::instance().doc(experiment.translator()).summary);
+        write_run_report_html(folder.path("."), TranslatorRegistry::instance().doc(experiment.translator()).summary,
+                              report_meanings(experiment.translator()));
       } catch (const WriteError&) {
         throw;  // a full disk fails the run, as any of its writes does
       } catch (const interrupt::Stopped&) {

@@ -123,6 +123,9 @@ TEST_F(Cli, AlbedoRenderShowsThePredictedColours) {
   const auto& first = data["viewer"]["meshes"][0];
   EXPECT_EQ(first["name"], "predicted look");
   EXPECT_EQ(data["images"][first["texture"].get<size_t>()]["name"], "preview/look.png");
+  // What the figures mean, from the translator's report structs.
+  EXPECT_EQ(data["meanings"]["albedo.delta_e00"], "ΔE00 between goal and achieved");
+  EXPECT_EQ(data["meanings"]["material_census.voxel_mm"], "cubic voxel edge of the census (goal.census_voxel_mm)");
 }
 
 TEST_F(Cli, AlbedoRefusesMoreColumnsThanItsLimitBeforeTuning) {

@@ -20,11 +20,8 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
-#include <opencv2/imgproc.hpp>
-
+#include "spec/report_fields.h"
 #include "../pieces/texture.h"
-#include "core/colour.h"
-#include "core/image_write.h"
 #include "fabrication/preview_renderer.h"
 #include "geometry/solid.h"
 #include "reducer/nodes/stack_grid.h"
@@ -169,40 +166,9 @@ class AlbedoTranslator final : public TuningTranslator {
     if (!texture_.lookup()) previews.push_back("preview/convergence.png");
     write_predicted_look(achieved, context.folder.path("preview/render.png"));
     previews.push_back("preview/render.png");
-    write_look_for_viewer(achieved, context);
+    texture_.write_look(achieved, solid_.mesh(), context.folder);
   }
 
-  /// The shape with its surface coordinates (preview/look.obj) and the
-  /// predicted colours in them (preview/look.png, at most 1024 px a side):
-  /// report.html's 3D view draws the predicted look on the shape from these.
-  void write_look_for_viewer(const std::vector<Rgb>& achieved, RunContext& context) const {
-    const Mesh& mesh = solid_.mesh();
-    constexpr size_t kMostTriangles = 200000;  // beyond, the page would outgrow its budget (report/run_page.cpp)
-    if (!mesh.has_uv() || mesh.triangles.size() > kMostTriangles) return;
-    const std::array<int, 2> columns = texture_.columns();
-    cv::Mat look(columns[1], columns[0], CV_8UC3);
-    for (int j = 0; j < columns[1]; ++j)
-      for (int i = 0; i < columns[0]; ++i) {
-        const Rgb& c = achieved[static_cast<size_t>(i) + static_cast<size_t>(columns[0]) * static_cast<size_t>(j)];
-        // Row 0 of the image is v = 1 (images run top down, v up); OpenCV stores BGR.
-        look.at<cv::Vec3b>(columns[1] - 1 - j, i) = {linear_to_srgb8(c[2]), linear_to_srgb8(c[1]), linear_to_srgb8(c[0])};
-      }
-    constexpr int kLargestSide = 1024;
-    if (std::max(columns[0], columns[1]) > kLargestSide) {
-      const double f = static_cast<double>(kLargestSide) / std::max(columns[0], columns[1]);
-      cv::resize(look, look, cv::Size(std::max(1, static_cast<int>(columns[0] * f)), std::max(1, static_cast<int>(columns[1] * f))),
-                 0, 0, cv::INTER_AREA);
-    }
-    write_image(context.folder.path("preview/look.png"), look);
-    std::string obj = "# spec2fab: the shape with its surface coordinates; preview/look.png holds the predicted colours\n";
-    for (const Vec3& v : mesh.vertices) obj += fmt::format("v {:.6g} {:.6g} {:.6g}\n", v.x(), v.y(), v.z());
-    for (const Vec2& uv : mesh.corner_uv) obj += fmt::format("vt {:.6g} {:.6g}\n", uv.x(), uv.y());
-    for (size_t t = 0; t < mesh.triangles.size(); ++t) {
-      const Eigen::Vector3i& f = mesh.triangles[t];
-      obj += fmt::format("f {}/{} {}/{} {}/{}\n", f[0] + 1, 3 * t + 1, f[1] + 1, 3 * t + 2, f[2] + 1, 3 * t + 3);
-    }
-    context.folder.write_text("preview/look.obj", obj);
-  }
 
   /// The surface in each point's predicted colour (the simulated albedo of
   /// the column beneath it) beside the goal mapped on the same shape.
@@ -229,6 +195,10 @@ class AlbedoTranslator final : public TuningTranslator {
 };
 
 }  // namespace
+}  // namespace spec2fab
+
+namespace spec2fab {
+SPEC2FAB_REPORT_FIELDS(albedo, "albedo", section_docs<AlbedoReport>("albedo."))
 }  // namespace spec2fab
 
 SPEC2FAB_REGISTER(spec2fab::TranslatorRegistry, spec2fab::AlbedoTranslator, "albedo")

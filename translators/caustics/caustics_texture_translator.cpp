@@ -37,6 +37,7 @@
 
 #include <fmt/format.h>
 
+#include "spec/report_fields.h"
 #include "../pieces/texture.h"
 #include "../pieces/texture_shadow.h"
 #include "caustic_translation.h"
@@ -349,6 +350,11 @@ class CausticsTextureTranslator final : public TuningTranslator {
 };
 
 }  // namespace
+}  // namespace spec2fab
+
+namespace spec2fab {
+SPEC2FAB_REPORT_FIELDS(caustics_texture_texture_section, "caustics_texture", section_docs<TextureSection>("texture."))
+SPEC2FAB_REPORT_FIELDS(caustics_texture, "caustics_texture", section_docs<CausticsTextureReport>("caustics."))
 }  // namespace spec2fab
 
 SPEC2FAB_REGISTER(spec2fab::TranslatorRegistry, spec2fab::CausticsTextureTranslator, "caustics_texture")

@@ -40,6 +40,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include "spec/report_fields.h"
 #include "caustic_translation.h"
 #include "facet_stitching.h"
 #include "caustics/caustic_parts.h"
@@ -472,6 +473,10 @@ class FacetCausticsTranslator final : public TuningTranslator {
 };
 
 }  // namespace
+}  // namespace spec2fab
+
+namespace spec2fab {
+SPEC2FAB_REPORT_FIELDS(facet_caustics, "facet_caustics", section_docs<FacetCausticsReport>("caustics."))
 }  // namespace spec2fab
 
 SPEC2FAB_REGISTER(spec2fab::TranslatorRegistry, spec2fab::FacetCausticsTranslator, "facet_caustics")

@@ -17,6 +17,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include "spec/report_fields.h"
 #include "caustic_translation.h"
 #include "caustics/caustic_parts.h"
 #include "reducer/nodes/nodes.h"
@@ -258,6 +259,10 @@ class SmoothCausticsTranslator final : public TuningTranslator {
 };
 
 }  // namespace
+}  // namespace spec2fab
+
+namespace spec2fab {
+SPEC2FAB_REPORT_FIELDS(smooth_caustics, "smooth_caustics", section_docs<SmoothCausticsReport>("caustics."))
 }  // namespace spec2fab
 
 SPEC2FAB_REGISTER(spec2fab::TranslatorRegistry, spec2fab::SmoothCausticsTranslator, "smooth_caustics")

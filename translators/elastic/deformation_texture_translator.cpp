@@ -15,6 +15,7 @@
 
 #include <fmt/format.h>
 
+#include "spec/report_fields.h"
 #include "../pieces/elastic.h"
 #include "../pieces/texture.h"
 #include "core/options.h"
@@ -205,6 +206,7 @@ class DeformationTextureTranslator final : public TuningTranslator {
     context.report.add("texture", texture_.report(achieved));
     texture_.write_preview({&texture_.image().pixels, &achieved},
                            context.folder.path("preview/texture_goal_vs_achieved.png"));
+    texture_.write_look(achieved, context.experiment.solid().mesh(), context.folder);
     // The cells' tuner ran last: its run is the record's last.
     DeformationReport deformation{elastic_.report(network_, *tree_, record.runs.back().summary, context), {}};
     if (options_.compare_without_shell)
@@ -224,6 +226,11 @@ class DeformationTextureTranslator final : public TuningTranslator {
 };
 
 }  // namespace
+}  // namespace spec2fab
+
+namespace spec2fab {
+SPEC2FAB_REPORT_FIELDS(deformation_texture_texture_section, "deformation_texture", section_docs<TextureReport>("texture."))
+SPEC2FAB_REPORT_FIELDS(deformation_texture, "deformation_texture", section_docs<DeformationReport>("deformation."))
 }  // namespace spec2fab
 
 SPEC2FAB_REGISTER(spec2fab::TranslatorRegistry, spec2fab::DeformationTextureTranslator, "deformation_texture")

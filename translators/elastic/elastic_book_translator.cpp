@@ -12,6 +12,7 @@
 
 #include <fmt/format.h>
 
+#include "spec/report_fields.h"
 #include "../pieces/elastic.h"
 #include "core/options.h"
 #include "reducer/reducer_tree.h"
@@ -106,6 +107,10 @@ class ElasticBookTranslator final : public TuningTranslator {
 };
 
 }  // namespace
+}  // namespace spec2fab
+
+namespace spec2fab {
+SPEC2FAB_REPORT_FIELDS(elastic_book, "elastic_book", section_docs<ElasticReport>("elastic_book."))
 }  // namespace spec2fab
 
 SPEC2FAB_REGISTER(spec2fab::TranslatorRegistry, spec2fab::ElasticBookTranslator, "elastic_book")

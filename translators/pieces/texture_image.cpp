@@ -10,6 +10,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/colour.h"
+#include "core/image_write.h"
+#include "core/run_folder.h"
 #include "core/properties.h"
 #include "geometry/solid.h"
 #include "materials/printer_profile.h"
@@ -110,6 +112,34 @@ DeltaE delta_e_statistics(const std::vector<Rgb>& goal, const std::vector<Rgb>& 
   std::sort(d.begin(), d.end());
   const auto p95 = d[static_cast<size_t>(std::ceil(0.95 * static_cast<double>(d.size()))) - 1];
   return {d.size(), mean, p95, d.back()};
+}
+
+void TexturePiece::write_look(const std::vector<Rgb>& achieved, const Mesh& mesh, const RunFolder& folder) const {
+  constexpr size_t kMostTriangles = 200000;  // beyond, the page would outgrow its budget (report/run_page.cpp)
+  if (!mesh.has_uv() || mesh.triangles.size() > kMostTriangles) return;
+  const std::array<int, 2> columns = columns_;
+  cv::Mat look(columns[1], columns[0], CV_8UC3);
+  for (int j = 0; j < columns[1]; ++j)
+    for (int i = 0; i < columns[0]; ++i) {
+      const Rgb& c = achieved[static_cast<size_t>(i) + static_cast<size_t>(columns[0]) * static_cast<size_t>(j)];
+      // Row 0 of the image is v = 1 (images run top down, v up); OpenCV stores BGR.
+      look.at<cv::Vec3b>(columns[1] - 1 - j, i) = {linear_to_srgb8(c[2]), linear_to_srgb8(c[1]), linear_to_srgb8(c[0])};
+    }
+  constexpr int kLargestSide = 1024;
+  if (std::max(columns[0], columns[1]) > kLargestSide) {
+    const double f = static_cast<double>(kLargestSide) / std::max(columns[0], columns[1]);
+    cv::resize(look, look, cv::Size(std::max(1, static_cast<int>(columns[0] * f)), std::max(1, static_cast<int>(columns[1] * f))),
+               0, 0, cv::INTER_AREA);
+  }
+  write_image(folder.path("preview/look.png"), look);
+  std::string obj = "# spec2fab: the shape with its surface coordinates; preview/look.png holds the predicted colours\n";
+  for (const Vec3& v : mesh.vertices) obj += fmt::format("v {:.6g} {:.6g} {:.6g}\n", v.x(), v.y(), v.z());
+  for (const Vec2& uv : mesh.corner_uv) obj += fmt::format("vt {:.6g} {:.6g}\n", uv.x(), uv.y());
+  for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const Eigen::Vector3i& f = mesh.triangles[t];
+    obj += fmt::format("f {}/{} {}/{} {}/{}\n", f[0] + 1, 3 * t + 1, f[1] + 1, 3 * t + 2, f[2] + 1, 3 * t + 3);
+  }
+  folder.write_text("preview/look.obj", obj);
 }
 
 }  // namespace spec2fab

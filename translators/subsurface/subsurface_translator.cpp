@@ -17,6 +17,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "spec/report_fields.h"
 #include "core/colour.h"
 #include "core/image_write.h"
 #include "core/distance.h"
@@ -381,6 +382,10 @@ class SubsurfaceTranslator final : public TuningTranslator {
 };
 
 }  // namespace
+}  // namespace spec2fab
+
+namespace spec2fab {
+SPEC2FAB_REPORT_FIELDS(subsurface, "subsurface", section_docs<SubsurfaceReport>("subsurface."))
 }  // namespace spec2fab
 
 SPEC2FAB_REGISTER(spec2fab::TranslatorRegistry, spec2fab::SubsurfaceTranslator, "subsurface")

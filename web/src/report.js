@@ -48,7 +48,7 @@ function flatten(value, prefix, out) {
   return out;
 }
 
-function headlineCards(result) {
+function headlineCards(result, meanings) {
   const cards = [];
   for (const [name, value] of Object.entries(result)) {
     if (SHARED.has(name)) continue;
@@ -57,21 +57,29 @@ function headlineCards(result) {
       if (!HEADLINE.includes(leaf) || typeof v !== 'number' || cards.length >= 8) continue;
       if (path.includes('initial') || path.includes('nearest_only')) continue;
       const parts = path.split('.');
-      cards.push(el('div', { class: 'card', title: MEANINGS[leaf] || '' },
+      cards.push(el('div', { class: 'card', title: meaningOf(path, meanings) },
         el('div', { class: 'v', text: fmt(v) }), el('div', { class: 'k', text: parts.slice(-3).map(words).join(' › ') })));
     }
   }
   return cards;
 }
 
-function figuresSection(result) {
+/// A figure's meaning: its own documented one (the run's field docs), else its
+/// nearest documented ancestor's, else the page's own words for common leaves.
+function meaningOf(path, meanings) {
+  const parts = path.split('.');
+  for (let n = parts.length; n > 0; --n) {
+    const text = meanings[parts.slice(0, n).join('.')];
+    if (text) return n === parts.length ? text : `${parts.slice(n).join(' ')}: ${text}`;
+  }
+  return MEANINGS[parts[parts.length - 1]] || '';
+}
+
+function figuresSection(result, meanings) {
   const blocks = [];
   for (const [name, value] of Object.entries(result)) {
     if (SHARED.has(name) || value === null || typeof value !== 'object') continue;
-    const rows = flatten(value, '', []).map(([path, v]) => {
-      const leaf = path.split('.').pop();
-      return [path, v, MEANINGS[leaf] || ''];
-    });
+    const rows = flatten(value, '', []).map(([path, v]) => [path, v, meaningOf(`${name}.${path}`, meanings)]);
     blocks.push(el('h3', { text: name }), table(['figure', 'value', 'meaning'], rows, [1]));
   }
   const tuners = result.tuning?.tuners;
@@ -116,7 +124,9 @@ function censusSection(result) {
   const fabricated = result.fabrication?.materials;
   if (!census && !fabricated) return null;
   const rows = [];
-  for (const [name, m] of Object.entries(census?.materials || {})) rows.push([name, m.volume_mm3, (100 * m.fraction).toFixed(1) + ' %']);
+  for (const [name, m] of Object.entries(census?.materials || {})) {
+    rows.push([name, m.volume_mm3, Number.isFinite(m.fraction) ? (100 * m.fraction).toFixed(1) + ' %' : '—']);
+  }
   const children = [];
   if (rows.length) children.push(el('p', { class: 'muted', text: `Census on a ${fmt(census.voxel_mm)} mm grid.` }),
     table(['material', 'volume (mm³)', 'share'], rows, [1, 2]));
@@ -156,7 +166,7 @@ function runPage(d, timing) {
     el('p', { text: `spec2fab ${result.spec2fab_version} · seed ${result.seed} · printer ${result.inputs?.printer?.name || '—'}` }));
   const sections = [];
   const lead = section('summary', 'What the run was for, and what it reached',
-    el('p', { class: 'lead', text: d.purpose || '' }), el('div', { class: 'cards' }, headlineCards(result)));
+    el('p', { class: 'lead', text: d.purpose || '' }), el('div', { class: 'cards' }, headlineCards(result, d.meanings || {})));
   if (d.notes?.length) lead.append(el('ul', { class: 'muted' }, d.notes.map((n) => el('li', { text: n }))));
   const warnings = timing?.warnings || [];
   if (warnings.length) {
@@ -170,7 +180,7 @@ function runPage(d, timing) {
     viewer = viewerSection(d.viewer, images);
     sections.push(section('view', '3D view of the print', viewer.element));
   }
-  sections.push(figuresSection(result), convergenceSection(d.convergence), censusSection(result), timingSection(timing),
+  sections.push(figuresSection(result, d.meanings || {}), convergenceSection(d.convergence), censusSection(result), timingSection(timing),
     inputsSection(result, d.experiment), filesSection(d.files || []));
   const present = sections.filter(Boolean);
   const nav = el('nav', {}, present.map((s) => el('a', { href: '#' + s.id, text: s.querySelector('h2').textContent.split(',')[0] })));
