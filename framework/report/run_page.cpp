@@ -404,6 +404,8 @@ void write_run_page(const fs::path& folder, const std::string& purpose,
   if (nlohmann::json look = look_entry(folder, data["images"], notes); !look.is_null()) {
     for (auto& mesh : viewer["meshes"])
       mesh["visible"] = false;  // the look first, the material regions a click away
+    // Where the FEM's surface is drawn (deformation_texture), the look is a click away too: they overlap.
+    if (viewer.contains("fem")) look["visible"] = false;
     viewer["meshes"].insert(viewer["meshes"].begin(), std::move(look));
   }
   if (nlohmann::json receiver = receiver_entry(result, data["images"]); !receiver.is_null())
