@@ -11,8 +11,9 @@
 
 namespace spec2fab {
 
-/// `mesh` with at most about `target_triangles` triangles (itself when it has
-/// no more), unused vertices dropped. Corner uvs are dropped.
+/// `mesh` with at most about `target_triangles` triangles: itself (its
+/// vertices and triangles) when it has no more, else the simplified mesh
+/// with only the vertices its triangles use. Corner uvs are dropped.
 Mesh decimate_for_viewing(const Mesh& mesh, std::size_t target_triangles);
 
 }  // namespace spec2fab
