@@ -47,7 +47,7 @@ std::vector<T> read_array(const std::string& file, size_t data_start, const Arra
   return out;
 }
 
-std::string fmt_missing(const std::string& file, const char* array, const char* type) {
+std::string missing_array(const std::string& file, const char* array, const char* type) {
   return file + " has no " + type + " array " + array;
 }
 
@@ -80,7 +80,7 @@ VtuArrays read_vtu(const fs::path& vtu, std::string& why_not) {
                                                         {"von_mises_mpa", "Float64"}};
   for (const auto& [array, type] : needed) {
     if (!arrays.count(array) || arrays[array].type != type) {
-      why_not = fmt_missing(name, array, type);
+      why_not = missing_array(name, array, type);
       return {};
     }
   }
@@ -177,12 +177,6 @@ double p99(std::vector<double> values) {
   const size_t rank = (99 * values.size() + 99) / 100;  // ceil(0.99 n), in integers
   std::nth_element(values.begin(), values.begin() + static_cast<long>(rank - 1), values.end());
   return values[rank - 1];
-}
-
-template <class T>
-std::string packed(const std::vector<T>& values) {
-  return base64(
-      std::string_view(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(T)));
 }
 
 }  // namespace

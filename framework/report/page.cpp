@@ -10,6 +10,7 @@
 
 #include "core/error.h"
 #include "core/file_read.h"
+#include "core/properties.h"
 
 namespace fs = std::filesystem;
 
@@ -116,12 +117,8 @@ std::string read_bytes(const fs::path& file) {
 }
 
 nlohmann::json read_json(const fs::path& file) {
-  const std::string text = read_bytes(file);
-  try {
-    return nlohmann::json::parse(text);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw InputError(fmt::format("{}: not JSON ({})", file.string(), e.what()));
-  }
+  // The project's reader: a missing file or malformed JSON is one line naming it.
+  return Properties::load(file).value();
 }
 
 std::pair<int, int> png_size(std::string_view bytes) {

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -20,8 +21,16 @@ std::string html_page(const std::string& title, const nlohmann::json& data,
 
 std::string base64(std::string_view bytes);
 std::string read_bytes(const std::filesystem::path& file);
-/// The JSON in `file`; an InputError naming it when it cannot be read or parsed.
+/// The JSON object in `file` (Properties::load: an InputError naming the
+/// file when it is missing, malformed or not an object).
 nlohmann::json read_json(const std::filesystem::path& file);
+
+/// Little-endian values as base64, which the page decodes into typed arrays.
+template <class T>
+std::string packed(const std::vector<T>& values) {
+  return base64(
+      std::string_view(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(T)));
+}
 
 /// Width and height of a PNG from its header; {0, 0} when it is not one.
 std::pair<int, int> png_size(std::string_view bytes);

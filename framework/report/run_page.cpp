@@ -39,8 +39,8 @@ std::string within(const fs::path& folder, std::string message) {
 /// What a picture shows, from its file name (the translators' names).
 std::string caption(const std::string& path) {
   static const std::vector<std::pair<std::string, std::string>> kCaptions = {
+      {"texture_goal_vs_achieved", "the texture's goal beside achieved"},  // before its suffix
       {"goal_vs_achieved", "goal beside achieved"},
-      {"texture_goal_vs_achieved", "the texture's goal beside achieved"},
       {"convergence", "error against evaluations"},
       {"optimizer_comparison", "the optimizers compared on this goal"},
       {"search", "branch and bound: what it evaluated and pruned"},
@@ -106,12 +106,6 @@ nlohmann::json images(const fs::path& folder, const nlohmann::json& result, size
     list.push_back(std::move(image));
   }
   return list;
-}
-
-template <class T>
-std::string packed(const std::vector<T>& values) {
-  return base64(
-      std::string_view(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(T)));
 }
 
 nlohmann::json mesh_entry(const Mesh& shown, const std::string& name, size_t source_triangles) {
@@ -232,7 +226,8 @@ nlohmann::json fem_entry(const fs::path& folder, std::vector<std::string>& notes
   }
   fem["probes"] = nlohmann::json::array();
   if (fs::is_regular_file(folder / "fem" / "probes.json"))
-    fem["probes"] = read_json(folder / "fem" / "probes.json");
+    fem["probes"] =
+        read_json(folder / "fem" / "probes.json").value("probes", nlohmann::json::array());
   return fem;
 }
 
@@ -381,7 +376,8 @@ nlohmann::json receiver_entry(const nlohmann::json& result, const nlohmann::json
 namespace {
 
 void write_run_page(const fs::path& folder, const std::string& purpose,
-                    const std::map<std::string, std::string>& meanings, const HtmlReportBudget& budget) {
+                    const std::map<std::string, std::string>& meanings,
+                    const HtmlReportBudget& budget) {
   using namespace html_report;
   const nlohmann::json result = read_json(folder / "result.json");
   if (!result.is_object() || !result.contains("experiment") || !result.contains("translator"))
@@ -391,8 +387,6 @@ void write_run_page(const fs::path& folder, const std::string& purpose,
       {"kind", "run"}, {"purpose", purpose}, {"result", result}, {"meanings", meanings}};
   if (fs::is_regular_file(folder / "convergence.csv"))
     data["convergence"] = convergence(folder / "convergence.csv");
-  if (fs::is_regular_file(folder / "experiment.json"))
-    data["experiment"] = read_json(folder / "experiment.json");
   data["images"] = images(folder, result, budget.inline_image_bytes);
   std::vector<std::string> notes;
   nlohmann::json viewer = {{"meshes", print_meshes(folder, budget.triangles, notes)}};
@@ -404,7 +398,8 @@ void write_run_page(const fs::path& folder, const std::string& purpose,
   if (nlohmann::json look = look_entry(folder, data["images"], notes); !look.is_null()) {
     for (auto& mesh : viewer["meshes"])
       mesh["visible"] = false;  // the look first, the material regions a click away
-    // Where the FEM's surface is drawn (deformation_texture), the look is a click away too: they overlap.
+    // Where the FEM's surface is drawn (deformation_texture), the look is a click away too: they
+    // overlap.
     if (viewer.contains("fem")) look["visible"] = false;
     viewer["meshes"].insert(viewer["meshes"].begin(), std::move(look));
   }

@@ -141,12 +141,8 @@ std::map<std::string, std::string> files_under(const fs::path& folder) {
     if (name.rfind("timing/", 0) == 0) continue;  // wall times
     std::ifstream in(entry.path(), std::ios::binary);
     std::string bytes(std::istreambuf_iterator<char>(in), {});
-    if (name == "report.html") {  // its copy of the wall time aside
-      const std::string open = R"(<script type="application/json" id="spec2fab-timing">)";
-      const size_t start = bytes.find(open) + open.size();
-      bytes.erase(start, bytes.find("</script>", start) - start);
-    }
-    files[name] = std::move(bytes);
+    // report.html's copy of the wall time aside.
+    files[name] = name == "report.html" ? spec2fab_cli_test::without_timing_block(std::move(bytes)) : std::move(bytes);
   }
   return files;
 }
@@ -344,13 +340,10 @@ TEST(BenchCli, QuickMatrixWritesLogsThatParseAndAddUp) {
     }
   }
   // report.html: the page holds report.json as it is.
-  std::ifstream html_file(out / "report.html");
-  const std::string html(std::istreambuf_iterator<char>(html_file), {});
-  const std::string open = R"(<script type="application/json" id="spec2fab-data">)";
-  const size_t start = html.find(open);
-  ASSERT_NE(start, std::string::npos);
-  const size_t end = html.find("</script>", start);
-  EXPECT_EQ(nlohmann::json::parse(html.substr(start + open.size(), end - start - open.size()))["report"], report);
+  const nlohmann::json data =
+      spec2fab_cli_test::page_block(spec2fab_cli_test::read(out / "report.html"), "spec2fab-data");
+  ASSERT_TRUE(data.is_object());
+  EXPECT_EQ(data["report"], report);
   EXPECT_GE(problems_run, 4);
   EXPECT_TRUE(fs::exists(out / "plots" / "fight.png"));
   std::ifstream md(out / "report.md");

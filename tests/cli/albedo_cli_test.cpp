@@ -116,10 +116,7 @@ TEST_F(Cli, AlbedoRenderShowsThePredictedColours) {
     for (int x = 0; x < look.cols; ++x)
       for (int c = 0; c < 3; ++c) look_sum[c] += srgb8_to_linear(look.at<cv::Vec3b>(y, x)[2 - c]) / (96 * 48);
   for (int c = 0; c < 3; ++c) EXPECT_NEAR(look_sum[c], mean[c], 0.004) << "channel " << c;  // 8-bit rounding
-  const std::string page = read(dir_ / "run" / "report.html");
-  const std::string open = R"(<script type="application/json" id="spec2fab-data">)";
-  const size_t start = page.find(open) + open.size();
-  const auto data = nlohmann::json::parse(page.substr(start, page.find("</script>", start) - start));
+  const nlohmann::json data = page_block(read(dir_ / "run" / "report.html"), "spec2fab-data");
   const auto& first = data["viewer"]["meshes"][0];
   EXPECT_EQ(first["name"], "predicted look");
   EXPECT_EQ(data["images"][first["texture"].get<size_t>()]["name"], "preview/look.png");

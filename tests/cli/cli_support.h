@@ -16,6 +16,8 @@
 #include <sstream>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 namespace spec2fab_cli_test {
 
 namespace fs = std::filesystem;
@@ -82,14 +84,24 @@ inline std::string read(const fs::path& file) {
   return s.str();
 }
 
-/// report.html without its copy of timing.json (the one block that may
-/// differ between reruns).
+/// report.html's JSON block `id` ("spec2fab-data", "spec2fab-timing")
+/// parsed; null when absent.
+inline nlohmann::json page_block(const std::string& page, const std::string& id) {
+  const std::string open = R"(<script type="application/json" id=")" + id + R"(">)";
+  const size_t start = page.find(open);
+  if (start == std::string::npos) return nullptr;
+  const size_t from = start + open.size();
+  return nlohmann::json::parse(page.substr(from, page.find("</script>", from) - from));
+}
+
+/// report.html with its copy of timing.json emptied: the one block a rerun
+/// may change.
 inline std::string without_timing_block(std::string page) {
   const std::string open = R"(<script type="application/json" id="spec2fab-timing">)";
   const size_t start = page.find(open);
   if (start == std::string::npos) return page;
-  const size_t end = page.find("</script>", start);
-  return page.erase(start + open.size(), end - start - open.size());
+  const size_t from = start + open.size();
+  return page.erase(from, page.find("</script>", from) - from);
 }
 
 /// Every file under `folder` but timing.json (wall times), by relative path;

@@ -17,14 +17,6 @@ using namespace spec2fab_cli_test;
 const char* kStratum =
     R"({"type": "stratum", "depth_mm": 1, "shell": {"type": "layered", "material": "VeroCyan"}, "core": {"type": "layered", "material": "VeroWhitePlus"}})";
 
-nlohmann::json data_block(const std::string& page) {
-  const std::string open = R"(<script type="application/json" id="spec2fab-data">)";
-  const size_t start = page.find(open);
-  if (start == std::string::npos) return nullptr;
-  const size_t end = page.find("</script>", start);
-  return nlohmann::json::parse(page.substr(start + open.size(), end - start - open.size()));
-}
-
 TEST_F(Cli, ReportIsWrittenByTheRunAndAgainByTheCommand) {
   const fs::path file = experiment("paged", valid_body(kStratum));
   const fs::path out = dir_ / "run";
@@ -32,7 +24,7 @@ TEST_F(Cli, ReportIsWrittenByTheRunAndAgainByTheCommand) {
   ASSERT_EQ(run.code, 0) << run.out;
   EXPECT_THAT(run.out, HasSubstr("report.html"));
   const std::string page = read(out / "report.html");
-  const nlohmann::json data = data_block(page);
+  const nlohmann::json data = page_block(page, "spec2fab-data");
   ASSERT_TRUE(data.is_object());
   EXPECT_EQ(data["kind"], "run");
   EXPECT_EQ(data["result"], nlohmann::json::parse(read(out / "result.json")));
@@ -87,10 +79,7 @@ TEST_F(Cli, WarningsOfTheRunReachTheReport) {
   const nlohmann::json timing = nlohmann::json::parse(read(out / "timing.json"));
   ASSERT_EQ(timing["warnings"].size(), 1u);
   EXPECT_THAT(timing["warnings"][0].get<std::string>(), HasSubstr("1 free parameter(s)"));
-  const std::string page = read(out / "report.html");
-  const std::string open = R"(<script type="application/json" id="spec2fab-timing">)";
-  const size_t start = page.find(open) + open.size();
-  EXPECT_EQ(nlohmann::json::parse(page.substr(start, page.find("</script>", start) - start)), timing);
+  EXPECT_EQ(page_block(read(out / "report.html"), "spec2fab-timing"), timing);
 }
 
 TEST_F(Cli, ReportRefusesWhatIsNoRunOrBenchInOneLine) {
@@ -106,7 +95,7 @@ TEST_F(Cli, ReportRefusesWhatIsNoRunOrBenchInOneLine) {
   std::ofstream(dir_ / "broken" / "result.json") << "{\"experiment\": ";
   const Result broken = run_spec2fab("report " + (dir_ / "broken").string());
   EXPECT_EQ(broken.code, 2);
-  EXPECT_THAT(single_line(broken.out), HasSubstr("result.json: not JSON"));
+  EXPECT_THAT(single_line(broken.out), HasSubstr("result.json: malformed JSON"));
   EXPECT_FALSE(fs::exists(dir_ / "broken" / "report.html"));
   // A field of another type than a run writes: the file named, not an internal error.
   std::ofstream(dir_ / "broken" / "result.json") << R"({"experiment": 5, "translator": "tree"})";

@@ -269,7 +269,7 @@ void write_solved_mesh(const Tuner& tuner, const DisplacementsObservation& achie
                       {"goal", {goal_u[3 * p], goal_u[3 * p + 1], goal_u[3 * p + 2]}},
                       {"achieved", {at[3 * p], at[3 * p + 1], at[3 * p + 2]}}});
   }
-  context.folder.write_json("fem/probes.json", probes);
+  context.folder.write_json("fem/probes.json", {{"probes", probes}});
 }
 
 }  // namespace

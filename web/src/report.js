@@ -145,11 +145,10 @@ function timingSection(timing) {
     table(['step', 'time'], rows, [1]));
 }
 
-function inputsSection(result, experiment) {
+function inputsSection(result) {
   const inputs = result.inputs || {};
   const rows = flatten(inputs, '', []);
-  return section('inputs', 'Inputs', table(['input', 'value'], rows),
-    experiment ? el('details', {}, el('summary', { text: 'the experiment as run' }), el('pre', { text: JSON.stringify(experiment, null, 2) })) : null);
+  return section('inputs', 'Inputs', table(['input', 'value'], rows));
 }
 
 function filesSection(files) {
@@ -181,7 +180,7 @@ function runPage(d, timing) {
     sections.push(section('view', '3D view of the print', viewer.element));
   }
   sections.push(figuresSection(result, d.meanings || {}), convergenceSection(d.convergence), censusSection(result), timingSection(timing),
-    inputsSection(result, d.experiment), filesSection(d.files || []));
+    inputsSection(result), filesSection(d.files || []));
   const present = sections.filter(Boolean);
   const nav = el('nav', {}, present.map((s) => el('a', { href: '#' + s.id, text: s.querySelector('h2').textContent.split(',')[0] })));
   document.body.append(header, nav, el('main', {}, present));
