@@ -7,8 +7,8 @@
 #include <cstdint>
 #include <cstring>
 #include <map>
-#include <regex>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "report/page.h"
@@ -65,14 +65,23 @@ VtuArrays read_vtu(const fs::path& vtu, std::string& why_not) {
   }
   std::map<std::string, ArrayRef> arrays;
   const std::string header = file.substr(0, appended);
-  static const std::regex kArray(
-      R"re(<DataArray type="(\w+)" Name="(\w+)"[^>]*offset="(\d{1,19})")re");
-  for (auto it = std::sregex_iterator(header.begin(), header.end(), kArray);
-       it != std::sregex_iterator(); ++it) {
-    ArrayRef ref{(*it)[1], 0};
-    const std::string digits = (*it)[3];
-    std::from_chars(digits.data(), digits.data() + digits.size(), ref.offset);
-    arrays[(*it)[2]] = ref;
+  // Each <DataArray ...> tag's type, Name and offset attributes.
+  for (size_t at = header.find("<DataArray"); at != std::string::npos;
+       at = header.find("<DataArray", at + 1)) {
+    const std::string_view tag = std::string_view(header).substr(at, header.find('>', at) - at);
+    const auto attribute = [&tag](std::string_view key) {
+      for (size_t k = tag.find(key); k != std::string_view::npos; k = tag.find(key, k + 1)) {
+        const size_t equals = k + key.size();
+        if (k == 0 || tag[k - 1] != ' ' || tag.substr(equals, 2) != "=\"") continue;
+        return tag.substr(equals + 2, tag.find('"', equals + 2) - equals - 2);
+      }
+      return std::string_view();
+    };
+    const std::string_view offset = attribute("offset");
+    ArrayRef ref{std::string(attribute("type")), 0};
+    if (std::from_chars(offset.data(), offset.data() + offset.size(), ref.offset).ec != std::errc())
+      continue;  // no offset, or one beyond 64 bits: the array is missing below
+    arrays[std::string(attribute("Name"))] = ref;
   }
   const std::pair<const char*, const char*> needed[] = {{"Points", "Float64"},
                                                         {"connectivity", "Int64"},
