@@ -10,6 +10,7 @@
 #include <cstring>
 #include <fstream>
 #include <sstream>
+#include <string_view>
 #include <unordered_map>
 #include <vector>
 
@@ -34,6 +35,15 @@ namespace {
 }  // namespace
 
 namespace {
+
+/// A line quoted in a message: at most 60 characters, bytes outside
+/// printable ASCII as '?' (the user's terminal gets one clean line).
+std::string shown_line(const std::string& line) {
+  std::string shown = line.substr(0, 60);
+  for (char& c : shown)
+    if (static_cast<unsigned char>(c) < 32 || static_cast<unsigned char>(c) > 126) c = '?';
+  return shown + (line.size() > 60 ? "..." : "");
+}
 
 int ply_type_size(const std::string& type) {
   static const std::unordered_map<std::string, int> sizes = {
@@ -316,21 +326,13 @@ void check_off(const std::filesystem::path& file) {
     return false;
   };
   const auto bad = [&](const std::string& what) { fail(file, "read", "malformed OFF: " + what); };
-  // A line quoted in a message: at most 60 characters, bytes outside
-  // printable ASCII as '?' (the user's terminal gets one clean line).
-  const auto quoted = [](const std::string& line) {
-    std::string shown = line.substr(0, 60);
-    for (char& c : shown)
-      if (static_cast<unsigned char>(c) < 32 || static_cast<unsigned char>(c) > 126) c = '?';
-    return shown + (line.size() > 60 ? "..." : "");
-  };
   std::string row;
   if (!next_row(row)) bad("the file is empty");
   std::istringstream head(row);
   std::string keyword;
   head >> keyword;
   if (keyword.size() < 3 || keyword.compare(keyword.size() - 3, 3, "OFF") != 0)
-    bad("the first line is '" + quoted(row) + "', not OFF");
+    bad("the first line is '" + shown_line(row) + "', not OFF");
   if (row.find("BINARY") != std::string::npos) return;  // binary OFF: its reader decides
   check_text(file, "an OFF file");
   // The counts follow the keyword on its line, or make the next one.
@@ -347,7 +349,7 @@ void check_off(const std::filesystem::path& file) {
     std::istringstream coordinates(row);
     double x, y, z;
     if (!(coordinates >> x >> y >> z))
-      bad(fmt::format("vertex {} has not three coordinates: '{}'", v, quoted(row)));
+      bad(fmt::format("vertex {} has not three coordinates: '{}'", v, shown_line(row)));
   }
   for (long long f = 0; f < faces; ++f) {
     if (!next_row(row)) bad(fmt::format("the header says {} faces, the file holds {}", faces, f));
@@ -355,11 +357,11 @@ void check_off(const std::filesystem::path& file) {
     long long count = -1;
     corners >> count;
     if (!corners || count < 3)
-      bad(fmt::format("face {} has {} corners: '{}'", f, std::max(count, 0LL), quoted(row)));
+      bad(fmt::format("face {} has {} corners: '{}'", f, std::max(count, 0LL), shown_line(row)));
     for (long long k = 0; k < count; ++k) {
       long long index = -1;
       if (!(corners >> index))
-        bad(fmt::format("face {} says {} corners and lists fewer: '{}'", f, count, quoted(row)));
+        bad(fmt::format("face {} says {} corners and lists fewer: '{}'", f, count, shown_line(row)));
       if (index < 0 || index >= vertices)
         bad(fmt::format("face {} refers to vertex {}, and there are {}", f, index, vertices));
     }
@@ -394,6 +396,96 @@ void check_binary_stl(const std::filesystem::path& file) {
         fmt::format("the binary STL header says {} triangles ({:.0f} bytes), the file has {} bytes "
                     "(truncated, or not an STL)",
                     triangles, needed, size));
+}
+
+
+namespace {
+
+/// One vertex reference of an OBJ statement, strictly: v, v/vt, v//vn or
+/// v/vt/vn, each index a nonzero integer of at most 9 digits without a
+/// leading zero or a sign other than '-'. Assimp's face reader steps over a
+/// reference by its value's digit count, so "01" or "+1" would count as two.
+bool is_vertex_reference(std::string_view token) {
+  int part = 0;
+  for (size_t at = 0; at <= token.size(); ++part) {
+    const size_t slash = std::min(token.find('/', at), token.size());
+    std::string_view index = token.substr(at, slash - at);
+    const bool may_be_empty = part == 1 && slash < token.size();  // v//vn
+    if (part > 2) return false;
+    if (index.empty()) {
+      if (!may_be_empty) return false;
+    } else {
+      if (index.front() == '-') index.remove_prefix(1);
+      if (index.empty() || index.size() > 9 || index.front() < '1' || index.front() > '9' ||
+          !std::all_of(index.begin(), index.end(), [](char c) { return c >= '0' && c <= '9'; }))
+        return false;
+    }
+    at = slash + 1;
+  }
+  return true;
+}
+
+/// An OBJ line statement ("l v1 v2 …"; Assimp takes any line whose first
+/// byte is 'l' for one): two or more strict vertex references.
+void check_obj_line_statement(const std::filesystem::path& file, const std::string& line, long long number) {
+  std::istringstream words(line);
+  std::string keyword, token;
+  words >> keyword;
+  int references = 0;
+  while (words >> token) {
+    if (!is_vertex_reference(token))
+      fail(file, "read",
+           fmt::format("malformed OBJ, line {}: '{}' is not a vertex reference, in '{}'", number, shown_line(token),
+                       shown_line(line)));
+    ++references;
+  }
+  if (references < 2)
+    fail(file, "read",
+         fmt::format("malformed OBJ, line {}: a line statement needs two or more vertices, '{}' has {}", number,
+                     shown_line(line), references));
+}
+
+}  // namespace
+
+/// An OBJ file's text, and its line statements. Debian 12's Assimp (5.2.5)
+/// gives a line statement of one vertex no room in its mesh and still
+/// writes it: a later line then writes past the mesh's arrays, corrupting
+/// the heap (found by fuzz_mesh; fixed upstream in 5.3.0). Lines are split
+/// as Assimp splits them: at CR or LF, joined where a backslash ends one.
+void check_obj(const std::filesystem::path& file) {
+  if (lowercase_extension(file) != ".obj") return;
+  check_text(file, "an OBJ file");
+  std::ifstream in(file, std::ios::binary);
+  std::string line;
+  bool line_statement = false, at_start = true;
+  long long physical = 1, first = 1;
+  const auto end_line = [&] {
+    if (line_statement) check_obj_line_statement(file, line, first);
+    line.clear();
+    line_statement = false;
+    at_start = true;
+  };
+  for (int c = in.get(); c != std::char_traits<char>::eof(); c = in.get()) {
+    if (c == '\\' && (in.peek() == '\r' || in.peek() == '\n')) {
+      // A continuation: Assimp skips to the next LF and reads on.
+      while ((c = in.get()) != std::char_traits<char>::eof() && c != '\n') {
+      }
+      ++physical;
+      continue;
+    }
+    if (c == '\r' || c == '\n') {
+      end_line();
+      if (c == '\n') ++physical;
+      continue;
+    }
+    if (at_start) {
+      at_start = false;
+      first = physical;
+      line_statement = c == 'l';
+    }
+    if (line_statement) line.push_back(static_cast<char>(c));
+  }
+  end_line();
 }
 
 }  // namespace spec2fab

@@ -23,6 +23,8 @@ void check_text(const std::filesystem::path& file, const char* format, std::uint
 void check_ply_header(const std::filesystem::path& file);
 /// An ASCII OFF file's grammar (another extension: nothing).
 void check_off(const std::filesystem::path& file);
+/// An OBJ file's text, and its line statements (another extension: nothing).
+void check_obj(const std::filesystem::path& file);
 /// A binary STL's triangle count against its size; an ASCII one's text.
 void check_binary_stl(const std::filesystem::path& file);
 

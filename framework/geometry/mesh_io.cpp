@@ -285,7 +285,7 @@ Mesh load_mesh(const std::filesystem::path& file, double scale_to_mm, const Limi
   check_ply_header(file);
   check_off(file);
   check_binary_stl(file);
-  if (lowercase_extension(file) == ".obj") check_text(file, "an OBJ file");
+  check_obj(file);
   // Open MPI forbids fork() in its processes: under mpirun Assimp runs here.
   if (process == MeshReaderProcess::this_one || std::getenv("OMPI_COMM_WORLD_SIZE") != nullptr)
     return import_with_assimp(file, scale_to_mm);

@@ -376,6 +376,19 @@ TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
   mesh_case("ASCII PLY with more values than properties", "extra.ply",
             ply_head + "0 0 0\n10 0 0\n0 10 0\n0 0 10 7\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n",
             "extra.ply: cannot read mesh: malformed PLY: vertex element 3: more values than its 3 properties");
+  // The heap corruption fuzz_mesh met twice (docs/robustness.md): Debian's
+  // Assimp 5.2.5 writes a one-vertex line statement past its mesh's arrays
+  // when a longer line follows. Assimp takes any line starting with 'l' for
+  // one, and joins lines a backslash ends.
+  const std::string square = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n";
+  mesh_case("OBJ line statements of one vertex", "lines.obj", square + "f 1 2 3\nl 1\nl 1\nl 1 2 3\n",
+            "lines.obj: cannot read mesh: malformed OBJ, line 6: a line statement needs two or more vertices, 'l 1' has 1");
+  mesh_case("OBJ 'lod' line read as a line statement", "lod.obj", square + "lod 1\nlx 2/1\nl 1 2 3 4\n",
+            "lod.obj: cannot read mesh: malformed OBJ, line 5: a line statement needs two or more vertices, 'lod 1' has 1");
+  mesh_case("OBJ line statement continued over two lines", "joined.obj", square + "l 1 \\\r\n 2 0x3\n",
+            "joined.obj: cannot read mesh: malformed OBJ, line 5: '0x3' is not a vertex reference, in 'l 1  2 0x3'");
+  mesh_case("OBJ line statement with a leading zero", "zero.obj", square + "l 01 2\n",
+            "zero.obj: cannot read mesh: malformed OBJ, line 5: '01' is not a vertex reference, in 'l 01 2'");
   mesh_case("OBJ with a NUL byte", "nul.obj", "v 0 0 0\nv 10 0 0\nv 0 10 0\nv 0 0 10\n" + std::string(1, '\0') + tetrahedron_faces,
             "nul.obj: cannot read mesh: byte 35 is a control character (0x00), and an OBJ file is text");
 

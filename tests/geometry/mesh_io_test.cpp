@@ -179,6 +179,18 @@ TEST(MeshIo, ObjWithUvsIsTriangulatedWeldedAndKeepsCornerUvs) {
   }
 }
 
+// Line statements are no part of a solid, but well-formed ones are no
+// reason to refuse a file (the check against Assimp 5.2.5's overrun on a
+// one-vertex line, mesh_grammar.cpp, lets them through); so are lines
+// joined by a backslash, as OBJ allows.
+TEST(MeshIo, ObjLineStatementsAndContinuationsAreRead) {
+  TempDir dir;
+  const Mesh mesh = load_mesh(dir.file("lines.obj", std::string(kCubeObj) + "l 1 2\nl -1 -2 -3\nl 1/1 2/2 \\\n 3/3\n"));
+  EXPECT_EQ(mesh.triangles.size(), 12u);
+  expect_closed(mesh);
+  EXPECT_NEAR(mesh.signed_volume(), 1, 1e-12);
+}
+
 TEST(MeshIo, AsciiStl) {
   TempDir dir;
   const Mesh mesh = load_mesh(dir.file("tetra.stl", kTetrahedronStl));
