@@ -425,50 +425,81 @@ bool is_vertex_reference(std::string_view token) {
   return true;
 }
 
-/// An OBJ line statement ("l v1 v2 …"; Assimp takes any line whose first
-/// byte is 'l' for one): two or more strict vertex references.
-void check_obj_line_statement(const std::filesystem::path& file, const std::string& line, long long number) {
-  std::istringstream words(line);
-  std::string keyword, token;
-  words >> keyword;
+/// An OBJ statement of vertex references, which Assimp's face reader takes
+/// any line starting with 'f', 'l' or 'p' for (its keyword is skipped
+/// whatever it is): strict references only (Assimp 5.2.5 reads a number
+/// past the line's end where atoi overflows), at least as many as the kind
+/// needs.
+void check_obj_elements(const std::filesystem::path& file, const std::string& line, long long number) {
+  const char kind = line.front();
+  const int needed = kind == 'f' ? 3 : kind == 'l' ? 2 : 1;
+  const char* const what = kind == 'f' ? "a face" : kind == 'l' ? "a line statement" : "a point statement";
+  const auto blank = [](char c) { return c == ' ' || c == '\t'; };
   int references = 0;
-  while (words >> token) {
+  size_t at = 0;
+  while (at < line.size() && !blank(line[at])) ++at;  // the keyword
+  while (true) {
+    while (at < line.size() && blank(line[at])) ++at;
+    if (at == line.size()) break;
+    const size_t begin = at;
+    while (at < line.size() && !blank(line[at])) ++at;
+    const std::string_view token(line.data() + begin, at - begin);
     if (!is_vertex_reference(token))
       fail(file, "read",
-           fmt::format("malformed OBJ, line {}: '{}' is not a vertex reference, in '{}'", number, shown_line(token),
-                       shown_line(line)));
+           fmt::format("malformed OBJ, line {}: '{}' is not a vertex reference, in '{}'", number,
+                       shown_line(std::string(token)), shown_line(line)));
     ++references;
   }
-  if (references < 2)
+  if (references < needed)
     fail(file, "read",
-         fmt::format("malformed OBJ, line {}: a line statement needs two or more vertices, '{}' has {}", number,
-                     shown_line(line), references));
+         fmt::format("malformed OBJ, line {}: {} needs {} or more vertices, '{}' has {}", number, what,
+                     needed == 3 ? "three" : needed == 2 ? "two" : "one", shown_line(line), references));
+}
+
+/// An OBJ's `mtllib NAME` (NAME: the rest of the line, as Assimp reads it,
+/// relative to the OBJ's folder) must not name the OBJ itself: Assimp would
+/// read it again as a material library (mesh_io.cpp opens no other file).
+void check_obj_material_library(const std::filesystem::path& file, const std::string& line, long long number) {
+  const size_t keyword_end = std::min(line.find_first_of(" \t"), line.size());
+  if (line.compare(0, keyword_end, "mtllib") != 0) return;
+  const size_t name = line.find_first_not_of(" \t", keyword_end);
+  if (name == std::string::npos) return;
+  std::error_code error;
+  if (std::filesystem::equivalent(file.parent_path() / line.substr(name), file, error))
+    fail(file, "read",
+         fmt::format("malformed OBJ, line {}: '{}' names the OBJ file itself as its material library", number,
+                     shown_line(line)));
 }
 
 }  // namespace
 
-/// An OBJ file's text, and its line statements. Debian 12's Assimp (5.2.5)
-/// gives a line statement of one vertex no room in its mesh and still
-/// writes it: a later line then writes past the mesh's arrays, corrupting
-/// the heap (found by fuzz_mesh; fixed upstream in 5.3.0). Lines are split
-/// as Assimp splits them: at CR or LF, joined where a backslash ends one.
+/// An OBJ file's text, and its statements of vertex references (faces,
+/// lines, points). Debian 12's Assimp (5.2.5) gives a line statement of one
+/// vertex no room in its mesh and still writes it: a later line then writes
+/// past the mesh's arrays, corrupting the heap (found by fuzz_mesh; fixed
+/// upstream in 5.3.0). Lines are split as Assimp splits them: at CR or LF,
+/// joined where a backslash ends one.
 void check_obj(const std::filesystem::path& file) {
   if (lowercase_extension(file) != ".obj") return;
   check_text(file, "an OBJ file");
   std::ifstream in(file, std::ios::binary);
+  std::streambuf& bytes = *in.rdbuf();  // byte by byte, without istream's per-call checks
+  constexpr int kEnd = std::char_traits<char>::eof();
   std::string line;
-  bool line_statement = false, at_start = true;
+  bool elements = false, at_start = true;
   long long physical = 1, first = 1;
+  bool material_library = false;
   const auto end_line = [&] {
-    if (line_statement) check_obj_line_statement(file, line, first);
+    if (elements) check_obj_elements(file, line, first);
+    if (material_library) check_obj_material_library(file, line, first);
     line.clear();
-    line_statement = false;
+    elements = material_library = false;
     at_start = true;
   };
-  for (int c = in.get(); c != std::char_traits<char>::eof(); c = in.get()) {
-    if (c == '\\' && (in.peek() == '\r' || in.peek() == '\n')) {
+  for (int c = bytes.sbumpc(); c != kEnd; c = bytes.sbumpc()) {
+    if (c == '\\' && (bytes.sgetc() == '\r' || bytes.sgetc() == '\n')) {
       // A continuation: Assimp skips to the next LF and reads on.
-      while ((c = in.get()) != std::char_traits<char>::eof() && c != '\n') {
+      while ((c = bytes.sbumpc()) != kEnd && c != '\n') {
       }
       ++physical;
       continue;
@@ -481,9 +512,10 @@ void check_obj(const std::filesystem::path& file) {
     if (at_start) {
       at_start = false;
       first = physical;
-      line_statement = c == 'l';
+      elements = c == 'f' || c == 'l' || c == 'p';
+      material_library = c == 'm';
     }
-    if (line_statement) line.push_back(static_cast<char>(c));
+    if (elements || material_library) line.push_back(static_cast<char>(c));
   }
   end_line();
 }

@@ -22,6 +22,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include <assimp/DefaultIOSystem.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <assimp/Exporter.hpp>
@@ -138,9 +139,28 @@ void check_face_indices(const std::filesystem::path& file, const aiScene& scene)
 
 namespace {
 
+/// What Assimp may open while it reads a mesh: the mesh alone. An OBJ's
+/// material library (`mtllib`, or the .mtl of the OBJ's name) is not read:
+/// the print's materials come from the library, and the file an OBJ names
+/// could be anything beside it (in fuzz_mesh, the previous input), handed to
+/// an MTL reader that Assimp 5.2.5 crashes on statements before `newmtl`.
+/// An OBJ naming itself is refused by check_obj.
+class MeshFileOnly : public Assimp::DefaultIOSystem {
+ public:
+  explicit MeshFileOnly(std::string mesh) : mesh_(std::move(mesh)) {}
+  bool Exists(const char* file) const override { return mesh_ == file && DefaultIOSystem::Exists(file); }
+  Assimp::IOStream* Open(const char* file, const char* mode) override {
+    return mesh_ == file ? DefaultIOSystem::Open(file, mode) : nullptr;
+  }
+
+ private:
+  std::string mesh_;
+};
+
 Mesh import_with_assimp(const std::filesystem::path& file, double scale_to_mm) {
   // No DefaultLogger is created, so Assimp stays silent (its NullLogger).
   Assimp::Importer importer;
+  importer.SetIOHandler(new MeshFileOnly(file.string()));  // the importer owns it
   // Assimp's own text (its validation's internals, e.g. "aiMesh::mFaces[0]
   // .mNumIndices is 0") is not the user's: the formats with a grammar of
   // their own are checked before (check_ply_header, check_off,

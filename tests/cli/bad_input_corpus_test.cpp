@@ -389,6 +389,16 @@ TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
             "joined.obj: cannot read mesh: malformed OBJ, line 5: '0x3' is not a vertex reference, in 'l 1  2 0x3'");
   mesh_case("OBJ line statement with a leading zero", "zero.obj", square + "l 01 2\n",
             "zero.obj: cannot read mesh: malformed OBJ, line 5: '01' is not a vertex reference, in 'l 01 2'");
+  // Assimp 5.2.5 steps over a face's index by the digits of atoi's value,
+  // which for an overflowing number is not the token's length.
+  mesh_case("OBJ face index of ten digits", "long.obj", square + "f 1 2 2147483648\n",
+            "long.obj: cannot read mesh: malformed OBJ, line 5: '2147483648' is not a vertex reference, in 'f 1 2 "
+            "2147483648'");
+  mesh_case("OBJ face of two vertices", "two.obj", square + "f 1 2\n",
+            "two.obj: cannot read mesh: malformed OBJ, line 5: a face needs three or more vertices, 'f 1 2' has 2");
+  mesh_case("OBJ naming itself as its material library", "self.obj", "mtllib self.obj\n" + square + "Kd 1 1 1\n",
+            "self.obj: cannot read mesh: malformed OBJ, line 1: 'mtllib self.obj' names the OBJ file itself as its "
+            "material library");
   mesh_case("OBJ with a NUL byte", "nul.obj", "v 0 0 0\nv 10 0 0\nv 0 10 0\nv 0 0 10\n" + std::string(1, '\0') + tetrahedron_faces,
             "nul.obj: cannot read mesh: byte 35 is a control character (0x00), and an OBJ file is text");
 

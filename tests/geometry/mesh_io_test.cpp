@@ -191,6 +191,20 @@ TEST(MeshIo, ObjLineStatementsAndContinuationsAreRead) {
   EXPECT_NEAR(mesh.signed_volume(), 1, 1e-12);
 }
 
+// Assimp reads the shape alone: a material library beside an OBJ is not
+// opened (the materials are the library's). Debian 12's Assimp (5.2.5)
+// dereferences a null material for this one's anisotropy line and crashes
+// the process, here where Assimp runs in it, as under mpirun.
+TEST(MeshIo, ObjMaterialLibrariesAreNotOpened) {
+  TempDir dir;
+  dir.file("bad.mtl", "a 1\nKd 1 1 1\n");
+  dir.file("cube.mtl", "a 1\n");  // what Assimp falls back to when bad.mtl cannot be opened
+  const Mesh mesh = load_mesh(dir.file("cube.obj", "mtllib bad.mtl\n" + std::string(kCubeObj)), 1.0, default_limits(),
+                              MeshReaderProcess::this_one);
+  EXPECT_EQ(mesh.triangles.size(), 12u);
+  EXPECT_NEAR(mesh.signed_volume(), 1, 1e-12);
+}
+
 TEST(MeshIo, AsciiStl) {
   TempDir dir;
   const Mesh mesh = load_mesh(dir.file("tetra.stl", kTetrahedronStl));
