@@ -216,7 +216,7 @@ bool update_option_tables(const fs::path& file) {
   }
   out += text.substr(at);
   if (out == text) return false;
-  if (!(std::ofstream(file) << out)) throw InputError(file.string() + ": cannot write");
+  write_file(file, out);  // a refused write: one line, exit 3
   return true;
 }
 

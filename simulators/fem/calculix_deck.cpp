@@ -8,12 +8,14 @@
 
 #include <fmt/format.h>
 
+#include "core/file_write.h"
+
 namespace spec2fab::fem {
 
 void write_calculix_deck(const TetMesh& mesh, const std::vector<double>& youngs_mpa,
                          const std::vector<double>& poisson, const Constraints& c, bool nonlinear,
                          int increments, const std::filesystem::path& inp_file) {
-  std::ofstream out(inp_file);
+  std::ostringstream out;  // written whole, checked (write_file: a refused write is one line, exit 3)
   out << "*HEADING\nSpec2Fab fem check\n*NODE, NSET=NALL\n";
   for (size_t v = 0; v < mesh.nodes.size(); ++v) {
     out << fmt::format("{}, {:.17g}, {:.17g}, {:.17g}\n", v + 1, mesh.nodes[v].x(), mesh.nodes[v].y(), mesh.nodes[v].z());
@@ -50,7 +52,7 @@ void write_calculix_deck(const TetMesh& mesh, const std::vector<double>& youngs_
     if (c.force_n[d] != 0 && !c.fixed[d]) out << fmt::format("{}, {}, {:.17g}\n", d / 3 + 1, d % 3 + 1, c.force_n[d]);
   }
   out << "*NODE PRINT, NSET=NALL\nU\n*END STEP\n";
-  if (!out) throw std::runtime_error("cannot write " + inp_file.string());
+  write_file(inp_file, out.view());
 }
 
 std::vector<double> read_calculix_displacements(const std::filesystem::path& dat_file, size_t nodes) {

@@ -2,7 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
+#include <sstream>
 #include <stdexcept>
 #include <map>
 #include <numeric>
@@ -11,6 +11,8 @@
 #include <unordered_set>
 
 #include <Eigen/Geometry>
+
+#include "core/file_write.h"
 
 namespace spec2fab::fem {
 namespace {
@@ -329,7 +331,7 @@ class PlcBuilder {
 }  // namespace
 
 void write_poly(const Plc& plc, const std::filesystem::path& file) {
-  std::ofstream out(file);
+  std::ostringstream out;  // written whole, checked (write_file)
   out.precision(17);
   out << plc.points.size() << " 3 0 0\n";
   for (size_t i = 0; i < plc.points.size(); ++i)
@@ -341,7 +343,7 @@ void write_poly(const Plc& plc, const std::filesystem::path& file) {
     out << "\n";
   }
   out << "0\n0\n";
-  if (!out) throw std::runtime_error("cannot write " + file.string());
+  write_file(file, out.view());
 }
 
 Plc surface_plc(const Mesh& surface) {

@@ -107,5 +107,18 @@ TEST_F(DiskFaults, AFileSizeLimitIsAWriteErrorForBench) {
     EXPECT_EQ(name.find(".bench.partial"), std::string::npos) << "left behind: " << name;
 }
 
+TEST_F(DiskFaults, AFileSizeLimitIsAWriteErrorForSimulate) {
+  const fs::path out = dir_ / "simulated";
+  // 4 kB per file: the radial profile's table goes past it.
+  const Result r = run_command("ulimit -f 4; " + std::string(SPEC2FAB_CLI_PATH) + " simulate -q subsurface " +
+                               (kDatasets / "simulations/subsurface_white_over_cyan.json").string() + " --out " +
+                               out.string());
+  EXPECT_EQ(r.code, 3) << r.out;
+  EXPECT_THAT(single_line(r.out), HasSubstr("error: cannot write " + out.string() + "/"));
+  EXPECT_THAT(r.out, HasSubstr(": File too large"));
+  EXPECT_FALSE(fs::exists(out));
+  for (const std::string& name : entries(dir_)) EXPECT_EQ(name.find("partial"), std::string::npos) << "left behind: " << name;
+}
+
 }  // namespace
 }  // namespace spec2fab_cli_test
