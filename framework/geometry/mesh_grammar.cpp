@@ -429,8 +429,12 @@ bool is_vertex_reference(std::string_view token) {
 /// any line starting with 'f', 'l' or 'p' for (its keyword is skipped
 /// whatever it is): strict references only (Assimp 5.2.5 reads a number
 /// past the line's end where atoi overflows), at least as many as the kind
-/// needs.
-void check_obj_elements(const std::filesystem::path& file, const std::string& line, long long number) {
+/// needs. With normals and no texture coordinates before it, Assimp reads
+/// v/vt/vn's middle index as the normal and gives up on the rest of the
+/// line at the third, so such a reference is refused too: the line would
+/// count fewer vertices than it lists.
+void check_obj_elements(const std::filesystem::path& file, const std::string& line, long long number,
+                        bool texture_coordinates_seen, bool normals_seen) {
   const char kind = line.front();
   const int needed = kind == 'f' ? 3 : kind == 'l' ? 2 : 1;
   const char* const what = kind == 'f' ? "a face" : kind == 'l' ? "a line statement" : "a point statement";
@@ -448,6 +452,12 @@ void check_obj_elements(const std::filesystem::path& file, const std::string& li
       fail(file, "read",
            fmt::format("malformed OBJ, line {}: '{}' is not a vertex reference, in '{}'", number,
                        shown_line(std::string(token)), shown_line(line)));
+    const size_t slash = token.find('/'), second = token.find('/', slash + 1);
+    if (normals_seen && !texture_coordinates_seen && second != std::string_view::npos && second > slash + 1)
+      fail(file, "read",
+           fmt::format("malformed OBJ, line {}: '{}' names a texture coordinate, and the file has normals but no "
+                       "texture coordinates before it (write v//vn)",
+                       number, shown_line(std::string(token))));
     ++references;
   }
   if (references < needed)
@@ -456,19 +466,9 @@ void check_obj_elements(const std::filesystem::path& file, const std::string& li
                      needed == 3 ? "three" : needed == 2 ? "two" : "one", shown_line(line), references));
 }
 
-/// An OBJ's `mtllib NAME` (NAME: the rest of the line, as Assimp reads it,
-/// relative to the OBJ's folder) must not name the OBJ itself: Assimp would
-/// read it again as a material library (mesh_io.cpp opens no other file).
-void check_obj_material_library(const std::filesystem::path& file, const std::string& line, long long number) {
-  const size_t keyword_end = std::min(line.find_first_of(" \t"), line.size());
-  if (line.compare(0, keyword_end, "mtllib") != 0) return;
-  const size_t name = line.find_first_not_of(" \t", keyword_end);
-  if (name == std::string::npos) return;
-  std::error_code error;
-  if (std::filesystem::equivalent(file.parent_path() / line.substr(name), file, error))
-    fail(file, "read",
-         fmt::format("malformed OBJ, line {}: '{}' names the OBJ file itself as its material library", number,
-                     shown_line(line)));
+/// The first word of a line (up to a blank).
+std::string_view first_word(const std::string& line) {
+  return std::string_view(line).substr(0, std::min(line.find_first_of(" \t"), line.size()));
 }
 
 }  // namespace
@@ -477,8 +477,12 @@ void check_obj_material_library(const std::filesystem::path& file, const std::st
 /// lines, points). Debian 12's Assimp (5.2.5) gives a line statement of one
 /// vertex no room in its mesh and still writes it: a later line then writes
 /// past the mesh's arrays, corrupting the heap (found by fuzz_mesh; fixed
-/// upstream in 5.3.0). Lines are split as Assimp splits them: at CR or LF,
-/// joined where a backslash ends one.
+/// upstream in 5.3.0). The file is read as Assimp reads it: lines end at CR
+/// or LF; a line's first byte says what it is; a free-form section
+/// (`cstype` to `end`) is skipped; a line continued by a backslash is
+/// refused, since Assimp joins such lines unlike the format says (it takes
+/// the byte after the line end as it comes, and reads past its buffer when
+/// the backslash ends one of its 16 MiB blocks).
 void check_obj(const std::filesystem::path& file) {
   if (lowercase_extension(file) != ".obj") return;
   check_text(file, "an OBJ file");
@@ -486,36 +490,40 @@ void check_obj(const std::filesystem::path& file) {
   std::streambuf& bytes = *in.rdbuf();  // byte by byte, without istream's per-call checks
   constexpr int kEnd = std::char_traits<char>::eof();
   std::string line;
-  bool elements = false, at_start = true;
-  long long physical = 1, first = 1;
-  bool material_library = false;
+  long long number = 1;
+  bool free_form = false, texture_coordinates = false, normals = false;
   const auto end_line = [&] {
-    if (elements) check_obj_elements(file, line, first);
-    if (material_library) check_obj_material_library(file, line, first);
-    line.clear();
-    elements = material_library = false;
-    at_start = true;
-  };
-  for (int c = bytes.sbumpc(); c != kEnd; c = bytes.sbumpc()) {
-    if (c == '\\' && (bytes.sgetc() == '\r' || bytes.sgetc() == '\n')) {
-      // A continuation: Assimp skips to the next LF and reads on.
-      while ((c = bytes.sbumpc()) != kEnd && c != '\n') {
-      }
-      ++physical;
-      continue;
+    if (line.empty()) return;
+    const char kind = line.front();
+    if (free_form) {
+      free_form = !(kind == 'e' && first_word(line) == "end");
+    } else if (kind == 'c') {
+      free_form = first_word(line) == "cstype";
+    } else if (kind == 'v' && line.size() > 1) {
+      texture_coordinates = texture_coordinates || line[1] == 't';
+      normals = normals || line[1] == 'n';
+    } else if (kind == 'f' || kind == 'l' || kind == 'p') {
+      check_obj_elements(file, line, number, texture_coordinates, normals);
     }
+    line.clear();
+  };
+  constexpr std::uint64_t kAssimpBlock = std::uint64_t{1} << 24;  // IOStreamBuffer's cache
+  std::uint64_t offset = 0;
+  for (int c = bytes.sbumpc(); c != kEnd; c = bytes.sbumpc(), ++offset) {
+    if (c == '\\' && (bytes.sgetc() == '\r' || bytes.sgetc() == '\n'))
+      fail(file, "read",
+           fmt::format("malformed OBJ, line {}: a line continued by a backslash (join it with the next)", number));
+    if (c == '\\' && offset % kAssimpBlock == kAssimpBlock - 1)  // Assimp would look at the byte past its block
+      fail(file, "read", fmt::format("malformed OBJ, line {}: a backslash at byte {}", number, offset));
     if (c == '\r' || c == '\n') {
       end_line();
-      if (c == '\n') ++physical;
+      if (c == '\n' || bytes.sgetc() != '\n') ++number;  // LF, CRLF or a lone CR
       continue;
     }
-    if (at_start) {
-      at_start = false;
-      first = physical;
-      elements = c == 'f' || c == 'l' || c == 'p';
-      material_library = c == 'm';
-    }
-    if (elements || material_library) line.push_back(static_cast<char>(c));
+    // Only the statements checked above are kept whole.
+    if (line.empty() || line.front() == 'f' || line.front() == 'l' || line.front() == 'p' ||
+        line.size() < 8)
+      line.push_back(static_cast<char>(c));
   }
   end_line();
 }

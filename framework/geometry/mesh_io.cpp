@@ -139,22 +139,31 @@ void check_face_indices(const std::filesystem::path& file, const aiScene& scene)
 
 namespace {
 
-/// What Assimp may open while it reads a mesh: the mesh alone. An OBJ's
-/// material library (`mtllib`, or the .mtl of the OBJ's name) is not read:
-/// the print's materials come from the library, and the file an OBJ names
-/// could be anything beside it (in fuzz_mesh, the previous input), handed to
-/// an MTL reader that Assimp 5.2.5 crashes on statements before `newmtl`.
-/// An OBJ naming itself is refused by check_obj.
+/// What Assimp may open while it reads a mesh: the mesh alone, one stream at
+/// a time. An OBJ's material library (`mtllib`, or the .mtl of the OBJ's
+/// name) is opened while the OBJ's own stream is open, so it never is: the
+/// print's materials come from the library, and the file an OBJ names could
+/// be anything beside it (in fuzz_mesh, the previous input; the OBJ itself,
+/// by a path Assimp cleans up), handed to an MTL reader that Assimp 5.2.5
+/// crashes on statements before `newmtl`.
 class MeshFileOnly : public Assimp::DefaultIOSystem {
  public:
   explicit MeshFileOnly(std::string mesh) : mesh_(std::move(mesh)) {}
   bool Exists(const char* file) const override { return mesh_ == file && DefaultIOSystem::Exists(file); }
   Assimp::IOStream* Open(const char* file, const char* mode) override {
-    return mesh_ == file ? DefaultIOSystem::Open(file, mode) : nullptr;
+    if (mesh_ != file || open_ > 0) return nullptr;
+    Assimp::IOStream* stream = DefaultIOSystem::Open(file, mode);
+    if (stream != nullptr) ++open_;
+    return stream;
+  }
+  void Close(Assimp::IOStream* stream) override {
+    if (stream != nullptr) --open_;
+    DefaultIOSystem::Close(stream);
   }
 
  private:
   std::string mesh_;
+  int open_ = 0;
 };
 
 Mesh import_with_assimp(const std::filesystem::path& file, double scale_to_mm) {

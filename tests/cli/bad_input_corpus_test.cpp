@@ -379,14 +379,14 @@ TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
   // The heap corruption fuzz_mesh met twice (docs/robustness.md): Debian's
   // Assimp 5.2.5 writes a one-vertex line statement past its mesh's arrays
   // when a longer line follows. Assimp takes any line starting with 'l' for
-  // one, and joins lines a backslash ends.
+  // one.
   const std::string square = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n";
   mesh_case("OBJ line statements of one vertex", "lines.obj", square + "f 1 2 3\nl 1\nl 1\nl 1 2 3\n",
             "lines.obj: cannot read mesh: malformed OBJ, line 6: a line statement needs two or more vertices, 'l 1' has 1");
   mesh_case("OBJ 'lod' line read as a line statement", "lod.obj", square + "lod 1\nlx 2/1\nl 1 2 3 4\n",
             "lod.obj: cannot read mesh: malformed OBJ, line 5: a line statement needs two or more vertices, 'lod 1' has 1");
-  mesh_case("OBJ line statement continued over two lines", "joined.obj", square + "l 1 \\\r\n 2 0x3\n",
-            "joined.obj: cannot read mesh: malformed OBJ, line 5: '0x3' is not a vertex reference, in 'l 1  2 0x3'");
+  mesh_case("OBJ line statement with a bad reference", "hex.obj", square + "l 1 2 0x3\n",
+            "hex.obj: cannot read mesh: malformed OBJ, line 5: '0x3' is not a vertex reference, in 'l 1 2 0x3'");
   mesh_case("OBJ line statement with a leading zero", "zero.obj", square + "l 01 2\n",
             "zero.obj: cannot read mesh: malformed OBJ, line 5: '01' is not a vertex reference, in 'l 01 2'");
   // Assimp 5.2.5 steps over a face's index by the digits of atoi's value,
@@ -396,9 +396,13 @@ TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
             "2147483648'");
   mesh_case("OBJ face of two vertices", "two.obj", square + "f 1 2\n",
             "two.obj: cannot read mesh: malformed OBJ, line 5: a face needs three or more vertices, 'f 1 2' has 2");
-  mesh_case("OBJ naming itself as its material library", "self.obj", "mtllib self.obj\n" + square + "Kd 1 1 1\n",
-            "self.obj: cannot read mesh: malformed OBJ, line 1: 'mtllib self.obj' names the OBJ file itself as its "
-            "material library");
+  mesh_case("OBJ with normals and no texture coordinates naming one", "vn.obj",
+            square + "vn 0 0 1\nl 1/1/1 1/1/1\nl 1/1/1 1/1/1\nl 1 1 1\n",
+            "vn.obj: cannot read mesh: malformed OBJ, line 6: '1/1/1' names a texture coordinate, and the file has "
+            "normals but no texture coordinates before it (write v//vn)");
+  mesh_case("OBJ line continued by a backslash", "continued.obj", square + "#\\\n\\\nl 1\nl 1\nl 1 2 3\n",
+            "continued.obj: cannot read mesh: malformed OBJ, line 5: a line continued by a backslash (join it with the "
+            "next)");
   mesh_case("OBJ with a NUL byte", "nul.obj", "v 0 0 0\nv 10 0 0\nv 0 10 0\nv 0 0 10\n" + std::string(1, '\0') + tetrahedron_faces,
             "nul.obj: cannot read mesh: byte 35 is a control character (0x00), and an OBJ file is text");
 

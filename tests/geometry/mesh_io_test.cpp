@@ -179,13 +179,14 @@ TEST(MeshIo, ObjWithUvsIsTriangulatedWeldedAndKeepsCornerUvs) {
   }
 }
 
-// Line statements are no part of a solid, but well-formed ones are no
-// reason to refuse a file (the check against Assimp 5.2.5's overrun on a
-// one-vertex line, mesh_grammar.cpp, lets them through); so are lines
-// joined by a backslash, as OBJ allows.
-TEST(MeshIo, ObjLineStatementsAndContinuationsAreRead) {
+// Line and point statements are no part of a solid, but well-formed ones
+// are no reason to refuse a file (the check against Assimp 5.2.5's overrun
+// on a one-vertex line, mesh_grammar.cpp, lets them through); nor is a
+// free-form section, which Assimp skips (Blender writes `parm` lines there).
+TEST(MeshIo, ObjLineStatementsAndFreeFormSectionsAreRead) {
   TempDir dir;
-  const Mesh mesh = load_mesh(dir.file("lines.obj", std::string(kCubeObj) + "l 1 2\nl -1 -2 -3\nl 1/1 2/2 \\\n 3/3\n"));
+  const Mesh mesh = load_mesh(dir.file("lines.obj", std::string(kCubeObj) + "l 1 2\r\nl -1 -2 -3\rl 1/1 2/2\t\np 3\n"
+                                                                            "cstype bspline\ndeg 3\nparm u 0 0 1 1\nend\n"));
   EXPECT_EQ(mesh.triangles.size(), 12u);
   expect_closed(mesh);
   EXPECT_NEAR(mesh.signed_volume(), 1, 1e-12);
@@ -203,6 +204,10 @@ TEST(MeshIo, ObjMaterialLibrariesAreNotOpened) {
                               MeshReaderProcess::this_one);
   EXPECT_EQ(mesh.triangles.size(), 12u);
   EXPECT_NEAR(mesh.signed_volume(), 1, 1e-12);
+  // Nor the OBJ itself, by a path Assimp cleans up to its own ('//' → '/').
+  const Mesh itself = load_mesh(dir.file("self.obj", "mtllib /self.obj\na 1\n" + std::string(kCubeObj)), 1.0,
+                                default_limits(), MeshReaderProcess::this_one);
+  EXPECT_EQ(itself.triangles.size(), 12u);
 }
 
 TEST(MeshIo, AsciiStl) {
