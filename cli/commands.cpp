@@ -130,6 +130,7 @@ int bench_command(BenchArguments arguments) {
                 << (last ? "" : ", ETA " + format_seconds(left)) << (terminal && !last ? "   " : "\n") << std::flush;
     };
   }
+  require_free_space(arguments.out, estimated_bench_report_bytes(options), "the benchmark's files");
   RunCache cache;
   const BenchResult result = run_bench(options, BenchmarkContext{arguments.datasets, &cache});
   RunFolder folder(arguments.out);
@@ -363,6 +364,9 @@ int simulate_command(const SimulateArguments& arguments) {
 
   using Clock = std::chrono::steady_clock;
   const double setup_seconds = set_up(prepared);
+  // After setup (the FEM's mesh is made), before the simulation: a disk
+  // that cannot take the files is refused with the figures.
+  require_free_space(arguments.out, simulator->estimated_report_bytes(), "the simulation's files");
   auto observation = simulator->make_observation();
   const auto simulate_start = Clock::now();
   int evaluations = 0;

@@ -388,6 +388,16 @@ void set_targets(BenchResult& result) {
 
 }  // namespace
 
+long long estimated_bench_report_bytes(const BenchOptions& options) {
+  const auto problems = static_cast<long long>(
+      options.problems.empty() ? BenchmarkRegistry::instance().names().size() : options.problems.size());
+  const long long runs = problems * static_cast<long long>(options.entrants.size()) * std::max(options.seeds, 1);
+  // Measured on `bench --quick` (5 problems, 57 runs: 1.95 MB, of which the
+  // page's script ~0.7 MB, 150 kB of plots a problem, ~5 kB a run in ioh/
+  // and report.json, which the page holds again): a little over that.
+  return (1LL << 20) + problems * (300LL << 10) + runs * (8LL << 10);
+}
+
 BenchResult run_bench(const BenchOptions& options, const BenchmarkContext& context) {
   const auto start = Clock::now();
   BenchResult result;

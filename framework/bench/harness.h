@@ -120,6 +120,12 @@ std::string capability_name(Capability capability);
 /// Builds the problems, decides the pairs and runs them.
 BenchResult run_bench(const BenchOptions& options, const BenchmarkContext& context);
 
+/// About how many bytes write_bench_report writes for `options`, known
+/// before anything runs (`spec2fab bench` refuses when the disk has less
+/// free): per problem its plots and its share of report.html, per run its
+/// IOHprofiler block and trace, and the page's script and summaries.
+long long estimated_bench_report_bytes(const BenchOptions& options);
+
 /// Expected running time to `target` over `runs`: evaluations spent by all
 /// runs (to the hit, or their whole length) over the number that hit;
 /// nothing when none did.

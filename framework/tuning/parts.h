@@ -86,6 +86,12 @@ class Simulator {
     return {out.write_files(folder), {}};
   }
 
+  /// After setup: about how many bytes write_report will write, so that
+  /// `spec2fab simulate` refuses before simulating when the disk has less
+  /// free (require_free_space: exit 2 with the figures). 0: no estimate, for
+  /// simulators whose files are small (a refused write is still exit 3).
+  virtual long long estimated_report_bytes() const { return 0; }
+
   /// Whether simulate() reads the tree beyond `subtree`: a volumetric
   /// simulator asks the whole tree which material is where, so it sees
   /// whatever the other tuners hold at that moment. Such a tuner may not

@@ -155,6 +155,20 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
 
   std::string failure() const override { return failure_; }
 
+  /// Per node, ~100 bytes of displacements.csv and 48 of fem.vtu (position
+  /// and displacement, doubles); per tet ~60 of fem.vtu (connectivity,
+  /// offset, type, material, stress); 50 per boundary face of deformed.stl;
+  /// the CalculiX deck's lines when asked for; 512 kB for the picture and
+  /// the record. fem_layered_block (4,807 nodes, 21,187 tets): 2.8 MB
+  /// estimated, 1.98 MB written.
+  long long estimated_report_bytes() const override {
+    if (mesh_ == nullptr) return 0;
+    const auto nodes = static_cast<long long>(mesh_->nodes.size()), tets = static_cast<long long>(mesh_->tets.size());
+    long long bytes = 148 * nodes + 60 * tets + 50 * static_cast<long long>(boundary_.size()) + (512LL << 10);
+    if (settings_.write_calculix_deck) bytes += 70 * nodes + 45 * tets;
+    return bytes;
+  }
+
   SimulatorFiles write_report(const Observation& observation, const std::filesystem::path& folder,
                               ReportSections& record) const override {
     const auto& out = static_cast<const DisplacementsObservation&>(observation);

@@ -11,6 +11,7 @@
 #include <cerrno>
 #include <cstring>
 
+#include "build_gates.h"
 #include "cli_support.h"
 
 namespace spec2fab_cli_test {
@@ -105,6 +106,30 @@ TEST_F(DiskFaults, AFileSizeLimitIsAWriteErrorForBench) {
   EXPECT_FALSE(fs::exists(out));
   for (const std::string& name : entries(dir_))
     EXPECT_EQ(name.find(".bench.partial"), std::string::npos) << "left behind: " << name;
+}
+
+TEST_F(DiskFaults, ASimulationThatCannotFitIsRefusedBeforeSimulating) {
+  SPEC2FAB_SKIP_UNLESS(SPEC2FAB_WITH_TETGEN);
+  if (const std::string why = mount_small_disk("2m"); !why.empty()) GTEST_SKIP() << why;
+  // The cantilever at 1 mm³ tets: its fem.vtu, displacements and surface are
+  // estimated from the mesh (~4 MB) once it is made, before the solve.
+  const Result r = run_spec2fab("simulate -q fem " + (kDatasets / "simulations/fem_cantilever.json").string() +
+                                " --out " + (small_ / "out").string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_THAT(single_line(r.out), HasSubstr("the simulation's files need ~"));
+  EXPECT_THAT(r.out, HasSubstr("free on " + small_.string()));
+  EXPECT_TRUE(entries(small_).empty()) << "nothing is written before the refusal";
+}
+
+TEST_F(DiskFaults, ABenchThatCannotFitIsRefusedBeforeItRuns) {
+  // One problem and one run: ~1.3 MB estimated (its page's script alone is ~0.7 MB).
+  if (const std::string why = mount_small_disk("1m"); !why.empty()) GTEST_SKIP() << why;
+  const Result r = run_command(std::string(SPEC2FAB_CLI_PATH) + " bench -q --out " + (small_ / "bench").string() +
+                               " --problems albedo_column --optimizers exhaustive --seeds 1");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_THAT(single_line(r.out), HasSubstr("the benchmark's files need ~"));
+  EXPECT_THAT(r.out, HasSubstr("free on " + small_.string()));
+  EXPECT_TRUE(entries(small_).empty()) << "nothing is written before the refusal";
 }
 
 TEST_F(DiskFaults, AFileSizeLimitIsAWriteErrorForSimulate) {
