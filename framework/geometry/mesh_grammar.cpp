@@ -317,47 +317,109 @@ std::string lowercase_extension(const std::filesystem::path& file) {
 /// Read line by line; comments (#) and blank lines are skipped.
 void check_off(const std::filesystem::path& file) {
   if (lowercase_extension(file) != ".off") return;
-  std::ifstream in(file, std::ios::binary);
-  const auto next_row = [&in](std::string& row) {
-    while (std::getline(in, row)) {
-      if (const size_t hash = row.find('#'); hash != std::string::npos) row.erase(hash);
-      if (row.find_first_not_of(" \t\r") != std::string::npos) return true;
-    }
-    return false;
-  };
+  std::string text;
+  {
+    std::ifstream in(file, std::ios::binary);
+    std::ostringstream bytes;
+    bytes << in.rdbuf();
+    text = std::move(bytes).str();
+  }
   const auto bad = [&](const std::string& what) { fail(file, "read", "malformed OFF: " + what); };
-  std::string row;
-  if (!next_row(row)) bad("the file is empty");
-  std::istringstream head(row);
-  std::string keyword;
-  head >> keyword;
+  // The header as Assimp 5.2.5's OFF reader walks it (NextToken: blanks,
+  // line ends and whole comment lines between tokens), so that the body
+  // below starts where its starts; then lines as its GetNextLine cuts them
+  // (at CR or LF, runs of line ends taken as one). Its vertex loop reads one
+  // line per vertex and its face loop one per face, skipping a line it
+  // cannot take as a face while counting the faces down: enough such lines
+  // wrap the count below zero, and every later pass over the faces reads
+  // far past them (SIGSEGV, found by fuzz_mesh: lines ended by lone CRs,
+  // which a check that cut lines at LF alone took for one). Here every
+  // vertex line must hold three numbers and the next lines a face each,
+  // so that the reader skips none.
+  const size_t size = text.size();
+  const auto line_end = [](char c) { return c == '\r' || c == '\n'; };
+  const auto blank = [](char c) { return c == ' ' || c == '\t'; };
+  size_t at = 0;
+  const auto next_token = [&] {
+    while (at < size && (blank(text[at]) || line_end(text[at]))) ++at;
+    while (at < size && text[at] == '#') {
+      while (at < size && !line_end(text[at])) ++at;
+      while (at < size && (blank(text[at]) || line_end(text[at]))) ++at;
+    }
+  };
+  const auto word_here = [&] {
+    size_t end_of_word = at;
+    while (end_of_word < size && !blank(text[end_of_word]) && !line_end(text[end_of_word])) ++end_of_word;
+    return text.substr(at, end_of_word - at);
+  };
+  next_token();
+  if (at == size) bad("the file is empty");
+  const std::string keyword = word_here();
   if (keyword.size() < 3 || keyword.compare(keyword.size() - 3, 3, "OFF") != 0)
-    bad("the first line is '" + shown_line(row) + "', not OFF");
-  if (row.find("BINARY") != std::string::npos) return;  // binary OFF: its reader decides
+    bad("the first word is '" + shown_line(keyword) + "', not OFF");
+  {
+    size_t line_stop = at;
+    while (line_stop < size && !line_end(text[line_stop])) ++line_stop;
+    if (text.substr(at, line_stop - at).find("BINARY") != std::string::npos) return;  // binary OFF: its reader decides
+  }
+  {
+    // The prefixes Assimp reads, in its order: ST (texture coordinates), C
+    // (colours), N (normals), 4 (homogeneous). An n (a dimension before the
+    // counts) would move the counts, so it is refused.
+    std::string_view rest(keyword);
+    for (const std::string_view prefix : {"ST", "C", "N", "4"})
+      if (rest.substr(0, prefix.size()) == prefix) rest.remove_prefix(prefix.size());
+    if (rest != "OFF")
+      bad("'" + shown_line(keyword) + "' is not read here (OFF, with ST, C, N or 4 before it)");
+  }
   check_text(file, "an OFF file");
-  // The counts follow the keyword on its line, or make the next one.
-  std::string counts;
-  std::getline(head, counts);
-  if (counts.find_first_not_of(" \t\r") == std::string::npos && !next_row(counts)) counts.clear();
-  std::istringstream count_line(counts);
-  long long vertices = -1, faces = -1;
-  count_line >> vertices >> faces;
-  if (!count_line || vertices < 0 || faces < 0) bad("no vertex and face counts after the OFF line");
+  at += keyword.size();
+  next_token();
+  // Three counts (vertices, faces, edges): plain digits, as strtoul10 reads them.
+  long long counts[3] = {-1, -1, -1};
+  for (long long& count : counts) {
+    next_token();
+    const std::string word = word_here();
+    if (word.empty() || word.size() > 9 || !std::all_of(word.begin(), word.end(), [](char c) { return c >= '0' && c <= '9'; }))
+      bad("no vertex and face counts after the OFF line");
+    count = std::stoll(word);
+    at += word.size();
+  }
+  next_token();
+  const long long vertices = counts[0], faces = counts[1];
+  // The body's lines.
+  const auto next_line = [&](std::string& line) {
+    if (at >= size) return false;
+    const size_t begin = at;
+    while (at < size && !line_end(text[at])) ++at;
+    line.assign(text, begin, at - begin);
+    while (at < size && line_end(text[at])) ++at;
+    return true;
+  };
+  // Assimp copies a line into 4096 bytes and writes its end one past them.
+  const auto check_length = [&](const std::string& line, const char* what, long long index) {
+    if (line.size() >= 4096)
+      bad(fmt::format("{} {}'s line is {} characters long (at most 4095)", what, index, line.size()));
+  };
+  std::string row;
   for (long long v = 0; v < vertices; ++v) {
-    if (!next_row(row))
-      bad(fmt::format("the header says {} vertices, the file holds {}", vertices, v));
+    if (!next_line(row)) bad(fmt::format("the header says {} vertices, the file holds {}", vertices, v));
+    check_length(row, "vertex", v);
     std::istringstream coordinates(row);
     double x, y, z;
     if (!(coordinates >> x >> y >> z))
       bad(fmt::format("vertex {} has not three coordinates: '{}'", v, shown_line(row)));
   }
   for (long long f = 0; f < faces; ++f) {
-    if (!next_row(row)) bad(fmt::format("the header says {} faces, the file holds {}", faces, f));
+    if (!next_line(row)) bad(fmt::format("the header says {} faces, the file holds {}", faces, f));
+    check_length(row, "face", f);
     std::istringstream corners(row);
     long long count = -1;
     corners >> count;
     if (!corners || count < 3)
       bad(fmt::format("face {} has {} corners: '{}'", f, std::max(count, 0LL), shown_line(row)));
+    if (count > 9)
+      bad(fmt::format("face {} has {} corners; the OFF reader takes at most 9 (split the polygon)", f, count));
     for (long long k = 0; k < count; ++k) {
       long long index = -1;
       if (!(corners >> index))

@@ -376,6 +376,18 @@ TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
   mesh_case("ASCII PLY with more values than properties", "extra.ply",
             ply_head + "0 0 0\n10 0 0\n0 10 0\n0 0 10 7\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n",
             "extra.ply: cannot read mesh: malformed PLY: vertex element 3: more values than its 3 properties");
+  // Found by fuzz_mesh: Assimp's OFF reader skips a line it cannot take as
+  // a face and counts the faces down; five such lines wrap the count of four
+  // below zero and a later pass over the faces crashes (SIGSEGV). Its lines
+  // end at CR as at LF, where a check cutting lines at LF saw one face line.
+  mesh_case("OFF face lines that Assimp would skip", "skipped.off",
+            "OFF\n4 4 0\n0 0 0\n10 0 0\n0 10 0\n0 0 10\rx\rx\rx\rx\rx\r3 0 2 1\r3 0 1 3\r3 0 3 2\r3 1 2 3\n",
+            "skipped.off: cannot read mesh: malformed OFF: face 0 has 0 corners: 'x'");
+  mesh_case("OFF face of more corners than Assimp reads", "ten.off",
+            "OFF\n4 1 0\n0 0 0\n10 0 0\n0 10 0\n0 0 10\n10 0 1 2 3 0 1 2 3 0 1\n",
+            "ten.off: cannot read mesh: malformed OFF: face 0 has 10 corners; the OFF reader takes at most 9");
+  mesh_case("OFF with a dimension before its counts", "dim.off", "nOFF\n3\n4 4 0\n",
+            "dim.off: cannot read mesh: malformed OFF: 'nOFF' is not read here");
   // The heap corruption fuzz_mesh met twice (docs/robustness.md): Debian's
   // Assimp 5.2.5 writes a one-vertex line statement past its mesh's arrays
   // when a longer line follows. Assimp takes any line starting with 'l' for
