@@ -356,7 +356,7 @@ void check_off(const std::filesystem::path& file) {
   if (at == size) bad("the file is empty");
   const std::string keyword = word_here();
   if (keyword.size() < 3 || keyword.compare(keyword.size() - 3, 3, "OFF") != 0)
-    bad("the first word is '" + shown_line(keyword) + "', not OFF");
+    bad(fmt::format("the first word is '{}', not OFF", shown_line(keyword)));
   {
     size_t line_stop = at;
     while (line_stop < size && !line_end(text[line_stop])) ++line_stop;
@@ -370,7 +370,7 @@ void check_off(const std::filesystem::path& file) {
     for (const std::string_view prefix : {"ST", "C", "N", "4"})
       if (rest.substr(0, prefix.size()) == prefix) rest.remove_prefix(prefix.size());
     if (rest != "OFF")
-      bad("'" + shown_line(keyword) + "' is not read here (OFF, with ST, C, N or 4 before it)");
+      bad(fmt::format("'{}' is not read here (OFF, with ST, C, N or 4 before it)", shown_line(keyword)));  // not "'" + …: g++ 12 warns falsely (-Wrestrict)
   }
   check_text(file, "an OFF file");
   at += keyword.size();
