@@ -13,7 +13,9 @@ void write_tuning_outputs(const RunRecord& record, TunerNetwork& network, RunCon
     for (size_t t = 0; t < network.size(); ++t) {
       Tuner& tuner = network.tuner(t);
       tuner.reset_target();
-      tuners.push_back({tuner.name(), tuner.error()});
+      const double error = tuner.error();
+      tuners.push_back({tuner.name(), error, {}});
+      if (tuner.term_count() > 1) tuners.back().terms = tuner.term_values();
     }
   }
   context.report.add("tuning", report);

@@ -191,10 +191,12 @@ struct PhaseTotals {
 struct TunerFinalError {
   std::string name;
   double final_error = 0;
+  std::optional<std::vector<TermValue>> terms;  ///< a tuner of several terms: each one
   template <class Fields, class Self>
   static void fields(Fields& f, Self& s) {
     f(s.name, "name", "the tuner");
     f(s.final_error, "final_error", "its error against its goal (not a diffused target) at the end");
+    f(s.terms, "terms", "a tuner that weighs several terms: each term's value at the end");
   }
 };
 

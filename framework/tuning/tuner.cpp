@@ -1,9 +1,12 @@
 #include "tuning/tuner.h"
 
 #include "core/interrupt.h"
+#include "core/options.h"
 
 #include <algorithm>
+#include <cmath>
 #include <functional>
+#include <limits>
 #include <stdexcept>
 
 namespace spec2fab {
@@ -44,7 +47,24 @@ std::string incompatibility(const Simulator& simulator, const ErrorMetric& metri
   return {};
 }
 
+void check_rule(const TermRule& rule, const std::string& where) {
+  const auto refuse = [&](const std::string& what) { throw std::invalid_argument(where + ": " + what); };
+  if (!(rule.weight >= 0) || !std::isfinite(rule.weight)) refuse("a weight is a finite number ≥ 0");
+  if (rule.at_most && (!(*rule.at_most >= 0) || !std::isfinite(*rule.at_most))) refuse("a limit is a finite number ≥ 0");
+  if (!(rule.penalty > 0) || !std::isfinite(rule.penalty)) refuse("a penalty is a finite number > 0");
+}
+
 }  // namespace
+
+/// A further term with its own observations; the target is the goal's (no
+/// coupling shifts it).
+struct Tuner::Term {
+  TunerTerm parts;
+  std::unique_ptr<Observation> simulated, target;
+  TermLowerBound bound;
+  std::vector<double> sensitivity;
+  double error = 0;
+};
 
 class Tuner::TunerProblem final : public Problem {
  public:
@@ -59,9 +79,15 @@ class Tuner::TunerProblem final : public Problem {
   bool has(Capability capability) const override {
     if (capability == Capability::lower_bound) return static_cast<bool>(tuner_.lower_bound_);
     if (capability == Capability::neighbour_moves) return tuner_.moves_.has_value();
-    if (capability == Capability::gradient)
-      return tuner_.metric_->differentiable() && tuner_.simulator_->differentiable(*tuner_.node_);
-    if (capability == Capability::residuals) return residual_count() > 0;
+    if (capability == Capability::gradient) {
+      return tuner_.metric_->differentiable() && tuner_.simulator_->differentiable(*tuner_.node_) &&
+             std::all_of(tuner_.terms_.begin(), tuner_.terms_.end(), [&](const auto& term) {
+               return term->parts.metric->differentiable() && term->parts.simulator->differentiable(*tuner_.node_);
+             });
+    }
+    // A weighted sum of squares is not one sum of squares once a limit or a
+    // second metric joins it: least squares only for a tuner of one term.
+    if (capability == Capability::residuals) return tuner_.terms_.empty() && residual_count() > 0;
     return Problem::has(capability);
   }
   int residual_count() const override { return tuner_.metric_->residual_count(*tuner_.effective_target_); }
@@ -98,9 +124,24 @@ class Tuner::TunerProblem final : public Problem {
   double error_and_gradient(std::span<const double> x, std::span<double> gradient) override {
     return tuner_.error_and_gradient_at(x, gradient);
   }
+  // The first term's bound, weighted, plus each further term's: a weighted
+  // term's weighted, a limited term's infinite where it passes its limit (no
+  // completion honours it: the branch is pruned) and 0 otherwise. Terms
+  // without a bound count 0, which every error is at least.
   double lower_bound(std::span<const double> x, int assigned) override {
     if (!tuner_.lower_bound_) return Problem::lower_bound(x, assigned);
-    return tuner_.lower_bound_(x, assigned, *tuner_.effective_target_);
+    double bound = tuner_.weight_ * tuner_.lower_bound_(x, assigned, *tuner_.effective_target_);
+    for (const auto& term : tuner_.terms_) {
+      if (!term->bound) continue;
+      const double b = term->bound(x, assigned);
+      const TermRule& rule = term->parts.rule;
+      if (rule.at_most) {
+        if (b > *rule.at_most) return std::numeric_limits<double>::infinity();
+      } else {
+        bound += rule.weight * b;
+      }
+    }
+    return bound;
   }
   int neighbour_count() const override {
     return tuner_.moves_ ? static_cast<int>(tuner_.moves_->neighbours.size()) : 0;
@@ -141,11 +182,52 @@ Tuner::~Tuner() = default;
 
 void Tuner::reset_target() { effective_target_ = goal_->target().clone(); }
 
+void Tuner::add_term(TunerTerm term) {
+  if (node_ != nullptr) throw std::logic_error("tuner '" + name_ + "': terms are added before set_node");
+  check_rule(term.rule, "tuner '" + name_ + "', term '" + term.name + "'");
+  const std::string problem = incompatibility(*term.simulator, *term.metric, *term.goal);
+  if (!problem.empty()) throw InputError("tuner '" + name_ + "', term '" + term.name + "': " + problem);
+  auto added = std::make_unique<Term>();
+  added->simulated = term.simulator->make_observation();
+  added->target = term.goal->target().clone();
+  added->parts = std::move(term);
+  terms_.push_back(std::move(added));
+}
+
+void Tuner::set_weight(double weight) {
+  check_rule(TermRule{weight, std::nullopt, 1e3}, "tuner '" + name_ + "'");
+  weight_ = weight;
+}
+
+void Tuner::set_term_lower_bound(size_t k, TermLowerBound bound) {
+  if (k == 0 || k > terms_.size())
+    throw std::out_of_range("tuner '" + name_ + "' has no term " + std::to_string(k) + " (the first is set_lower_bound's)");
+  terms_[k - 1]->bound = std::move(bound);
+}
+
+bool Tuner::reads_beyond_its_node() const {
+  return simulator_->reads_beyond_subtree() ||
+         std::any_of(terms_.begin(), terms_.end(),
+                     [](const auto& term) { return term->parts.simulator->reads_beyond_subtree(); });
+}
+
+std::vector<TermValue> Tuner::term_values() const {
+  const double first = metric_->error(*simulated_, goal_->target());
+  std::vector<TermValue> values{{"objective", simulator_->name(), metric_->name(), first, weight_ * first, weight_, {}}};
+  for (const auto& term : terms_) {
+    const TermRule& rule = term->parts.rule;
+    values.push_back({term->parts.name, term->parts.simulator->name(), term->parts.metric->name(), term->error,
+                      rule.contribution(term->error), rule.at_most ? 0.0 : rule.weight, rule.at_most});
+  }
+  return values;
+}
+
 void Tuner::set_node(ReducerNode& node, const SimulationDomain& domain) {
   node_ = &node;
   collect_search_space();
   try {
     simulator_->setup(node, domain);
+    for (const auto& term : terms_) term->parts.simulator->setup(node, domain);
   } catch (const InputError&) {
     if (!origin_.empty()) rethrow_located(origin_);
     throw;
@@ -165,11 +247,22 @@ void Tuner::collect_search_space() {
 double Tuner::error() {
   interrupt::throw_if_stop_requested();  // a relaxed load: nothing beside a simulation
   simulator_->simulate(*node_, *simulated_);
-  return metric_->error(*simulated_, *effective_target_);
+  return combined_error();
+}
+
+double Tuner::combined_error() {
+  double e = weight_ * metric_->error(*simulated_, *effective_target_);  // × 1 is exact: one term's error as it is
+  for (const auto& term : terms_) {
+    term->parts.simulator->simulate(*node_, *term->simulated);
+    term->error = term->parts.metric->error(*term->simulated, *term->target);
+    e += term->parts.rule.contribution(term->error);
+  }
+  return e;
 }
 
 const Observation& Tuner::simulate() {
   simulator_->simulate(*node_, *simulated_);
+  for (const auto& term : terms_) term->parts.simulator->simulate(*node_, *term->simulated);
   return *simulated_;
 }
 
@@ -196,10 +289,27 @@ void Tuner::adopt(std::span<const double> x) {
 double Tuner::error_and_gradient_at(std::span<const double> x, std::span<double> gradient) {
   set_values(x);
   double e = error();
-  sensitivity_.resize(simulated_->values().size());
-  metric_->error_gradient(*simulated_, *effective_target_, sensitivity_);
+  // Each term's ∂error/∂(its values), scaled by its rule's slope, pulled back
+  // through its simulator into the one gradient. A pull_back follows its own
+  // simulate(); the first term's ran before the others', which do not touch
+  // its simulator.
+  const auto pull_back = [&](Simulator& simulator, const ErrorMetric& metric, const Observation& simulated,
+                             const Observation& target, std::vector<double>& sensitivity, double slope) {
+    if (slope == 0) return;
+    sensitivity.resize(simulated.values().size());
+    metric.error_gradient(simulated, target, sensitivity);
+    if (slope != 1) {
+      for (double& s : sensitivity) s *= slope;
+    }
+    simulator.pull_back(*node_, sensitivity, space_, gradient);
+  };
   std::fill(gradient.begin(), gradient.end(), 0.0);
-  simulator_->pull_back(*node_, sensitivity_, space_, gradient);
+  pull_back(*simulator_, *metric_, *simulated_, *effective_target_, sensitivity_, weight_);
+  for (const auto& term : terms_) {
+    const TermRule& rule = term->parts.rule;
+    const double slope = rule.at_most ? (term->error > *rule.at_most ? rule.penalty : 0.0) : rule.weight;
+    pull_back(*term->parts.simulator, *term->parts.metric, *term->simulated, *term->target, term->sensitivity, slope);
+  }
   if (penalty_) e += penalty_(x, gradient);
   return e;
 }
@@ -251,6 +361,12 @@ void Tuner::restore(const State& state) {
   if (simulated_->values().size() != state.simulated.size()) simulate();
   if (simulated_->values().size() != state.simulated.size()) refuse("simulated values");
   std::copy(state.simulated.begin(), state.simulated.end(), simulated_->values().begin());
+  // The further terms' simulations are not saved: they are made again from
+  // the restored parameters (simulators are deterministic).
+  for (const auto& term : terms_) {
+    term->parts.simulator->simulate(*node_, *term->simulated);
+    term->error = term->parts.metric->error(*term->simulated, *term->target);
+  }
   published_ = state.published;
   optimizer_->restore(state.optimizer);
 }
@@ -283,19 +399,89 @@ Summary Tuner::tune_here(const IterationCallback& callback) {
   return summary;
 }
 
+namespace {
+
+/// The tuner's own keys build_tuner reads beside its parts.
+struct WeightKeys {
+  double weight = 1;
+  template <class Declare, class Self>
+  static void declare(Declare& d, Self& o) {
+    d.number(o.weight, "weight", Range::at_least(0),
+             "the weight of its own simulator, metric and goal in the sum with its \"terms\"");
+  }
+};
+
+/// One of a tuner's "terms", beside its simulator, metric and goal.
+struct TermKeys {
+  std::optional<std::string> name;
+  std::optional<double> weight, at_most;
+  double penalty = 1e3;
+  template <class Declare, class Self>
+  static void declare(Declare& d, Self& o) {
+    d.value(o.name, "name", "how result.json names it", Default{"termN"});
+    d.value(o.weight, "weight", "its weight in the sum (≥ 0)", Default{"1"});
+    d.value(o.at_most, "at_most",
+            "instead of a weight: a limit its error is held under (a constraint; branch and bound prunes on it)",
+            Default{"none"});
+    d.number(o.penalty, "penalty", Range::above(0), "with at_most: added to the error per unit past the limit");
+  }
+  bool check(std::string* why) const {
+    if (weight && at_most) *why = "at_most: a term held under a limit takes no weight";
+    else if (weight && !(*weight >= 0 && std::isfinite(*weight))) *why = "weight: a finite number ≥ 0";
+    else if (at_most && !(*at_most >= 0 && std::isfinite(*at_most))) *why = "at_most: a finite number ≥ 0";
+    else return true;
+    return false;
+  }
+};
+
+/// A simulator, metric and goal that agree, or an InputError at `properties`.
+struct Parts {
+  std::unique_ptr<Simulator> simulator;
+  std::unique_ptr<ErrorMetric> metric;
+  std::unique_ptr<Goal> goal;
+};
+Parts build_parts(const Properties& properties, const PartContext& context) {
+  Parts parts{SimulatorRegistry::instance().create(properties.object("simulator"), "simulator", context),
+              MetricRegistry::instance().create(properties.object("metric"), "metric", context),
+              GoalRegistry::instance().create(properties.object("goal"), "goal", context)};
+  const std::string problem = incompatibility(*parts.simulator, *parts.metric, *parts.goal);
+  if (!problem.empty()) properties.fail(problem);
+  return parts;
+}
+
+}  // namespace
+
 std::unique_ptr<Tuner> build_tuner(const Properties& properties, std::string name,
                                    const PartContext& context) {
-  auto simulator =
-      SimulatorRegistry::instance().create(properties.object("simulator"), "simulator", context);
-  auto metric = MetricRegistry::instance().create(properties.object("metric"), "metric", context);
-  auto goal = GoalRegistry::instance().create(properties.object("goal"), "goal", context);
+  Parts own = build_parts(properties, context);
   auto optimizer = build_optimizer(properties.object("optimizer"));
-  const std::string problem = incompatibility(*simulator, *metric, *goal);
-  if (!problem.empty()) properties.fail(problem);
-  auto tuner = std::make_unique<Tuner>(std::move(name), std::move(simulator), std::move(metric), std::move(goal),
-                                       std::move(optimizer));
+  auto tuner = std::make_unique<Tuner>(std::move(name), std::move(own.simulator), std::move(own.metric),
+                                       std::move(own.goal), std::move(optimizer));
+  tuner->set_weight(read_options<WeightKeys>(properties).weight);
+  const std::vector<Properties> terms = properties.has("terms") ? properties.objects("terms") : std::vector<Properties>{};
+  for (size_t k = 0; k < terms.size(); ++k) {
+    const TermKeys keys = read_options<TermKeys>(terms[k]);
+    Parts parts = build_parts(terms[k], context);
+    TermRule rule{keys.weight.value_or(1.0), keys.at_most, keys.penalty};
+    tuner->add_term({keys.name.value_or("term" + std::to_string(k + 1)), std::move(parts.simulator),
+                     std::move(parts.metric), std::move(parts.goal), rule});
+  }
   tuner->set_origin(properties.where());
   return tuner;
+}
+
+std::vector<PropertyDoc> tuner_term_docs(const std::string& prefix) {
+  std::vector<PropertyDoc> rows = prefixed(option_docs<WeightKeys>(), prefix);
+  rows.push_back({prefix + "terms", "array of {simulator, metric, goal, " + join([] {
+                    std::vector<std::string> keys;
+                    for (const PropertyDoc& row : option_docs<TermKeys>()) keys.push_back(row.name);
+                    return keys;
+                  }()) + "}",
+                  "none",
+                  "further terms the tuner weighs on the same node: weighted ones add weight × error, limited ones "
+                  "penalty × (error − at_most) where positive; result.json gives each one's value"});
+  append(rows, prefixed(option_docs<TermKeys>(), prefix + "terms[]."));
+  return rows;
 }
 
 }  // namespace spec2fab

@@ -7,7 +7,15 @@
 /// The goal's target is copied into an *effective target* that tuner-network
 /// couplings may shift (error diffusion adds neighbours' residuals to it);
 /// `published()` is the state neighbours read.
+///
+/// Beside its first (simulator, metric, goal) a tuner may weigh further
+/// terms (add_term): each its own simulator, metric and goal on the same
+/// subtree, either added with a weight or held under a limit ("at most",
+/// with a penalty, and a pruning rule for branch and bound). The error the
+/// optimizer sees is their combination (see TermRule); couplings, states and
+/// the residual form are the first term's.
 
+#include <algorithm>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -20,6 +28,49 @@
 #include "tuning/parts.h"
 
 namespace spec2fab {
+
+/// How a term enters a tuner's error: added with `weight` (weight · error),
+/// or, with `at_most`, held under that limit: penalty · max(0, error − limit)
+/// is added (an exact penalty: with a penalty above the objective's rate of
+/// change a tuned optimum honours the limit), and branch and bound prunes a
+/// partial assignment whose term's lower bound passes the limit.
+struct TermRule {
+  double weight = 1;
+  std::optional<double> at_most;
+  double penalty = 1e3;
+  /// This rule's share of the tuner's error for a term's error `e`.
+  double contribution(double e) const {
+    return at_most ? penalty * std::max(0.0, e - *at_most) : weight * e;
+  }
+};
+
+/// A further (simulator, metric, goal) a tuner weighs (Tuner::add_term).
+struct TunerTerm {
+  std::string name;  ///< how the run report names it
+  std::unique_ptr<Simulator> simulator;
+  std::unique_ptr<ErrorMetric> metric;
+  std::unique_ptr<Goal> goal;
+  TermRule rule;
+};
+
+/// One term's value at the tuner's current parameters (Tuner::term_values).
+struct TermValue {
+  std::string name, simulator, metric;
+  double error = 0;         ///< the metric's error against the term's goal
+  double contribution = 0;  ///< what it adds to the tuner's error
+  double weight = 1;
+  std::optional<double> at_most;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.name, "name", "the term (the first is the tuner's own simulator, metric and goal)");
+    f(s.simulator, "simulator", "its simulator");
+    f(s.metric, "metric", "its metric");
+    f(s.error, "error", "its metric's error against its goal");
+    f(s.weight, "weight", "its weight in the sum (a limited term: 0)");
+    f(s.at_most, "at_most", "the limit its error is held under, where it is a constraint");
+    f(s.contribution, "contribution", "what it adds to the tuner's error: weight × error, or penalty × excess");
+  }
+};
 
 class Tuner {
  public:
@@ -41,11 +92,28 @@ class Tuner {
   /// bound to a solid (how translators and JSON plans attach tuners).
   void set_node(ReducerTree& tree, ReducerNode& node);
   bool is_bound() const { return node_ != nullptr; }
+
+  /// Adds a term (before set_node). Throws InputError naming the term when
+  /// its simulator, metric and goal disagree on their observation type, and
+  /// std::invalid_argument for a negative weight, limit or penalty.
+  void add_term(TunerTerm term);
+  /// The first term's weight (1 unless set).
+  void set_weight(double weight);
+  size_t term_count() const { return terms_.size() + 1; }
+  /// A lower bound on term k's error (k ≥ 1) over every completion of a
+  /// partial assignment, like set_lower_bound's: with one, branch and bound
+  /// prunes on it (a limited term: where it passes the limit). A term
+  /// without one counts 0 in the tuner's bound.
+  using TermLowerBound = std::function<double(std::span<const double> x, int assigned)>;
+  void set_term_lower_bound(size_t k, TermLowerBound bound);
+  /// Every term's error and contribution at the last simulation (the first
+  /// term against the goal's own target, not a diffused one).
+  std::vector<TermValue> term_values() const;
   ReducerNode& node() { return *node_; }
   SearchSpace& search_space() { return space_; }
 
   /// getError: simulates the subtree at its current parameters and compares
-  /// with the effective target.
+  /// with the effective target; with several terms, their combination.
   double error();
   /// Simulates the subtree at its current parameters and compares it with
   /// nothing: how a goal is made from a reference assignment (bench problems).
@@ -110,8 +178,9 @@ class Tuner {
   void set_simulator_input(std::string_view name, GridField value) { simulator_->set_input(name, std::move(value)); }
   /// The simulator's inputs, for couplings that check what they hand over.
   std::vector<SimulatorInput> simulator_inputs() const { return simulator_->inputs(); }
-  /// Whether its simulator reads the tree beyond this tuner's node (Simulator::reads_beyond_subtree).
-  bool reads_beyond_its_node() const { return simulator_->reads_beyond_subtree(); }
+  /// Whether a simulator of its terms reads the tree beyond this tuner's
+  /// node (Simulator::reads_beyond_subtree).
+  bool reads_beyond_its_node() const;
   std::string simulator_name() const { return simulator_->name(); }
   /// The simulator's files for the last simulation (Simulator::write_report)
   /// into `folder`, its sections into `record`: what `spec2fab simulate`
@@ -148,7 +217,10 @@ class Tuner {
 
  private:
   class TunerProblem;
+  struct Term;
   void collect_search_space();
+  /// The first term's error, the others' simulated, and their combination.
+  double combined_error();
   Summary tune_here(const IterationCallback& callback);
 
   std::string name_;
@@ -166,6 +238,8 @@ class Tuner {
   LowerBound lower_bound_;
   Penalty penalty_;
   std::optional<NeighbourMoves> moves_;
+  double weight_ = 1;  ///< the first term's
+  std::vector<std::unique_ptr<Term>> terms_;  ///< the further terms
 };
 
 /// Builds a tuner from C++ parts; does not compile when the simulator, metric
@@ -180,10 +254,14 @@ std::unique_ptr<Tuner> make_tuner(std::string name, std::unique_ptr<S> simulator
 }
 
 /// Builds a tuner from JSON: {"simulator": {...}, "metric": {...}, "goal":
-/// {...}, "optimizer": {...}}, each with a registered "type". Incompatible
-/// parts are an InputError at `properties` naming both.
+/// {...}, "optimizer": {...}}, each with a registered "type", and optionally
+/// "weight" and "terms": [{"simulator", "metric", "goal", "weight" |
+/// "at_most" + "penalty", "name"}]. Incompatible parts are an InputError at
+/// `properties` (or the term's) naming both.
 std::unique_ptr<Tuner> build_tuner(const Properties& properties, std::string name,
                                    const PartContext& context);
+/// The rows of a tuner's "weight" and "terms" for a TypeDoc, under `prefix`.
+std::vector<PropertyDoc> tuner_term_docs(const std::string& prefix);
 
 /// Refreshes derived state of every node of a subtree (after its parameters changed).
 void evaluate_subtree(ReducerNode& node);

@@ -89,11 +89,13 @@ std::vector<PropertyDoc> tuning_plan_docs(const std::string& prefix) {
       {prefix + "tuners", "array of {" + join([] {
                             std::vector<std::string> keys;
                             for (const PropertyDoc& row : option_docs<TunerKeys>()) keys.push_back(row.name);
-                            for (const char* part : {"simulator", "metric", "goal", "optimizer"}) keys.push_back(part);
+                            for (const char* part : {"simulator", "metric", "goal", "optimizer", "weight", "terms"})
+                              keys.push_back(part);
                             return keys;
                           }()) + "}",
        "none", "the tuners; each part a registered type with its options (`spec2fab list simulator` ...)"}};
   append(rows, prefixed(option_docs<TunerKeys>(), prefix + "tuners[]."));
+  append(rows, tuner_term_docs(prefix + "tuners[]."));
   rows.push_back({prefix + "network", "object", "none",
                   "{type, ...}: a registered network shape (`spec2fab list network`), tuners row-major"});
   rows.push_back({prefix + "schedule", "array of phases", "one serial phase of all tuners", "the phases, in order"});

@@ -1,0 +1,296 @@
+// The mass_properties simulator, its goal and metrics (mass/mass_properties.h).
+
+#include "mass/mass_properties.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <fmt/format.h>
+#include <tbb/parallel_for.h>
+
+#include "core/error.h"
+#include "core/file_write.h"
+#include "core/limits.h"
+#include "reducer/reducer_tree.h"
+
+SPEC2FAB_LIMIT("mass_cells", 1e8, "cells the mass_properties simulator samples per evaluation (8 bytes each row)");
+
+namespace spec2fab {
+
+std::vector<std::string> MassPropertiesObservation::write_files(const std::filesystem::path& folder) const {
+  std::string csv = "quantity,value,unit\n";
+  const auto row = [&](const std::string& name, double value, const char* unit) {
+    csv += fmt::format("{},{:.9g},{}\n", name, value, unit);
+  };
+  row("mass", mass_kg(), "kg");
+  for (int k = 0; k < 3; ++k) row(std::string("centre_of_mass_") + "xyz"[k], data[kCentre + k], "mm");
+  const char* inertia[] = {"xx", "yy", "zz", "xy", "xz", "yz"};
+  for (int k = 0; k < 6; ++k) row(std::string("inertia_") + inertia[k], data[kInertia + k], "kg mm^2");
+  for (std::size_t id = 0; id < materials(); ++id) row(fmt::format("volume_material_{}", id), volume_mm3(id), "mm^3");
+  write_file(folder / "mass_properties.csv", csv);
+  return {"mass_properties.csv"};
+}
+
+bool CentreOffsetOptions::check(std::string* why) const {
+  if (std::isfinite(gravity[0] + gravity[1] + gravity[2]) &&
+      gravity[0] * gravity[0] + gravity[1] * gravity[1] + gravity[2] * gravity[2] > 0)
+    return true;
+  *why = "gravity: a finite direction, not [0, 0, 0]";
+  return false;
+}
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+/// Sums over one material's cells: count, Σx, Σy, Σz, Σxx, Σyy, Σzz, Σxy,
+/// Σxz, Σyz (cell centres, mm, relative to the grid's centre).
+using Moments = std::array<double, 10>;
+
+class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservation> {
+ public:
+  using Options = MassPropertiesOptions;
+  MassPropertiesSimulator(const Properties& properties, const PartContext& context)
+      : MassPropertiesSimulator(read_options<Options>(properties), context) {}
+  MassPropertiesSimulator(const Options& options, const PartContext& context)
+      : options_(options), limits_(context.limits()) {
+    densities_.assign(context.palette.size(), 0.0);
+    for (MaterialId id = 1; id < context.palette.size(); ++id) {
+      const Material& material = context.palette.material(id);
+      if (!(material.density_kg_m3.value > 0)) {
+        throw InputError("mass_properties: material '" + material.name + "' has no density in the library");
+      }
+      densities_[id] = material.density_kg_m3.value * 1e-9;  // kg/mm³
+    }
+  }
+
+  std::string name() const override { return "mass_properties"; }
+  bool reads_beyond_subtree() const override { return true; }  // the whole print stands or falls
+
+  void setup(const ReducerNode& /*subtree*/, const SimulationDomain& domain) override {
+    const Solid& solid = domain.require_solid(name());
+    tree_ = &domain.tree();
+    const Bounds& bounds = solid.bounds();
+    voxel_mm_ = options_.voxel_mm > 0 ? options_.voxel_mm : bounds.size().maxCoeff() / 96;
+    double cells = 1;
+    for (int k = 0; k < 3; ++k) {
+      grid_[k] = std::max(1.0, std::ceil(bounds.size()[k] / voxel_mm_));
+      cells *= grid_[k];
+    }
+    if (const double limit = limits_.get("mass_cells"); cells > limit) {
+      throw InputError(fmt::format("mass_properties: {:.3g} cells of {:.3g} mm over the solid's bounds, past the limit "
+                                   "of {:.3g}; give a coarser voxel_mm {}",
+                                   cells, voxel_mm_, limit, limits_.how_to_change("mass_cells")));
+    }
+    centre_ = bounds.lower + 0.5 * voxel_mm_ * Vec3(grid_[0], grid_[1], grid_[2]);
+    solid_volume_ = solid.volume();
+    slices_.assign(static_cast<size_t>(grid_[2]), std::vector<Moments>(densities_.size()));
+  }
+
+  using SimulatorFor::simulate;
+  void simulate(const ReducerNode& /*subtree*/, MassPropertiesObservation& out) override {
+    if (tree_ == nullptr) throw std::logic_error("mass_properties: simulate before setup");
+    const int nx = static_cast<int>(grid_[0]), ny = static_cast<int>(grid_[1]);
+    const double h = voxel_mm_;
+    const Vec3 lower = centre_ - 0.5 * h * Vec3(grid_[0], grid_[1], grid_[2]);
+    tbb::parallel_for(0, static_cast<int>(grid_[2]), [&](int z) {
+      ReducerTree::Query query(*tree_);
+      std::vector<MaterialId> row(static_cast<size_t>(nx));
+      std::vector<Moments>& sums = slices_[static_cast<size_t>(z)];
+      std::fill(sums.begin(), sums.end(), Moments{});
+      const double zc = lower.z() + (z + 0.5) * h - centre_.z();
+      for (int y = 0; y < ny; ++y) {
+        const double yc = lower.y() + (y + 0.5) * h - centre_.y();
+        query.material_row(lower + h * Vec3(0.5, y + 0.5, z + 0.5), Vec3(h, 0, 0), nx, row.data());
+        for (int x = 0; x < nx; ++x) {
+          const MaterialId id = row[static_cast<size_t>(x)];
+          if (id == kVoid) continue;
+          const double xc = lower.x() + (x + 0.5) * h - centre_.x();
+          Moments& m = sums[id];
+          const Moments cell = {1, xc, yc, zc, xc * xc, yc * yc, zc * zc, xc * yc, xc * zc, yc * zc};
+          for (size_t k = 0; k < m.size(); ++k) m[k] += cell[k];
+        }
+      }
+    });
+    // Slices summed in order: the same sums for any thread count.
+    Moments mass{};  // ρ-weighted sums over every material
+    out.data.assign(MassPropertiesObservation::kVolumes + densities_.size(), 0.0);
+    const double cell = h * h * h;
+    double material_volume = 0;
+    for (size_t id = 1; id < densities_.size(); ++id) {
+      Moments total{};
+      for (const auto& slice : slices_) {
+        for (size_t k = 0; k < total.size(); ++k) total[k] += slice[id][k];
+      }
+      out.data[MassPropertiesObservation::kVolumes + id] = total[0] * cell;
+      material_volume += total[0] * cell;
+      for (size_t k = 0; k < total.size(); ++k) mass[k] += densities_[id] * cell * total[k];
+    }
+    out.data[MassPropertiesObservation::kVolumes] = std::max(0.0, solid_volume_ - material_volume);
+    assemble(mass, out);
+  }
+
+  std::string failure() const override {
+    return weightless_ ? "the print weighs nothing: every cell the simulator samples is void" : std::string();
+  }
+
+  static TypeDoc doc() {
+    return {"Mass, centre of mass and inertia tensor of the whole print (the materials the tree assigns "
+            "and the library's densities; void weighs nothing), sampled at the centres of cubic cells over "
+            "the solid's bounds, each cell a cube of its material. Reads the whole tree, whichever node it "
+            "is bound to. Produces mass_properties: mass (kg), centre of mass (mm), inertia about it "
+            "(kg mm^2) and each material's volume (mm^3).",
+            option_docs<Options>(), R"({"type": "mass_properties", "voxel_mm": 0.5})"};
+  }
+
+ private:
+  // Mass, centre and inertia about the centre from the ρ-weighted sums about
+  // the grid's centre (the parallel-axis theorem; each cell's own inertia
+  // about its centre is m h²/6 on every axis).
+  void assemble(const Moments& s, MassPropertiesObservation& out) {
+    const double m = s[0];
+    weightless_ = !(m > 0);
+    auto& d = out.data;
+    d[MassPropertiesObservation::kMass] = m;
+    if (weightless_) {
+      std::fill(d.begin() + MassPropertiesObservation::kCentre, d.begin() + MassPropertiesObservation::kVolumes, kNaN);
+      return;
+    }
+    const Vec3 c(s[1] / m, s[2] / m, s[3] / m);  // relative to the grid's centre
+    const double own = m * voxel_mm_ * voxel_mm_ / 6;
+    const double ixx = s[5] + s[6] + own - m * (c.y() * c.y() + c.z() * c.z());
+    const double iyy = s[4] + s[6] + own - m * (c.x() * c.x() + c.z() * c.z());
+    const double izz = s[4] + s[5] + own - m * (c.x() * c.x() + c.y() * c.y());
+    const double ixy = -(s[7] - m * c.x() * c.y()), ixz = -(s[8] - m * c.x() * c.z()),
+                 iyz = -(s[9] - m * c.y() * c.z());
+    for (int k = 0; k < 3; ++k) d[MassPropertiesObservation::kCentre + k] = centre_[k] + c[k];
+    const double inertia[] = {ixx, iyy, izz, ixy, ixz, iyz};
+    std::copy(std::begin(inertia), std::end(inertia), d.begin() + MassPropertiesObservation::kInertia);
+  }
+
+  Options options_;
+  Limits limits_;  // the run's, copied: a part may outlive the context it was built in
+  std::vector<double> densities_;  ///< kg/mm³ per palette id
+  const ReducerTree* tree_ = nullptr;
+  double voxel_mm_ = 0, solid_volume_ = 0;
+  std::array<double, 3> grid_{1, 1, 1};
+  Vec3 centre_ = Vec3::Zero();  ///< of the grid: sums about it keep their digits
+  std::vector<std::vector<Moments>> slices_;  ///< per z slice, per material
+  bool weightless_ = false;
+};
+
+class MassPropertiesGoal final : public GoalFor<MassPropertiesObservation> {
+ public:
+  struct Options {
+    std::optional<double> mass_kg;
+    std::optional<std::array<double, 3>> centre_mm;
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.value(o.mass_kg, "mass_kg", "target mass (mass_difference needs it)", Default{"none"});
+      d.value(o.centre_mm, "centre_mm", "target centre of mass, the run's frame (centre_offset needs it)",
+              Default{"none"});
+    }
+    bool check(std::string* why) const {
+      if (mass_kg && !(*mass_kg >= 0 && std::isfinite(*mass_kg))) *why = "mass_kg: a finite number ≥ 0";
+      else if (centre_mm && !std::isfinite((*centre_mm)[0] + (*centre_mm)[1] + (*centre_mm)[2]))
+        *why = "centre_mm: three finite numbers";
+      else if (!mass_kg && !centre_mm) *why = "give \"mass_kg\", \"centre_mm\" or both";
+      else return true;
+      return false;
+    }
+  };
+  MassPropertiesGoal(const Properties& properties, const PartContext& /*context*/) {
+    const Options options = read_options<Options>(properties);
+    set(options.mass_kg, options.centre_mm);
+  }
+  MassPropertiesGoal(std::optional<double> mass_kg, std::optional<std::array<double, 3>> centre_mm) {
+    set(mass_kg, centre_mm);
+  }
+  std::string name() const override { return "mass_properties"; }
+  const MassPropertiesObservation& typed_target() const override { return target_; }
+  static TypeDoc doc() {
+    return {"A target mass and centre of mass; what is not given is not a target (NaN). Describes "
+            "mass_properties.",
+            option_docs<Options>(), R"({"type": "mass_properties", "centre_mm": [0, 0, 0]})"};
+  }
+
+ private:
+  void set(std::optional<double> mass_kg, std::optional<std::array<double, 3>> centre_mm) {
+    std::fill(target_.data.begin(), target_.data.end(), kNaN);
+    target_.data[MassPropertiesObservation::kMass] = mass_kg.value_or(kNaN);
+    for (int k = 0; k < 3; ++k)
+      target_.data[MassPropertiesObservation::kCentre + k] = centre_mm ? (*centre_mm)[k] : kNaN;
+  }
+  MassPropertiesObservation target_;
+};
+
+class CentreOffset final : public MetricFor<MassPropertiesObservation> {
+ public:
+  using Options = CentreOffsetOptions;
+  CentreOffset(const Properties& properties, const PartContext& /*context*/)
+      : CentreOffset(read_options<Options>(properties)) {}
+  explicit CentreOffset(const Options& options) {
+    const Vec3 g(options.gravity[0], options.gravity[1], options.gravity[2]);
+    gravity_ = g.normalized();
+  }
+  std::string name() const override { return "centre_offset"; }
+  using MetricFor::error;
+  double error(const MassPropertiesObservation& simulated, const MassPropertiesObservation& target) const override {
+    const auto t = target.centre_mm(), s = simulated.centre_mm();
+    if (std::isnan(t[0])) throw InputError("metric 'centre_offset' needs a goal with \"centre_mm\"");
+    Vec3 d(s[0] - t[0], s[1] - t[1], s[2] - t[2]);
+    d -= d.dot(gravity_) * gravity_;
+    return d.norm();  // NaN for a print that weighs nothing: the worst error
+  }
+  static TypeDoc doc() {
+    return {"Distance (mm) between the simulated and the target centre of mass across gravity: "
+            "their offset projected on the plane normal to it (Make It Stand's centre-of-mass "
+            "energy, as a distance). Compares mass_properties.",
+            option_docs<Options>(), R"({"type": "centre_offset", "gravity": [0, 0, -1]})"};
+  }
+
+ private:
+  Vec3 gravity_;
+};
+
+class MassDifference final : public MetricFor<MassPropertiesObservation> {
+ public:
+  MassDifference() = default;
+  MassDifference(const Properties& /*properties*/, const PartContext& /*context*/) {}
+  std::string name() const override { return "mass_difference"; }
+  using MetricFor::error;
+  double error(const MassPropertiesObservation& simulated, const MassPropertiesObservation& target) const override {
+    if (std::isnan(target.mass_kg())) throw InputError("metric 'mass_difference' needs a goal with \"mass_kg\"");
+    return std::abs(simulated.mass_kg() - target.mass_kg()) * 1e3;
+  }
+  static TypeDoc doc() {
+    return {"|simulated mass − target mass| in grams (a target of 0: the mass itself). Compares "
+            "mass_properties.",
+            {}, R"({"type": "mass_difference"})"};
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<SimulatorFor<MassPropertiesObservation>> make_mass_properties_simulator(
+    const MassPropertiesOptions& options, const PartContext& context) {
+  return std::make_unique<MassPropertiesSimulator>(options, context);
+}
+std::unique_ptr<GoalFor<MassPropertiesObservation>> make_mass_properties_goal(
+    std::optional<double> mass_kg, std::optional<std::array<double, 3>> centre_mm) {
+  return std::make_unique<MassPropertiesGoal>(mass_kg, centre_mm);
+}
+std::unique_ptr<MetricFor<MassPropertiesObservation>> make_centre_offset_metric(const CentreOffsetOptions& options) {
+  return std::make_unique<CentreOffset>(options);
+}
+std::unique_ptr<MetricFor<MassPropertiesObservation>> make_mass_difference_metric() {
+  return std::make_unique<MassDifference>();
+}
+
+}  // namespace spec2fab
+
+SPEC2FAB_REGISTER(spec2fab::SimulatorRegistry, spec2fab::MassPropertiesSimulator, "mass_properties")
+SPEC2FAB_REGISTER(spec2fab::GoalRegistry, spec2fab::MassPropertiesGoal, "mass_properties")
+SPEC2FAB_REGISTER(spec2fab::MetricRegistry, spec2fab::CentreOffset, "centre_offset")
+SPEC2FAB_REGISTER(spec2fab::MetricRegistry, spec2fab::MassDifference, "mass_difference")

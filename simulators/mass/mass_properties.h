@@ -1,0 +1,78 @@
+#pragma once
+/// Mass properties of a print: its mass, centre of mass and inertia tensor
+/// from the materials the whole tree assigns and the library's densities
+/// (void weighs nothing). What standing (Make It Stand: the centre of mass
+/// over the support) and lightness depend on.
+///
+/// The "mass_properties" simulator samples the tree at the centres of cubic
+/// cells of a stated edge covering the solid's bounds (each cell a small
+/// cube of its material: its own inertia counts), summed slice by slice in a
+/// fixed order, so the result is the same for any thread count. The goal
+/// "mass_properties" holds a target mass and centre; the metrics
+/// "centre_offset" (the centres' distance across the direction of gravity,
+/// mm) and "mass_difference" (grams) compare them.
+
+#include <array>
+#include <cstddef>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "core/options.h"
+#include "tuning/parts.h"
+
+namespace spec2fab {
+
+/// Mass (kg), centre of mass (mm, the run's frame), inertia about the centre
+/// of mass (kg·mm²: xx, yy, zz, xy, xz, yz, products of inertia as
+/// −∫ρ x y dV) and each material's volume (mm³, per palette id; id 0: the
+/// void inside the solid), one flat array.
+struct MassPropertiesObservation final : ObservationOf<MassPropertiesObservation> {
+  static constexpr std::string_view kType = "mass_properties";
+  static constexpr std::size_t kMass = 0, kCentre = 1, kInertia = 4, kVolumes = 10;
+  std::vector<double> data = std::vector<double>(kVolumes, 0.0);
+
+  std::span<const double> values() const override { return data; }
+  std::span<double> values() override { return data; }
+  double mass_kg() const { return data[kMass]; }
+  std::array<double, 3> centre_mm() const { return {data[kCentre], data[kCentre + 1], data[kCentre + 2]}; }
+  /// Volume (mm³) of material `id`; 0 for ids past the palette it was made with.
+  double volume_mm3(std::size_t id) const { return kVolumes + id < data.size() ? data[kVolumes + id] : 0.0; }
+  std::size_t materials() const { return data.size() - kVolumes; }
+  /// mass_properties.csv: each quantity by name, with its unit.
+  std::vector<std::string> write_files(const std::filesystem::path& folder) const override;
+};
+
+struct MassPropertiesOptions {
+  double voxel_mm = 0;
+  template <class Declare, class Self>
+  static void declare(Declare& d, Self& o) {
+    d.number(o.voxel_mm, "voxel_mm", Range::at_least(0),
+             "edge of the sampling cells; 0: the solid's longest extent / 96", Default{"longest extent / 96"});
+  }
+};
+
+/// The centre of mass across gravity: the distance (mm) between the
+/// simulated and the target centres, projected on the plane normal to
+/// `gravity` (Make It Stand's centre-of-mass energy, as a distance).
+struct CentreOffsetOptions {
+  std::array<double, 3> gravity{0, 0, -1};
+  template <class Declare, class Self>
+  static void declare(Declare& d, Self& o) {
+    d.value(o.gravity, "gravity", "direction of gravity (any length but 0)");
+  }
+  bool check(std::string* why) const;
+};
+
+std::unique_ptr<SimulatorFor<MassPropertiesObservation>> make_mass_properties_simulator(
+    const MassPropertiesOptions& options, const PartContext& context);
+/// A target mass and centre of mass (either may be left out: the metric that
+/// needs it says so).
+std::unique_ptr<GoalFor<MassPropertiesObservation>> make_mass_properties_goal(
+    std::optional<double> mass_kg, std::optional<std::array<double, 3>> centre_mm);
+std::unique_ptr<MetricFor<MassPropertiesObservation>> make_centre_offset_metric(const CentreOffsetOptions& options);
+std::unique_ptr<MetricFor<MassPropertiesObservation>> make_mass_difference_metric();
+
+}  // namespace spec2fab

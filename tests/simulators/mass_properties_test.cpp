@@ -1,0 +1,201 @@
+// The mass_properties simulator against closed forms: two bonded blocks
+// (exact on a grid whose cells the interface does not cut), a sphere (the
+// mesh's own volume; 2/5 M R²), a print that weighs nothing; its metrics;
+// the same sums for any thread count; and a tuner that moves a material
+// interface to put the centre of mass where a goal asks.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <tbb/global_control.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "geometry/primitives.h"
+#include "geometry/solid.h"
+#include "mass/mass_properties.h"
+#include "materials/palette.h"
+#include "reducer/reducer_tree.h"
+#include "tuning/optimizer.h"
+#include "tuning/tuner.h"
+
+namespace spec2fab {
+namespace {
+
+using ::testing::HasSubstr;
+
+/// Light (1000 kg/m³) and heavy (3000 kg/m³).
+MaterialPalette light_and_heavy() {
+  std::vector<Material> materials(2);
+  materials[0].name = "light";
+  materials[0].density_kg_m3.value = 1000;
+  materials[1].name = "heavy";
+  materials[1].density_kg_m3.value = 3000;
+  return MaterialPalette(materials);
+}
+
+class MassProperties : public ::testing::Test {
+ protected:
+  MassProperties() : palette_(light_and_heavy()) {}
+
+  std::unique_ptr<ReducerTree> bound(const std::string& json, const Solid& solid) {
+    const Properties properties = Properties::parse(json, "tree.json");
+    auto tree = std::make_unique<ReducerTree>(properties, palette_);
+    properties.check_all_read();
+    tree->bind(solid);
+    return tree;
+  }
+  MassPropertiesObservation simulate(ReducerTree& tree, double voxel_mm) {
+    auto simulator = make_mass_properties_simulator({voxel_mm}, PartContext{palette_});
+    simulator->setup(tree.root(), SimulationDomain(tree, tree.root()));
+    MassPropertiesObservation out;
+    simulator->simulate(tree.root(), out);
+    failure_ = simulator->failure();
+    return out;
+  }
+
+  MaterialPalette palette_;
+  std::string failure_;
+};
+
+// A 40 × 30 × 20 mm box centred on the origin, light for x < 5 and heavy
+// above: two blocks whose mass, centre and inertia are textbook sums (each
+// block m/12 (a² + b²) about its centre, moved by the parallel-axis
+// theorem). Cells of 1 mm are not cut by the interface or the box's faces,
+// and a cell's sums with its own inertia integrate x² exactly: equal to
+// rounding.
+TEST_F(MassProperties, TwoBondedBlocksMatchTheClosedForm) {
+  const Solid box(make_box(Vec3(-20, -15, -10), Vec3(20, 15, 10), 2), UvSource::planar, 2);
+  auto tree = bound(R"({"type": "plane", "axis": "x", "offset_mm": 5,
+      "below": {"type": "layered", "material": "light"}, "above": {"type": "layered", "material": "heavy"}})",
+                    box);
+  const MassPropertiesObservation out = simulate(*tree, 1.0);
+
+  const double m_light = 25.0 * 30 * 20 * 1e-6, m_heavy = 15.0 * 30 * 20 * 3e-6;  // kg
+  const double x_light = -7.5, x_heavy = 12.5;
+  const double mass = m_light + m_heavy;
+  const double cx = (m_light * x_light + m_heavy * x_heavy) / mass;
+  const auto block = [](double m, double a, double b) { return m / 12 * (a * a + b * b); };
+  const double ixx = block(m_light, 30, 20) + block(m_heavy, 30, 20);
+  const double iyy = block(m_light, 25, 20) + m_light * (x_light - cx) * (x_light - cx) + block(m_heavy, 15, 20) +
+                     m_heavy * (x_heavy - cx) * (x_heavy - cx);
+  const double izz = block(m_light, 25, 30) + m_light * (x_light - cx) * (x_light - cx) + block(m_heavy, 15, 30) +
+                     m_heavy * (x_heavy - cx) * (x_heavy - cx);
+
+  EXPECT_NEAR(out.mass_kg(), mass, 1e-12);
+  EXPECT_NEAR(out.centre_mm()[0], cx, 1e-9);
+  EXPECT_NEAR(out.centre_mm()[1], 0, 1e-9);
+  EXPECT_NEAR(out.centre_mm()[2], 0, 1e-9);
+  const double* inertia = out.data.data() + MassPropertiesObservation::kInertia;
+  EXPECT_NEAR(inertia[0], ixx, 1e-9 * ixx);
+  EXPECT_NEAR(inertia[1], iyy, 1e-9 * iyy);
+  EXPECT_NEAR(inertia[2], izz, 1e-9 * izz);
+  for (int k = 3; k < 6; ++k) EXPECT_NEAR(inertia[k], 0, 1e-9 * ixx) << "product of inertia " << k;
+  EXPECT_NEAR(out.volume_mm3(1), 25.0 * 30 * 20, 1e-6);
+  EXPECT_NEAR(out.volume_mm3(2), 15.0 * 30 * 20, 1e-6);
+  EXPECT_NEAR(out.volume_mm3(0), 0, 1e-6) << "no void inside";
+  EXPECT_EQ(failure_, "");
+}
+
+// A sphere of radius 10 mm (a polyhedron of 64 × 32 facets): its mass is
+// the density times the mesh's exact volume, its centre the origin, and its
+// inertia 2/5 M R² on every axis with R the radius of a ball of that volume
+// (the sampled surface is off by under a cell). Half void carved out of it
+// (the upper half) moves the centre down by 3R/8, the hemisphere's centroid.
+TEST_F(MassProperties, ABallAndAHemisphereMatchTheirClosedForms) {
+  const Solid ball(make_sphere(10, 64, 32), UvSource::planar, 2);
+  const double volume = ball.volume(), r = std::cbrt(3 * volume / (4 * std::numbers::pi));
+  auto solid_tree = bound(R"({"type": "layered", "material": "heavy"})", ball);
+  const MassPropertiesObservation whole = simulate(*solid_tree, 0.25);
+  const double mass = 3e-6 * volume;
+  EXPECT_NEAR(whole.mass_kg(), mass, 0.005 * mass);
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(whole.centre_mm()[k], 0, 0.01) << "axis " << k;
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_NEAR(whole.data[MassPropertiesObservation::kInertia + k], 0.4 * mass * r * r, 0.01 * 0.4 * mass * r * r);
+  }
+
+  auto half_tree = bound(R"({"type": "plane", "offset_mm": 0,
+      "below": {"type": "layered", "material": "heavy"}, "above": {"type": "layered", "material": "void"}})", ball);
+  const MassPropertiesObservation half = simulate(*half_tree, 0.25);
+  EXPECT_NEAR(half.mass_kg(), mass / 2, 0.01 * mass);
+  EXPECT_NEAR(half.centre_mm()[2], -3 * r / 8, 0.05);
+  EXPECT_NEAR(half.volume_mm3(0), volume / 2, 0.01 * volume) << "the carved half is void inside the solid";
+}
+
+TEST_F(MassProperties, AllVoidWeighsNothingAndSaysSo) {
+  const Solid box(make_box(Vec3(0, 0, 0), Vec3(10, 10, 10)), UvSource::planar, 2);
+  auto tree = bound(R"({"type": "layered", "material": "void"})", box);
+  const MassPropertiesObservation out = simulate(*tree, 1.0);
+  EXPECT_EQ(out.mass_kg(), 0);
+  EXPECT_TRUE(std::isnan(out.centre_mm()[0]));
+  EXPECT_THAT(failure_, HasSubstr("weighs nothing"));
+  const auto metric = make_centre_offset_metric({});
+  const auto goal = make_mass_properties_goal(std::nullopt, std::array<double, 3>{0, 0, 0});
+  EXPECT_TRUE(std::isnan(metric->error(out, goal->target()))) << "the worst error, for an optimizer";
+}
+
+TEST_F(MassProperties, SumsAreTheSameForAnyThreadCount) {
+  const Solid ball(make_sphere(10, 48, 24), UvSource::planar, 2);
+  auto tree = bound(R"({"type": "plane", "axis": "y", "offset_mm": 1.3,
+      "below": {"type": "layered", "material": "light"}, "above": {"type": "layered", "material": "heavy"}})", ball);
+  std::vector<double> one, two;
+  {
+    tbb::global_control threads(tbb::global_control::max_allowed_parallelism, 1);
+    one = simulate(*tree, 0.4).data;
+  }
+  {
+    tbb::global_control threads(tbb::global_control::max_allowed_parallelism, 2);
+    two = simulate(*tree, 0.4).data;
+  }
+  EXPECT_EQ(one, two);
+}
+
+TEST(MassMetrics, CentreOffsetIsAcrossGravityAndMassDifferenceInGrams) {
+  MassPropertiesObservation simulated;
+  simulated.data[MassPropertiesObservation::kMass] = 0.042;
+  simulated.data[MassPropertiesObservation::kCentre] = 3;
+  simulated.data[MassPropertiesObservation::kCentre + 1] = 4;
+  simulated.data[MassPropertiesObservation::kCentre + 2] = 12;
+  const auto goal = make_mass_properties_goal(0.040, std::array<double, 3>{0, 0, 0});
+  EXPECT_DOUBLE_EQ(make_centre_offset_metric({})->error(simulated, goal->target()), 5);  // √(3² + 4²)
+  EXPECT_DOUBLE_EQ(make_centre_offset_metric({{0, -2, 0}})->error(simulated, goal->target()), std::hypot(3, 12));
+  EXPECT_NEAR(make_mass_difference_metric()->error(simulated, goal->target()), 2, 1e-12);
+  const auto no_centre = make_mass_properties_goal(0.040, std::nullopt);
+  EXPECT_THROW(make_centre_offset_metric({})->error(simulated, no_centre->target()), InputError);
+  std::string why;
+  EXPECT_FALSE((CentreOffsetOptions{{0, 0, 0}}.check(&why)));
+  EXPECT_THAT(why, HasSubstr("gravity"));
+}
+
+// Make It Stand in one dimension: the interface between the light and the
+// heavy part of the box is free (1 mm steps); the tuner moves it to put the
+// centre of mass over x = 2 across gravity (−z). The interface it chooses is
+// the one whose closed-form centre lies nearest x = 2.
+TEST_F(MassProperties, ATunerMovesTheInterfaceToPutTheCentreOverATarget) {
+  const Solid box(make_box(Vec3(-20, -15, -10), Vec3(20, 15, 10), 2), UvSource::planar, 2);
+  auto tree = bound(R"({"type": "plane", "axis": "x", "offset_mm": {"value": 0, "min": -19, "max": 19, "step": 1},
+      "below": {"type": "layered", "material": "light"}, "above": {"type": "layered", "material": "heavy"}})",
+                    box);
+  Tuner tuner("stand", make_mass_properties_simulator({1.0}, PartContext{palette_}), make_centre_offset_metric({}),
+              make_mass_properties_goal(std::nullopt, std::array<double, 3>{2, 0, 0}),
+              build_optimizer(Properties::parse(R"({"type": "exhaustive"})", "optimizer.json")));
+  tuner.set_node(*tree, tree->root());
+  const Summary summary = tuner.tune();
+  ASSERT_TRUE(summary.usable()) << summary.full_report();
+  // The closed form's centre for an interface at o: light block [−20, o], heavy [o, 20].
+  const auto centre = [](double o) {
+    const double ml = (o + 20) * 1e-6, mh = (20 - o) * 3e-6;
+    return (ml * (o - 20) / 2 + mh * (o + 20) / 2) / (ml + mh);
+  };
+  double best = 1e9, best_o = 0;
+  for (double o = -19; o <= 19; o += 1) {
+    if (std::abs(centre(o) - 2) < best) best = std::abs(centre(o) - 2), best_o = o;
+  }
+  const double chosen = tuner.search_space().values()[0];
+  EXPECT_EQ(chosen, best_o);
+  EXPECT_NEAR(summary.final_error, best, 1e-9);
+}
+
+}  // namespace
+}  // namespace spec2fab
