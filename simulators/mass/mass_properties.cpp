@@ -265,8 +265,8 @@ class MassDifference final : public MetricFor<MassPropertiesObservation> {
     return std::abs(simulated.mass_kg() - target.mass_kg()) * 1e3;
   }
   static TypeDoc doc() {
-    return {"|simulated mass − target mass| in grams (a target of 0: the mass itself). Compares "
-            "mass_properties.",
+    return {"The absolute difference of the simulated and the target mass, in grams (a target of 0: "
+            "the mass itself). Compares mass_properties.",
             {}, R"({"type": "mass_difference"})"};
   }
 };
