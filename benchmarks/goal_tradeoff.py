@@ -6,7 +6,7 @@ weights, and its core cut into CELLS cells along x (exhaustive search over
 centre of mass's distance from the target across gravity (mm), the cells
 carved and the tuning time.
 
-  benchmarks/goal_tradeoff.py [--spec2fab build/spec2fab] [--cells 8] [--weights 0.5 2 8]
+  benchmarks/goal_tradeoff.py [--spec2fab build/spec2fab] [--cells 8] [--weights 0.5 1.8 8]
 """
 import argparse
 import json
@@ -25,7 +25,10 @@ def experiment(cells, weight):
     for key in ("materials", "printer"):
         e[key] = str((SHIPPED.parent / e[key]).resolve())
     e["geometry"]["mesh"] = str((SHIPPED.parent / e["geometry"]["mesh"]).resolve())
-    e["goal"]["tree"]["core"]["size_mm"][0] = 38.0 / cells  # the core spans x = 2 … 38 mm (cells past it do nothing)
+    # The core spans x = 2 … 38 mm: cells of 36/CELLS mm from x = 2 (their
+    # faces on the mass sampling's 0.5 mm cell faces for 4, 8 or 9 cells, so
+    # the sampled masses are the cells' own).
+    e["goal"]["tree"]["core"]["size_mm"][0] = 36.0 / cells
     term = e["goal"]["tuners"][0]["terms"][0]
     if weight is not None:
         del term["at_most"]
@@ -38,7 +41,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--spec2fab", default=str(ROOT / "build" / "spec2fab"))
     parser.add_argument("--cells", type=int, default=8)
-    parser.add_argument("--weights", type=float, nargs="+", default=[0.5, 2, 8])
+    parser.add_argument("--weights", type=float, nargs="+", default=[0.5, 1.8, 8])
     args = parser.parse_args()
     print(f"balance_box, {args.cells} core cells along x, exhaustive over {2 ** args.cells} carvings")
     print("| term over_target | grams carved | offset (mm) | cells carved (x order) | tuning (s) |")

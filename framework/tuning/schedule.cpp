@@ -85,7 +85,8 @@ std::optional<std::pair<size_t, size_t>> tuner_reading_a_neighbour(TunerNetwork&
 std::string reading_a_neighbour_problem(TunerNetwork& network, std::pair<size_t, size_t> pair) {
   const Tuner& reader = network.tuner(pair.first);
   return "tuners '" + reader.name() + "' and '" + network.tuner(pair.second).name() +
-         "' cannot run in parallel: the " + reader.simulator_name() + " simulator of '" + reader.name() +
+         "' cannot run in parallel: the " + reader.simulator_reading_beyond_its_node().value_or("?") +
+         " simulator of '" + reader.name() +
          "' reads the whole tree, so it would see the trial values of '" + network.tuner(pair.second).name() +
          "' as they change and its result would depend on timing; make the phase serial";
 }

@@ -195,7 +195,9 @@ struct TunerFinalError {
   template <class Fields, class Self>
   static void fields(Fields& f, Self& s) {
     f(s.name, "name", "the tuner");
-    f(s.final_error, "final_error", "its error against its goal (not a diffused target) at the end");
+    f(s.final_error, "final_error",
+      "its error against its goal (not a diffused target) at the end; with several terms, their weighted sum and "
+      "penalties");
     f(s.terms, "terms", "a tuner that weighs several terms: each term's value at the end");
   }
 };

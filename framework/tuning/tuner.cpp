@@ -124,22 +124,16 @@ class Tuner::TunerProblem final : public Problem {
   double error_and_gradient(std::span<const double> x, std::span<double> gradient) override {
     return tuner_.error_and_gradient_at(x, gradient);
   }
-  // The first term's bound, weighted, plus each further term's: a weighted
-  // term's weighted, a limited term's infinite where it passes its limit (no
-  // completion honours it: the branch is pruned) and 0 otherwise. Terms
-  // without a bound count 0, which every error is at least.
+  // The first term's bound, weighted, plus each further term's share of its
+  // own (TermRule::contribution is non-decreasing: a bound on the error
+  // bounds the share; a limited term past its limit adds its penalty, as
+  // the error does). Terms without a bound count 0, which every registered
+  // metric's error is at least.
   double lower_bound(std::span<const double> x, int assigned) override {
     if (!tuner_.lower_bound_) return Problem::lower_bound(x, assigned);
     double bound = tuner_.weight_ * tuner_.lower_bound_(x, assigned, *tuner_.effective_target_);
     for (const auto& term : tuner_.terms_) {
-      if (!term->bound) continue;
-      const double b = term->bound(x, assigned);
-      const TermRule& rule = term->parts.rule;
-      if (rule.at_most) {
-        if (b > *rule.at_most) return std::numeric_limits<double>::infinity();
-      } else {
-        bound += rule.weight * b;
-      }
+      if (term->bound) bound += term->parts.rule.contribution(term->bound(x, assigned));
     }
     return bound;
   }
@@ -205,10 +199,12 @@ void Tuner::set_term_lower_bound(size_t k, TermLowerBound bound) {
   terms_[k - 1]->bound = std::move(bound);
 }
 
-bool Tuner::reads_beyond_its_node() const {
-  return simulator_->reads_beyond_subtree() ||
-         std::any_of(terms_.begin(), terms_.end(),
-                     [](const auto& term) { return term->parts.simulator->reads_beyond_subtree(); });
+std::optional<std::string> Tuner::simulator_reading_beyond_its_node() const {
+  if (simulator_->reads_beyond_subtree()) return simulator_->name();
+  for (const auto& term : terms_) {
+    if (term->parts.simulator->reads_beyond_subtree()) return term->parts.simulator->name();
+  }
+  return std::nullopt;
 }
 
 std::vector<TermValue> Tuner::term_values() const {
@@ -361,12 +357,10 @@ void Tuner::restore(const State& state) {
   if (simulated_->values().size() != state.simulated.size()) simulate();
   if (simulated_->values().size() != state.simulated.size()) refuse("simulated values");
   std::copy(state.simulated.begin(), state.simulated.end(), simulated_->values().begin());
-  // The further terms' simulations are not saved: they are made again from
-  // the restored parameters (simulators are deterministic).
-  for (const auto& term : terms_) {
-    term->parts.simulator->simulate(*node_, *term->simulated);
-    term->error = term->parts.metric->error(*term->simulated, *term->target);
-  }
+  // The further terms' simulations are not saved: the next error() makes
+  // them again (a term may read the whole tree, whose other tuners a resumed
+  // checkpoint has not restored yet).
+  for (const auto& term : terms_) term->error = std::numeric_limits<double>::quiet_NaN();
   published_ = state.published;
   optimizer_->restore(state.optimizer);
 }
@@ -414,8 +408,7 @@ struct WeightKeys {
 /// One of a tuner's "terms", beside its simulator, metric and goal.
 struct TermKeys {
   std::optional<std::string> name;
-  std::optional<double> weight, at_most;
-  double penalty = 1e3;
+  std::optional<double> weight, at_most, penalty;
   template <class Declare, class Self>
   static void declare(Declare& d, Self& o) {
     d.value(o.name, "name", "how result.json names it", Default{"termN"});
@@ -423,12 +416,14 @@ struct TermKeys {
     d.value(o.at_most, "at_most",
             "instead of a weight: a limit its error is held under (a constraint; branch and bound prunes on it)",
             Default{"none"});
-    d.number(o.penalty, "penalty", Range::above(0), "with at_most: added to the error per unit past the limit");
+    d.value(o.penalty, "penalty", "with at_most: added to the error per unit past the limit (> 0)", Default{"1000"});
   }
   bool check(std::string* why) const {
     if (weight && at_most) *why = "at_most: a term held under a limit takes no weight";
+    else if (penalty && !at_most) *why = "penalty: only a term held under a limit (at_most) takes a penalty";
     else if (weight && !(*weight >= 0 && std::isfinite(*weight))) *why = "weight: a finite number ≥ 0";
     else if (at_most && !(*at_most >= 0 && std::isfinite(*at_most))) *why = "at_most: a finite number ≥ 0";
+    else if (penalty && !(*penalty > 0 && std::isfinite(*penalty))) *why = "penalty: a finite number > 0";
     else return true;
     return false;
   }
@@ -462,7 +457,7 @@ std::unique_ptr<Tuner> build_tuner(const Properties& properties, std::string nam
   for (size_t k = 0; k < terms.size(); ++k) {
     const TermKeys keys = read_options<TermKeys>(terms[k]);
     Parts parts = build_parts(terms[k], context);
-    TermRule rule{keys.weight.value_or(1.0), keys.at_most, keys.penalty};
+    TermRule rule{keys.weight.value_or(1.0), keys.at_most, keys.penalty.value_or(TermRule{}.penalty)};
     tuner->add_term({keys.name.value_or("term" + std::to_string(k + 1)), std::move(parts.simulator),
                      std::move(parts.metric), std::move(parts.goal), rule});
   }

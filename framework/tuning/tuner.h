@@ -16,6 +16,7 @@
 /// the residual form are the first term's.
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -32,14 +33,17 @@ namespace spec2fab {
 /// How a term enters a tuner's error: added with `weight` (weight · error),
 /// or, with `at_most`, held under that limit: penalty · max(0, error − limit)
 /// is added (an exact penalty: with a penalty above the objective's rate of
-/// change a tuned optimum honours the limit), and branch and bound prunes a
-/// partial assignment whose term's lower bound passes the limit.
+/// change a tuned optimum honours the limit). Both are non-decreasing in the
+/// error, so a lower bound on a term's error gives one on its share (what
+/// branch and bound prunes on). A NaN error (a simulation that failed) stays
+/// NaN, the worst, whichever the rule.
 struct TermRule {
   double weight = 1;
   std::optional<double> at_most;
   double penalty = 1e3;
   /// This rule's share of the tuner's error for a term's error `e`.
   double contribution(double e) const {
+    if (std::isnan(e)) return e;  // std::max(0.0, NaN) would be 0: a failed simulation passing a limit
     return at_most ? penalty * std::max(0.0, e - *at_most) : weight * e;
   }
 };
@@ -101,9 +105,11 @@ class Tuner {
   void set_weight(double weight);
   size_t term_count() const { return terms_.size() + 1; }
   /// A lower bound on term k's error (k ≥ 1) over every completion of a
-  /// partial assignment, like set_lower_bound's: with one, branch and bound
-  /// prunes on it (a limited term: where it passes the limit). A term
-  /// without one counts 0 in the tuner's bound.
+  /// partial assignment, like set_lower_bound's. The tuner's bound (what
+  /// branch and bound prunes on; it needs the first term's, set_lower_bound)
+  /// adds each term's share of its bound (TermRule::contribution). A term
+  /// without one counts 0: valid for metrics whose errors are ≥ 0, as every
+  /// registered one's are (a metric written in Python may not be).
   using TermLowerBound = std::function<double(std::span<const double> x, int assigned)>;
   void set_term_lower_bound(size_t k, TermLowerBound bound);
   /// Every term's error and contribution at the last simulation (the first
@@ -180,7 +186,9 @@ class Tuner {
   std::vector<SimulatorInput> simulator_inputs() const { return simulator_->inputs(); }
   /// Whether a simulator of its terms reads the tree beyond this tuner's
   /// node (Simulator::reads_beyond_subtree).
-  bool reads_beyond_its_node() const;
+  bool reads_beyond_its_node() const { return simulator_reading_beyond_its_node().has_value(); }
+  /// The name of the first such simulator, for the message that refuses it.
+  std::optional<std::string> simulator_reading_beyond_its_node() const;
   std::string simulator_name() const { return simulator_->name(); }
   /// The simulator's files for the last simulation (Simulator::write_report)
   /// into `folder`, its sections into `record`: what `spec2fab simulate`

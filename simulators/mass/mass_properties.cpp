@@ -33,9 +33,10 @@ std::vector<std::string> MassPropertiesObservation::write_files(const std::files
 }
 
 bool CentreOffsetOptions::check(std::string* why) const {
-  if (std::isfinite(gravity[0] + gravity[1] + gravity[2]) &&
-      gravity[0] * gravity[0] + gravity[1] * gravity[1] + gravity[2] * gravity[2] > 0)
-    return true;
+  // The largest component, not the squared length: 1e-200 is a direction,
+  // and 1e200 must not overflow to a zero direction once normalised.
+  const double largest = std::max({std::abs(gravity[0]), std::abs(gravity[1]), std::abs(gravity[2])});
+  if (std::isfinite(largest) && largest > 0) return true;
   *why = "gravity: a finite direction, not [0, 0, 0]";
   return false;
 }
@@ -47,6 +48,11 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 /// Sums over one material's cells: count, Σx, Σy, Σz, Σxx, Σyy, Σzz, Σxy,
 /// Σxz, Σyz (cell centres, mm, relative to the grid's centre).
 using Moments = std::array<double, 10>;
+
+/// The z slices are summed in at most this many runs of consecutive slices,
+/// each its own partial sums, added in order: the same result for any thread
+/// count, and memory that does not grow with the slices.
+constexpr int kSliceRuns = 256;
 
 class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservation> {
  public:
@@ -78,50 +84,44 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
       grid_[k] = std::max(1.0, std::ceil(bounds.size()[k] / voxel_mm_));
       cells *= grid_[k];
     }
-    if (const double limit = limits_.get("mass_cells"); cells > limit) {
+    const double limit = limits_.get("mass_cells");
+    if (cells > limit || grid_.maxCoeff() > 1e9) {  // an axis's cells count as an int
       throw InputError(fmt::format("mass_properties: {:.3g} cells of {:.3g} mm over the solid's bounds, past the limit "
                                    "of {:.3g}; give a coarser voxel_mm {}",
                                    cells, voxel_mm_, limit, limits_.how_to_change("mass_cells")));
     }
-    centre_ = bounds.lower + 0.5 * voxel_mm_ * Vec3(grid_[0], grid_[1], grid_[2]);
+    centre_ = bounds.lower + 0.5 * voxel_mm_ * grid_;
     solid_volume_ = solid.volume();
-    slices_.assign(static_cast<size_t>(grid_[2]), std::vector<Moments>(densities_.size()));
+    runs_.assign(static_cast<size_t>(std::min<double>(kSliceRuns, grid_[2])), std::vector<Moments>(densities_.size()));
   }
 
   using SimulatorFor::simulate;
   void simulate(const ReducerNode& /*subtree*/, MassPropertiesObservation& out) override {
     if (tree_ == nullptr) throw std::logic_error("mass_properties: simulate before setup");
-    const int nx = static_cast<int>(grid_[0]), ny = static_cast<int>(grid_[1]);
+    const int nx = static_cast<int>(grid_[0]), nz = static_cast<int>(grid_[2]);
     const double h = voxel_mm_;
-    const Vec3 lower = centre_ - 0.5 * h * Vec3(grid_[0], grid_[1], grid_[2]);
-    tbb::parallel_for(0, static_cast<int>(grid_[2]), [&](int z) {
+    const Vec3 lower = centre_ - 0.5 * h * grid_;
+    const int runs = static_cast<int>(runs_.size());
+    tbb::parallel_for(0, runs, [&](int r) {
       ReducerTree::Query query(*tree_);
       std::vector<MaterialId> row(static_cast<size_t>(nx));
-      std::vector<Moments>& sums = slices_[static_cast<size_t>(z)];
+      std::vector<Moments>& sums = runs_[static_cast<size_t>(r)];
       std::fill(sums.begin(), sums.end(), Moments{});
-      const double zc = lower.z() + (z + 0.5) * h - centre_.z();
-      for (int y = 0; y < ny; ++y) {
-        const double yc = lower.y() + (y + 0.5) * h - centre_.y();
-        query.material_row(lower + h * Vec3(0.5, y + 0.5, z + 0.5), Vec3(h, 0, 0), nx, row.data());
-        for (int x = 0; x < nx; ++x) {
-          const MaterialId id = row[static_cast<size_t>(x)];
-          if (id == kVoid) continue;
-          const double xc = lower.x() + (x + 0.5) * h - centre_.x();
-          Moments& m = sums[id];
-          const Moments cell = {1, xc, yc, zc, xc * xc, yc * yc, zc * zc, xc * yc, xc * zc, yc * zc};
-          for (size_t k = 0; k < m.size(); ++k) m[k] += cell[k];
-        }
+      // Run r holds slices [nz·r/runs, nz·(r+1)/runs).
+      const int z_end = static_cast<int>(static_cast<long long>(nz) * (r + 1) / runs);
+      for (int z = static_cast<int>(static_cast<long long>(nz) * r / runs); z < z_end; ++z) {
+        add_slice(query, row, lower, z, sums);
       }
     });
-    // Slices summed in order: the same sums for any thread count.
+    // Runs summed in order: the same sums for any thread count.
     Moments mass{};  // ρ-weighted sums over every material
     out.data.assign(MassPropertiesObservation::kVolumes + densities_.size(), 0.0);
     const double cell = h * h * h;
     double material_volume = 0;
     for (size_t id = 1; id < densities_.size(); ++id) {
       Moments total{};
-      for (const auto& slice : slices_) {
-        for (size_t k = 0; k < total.size(); ++k) total[k] += slice[id][k];
+      for (const auto& run : runs_) {
+        for (size_t k = 0; k < total.size(); ++k) total[k] += run[id][k];
       }
       out.data[MassPropertiesObservation::kVolumes + id] = total[0] * cell;
       material_volume += total[0] * cell;
@@ -145,6 +145,25 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
   }
 
  private:
+  // Adds slice z's cells to `sums` (per material, about the grid's centre).
+  void add_slice(ReducerTree::Query& query, std::vector<MaterialId>& row, const Vec3& lower, int z,
+                 std::vector<Moments>& sums) const {
+    const int nx = static_cast<int>(row.size()), ny = static_cast<int>(grid_[1]);
+    const double h = voxel_mm_, zc = lower.z() + (z + 0.5) * h - centre_.z();
+    for (int y = 0; y < ny; ++y) {
+      const double yc = lower.y() + (y + 0.5) * h - centre_.y();
+      query.material_row(lower + h * Vec3(0.5, y + 0.5, z + 0.5), Vec3(h, 0, 0), nx, row.data());
+      for (int x = 0; x < nx; ++x) {
+        const MaterialId id = row[static_cast<size_t>(x)];
+        if (id == kVoid) continue;
+        const double xc = lower.x() + (x + 0.5) * h - centre_.x();
+        const Moments cell = {1, xc, yc, zc, xc * xc, yc * yc, zc * zc, xc * yc, xc * zc, yc * zc};
+        Moments& m = sums[id];
+        for (size_t k = 0; k < m.size(); ++k) m[k] += cell[k];
+      }
+    }
+  }
+
   // Mass, centre and inertia about the centre from the ρ-weighted sums about
   // the grid's centre (the parallel-axis theorem; each cell's own inertia
   // about its centre is m h²/6 on every axis).
@@ -174,9 +193,9 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
   std::vector<double> densities_;  ///< kg/mm³ per palette id
   const ReducerTree* tree_ = nullptr;
   double voxel_mm_ = 0, solid_volume_ = 0;
-  std::array<double, 3> grid_{1, 1, 1};
+  Vec3 grid_ = Vec3::Ones();     ///< cells along x, y, z
   Vec3 centre_ = Vec3::Zero();  ///< of the grid: sums about it keep their digits
-  std::vector<std::vector<Moments>> slices_;  ///< per z slice, per material
+  std::vector<std::vector<Moments>> runs_;  ///< per run of z slices, per material
   bool weightless_ = false;
 };
 
@@ -232,7 +251,7 @@ class CentreOffset final : public MetricFor<MassPropertiesObservation> {
       : CentreOffset(read_options<Options>(properties)) {}
   explicit CentreOffset(const Options& options) {
     const Vec3 g(options.gravity[0], options.gravity[1], options.gravity[2]);
-    gravity_ = g.normalized();
+    gravity_ = (g / g.cwiseAbs().maxCoeff()).normalized();  // scaled first: no overflow or underflow
   }
   std::string name() const override { return "centre_offset"; }
   using MetricFor::error;
@@ -275,14 +294,14 @@ class MassDifference final : public MetricFor<MassPropertiesObservation> {
 
 std::unique_ptr<SimulatorFor<MassPropertiesObservation>> make_mass_properties_simulator(
     const MassPropertiesOptions& options, const PartContext& context) {
-  return std::make_unique<MassPropertiesSimulator>(options, context);
+  return std::make_unique<MassPropertiesSimulator>(require_valid(options, "mass_properties"), context);
 }
 std::unique_ptr<GoalFor<MassPropertiesObservation>> make_mass_properties_goal(
     std::optional<double> mass_kg, std::optional<std::array<double, 3>> centre_mm) {
   return std::make_unique<MassPropertiesGoal>(mass_kg, centre_mm);
 }
 std::unique_ptr<MetricFor<MassPropertiesObservation>> make_centre_offset_metric(const CentreOffsetOptions& options) {
-  return std::make_unique<CentreOffset>(options);
+  return std::make_unique<CentreOffset>(require_valid(options, "centre_offset"));
 }
 std::unique_ptr<MetricFor<MassPropertiesObservation>> make_mass_difference_metric() {
   return std::make_unique<MassDifference>();

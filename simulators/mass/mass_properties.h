@@ -6,8 +6,8 @@
 ///
 /// The "mass_properties" simulator samples the tree at the centres of cubic
 /// cells of a stated edge covering the solid's bounds (each cell a small
-/// cube of its material: its own inertia counts), summed slice by slice in a
-/// fixed order, so the result is the same for any thread count. The goal
+/// cube of its material: its own inertia counts), summed in runs of z slices
+/// added in a fixed order, so the result is the same for any thread count. The goal
 /// "mass_properties" holds a target mass and centre; the metrics
 /// "centre_offset" (the centres' distance across the direction of gravity,
 /// mm) and "mass_difference" (grams) compare them.

@@ -9,6 +9,7 @@
 
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -96,6 +97,54 @@ TEST_F(MassProperties, TwoBondedBlocksMatchTheClosedForm) {
   EXPECT_NEAR(out.volume_mm3(2), 15.0 * 30 * 20, 1e-6);
   EXPECT_NEAR(out.volume_mm3(0), 0, 1e-6) << "no void inside";
   EXPECT_EQ(failure_, "");
+}
+
+// Eight 20 × 15 × 10 mm blocks (a 2 × 2 × 2 voxel grid over the box), three
+// of them heavy and out of symmetry: every product of inertia is non-zero.
+// The closed form sums each block's own inertia, m/12 (b² + c²) and so on,
+// and m (|d|² I − d dᵀ) for its centre's offset d from the centre of mass.
+TEST_F(MassProperties, AsymmetricBlocksMatchTheClosedFormWithProductsOfInertia) {
+  const Solid box(make_box(Vec3(-20, -15, -10), Vec3(20, 15, 10), 2), UvSource::planar, 2);
+  const std::vector<int> heavy = {0, 3, 5};  // cell i + 2 (j + 2 k)
+  std::string children;
+  for (int c = 0; c < 8; ++c) {
+    const bool is_heavy = std::find(heavy.begin(), heavy.end(), c) != heavy.end();
+    children += std::string(c ? ", " : "") + R"({"type": "layered", "material": ")" + (is_heavy ? "heavy" : "light") +
+                "\"}";
+  }
+  auto tree = bound(R"({"type": "voxel", "size_mm": [20, 15, 10], "children": [)" + children + "]}", box);
+  const MassPropertiesObservation out = simulate(*tree, 1.0);
+
+  struct Block {
+    double m;
+    Eigen::Vector3d centre;
+  };
+  std::vector<Block> blocks;
+  for (int c = 0; c < 8; ++c) {
+    const int i = c % 2, j = (c / 2) % 2, k = c / 4;
+    const bool is_heavy = std::find(heavy.begin(), heavy.end(), c) != heavy.end();
+    blocks.push_back({20.0 * 15 * 10 * (is_heavy ? 3e-6 : 1e-6), Eigen::Vector3d(i ? 10 : -10, j ? 7.5 : -7.5, k ? 5 : -5)});
+  }
+  double mass = 0;
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  for (const Block& b : blocks) mass += b.m, centre += b.m * b.centre;
+  centre /= mass;
+  Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();  // the tensor, products negative: I = Σ m (|d|² 1 − d dᵀ)
+  for (const Block& b : blocks) {
+    const Eigen::Vector3d d = b.centre - centre;
+    inertia += b.m * (d.squaredNorm() * Eigen::Matrix3d::Identity() - d * d.transpose());
+    inertia += b.m / 12 * Eigen::Vector3d(15 * 15 + 10 * 10, 20 * 20 + 10 * 10, 20 * 20 + 15 * 15).asDiagonal().toDenseMatrix();
+  }
+  EXPECT_NEAR(out.mass_kg(), mass, 1e-12);
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(out.centre_mm()[k], centre[k], 1e-9) << "axis " << k;
+  const double* got = out.data.data() + MassPropertiesObservation::kInertia;
+  const double expected[] = {inertia(0, 0), inertia(1, 1), inertia(2, 2), inertia(0, 1), inertia(0, 2), inertia(1, 2)};
+  for (int k = 0; k < 6; ++k) {
+    EXPECT_NEAR(got[k], expected[k], 1e-9 * inertia(0, 0)) << "component " << k;
+    if (k >= 3) {
+      EXPECT_GT(std::abs(expected[k]), 1e-3) << "the case has products of inertia";
+    }
+  }
 }
 
 // A sphere of radius 10 mm (a polyhedron of 64 × 32 facets): its mass is

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 #include "materials/palette.h"
 #include "reducer/reducer_tree.h"
@@ -157,6 +158,11 @@ TEST_F(TunerTerms, RulesAndPartsAreChecked) {
   auto tree = layers(1);
   t->set_node(tree->root());
   EXPECT_THROW(t->add_term(distance_to({1.0}, TermRule{})), std::logic_error) << "terms come before set_node";
+  // A failed simulation (NaN) is the worst error under either rule, never within a limit.
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_TRUE(std::isnan(TermRule{1, 0.5, 1e3}.contribution(nan)));
+  EXPECT_TRUE(std::isnan(TermRule{2, std::nullopt, 1e3}.contribution(nan)));
+  EXPECT_EQ((TermRule{1, 0.5, 10}.contribution(0.75)), 2.5);
 }
 
 TEST_F(TunerTerms, TermsAreReadFromJsonAndReported) {
@@ -200,6 +206,9 @@ TEST_F(TunerTerms, JsonMistakesInATermAreNamedWhereTheyAre) {
                                                   "observations, but simulator 'test_parameters' produces vector")));
   EXPECT_THAT([&] { build("{" + parts + R"(, "at_most": -1})"); },
               ThrowsMessage<InputError>(HasSubstr("at_most: a finite number ≥ 0")));
+  EXPECT_THAT([&] { build("{" + parts + R"(, "weight": 2, "penalty": 10})"); },
+              ThrowsMessage<InputError>(HasSubstr("/terms/0/penalty: only a term held under a limit (at_most) takes "
+                                                  "a penalty")));
 }
 
 }  // namespace
