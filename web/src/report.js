@@ -84,6 +84,14 @@ function figuresSection(result, meanings) {
   }
   const tuners = result.tuning?.tuners;
   if (tuners) blocks.push(el('h3', { text: 'tuners' }), table(['tuner', 'final error'], tuners.map((t) => [t.name, t.final_error]), [1]));
+  // A tuner that weighs several terms: each one's error, its rule, and its share of the tuner's error.
+  const terms = (tuners || []).flatMap((t) => (t.terms || []).map((term) => [t.name, term.name,
+    `${term.simulator} · ${term.metric}`, term.error,
+    term.at_most !== undefined ? `at most ${term.at_most}` : `weight ${term.weight}`, term.contribution]));
+  if (terms.length) {
+    blocks.push(el('h3', { text: 'tuner terms' }),
+      table(['tuner', 'term', 'simulator · metric', 'error', 'rule', 'contribution'], terms, [3, 5]));
+  }
   const phases = result.tuning?.phases;
   if (phases) {
     blocks.push(el('h3', { text: 'tuning phases' }), table(['phase', 'tuner runs', 'evaluations', 'error at start (sum)', 'at end'],
