@@ -47,11 +47,16 @@ std::string incompatibility(const Simulator& simulator, const ErrorMetric& metri
   return {};
 }
 
+/// What is wrong with a rule, as "key: why" (the JSON keys' names), or "".
+std::string rule_problem(const TermRule& rule) {
+  if (!(rule.weight >= 0) || !std::isfinite(rule.weight)) return "weight: a finite number ≥ 0";
+  if (rule.at_most && (!(*rule.at_most >= 0) || !std::isfinite(*rule.at_most))) return "at_most: a finite number ≥ 0";
+  if (!(rule.penalty > 0) || !std::isfinite(rule.penalty)) return "penalty: a finite number > 0";
+  return {};
+}
+
 void check_rule(const TermRule& rule, const std::string& where) {
-  const auto refuse = [&](const std::string& what) { throw std::invalid_argument(where + ": " + what); };
-  if (!(rule.weight >= 0) || !std::isfinite(rule.weight)) refuse("a weight is a finite number ≥ 0");
-  if (rule.at_most && (!(*rule.at_most >= 0) || !std::isfinite(*rule.at_most))) refuse("a limit is a finite number ≥ 0");
-  if (!(rule.penalty > 0) || !std::isfinite(rule.penalty)) refuse("a penalty is a finite number > 0");
+  if (const std::string problem = rule_problem(rule); !problem.empty()) throw std::invalid_argument(where + ": " + problem);
 }
 
 }  // namespace
@@ -421,12 +426,10 @@ struct TermKeys {
   bool check(std::string* why) const {
     if (weight && at_most) *why = "at_most: a term held under a limit takes no weight";
     else if (penalty && !at_most) *why = "penalty: only a term held under a limit (at_most) takes a penalty";
-    else if (weight && !(*weight >= 0 && std::isfinite(*weight))) *why = "weight: a finite number ≥ 0";
-    else if (at_most && !(*at_most >= 0 && std::isfinite(*at_most))) *why = "at_most: a finite number ≥ 0";
-    else if (penalty && !(*penalty > 0 && std::isfinite(*penalty))) *why = "penalty: a finite number > 0";
-    else return true;
-    return false;
+    else *why = rule_problem(rule());
+    return why->empty();
   }
+  TermRule rule() const { return {weight.value_or(1.0), at_most, penalty.value_or(TermRule{}.penalty)}; }
 };
 
 /// A simulator, metric and goal that agree, or an InputError at `properties`.
@@ -457,9 +460,8 @@ std::unique_ptr<Tuner> build_tuner(const Properties& properties, std::string nam
   for (size_t k = 0; k < terms.size(); ++k) {
     const TermKeys keys = read_options<TermKeys>(terms[k]);
     Parts parts = build_parts(terms[k], context);
-    TermRule rule{keys.weight.value_or(1.0), keys.at_most, keys.penalty.value_or(TermRule{}.penalty)};
     tuner->add_term({keys.name.value_or("term" + std::to_string(k + 1)), std::move(parts.simulator),
-                     std::move(parts.metric), std::move(parts.goal), rule});
+                     std::move(parts.metric), std::move(parts.goal), keys.rule()});
   }
   tuner->set_origin(properties.where());
   return tuner;

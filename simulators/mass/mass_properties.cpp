@@ -92,19 +92,21 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
     }
     centre_ = bounds.lower + 0.5 * voxel_mm_ * grid_;
     solid_volume_ = solid.volume();
-    runs_.assign(static_cast<size_t>(std::min<double>(kSliceRuns, grid_[2])), std::vector<Moments>(densities_.size()));
+    const auto runs = static_cast<size_t>(std::min<double>(kSliceRuns, grid_[2]));
+    runs_.assign(runs, std::vector<Moments>(densities_.size()));
+    rows_.assign(runs, std::vector<MaterialId>(static_cast<size_t>(grid_[0])));  // simulate allocates none
   }
 
   using SimulatorFor::simulate;
   void simulate(const ReducerNode& /*subtree*/, MassPropertiesObservation& out) override {
     if (tree_ == nullptr) throw std::logic_error("mass_properties: simulate before setup");
-    const int nx = static_cast<int>(grid_[0]), nz = static_cast<int>(grid_[2]);
+    const int nz = static_cast<int>(grid_[2]);
     const double h = voxel_mm_;
     const Vec3 lower = centre_ - 0.5 * h * grid_;
     const int runs = static_cast<int>(runs_.size());
     tbb::parallel_for(0, runs, [&](int r) {
       ReducerTree::Query query(*tree_);
-      std::vector<MaterialId> row(static_cast<size_t>(nx));
+      std::vector<MaterialId>& row = rows_[static_cast<size_t>(r)];
       std::vector<Moments>& sums = runs_[static_cast<size_t>(r)];
       std::fill(sums.begin(), sums.end(), Moments{});
       // Run r holds slices [nz·r/runs, nz·(r+1)/runs).
@@ -196,6 +198,7 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
   Vec3 grid_ = Vec3::Ones();     ///< cells along x, y, z
   Vec3 centre_ = Vec3::Zero();  ///< of the grid: sums about it keep their digits
   std::vector<std::vector<Moments>> runs_;  ///< per run of z slices, per material
+  std::vector<std::vector<MaterialId>> rows_;  ///< per run of z slices: one row of materials
   bool weightless_ = false;
 };
 

@@ -152,9 +152,9 @@ TEST_F(TunerTerms, BranchAndBoundPrunesOnALimitedTermsBound) {
 TEST_F(TunerTerms, RulesAndPartsAreChecked) {
   auto t = tuner({0.0}, R"({"type": "exhaustive"})");
   EXPECT_THAT([&] { t->add_term(distance_to({1.0}, TermRule{-1, std::nullopt, 1e3})); },
-              ThrowsMessage<std::invalid_argument>(HasSubstr("term 'near': a weight is a finite number ≥ 0")));
+              ThrowsMessage<std::invalid_argument>(HasSubstr("term 'near': weight: a finite number ≥ 0")));
   EXPECT_THAT([&] { t->add_term(distance_to({1.0}, TermRule{1, 1, 0})); },
-              ThrowsMessage<std::invalid_argument>(HasSubstr("a penalty is a finite number > 0")));
+              ThrowsMessage<std::invalid_argument>(HasSubstr("penalty: a finite number > 0")));
   auto tree = layers(1);
   t->set_node(tree->root());
   EXPECT_THROW(t->add_term(distance_to({1.0}, TermRule{})), std::logic_error) << "terms come before set_node";
