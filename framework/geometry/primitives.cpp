@@ -156,4 +156,41 @@ Mesh make_box(const Vec3& lower, const Vec3& upper, int subdivisions) {
   return mesh;
 }
 
+Mesh make_extrusion(const std::vector<Vec2>& polygon_xz, double depth_mm) {
+  const int n = static_cast<int>(polygon_xz.size());
+  require(n >= 3, "make_extrusion: the polygon needs at least 3 corners");
+  require(depth_mm > 0, "make_extrusion: depth must be positive");
+  Mesh mesh;
+  mesh.name = "extrusion";
+  Vec2 lower = polygon_xz.front(), upper = lower;
+  std::vector<double> along(static_cast<size_t>(n) + 1, 0.0);  // outline length to each corner
+  for (int i = 0; i < n; ++i) {
+    const Vec2& p = polygon_xz[static_cast<size_t>(i)];
+    lower = lower.cwiseMin(p);
+    upper = upper.cwiseMax(p);
+    along[static_cast<size_t>(i) + 1] = along[static_cast<size_t>(i)] + (polygon_xz[static_cast<size_t>((i + 1) % n)] - p).norm();
+  }
+  require(((upper - lower).array() > 0).all(), "make_extrusion: the polygon has no area");
+  for (int side = 0; side < 2; ++side) {
+    for (const Vec2& p : polygon_xz) mesh.vertices.emplace_back(p.x(), side * depth_mm, p.y());
+  }
+  const auto cap_uv = [&](int i) {
+    return Vec2((polygon_xz[static_cast<size_t>(i)] - lower).cwiseQuotient(upper - lower));
+  };
+  // Oriented for a counter-clockwise polygon in (x, z) seen from −y; flipped at the end otherwise.
+  for (int i = 1; i + 1 < n; ++i) {
+    add_triangle(mesh, 0, i + 1, i, cap_uv(0), cap_uv(i + 1), cap_uv(i));              // y = 0, facing −y
+    add_triangle(mesh, n, n + i, n + i + 1, cap_uv(0), cap_uv(i), cap_uv(i + 1));  // y = depth, facing +y
+  }
+  const double perimeter = along.back();
+  for (int i = 0; i < n; ++i) {
+    const int j = (i + 1) % n;
+    const double u0 = along[static_cast<size_t>(i)] / perimeter, u1 = along[static_cast<size_t>(i) + 1] / perimeter;
+    add_triangle(mesh, i, j, n + j, {u0, 0}, {u1, 0}, {u1, 1});
+    add_triangle(mesh, i, n + j, n + i, {u0, 0}, {u1, 1}, {u0, 1});
+  }
+  if (mesh.signed_volume() < 0) mesh.flip();
+  return mesh;
+}
+
 }  // namespace spec2fab

@@ -213,14 +213,18 @@ std::optional<std::vector<MaterialId>> possible_materials(const ReducerNode& sub
   return out;
 }
 
-MaterialId route_to_material(const ReducerNode& subtree, const QueryPoint& point, LocalFrame frame) {
+const MaterialNode& route_to_leaf(const ReducerNode& subtree, const QueryPoint& point, LocalFrame& frame) {
   const ReducerNode* node = &subtree;
   while (node->role() == ReducerNode::Role::geometry) {
     const GeometryNode::Route route = static_cast<const GeometryNode*>(node)->route(point, frame);
     node = &node->child(static_cast<size_t>(route.child));
     frame = route.frame;
   }
-  return static_cast<const MaterialNode*>(node)->material(point, frame);
+  return static_cast<const MaterialNode&>(*node);
+}
+
+MaterialId route_to_material(const ReducerNode& subtree, const QueryPoint& point, LocalFrame frame) {
+  return route_to_leaf(subtree, point, frame).material(point, frame);
 }
 
 void sample_along_depth(const ReducerNode& subtree, double a, double b, double step_mm,

@@ -163,6 +163,12 @@ class MaterialNode : public ReducerNode {
   /// (its fixed materials and every choice of its free ones); false where
   /// the node cannot say (then callers must assume anything).
   virtual bool possible_materials(std::vector<MaterialId>& /*out*/) const { return false; }
+  /// True when the node assigns one material over all its region whatever
+  /// values its parameters take (they may change which): a simulator that
+  /// sums over cells can then take each such leaf's cells once and reweigh
+  /// them as its material changes (mass/mass_properties.h). False by
+  /// default, which is always safe.
+  virtual bool assigns_one_material() const { return false; }
 
  protected:
   MaterialNode() : ReducerNode(Role::material) {}
@@ -176,6 +182,8 @@ std::optional<std::vector<MaterialId>> possible_materials(const ReducerNode& sub
 /// The material a subtree assigns to `point`, given in `frame` (the frame the
 /// subtree's root reads): routes through geometry nodes down to a material node.
 MaterialId route_to_material(const ReducerNode& subtree, const QueryPoint& point, LocalFrame frame);
+/// The material node route_to_material reaches; `frame` becomes the frame it reads.
+const MaterialNode& route_to_leaf(const ReducerNode& subtree, const QueryPoint& point, LocalFrame& frame);
 
 /// The frame that the node at `path` (child indices from `root`) reads at a
 /// point, following that path whatever route() would choose.

@@ -4,7 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
+#include <unordered_map>
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
@@ -95,36 +97,31 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
     const auto runs = static_cast<size_t>(std::min<double>(kSliceRuns, grid_[2]));
     runs_.assign(runs, std::vector<Moments>(densities_.size()));
     rows_.assign(runs, std::vector<MaterialId>(static_cast<size_t>(grid_[0])));  // simulate allocates none
+    leaf_sums_ = {};
   }
 
   using SimulatorFor::simulate;
   void simulate(const ReducerNode& /*subtree*/, MassPropertiesObservation& out) override {
     if (tree_ == nullptr) throw std::logic_error("mass_properties: simulate before setup");
-    const int nz = static_cast<int>(grid_[2]);
-    const double h = voxel_mm_;
-    const Vec3 lower = centre_ - 0.5 * h * grid_;
-    const int runs = static_cast<int>(runs_.size());
-    tbb::parallel_for(0, runs, [&](int r) {
-      ReducerTree::Query query(*tree_);
-      std::vector<MaterialId>& row = rows_[static_cast<size_t>(r)];
-      std::vector<Moments>& sums = runs_[static_cast<size_t>(r)];
-      std::fill(sums.begin(), sums.end(), Moments{});
-      // Run r holds slices [nz·r/runs, nz·(r+1)/runs).
-      const int z_end = static_cast<int>(static_cast<long long>(nz) * (r + 1) / runs);
-      for (int z = static_cast<int>(static_cast<long long>(nz) * r / runs); z < z_end; ++z) {
-        add_slice(query, row, lower, z, sums);
+    std::vector<Moments>& totals = totals_;
+    totals.assign(densities_.size(), Moments{});
+    if (leaf_sums_apply()) {
+      // Each tuned leaf's cells, added by the material it holds now.
+      totals = leaf_sums_.fixed;
+      for (size_t i = 0; i < leaf_sums_.leaves.size(); ++i) {
+        const MaterialId id = leaf_sums_.leaves[i]->material(QueryPoint{}, LocalFrame{});
+        add(totals.at(id), leaf_sums_.per_leaf[i]);
       }
-    });
-    // Runs summed in order: the same sums for any thread count.
+    } else {
+      sample_cells(totals);
+    }
+    const double h = voxel_mm_;
     Moments mass{};  // ρ-weighted sums over every material
     out.data.assign(MassPropertiesObservation::kVolumes + densities_.size(), 0.0);
     const double cell = h * h * h;
     double material_volume = 0;
     for (size_t id = 1; id < densities_.size(); ++id) {
-      Moments total{};
-      for (const auto& run : runs_) {
-        for (size_t k = 0; k < total.size(); ++k) total[k] += run[id][k];
-      }
+      const Moments& total = totals[id];
       out.data[MassPropertiesObservation::kVolumes + id] = total[0] * cell;
       material_volume += total[0] * cell;
       for (size_t k = 0; k < total.size(); ++k) mass[k] += densities_[id] * cell * total[k];
@@ -147,6 +144,128 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
   }
 
  private:
+  static void add(Moments& to, const Moments& from) {
+    for (size_t k = 0; k < to.size(); ++k) to[k] += from[k];
+  }
+  static Moments cell_moments(double xc, double yc, double zc) {
+    return {1, xc, yc, zc, xc * xc, yc * yc, zc * zc, xc * yc, xc * zc, yc * zc};
+  }
+  Vec3 lower() const { return centre_ - 0.5 * voxel_mm_ * grid_; }
+
+  // Every cell of the grid walked through the tree: per material, into `totals`.
+  void sample_cells(std::vector<Moments>& totals) {
+    const int nz = static_cast<int>(grid_[2]);
+    const Vec3 lower = this->lower();
+    const int runs = static_cast<int>(runs_.size());
+    tbb::parallel_for(0, runs, [&](int r) {
+      ReducerTree::Query query(*tree_);
+      std::vector<MaterialId>& row = rows_[static_cast<size_t>(r)];
+      std::vector<Moments>& sums = runs_[static_cast<size_t>(r)];
+      std::fill(sums.begin(), sums.end(), Moments{});
+      // Run r holds slices [nz·r/runs, nz·(r+1)/runs).
+      const int z_end = static_cast<int>(static_cast<long long>(nz) * (r + 1) / runs);
+      for (int z = static_cast<int>(static_cast<long long>(nz) * r / runs); z < z_end; ++z) {
+        add_slice(query, row, lower, z, sums);
+      }
+    });
+    // Runs summed in order: the same sums for any thread count.
+    for (const auto& run : runs_) {
+      for (size_t id = 0; id < totals.size(); ++id) add(totals[id], run[id]);
+    }
+  }
+
+  // Where every free parameter of the tree is a one-material leaf's
+  // (ReducerNode::assigns_one_material: a voxel core's cells, each a
+  // material or void), no cell changes leaf as the tuners move: each leaf's
+  // cells are summed once and an evaluation adds the sums by the leaves'
+  // current materials. The same cells as sample_cells, in O(leaves) per
+  // evaluation instead of O(cells). The sums are taken again when anything
+  // else in the tree changed (its signature: every other parameter's value
+  // and every parameter's freedom).
+  struct LeafSums {
+    bool taken = false, apply = false;
+    std::vector<double> signature;
+    std::vector<const MaterialNode*> leaves;  ///< the tuned one-material leaves, depth first
+    std::vector<Moments> per_leaf;
+    std::vector<Moments> fixed;  ///< per material: the cells of every other leaf
+  };
+
+  // The tree's signature; false when a free parameter is not a one-material leaf's.
+  bool signature(std::vector<double>& out, std::vector<const MaterialNode*>* leaves) const {
+    out.clear();
+    bool apply = true;
+    const std::function<void(const ReducerNode&)> visit = [&](const ReducerNode& node) {
+      const bool one_material = node.role() == ReducerNode::Role::material &&
+                                static_cast<const MaterialNode&>(node).assigns_one_material();
+      bool tuned = false;
+      node.read_parameters([&](const std::string& /*name*/, const Parameter& parameter) {
+        out.push_back(parameter.is_free() ? 1.0 : 0.0);
+        if (!parameter.is_free()) out.push_back(parameter.value());
+        tuned = tuned || parameter.is_free();
+      });
+      if (tuned && !one_material) apply = false;
+      if (tuned && one_material && leaves != nullptr) leaves->push_back(static_cast<const MaterialNode*>(&node));
+      for (size_t i = 0; i < node.child_count(); ++i) visit(node.child(i));
+    };
+    visit(tree_->root());
+    return apply;
+  }
+
+  bool leaf_sums_apply() {
+    if (leaf_sums_.taken) {
+      signature(signature_now_, nullptr);
+      if (signature_now_ == leaf_sums_.signature) return leaf_sums_.apply;
+    }
+    take_leaf_sums();
+    return leaf_sums_.apply;
+  }
+
+  void take_leaf_sums() {
+    LeafSums& sums = leaf_sums_;
+    sums = {};
+    sums.taken = true;
+    sums.apply = signature(sums.signature, &sums.leaves);
+    if (!sums.apply) return;
+    std::unordered_map<const ReducerNode*, size_t> index;
+    for (size_t i = 0; i < sums.leaves.size(); ++i) index.emplace(sums.leaves[i], i);
+    const size_t slots = densities_.size() + sums.leaves.size();  // materials, then the tuned leaves
+    const int nx = static_cast<int>(grid_[0]), ny = static_cast<int>(grid_[1]), nz = static_cast<int>(grid_[2]);
+    // Fewer runs than sample_cells: each holds a sum per leaf. The count
+    // depends on the grid alone, so the sums do not depend on threads.
+    const int runs = std::min(nz, 64);
+    std::vector<std::vector<Moments>> run_sums(static_cast<size_t>(runs), std::vector<Moments>(slots));
+    const Vec3 lower = this->lower();
+    const double h = voxel_mm_;
+    tbb::parallel_for(0, runs, [&](int r) {
+      ReducerTree::Query query(*tree_);
+      std::vector<Moments>& run = run_sums[static_cast<size_t>(r)];
+      const int z_end = static_cast<int>(static_cast<long long>(nz) * (r + 1) / runs);
+      for (int z = static_cast<int>(static_cast<long long>(nz) * r / runs); z < z_end; ++z) {
+        for (int y = 0; y < ny; ++y) {
+          for (int x = 0; x < nx; ++x) {
+            const Vec3 p = lower + h * Vec3(x + 0.5, y + 0.5, z + 0.5);
+            const QueryPoint point = query.query_point(p);
+            if (!point.surface.inside) continue;
+            LocalFrame frame{p.x(), p.y(), p.z()};  // the root's, as ReducerTree::walk starts
+            const MaterialNode& leaf = route_to_leaf(tree_->root(), point, frame);
+            const Vec3 c = p - centre_;
+            const auto found = index.find(&leaf);
+            const size_t slot =
+                found != index.end() ? densities_.size() + found->second : leaf.material(point, frame);
+            if (slot == kVoid) continue;
+            add(run[slot], cell_moments(c.x(), c.y(), c.z()));
+          }
+        }
+      }
+    });
+    std::vector<Moments> total(slots);
+    for (const auto& run : run_sums) {
+      for (size_t k = 0; k < slots; ++k) add(total[k], run[k]);
+    }
+    sums.fixed.assign(total.begin(), total.begin() + static_cast<std::ptrdiff_t>(densities_.size()));
+    sums.per_leaf.assign(total.begin() + static_cast<std::ptrdiff_t>(densities_.size()), total.end());
+  }
+
   // Adds slice z's cells to `sums` (per material, about the grid's centre).
   void add_slice(ReducerTree::Query& query, std::vector<MaterialId>& row, const Vec3& lower, int z,
                  std::vector<Moments>& sums) const {
@@ -159,9 +278,7 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
         const MaterialId id = row[static_cast<size_t>(x)];
         if (id == kVoid) continue;
         const double xc = lower.x() + (x + 0.5) * h - centre_.x();
-        const Moments cell = {1, xc, yc, zc, xc * xc, yc * yc, zc * zc, xc * yc, xc * zc, yc * zc};
-        Moments& m = sums[id];
-        for (size_t k = 0; k < m.size(); ++k) m[k] += cell[k];
+        add(sums[id], cell_moments(xc, yc, zc));
       }
     }
   }
@@ -199,6 +316,9 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
   Vec3 centre_ = Vec3::Zero();  ///< of the grid: sums about it keep their digits
   std::vector<std::vector<Moments>> runs_;  ///< per run of z slices, per material
   std::vector<std::vector<MaterialId>> rows_;  ///< per run of z slices: one row of materials
+  std::vector<Moments> totals_;                 ///< per material, this evaluation
+  LeafSums leaf_sums_;
+  std::vector<double> signature_now_;
   bool weightless_ = false;
 };
 

@@ -8,14 +8,15 @@ namespace spec2fab_cli_test {
 namespace {
 
 /// A shipped experiment with its paths made absolute, on the coarse printer
-/// and without print files (the test reads result.json and tree.json).
-fs::path shipped_without_print(const fs::path& dir, const std::string& name) {
+/// and without print files (the test reads result.json and tree.json), or
+/// with its slices alone.
+fs::path shipped_without_print(const fs::path& dir, const std::string& name, bool slices = false) {
   nlohmann::json experiment = nlohmann::json::parse(read(kDatasets / "experiments" / (name + ".json")));
   const fs::path shipped = kDatasets / "experiments";
   for (const char* key : {"materials"}) experiment[key] = (shipped / experiment[key].get<std::string>()).string();
   experiment["geometry"]["mesh"] = (shipped / experiment["geometry"]["mesh"].get<std::string>()).string();
   experiment["printer"] = (dir / "coarse_printer.json").string();
-  experiment["output"] = {{"slices", false}, {"stl", false}, {"3mf", false}, {"render", false}};
+  experiment["output"] = {{"slices", slices}, {"stl", false}, {"3mf", false}, {"render", false}};
   const fs::path file = dir / (name + ".json");
   std::ofstream(file) << experiment.dump(2);
   return file;
@@ -49,6 +50,32 @@ TEST_F(Cli, ATunerOfTwoTermsCarvesTheLeastThatBalancesTheBox) {
   ASSERT_EQ(cells.size(), 4u) << tree.dump();
   EXPECT_EQ(cells[0]["layers"][0]["material"]["value"], "void");
   for (int k = 1; k < 4; ++k) EXPECT_EQ(cells[k]["layers"][0]["material"]["value"], "VeroWhitePlus") << "cell " << k;
+}
+
+// stand_crane (Make It Stand): printed solid it falls, tuned it stands with
+// its margin, lighter; and tools/check_stand.py, which shares no code with
+// the project (numpy and Pillow on the slices, its own support polygon
+// from the STL), finds the same centre of mass in the print's slices and
+// agrees that solid it falls and tuned it stands.
+TEST_F(Cli, TheCraneFallsSolidAndStandsTunedAsItsSlicesShow) {
+  const fs::path file = shipped_without_print(dir_, "stand_crane", /*slices=*/true);
+  const fs::path run = dir_ / "run";
+  const Result r = run_spec2fab("run -q " + file.string() + " --out " + run.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto stand = nlohmann::json::parse(read(run / "result.json"))["stand"];
+  EXPECT_FALSE(stand["solid"]["stands"].get<bool>()) << stand.dump(2);
+  EXPECT_LT(stand["solid"]["margin_mm"].get<double>(), 0) << stand.dump(2);
+  EXPECT_TRUE(stand["tuned"]["stands"].get<bool>()) << stand.dump(2);
+  EXPECT_GE(stand["tuned"]["margin_mm"].get<double>(), 1.0) << stand.dump(2);
+  EXPECT_LT(stand["mass_change_g"].get<double>(), 0) << "carved, not filled";
+  EXPECT_GT(stand["carved_cells"].get<int>(), 0);
+  EXPECT_EQ(stand["support_polygon_mm"].size(), 4u) << "the foot's four corners";
+  EXPECT_TRUE(fs::exists(run / "preview" / "stand.png"));
+
+  const Result check = run_command(std::string(SPEC2FAB_PYTHON) + " " + SPEC2FAB_TOOLS_DIR + "/check_stand.py " +
+                                   file.string() + " " + run.string());
+  EXPECT_EQ(check.code, 0) << check.out;
+  EXPECT_THAT(check.out, HasSubstr("ok: centres agree"));
 }
 
 }  // namespace

@@ -200,6 +200,55 @@ TEST_F(MassProperties, SumsAreTheSameForAnyThreadCount) {
   EXPECT_EQ(one, two);
 }
 
+// A voxel core whose cells' materials are the only free parameters is summed
+// per cell once and reweighed (the leaf sums); a free stratum depth (one
+// choice: the same geometry) makes the simulator sample every cell each
+// time. Both must give the same mass properties, for any assignment, and
+// after a fixed parameter changed under the simulator.
+TEST_F(MassProperties, LeafSumsEqualSamplingEveryCell) {
+  const Solid box(make_box(Vec3(0, 0, 0), Vec3(40, 30, 20), 2), UvSource::planar, 2);
+  const auto tree_json = [](const std::string& depth, const std::string& shell = "heavy") {
+    return R"({"type": "stratum", "depth_mm": )" + depth + R"(,
+      "shell": {"type": "layered", "material": {"value": ")" + shell + R"(", "choices": ["heavy", "light"], "free": false}},
+      "core": {"type": "voxel", "size_mm": [9.5, 28, 18], "origin": [2, 2, 2],
+        "child": {"type": "layered", "material": {"value": "light", "choices": ["light", "heavy", "void"]}}}})";
+  };
+  auto reweighed = bound(tree_json("2"), box);
+  auto fast = make_mass_properties_simulator({0.7}, PartContext{palette_});
+  fast->setup(reweighed->root(), SimulationDomain(*reweighed, reweighed->root()));
+  // The same assignment on a tree that must be sampled cell by cell.
+  const auto expect_same = [&](const std::vector<double>& ids, const std::string& depth,
+                                const std::string& shell = "heavy") {
+    SearchSpace cells = reweighed->search_space();
+    ASSERT_EQ(cells.dimension(), 4u);
+    cells.set_values(ids);
+    reweighed->evaluate();
+    // A solid of its own: a deeper band would rebuild a shared solid's
+    // field under the first tree (Solid::field keeps one).
+    const Solid same_box(make_box(Vec3(0, 0, 0), Vec3(40, 30, 20), 2), UvSource::planar, 2);
+    auto sampled = bound(tree_json(depth, shell), same_box);
+    SearchSpace same = sampled->search_space("core");
+    same.set_values(ids);
+    sampled->evaluate();
+    MassPropertiesObservation a, b;
+    fast->simulate(reweighed->root(), a);
+    auto slow = make_mass_properties_simulator({0.7}, PartContext{palette_});
+    slow->setup(sampled->root(), SimulationDomain(*sampled, sampled->root()));
+    slow->simulate(sampled->root(), b);
+    ASSERT_EQ(a.data.size(), b.data.size());
+    for (size_t k = 0; k < a.data.size(); ++k) {
+      EXPECT_NEAR(a.data[k], b.data[k], 1e-9 * (1 + std::abs(b.data[k]))) << depth << ", value " << k;
+    }
+  };
+  expect_same({1, 1, 1, 1}, R"({"value": 2, "choices": [2]})");
+  expect_same({0, 2, 1, 2}, R"({"value": 2, "choices": [2]})");
+  expect_same({2, 2, 2, 0}, R"({"value": 2, "choices": [2]})");
+  // A fixed parameter (the shell's material) changed after setup: the sums are taken again.
+  reweighed->node("shell").visit_parameters([](const std::string&, Parameter& p) { p.set(1); });
+  reweighed->evaluate();
+  expect_same({0, 2, 1, 2}, R"({"value": 2, "choices": [2]})", "light");
+}
+
 TEST(MassMetrics, CentreOffsetIsAcrossGravityAndMassDifferenceInGrams) {
   MassPropertiesObservation simulated;
   simulated.data[MassPropertiesObservation::kMass] = 0.042;

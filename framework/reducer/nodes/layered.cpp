@@ -74,6 +74,9 @@ class LayeredNode final : public ClonableNode<LayeredNode, MaterialNode> {
     return known;
   }
 
+  // One unbounded layer: its fill is never reached.
+  bool assigns_one_material() const override { return layers_.size() == 1 && !layers_.front().thickness_mm; }
+
   bool decided_by_interfaces() const override { return true; }
   // Every finite layer boundary (whether the materials on either side differ
   // or not: a tuner may change them).

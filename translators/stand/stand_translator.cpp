@@ -1,0 +1,394 @@
+// Make It Stand (Prévost et al. 2013), composed from the framework's pieces:
+// a shape that topples when printed solid is given a solid shell of a
+// printable thickness (a Stratum node) over a core of Voxel cells, each a
+// material or void, and one tuner of two terms chooses the cells: it
+// changes the mass as little as it can (mass_properties, mass_difference
+// against the solid print's mass) while the centre of mass, projected
+// along gravity, lies inside the support polygon with a margin (stability,
+// stand_shortfall against "stands", held at most 0). The support polygon
+// is the convex hull of the surface's lowest points within a contact
+// tolerance (mass/stability.h). Where the carving alone cannot move the
+// centre far enough, a denser material among the cells' choices can.
+
+#include <cmath>
+#include <limits>
+#include <unordered_map>
+
+#include <fmt/format.h>
+#include <opencv2/imgproc.hpp>
+
+#include "core/image_write.h"
+#include "core/options.h"
+#include "mass/mass_properties.h"
+#include "mass/stability.h"
+#include "reducer/nodes/nodes.h"
+#include "reducer/reducer_tree.h"
+#include "spec/report_fields.h"
+#include "spec/tuning_translator.h"
+#include "tuning/optimizer.h"
+#include "tuning/simulation_domain.h"
+
+namespace spec2fab {
+namespace {
+
+/// Whether the print stands, in one state (printed solid, or tuned).
+struct StandState {
+  bool stands = false;
+  double margin_mm = 0, mass_kg = 0;
+  std::array<double, 3> centre_mm{};
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.stands, "stands", "whether the centre of mass projects inside the support polygon with the margin");
+    f(s.margin_mm, "margin_mm", "signed distance from its projection to the polygon's edge (negative: outside)");
+    f(s.mass_kg, "mass_kg", "the print's mass");
+    f(s.centre_mm, "centre_mm", "its centre of mass");
+  }
+};
+
+struct StandReport {
+  std::array<double, 3> gravity{};
+  double margin_goal_mm = 0, support_area_mm2 = 0;
+  std::vector<std::array<double, 3>> support_polygon_mm;
+  std::array<int, 3> cells{};
+  int core_cells = 0, carved_cells = 0;
+  std::vector<std::string> materials, assignment;
+  StandState solid, tuned;
+  double mass_change_g = 0, mass_change_fraction = 0;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.gravity, "gravity", "the direction of gravity");
+    f(s.margin_goal_mm, "margin_goal_mm", "the least margin asked for");
+    f(s.support_area_mm2, "support_area_mm2", "the support polygon's area");
+    f(s.support_polygon_mm, "support_polygon_mm", "its corners, on the floor, counter-clockwise seen from above");
+    f(s.cells, "cells", "the core's voxel cells along x, y, z");
+    f(s.core_cells, "core_cells", "cells that hold part of the core (the others are tuned by nothing)");
+    f(s.carved_cells, "carved_cells", "core cells the tuner made void");
+    f(s.materials, "materials", "what a core cell may be");
+    f(s.assignment, "assignment", "each cell's material, x fastest (cells outside the core keep the first)");
+    f(s.solid, "solid", "the shape printed solid (every cell the first material)");
+    f(s.tuned, "tuned", "the tuned print");
+    f(s.mass_change_g, "mass_change_g", "tuned mass minus solid mass");
+    f(s.mass_change_fraction, "mass_change_fraction", "that, as a fraction of the solid mass");
+  }
+};
+
+class StandTranslator final : public TuningTranslator {
+ public:
+  struct Options {
+    std::array<double, 3> gravity{0, 0, -1};
+    double contact_tolerance_mm = 0.5;
+    double margin_mm = 1;
+    double shell_mm = 2;
+    std::array<int, 3> cells{6, 6, 8};
+    std::string material = "VeroWhitePlus";
+    std::vector<std::string> core_materials;
+    double voxel_mm = 0.5;
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.value(o.gravity, "gravity", "direction of gravity (any length but 0)");
+      d.number(o.contact_tolerance_mm, "contact_tolerance_mm", Range::at_least(0),
+               "surface points this close to the lowest (along gravity) touch the floor");
+      d.number(o.margin_mm, "margin_mm", Range::at_least(0),
+               "least distance from the centre of mass's projection to the support polygon's edge");
+      d.number(o.shell_mm, "shell_mm", Range::above(0), "the shell kept solid under the surface (printable)");
+      d.number(o.cells, "cells", Range::closed(1, 64), "the core's voxel cells along x, y, z over the inner bounds");
+      d.value(o.material, "material", "the shell's material, and the cells' when solid");
+      d.value(o.core_materials, "core_materials",
+              "what a core cell may be: the first is the solid print's; \"void\" carves",
+              Default{"[material, \"void\"]"});
+      d.number(o.voxel_mm, "voxel_mm", Range::above(0), "edge of the mass properties' sampling cells");
+    }
+    bool check(std::string* why) const {
+      StabilityOptions stability;
+      stability.gravity = gravity;
+      return stability.check(why);
+    }
+  };
+
+  StandTranslator(const Properties& /*root*/, const Experiment& experiment)
+      : options_(read_options<Options>(experiment.goal())) {
+    const Properties goal = experiment.goal();
+    const std::string where = goal.where();
+    if (options_.core_materials.empty()) options_.core_materials = {options_.material, "void"};
+    const MaterialPalette& palette = experiment.palette();
+    const Bounds& bounds = experiment.solid().bounds();
+    const Vec3 inner_lower = bounds.lower + Vec3::Constant(options_.shell_mm);
+    const Vec3 inner_size = bounds.size() - Vec3::Constant(2 * options_.shell_mm);
+    if ((inner_size.array() <= 0).any()) {
+      throw InputError(fmt::format("{}/shell_mm: {} mm leaves no core in a shape {:.3g} x {:.3g} x {:.3g} mm",
+                                   where, options_.shell_mm, bounds.size().x(), bounds.size().y(),
+                                   bounds.size().z()));
+    }
+    // stratum: the shell solid, the core in voxel cells of a material or void.
+    VoxelOptions voxel;
+    voxel.size_mm.edges = {inner_size.x() / options_.cells[0], inner_size.y() / options_.cells[1],
+                           inner_size.z() / options_.cells[2]};
+    voxel.origin = {inner_lower.x(), inner_lower.y(), inner_lower.z()};
+    voxel.cells.child.node = make_solid_material(
+        material_choice(palette, options_.core_materials.front(), options_.core_materials, where + "/core_materials"));
+    StratumOptions stratum;
+    stratum.depth_mm = fixed_number(options_.shell_mm, stratum.depth_mm);
+    stratum.shell.node = make_solid_material(fixed_material(palette, options_.material, where + "/material"));
+    stratum.core.node = make_voxel(std::move(voxel));
+    set_tree(make_stratum(std::move(stratum)), goal, experiment);
+    core_cells_ = fix_empty_cells();
+
+    // One tuner: the least change of mass, standing with the margin.
+    const PartContext context = experiment.part_context();
+    MassPropertiesOptions mass;
+    mass.voxel_mm = options_.voxel_mm;
+    solid_mass_kg_ = solid_state(context).mass_kg;
+    const OptimizerChoice optimizer(experiment.root(), "optimizer",
+                                    nlohmann::json{{"type", "annealing"},
+                                                   {"iterations", 20000},
+                                                   {"initial_temperature", 1.0},
+                                                   {"cooling", 0.9995}});
+    auto tuner = make_tuner("stand", make_mass_properties_simulator(mass, context), make_mass_difference_metric(),
+                            make_mass_properties_goal(solid_mass_kg_, std::nullopt), optimizer.build());
+    tuner->set_origin(where);
+    tuner->add_term({"stands", make_stability_simulator(stability_options(), context), make_stand_shortfall_metric(),
+                     make_stands_goal(options_.margin_mm), TermRule{1, 0.0, 1e3}});
+    tuner->set_node(*tree_, tree_->root());
+    network_.add(std::move(tuner));
+    Phase phase;
+    phase.name = "cells";
+    phase.tuners = {0};
+    schedule_.add(std::move(phase));
+  }
+
+  std::string summary() const override {
+    return fmt::format(
+        "stand (Make It Stand): a {} mm {} shell over {} x {} x {} core cells ({} hold core), each one of {}; one "
+        "tuner: the least change of mass with the centre of mass at least {} mm inside the support polygon",
+        options_.shell_mm, options_.material, options_.cells[0], options_.cells[1], options_.cells[2], core_cells_,
+        fmt::join(options_.core_materials, ", "), options_.margin_mm);
+  }
+
+  static TypeDoc doc() {
+    TypeDoc doc{"Make It Stand (Prévost et al. 2013): a shape that topples printed solid is given a solid shell "
+                "(shell_mm) over a core of voxel cells, each a material or void, tuned so that its centre of "
+                "mass, projected along gravity, lies at least margin_mm inside its support polygon (the convex "
+                "hull of its lowest points within contact_tolerance_mm) while its mass changes as little as it "
+                "can. One tuner of two terms: mass_properties + mass_difference (the objective) and stability + "
+                "stand_shortfall held at most 0. result.json's stand section says whether it stands solid and "
+                "tuned; preview/stand.png draws both centres over the support polygon.",
+                prefixed(option_docs<Options>(), "goal."),
+                R"({"translator": "stand", "goal": {"cells": [6, 6, 8], "margin_mm": 1}})"};
+    doc.properties.push_back(
+        {"optimizer", "optimizer", "annealing, 20000 iterations", "the cells' optimizer (any registered)"});
+    append(doc.properties, TreeOutputOptions::docs());
+    return doc;
+  }
+
+ private:
+  StabilityOptions stability_options() const {
+    StabilityOptions o;
+    o.gravity = options_.gravity;
+    o.contact_tolerance_mm = options_.contact_tolerance_mm;
+    o.voxel_mm = options_.voxel_mm;
+    return o;
+  }
+
+  StandState state_of(const StabilityObservation& observed) const {
+    StandState state;
+    state.margin_mm = observed.margin_mm();
+    state.stands = state.margin_mm >= options_.margin_mm;
+    state.mass_kg = observed.mass_kg();
+    const Vec3 c = observed.centre_mm();
+    state.centre_mm = {c.x(), c.y(), c.z()};
+    return state;
+  }
+
+  // The print as the tree holds it now.
+  StandState simulate_state(const PartContext& context) {
+    stability_ = make_stability_simulator(stability_options(), context);
+    stability_->setup(tree_->root(), SimulationDomain(*tree_, tree_->root()));
+    StabilityObservation observed;
+    stability_->simulate(tree_->root(), observed);
+    return state_of(observed);
+  }
+
+  // The print with every cell its first material (the start).
+  StandState solid_state(const PartContext& context) {
+    SearchSpace space = tree_->search_space();
+    const std::vector<double> start = space.values();
+    std::vector<double> solid(start.size(), static_cast<double>(first_core_material()));
+    space.set_values(solid);
+    tree_->evaluate();
+    const StandState state = simulate_state(context);
+    space.set_values(start);
+    tree_->evaluate();
+    return state;
+  }
+
+  MaterialId first_core_material() const {
+    return tree_->palette().id(options_.core_materials.front(), "goal/core_materials");
+  }
+
+  // Cells that hold no part of the core (outside the solid, or all shell)
+  // stay fixed: the tuner has nothing to gain from them. Returns the rest.
+  int fix_empty_cells() {
+    ReducerNode& voxel = tree_->node("core");
+    std::vector<char> used(voxel.child_count(), 0);
+    std::unordered_map<const ReducerNode*, size_t> index;
+    for (size_t i = 0; i < voxel.child_count(); ++i) index.emplace(&voxel.child(i), i);
+    const Bounds& bounds = tree_->solid().bounds();
+    const double h = options_.voxel_mm;
+    ReducerTree::Query query(*tree_);
+    for (double z = bounds.lower.z() + h / 2; z < bounds.upper.z(); z += h) {
+      for (double y = bounds.lower.y() + h / 2; y < bounds.upper.y(); y += h) {
+        for (double x = bounds.lower.x() + h / 2; x < bounds.upper.x(); x += h) {
+          const QueryPoint point = query.query_point(Vec3(x, y, z));
+          if (!point.surface.inside) continue;
+          LocalFrame frame{x, y, z};
+          const auto found = index.find(&route_to_leaf(tree_->root(), point, frame));
+          if (found != index.end()) used[found->second] = 1;
+        }
+      }
+    }
+    int count = 0;
+    for (size_t i = 0; i < voxel.child_count(); ++i) {
+      count += used[i];
+      if (!used[i]) {
+        voxel.child(i).visit_parameters([](const std::string&, Parameter& p) { p.set_free(false); });
+      }
+    }
+    return count;
+  }
+
+  void report(const RunRecord& /*record*/, RunContext& context) override {
+    const PartContext part = context.experiment.part_context();
+    StandReport report;
+    report.gravity = options_.gravity;
+    report.margin_goal_mm = options_.margin_mm;
+    report.cells = options_.cells;
+    report.core_cells = core_cells_;
+    report.materials = options_.core_materials;
+    report.tuned = simulate_state(part);
+    report.solid = solid_state(part);
+    const ReducerNode& voxel = tree_->node("core");
+    for (size_t i = 0; i < voxel.child_count(); ++i) {
+      const MaterialId id = route_to_material(voxel.child(i), QueryPoint{}, LocalFrame{});
+      report.assignment.push_back(tree_->palette().name(id));
+      bool tuned = false;
+      voxel.child(i).read_parameters([&](const std::string&, const Parameter& p) { tuned = tuned || p.is_free(); });
+      report.carved_cells += tuned && id == kVoid;
+    }
+    const SupportPolygon support = SupportPolygon::of(context.experiment.solid().mesh(),
+                                                      Vec3(options_.gravity[0], options_.gravity[1],
+                                                           options_.gravity[2]),
+                                                      options_.contact_tolerance_mm);
+    report.support_area_mm2 = support.area_mm2();
+    for (const Vec3& corner : support.corners()) report.support_polygon_mm.push_back({corner.x(), corner.y(), corner.z()});
+    report.mass_change_g = (report.tuned.mass_kg - report.solid.mass_kg) * 1e3;
+    report.mass_change_fraction = report.solid.mass_kg > 0 ? report.mass_change_g / (report.solid.mass_kg * 1e3) : 0;
+    write_preview(support, report, context.folder.path("preview/stand.png"));
+    context.report.files.previews.push_back("preview/stand.png");
+    context.report.add("stand", report);
+  }
+
+  // Two views at one scale: from above (the shape's footprint, the support
+  // polygon, both centres of mass with the margin's circle) and from the
+  // side (the silhouette across v, the floor under the support, the
+  // centres at their heights). Solid: red; tuned: green where it stands.
+  void write_preview(const SupportPolygon& support, const StandReport& report,
+                     const std::filesystem::path& file) const {
+    const Mesh& mesh = tree_->solid().mesh();
+    const auto above = [&](const Vec3& p) { return support.project(p); };
+    const auto side = [&](const Vec3& p) { return Vec2(p.dot(support.u()), -p.dot(support.down())); };
+    const auto extent = [&](const auto& view, Vec2& lower, Vec2& upper) {
+      lower = Vec2::Constant(std::numeric_limits<double>::infinity());
+      upper = -lower;
+      for (const Vec3& v : mesh.vertices) lower = lower.cwiseMin(view(v)), upper = upper.cwiseMax(view(v));
+    };
+    Vec2 lower_a, upper_a, lower_s, upper_s;
+    extent(above, lower_a, upper_a);
+    extent(side, lower_s, upper_s);
+    constexpr int kPad = 36, kLegend = 76;
+    const Vec2 size_a = (upper_a - lower_a).cwiseMax(1e-9), size_s = (upper_s - lower_s).cwiseMax(1e-9);
+    const double scale = std::min(880.0 / (size_a.x() + size_s.x()), 520.0 / std::max(size_a.y(), size_s.y()));
+    const int width_a = static_cast<int>(std::lround(size_a.x() * scale)) + 2 * kPad;
+    const int width_s = static_cast<int>(std::lround(size_s.x() * scale)) + 2 * kPad;
+    const int height = static_cast<int>(std::lround(std::max(size_a.y(), size_s.y()) * scale)) + 2 * kPad;
+    cv::Mat image(height + kLegend, std::max(width_a + width_s, 560), CV_8UC3, cv::Scalar(255, 255, 255));
+    const cv::Scalar red(40, 40, 210), green(40, 150, 40), grey(90, 90, 90), shape(225, 225, 225);
+    const auto font = cv::FONT_HERSHEY_SIMPLEX;
+    const auto panel = [&](int left, const Vec2& lower, const auto& view, const char* title) {
+      const auto pixel = [&, left](const Vec2& p) {
+        return cv::Point(left + kPad + static_cast<int>(std::lround((p.x() - lower.x()) * scale)),
+                         height - kPad - static_cast<int>(std::lround((p.y() - lower.y()) * scale)));
+      };
+      for (const Eigen::Vector3i& t : mesh.triangles) {
+        const cv::Point corners[3] = {pixel(view(mesh.vertices[static_cast<size_t>(t[0])])),
+                                      pixel(view(mesh.vertices[static_cast<size_t>(t[1])])),
+                                      pixel(view(mesh.vertices[static_cast<size_t>(t[2])]))};
+        cv::fillConvexPoly(image, corners, 3, shape, cv::LINE_AA);
+      }
+      cv::putText(image, title, {left + 10, 22}, font, 0.5, grey, 1, cv::LINE_AA);
+      return pixel;
+    };
+    const auto mark = [&](const cv::Point& at, const StandState& state, bool circle) {
+      const cv::Scalar colour = state.stands ? green : red;
+      if (circle) {
+        cv::circle(image, at, std::max(3, static_cast<int>(std::lround(report.margin_goal_mm * scale))), colour, 1,
+                   cv::LINE_AA);
+      }
+      cv::drawMarker(image, at, colour, cv::MARKER_CROSS, 16, 2, cv::LINE_AA);
+    };
+    const auto centre = [](const StandState& s) { return Vec3(s.centre_mm[0], s.centre_mm[1], s.centre_mm[2]); };
+
+    const auto from_above = panel(0, lower_a, above, "from above");
+    std::vector<cv::Point> polygon;
+    for (const Vec2& p : support.hull()) polygon.push_back(from_above(p));
+    if (polygon.size() >= 3) {
+      cv::Mat fill = image.clone();
+      cv::fillPoly(fill, std::vector<std::vector<cv::Point>>{polygon}, cv::Scalar(170, 215, 170), cv::LINE_AA);
+      cv::addWeighted(fill, 0.6, image, 0.4, 0, image);
+    }
+    cv::polylines(image, polygon, true, green, 2, cv::LINE_AA);
+    mark(from_above(above(centre(report.solid))), report.solid, true);
+    mark(from_above(above(centre(report.tuned))), report.tuned, true);
+
+    const auto from_side = panel(width_a, lower_s, side, "from the side (gravity down)");
+    double support_lower = std::numeric_limits<double>::infinity(), support_upper = -support_lower;
+    for (const Vec3& corner : support.corners()) {
+      support_lower = std::min(support_lower, side(corner).x());
+      support_upper = std::max(support_upper, side(corner).x());
+    }
+    const double floor = support.corners().empty() ? lower_s.y() : side(support.corners().front()).y();
+    cv::line(image, from_side({lower_s.x() - 5, floor}), from_side({upper_s.x() + 5, floor}), grey, 1, cv::LINE_AA);
+    cv::line(image, from_side({support_lower, floor}), from_side({support_upper, floor}), green, 4, cv::LINE_AA);
+    for (const StandState* state : {&report.solid, &report.tuned}) {
+      const Vec2 at = side(centre(*state));
+      cv::line(image, from_side(at), from_side({at.x(), floor}), state->stands ? green : red, 1, cv::LINE_AA);
+      mark(from_side(at), *state, false);
+    }
+
+    const auto verdict = [](const StandState& s) {
+      return fmt::format("{} ({:+.2f} mm from the support's edge)", s.stands ? "stands" : "falls", s.margin_mm);
+    };
+    cv::putText(image, "solid: " + verdict(report.solid), {12, height + 22}, font, 0.5,
+                report.solid.stands ? green : red, 1, cv::LINE_AA);
+    cv::putText(image, "tuned: " + verdict(report.tuned), {12, height + 44}, font, 0.5,
+                report.tuned.stands ? green : red, 1, cv::LINE_AA);
+    cv::putText(image,
+                fmt::format("crosses: centres of mass; green: support polygon; circles: the {} mm margin",
+                            report.margin_goal_mm),
+                {12, height + 66}, font, 0.4, grey, 1, cv::LINE_AA);
+    write_image(file, image);
+  }
+
+  Options options_;
+  int core_cells_ = 0;
+  double solid_mass_kg_ = 0;
+  std::unique_ptr<SimulatorFor<StabilityObservation>> stability_;
+};
+
+}  // namespace
+}  // namespace spec2fab
+
+namespace spec2fab {
+SPEC2FAB_REPORT_FIELDS(stand, "stand", section_docs<StandReport>("stand."))
+}  // namespace spec2fab
+
+SPEC2FAB_REGISTER(spec2fab::TranslatorRegistry, spec2fab::StandTranslator, "stand")
