@@ -98,6 +98,12 @@ TypeDoc benchmark_doc(const BenchmarkDescription& description);
 /// per free parameter in search-space order. Relative paths are read from
 /// `context.datasets`. Every instance simulates the reference again (it is
 /// cheap next to a run, and keeps instances independent).
+///
+/// Or, instead of "reference", a "goal" of its own and optionally "terms"
+/// and "weight", as a tuner in an experiment has them (build_tuner): a
+/// problem whose optimum is no hidden assignment (the least carving that
+/// stands). Its optimum is known where the problem is all discrete and has
+/// at most 1e5 assignments: the bench tries every one as it starts.
 class TunerBenchmark : public BenchmarkProblem {
  public:
   TunerBenchmark(nlohmann::json spec, const BenchmarkDescription& description,

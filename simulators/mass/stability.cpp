@@ -20,13 +20,6 @@ namespace spec2fab {
 namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-// Gravity scaled before it is normalised: 1e-200 is a direction, and 1e200
-// must not overflow to a zero one.
-Vec3 unit_down(const std::array<double, 3>& gravity) {
-  const Vec3 g(gravity[0], gravity[1], gravity[2]);
-  return (g / g.cwiseAbs().maxCoeff()).normalized();
-}
-
 // Distance from p to the segment [a, b].
 double segment_distance(const Vec2& p, const Vec2& a, const Vec2& b) {
   const Vec2 ab = b - a;
@@ -38,7 +31,9 @@ double segment_distance(const Vec2& p, const Vec2& a, const Vec2& b) {
 
 SupportPolygon SupportPolygon::of(const Mesh& mesh, const Vec3& gravity, double tolerance_mm) {
   SupportPolygon polygon;
-  polygon.down_ = gravity.normalized();
+  // Scaled before it is normalised: 1e-200 is a direction, and 1e200 must
+  // not overflow to a zero one.
+  polygon.down_ = (gravity / gravity.cwiseAbs().maxCoeff()).normalized();
   // Any basis of the floor's plane, right-handed with "up" (−down): hulls
   // counter-clockwise in (u, v) are counter-clockwise seen from above.
   const Vec3 up = -polygon.down_;
@@ -129,7 +124,8 @@ class StabilitySimulator final : public SimulatorFor<StabilityObservation> {
   void setup(const ReducerNode& subtree, const SimulationDomain& domain) override {
     const Solid& solid = domain.require_solid(name());
     mass_->setup(subtree, domain);
-    support_ = SupportPolygon::of(solid.mesh(), unit_down(options_.gravity), options_.contact_tolerance_mm);
+    const auto& g = options_.gravity;
+    support_ = SupportPolygon::of(solid.mesh(), Vec3(g[0], g[1], g[2]), options_.contact_tolerance_mm);
   }
 
   using SimulatorFor::simulate;

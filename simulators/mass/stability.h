@@ -28,7 +28,7 @@ namespace spec2fab {
 class SupportPolygon {
  public:
   /// The convex hull of the mesh's vertices within `tolerance_mm` of its
-  /// lowest along `gravity` (any length but 0). Fewer than three hull
+  /// lowest along `gravity` (any finite length but 0). Fewer than three hull
   /// points (a point or a line of contact) give a polygon nothing stands on.
   static SupportPolygon of(const Mesh& mesh, const Vec3& gravity, double tolerance_mm);
 

@@ -98,6 +98,24 @@ TEST(BenchSanity, ExhaustiveAndBranchAndBoundReachTheKnownOptimum) {
             runs_of(result, "exhaustive", "subsurface_stack")[0]->errors.size() / 10);
 }
 
+// A problem with a goal of its own and a limited term (Make It Stand on the
+// crane): its optimum is no hidden assignment but the least carving that
+// stands, found by trying all 4,096 as the bench starts. Solid, the crane
+// falls (the start pays the penalty); exhaustive search reaches the optimum.
+TEST(BenchSanity, TheStandProblemsOptimumIsTheLeastCarvingThatStands) {
+  const BenchResult result = bench({"stand_crane"}, {entrant("exhaustive", {{"type", "exhaustive"}})}, "5000", 1);
+  ASSERT_EQ(result.problems.size(), 1u);
+  const BenchProblem& problem = result.problems.front();
+  EXPECT_EQ(problem.facts.assignments, 4096);
+  ASSERT_TRUE(problem.facts.optimum);
+  EXPECT_GT(*problem.facts.optimum, 0) << "standing needs some carving";
+  EXPECT_LT(*problem.facts.optimum, 27.072) << "grams, no penalty: it stands";
+  ASSERT_EQ(result.runs.size(), 1u);
+  const BenchRun& run = result.runs.front();
+  EXPECT_GT(run.summary.initial_error, 1000) << "solid, it falls: the limited term's penalty";
+  EXPECT_DOUBLE_EQ(run.best(), *problem.facts.optimum);
+}
+
 TEST(BenchSanity, ErtEqualsTheOneTheOptimizersSummariesGive) {
   // Annealing makes one evaluation per iteration, so its trace says, from
   // its own count, when its best error first reached a target.

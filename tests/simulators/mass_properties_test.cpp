@@ -17,6 +17,7 @@
 #include "geometry/solid.h"
 #include "mass/mass_properties.h"
 #include "materials/palette.h"
+#include "simulators/mass_test_palette.h"
 #include "reducer/reducer_tree.h"
 #include "tuning/optimizer.h"
 #include "tuning/tuner.h"
@@ -25,16 +26,6 @@ namespace spec2fab {
 namespace {
 
 using ::testing::HasSubstr;
-
-/// Light (1000 kg/m³) and heavy (3000 kg/m³).
-MaterialPalette light_and_heavy() {
-  std::vector<Material> materials(2);
-  materials[0].name = "light";
-  materials[0].density_kg_m3.value = 1000;
-  materials[1].name = "heavy";
-  materials[1].density_kg_m3.value = 3000;
-  return MaterialPalette(materials);
-}
 
 class MassProperties : public ::testing::Test {
  protected:

@@ -14,6 +14,7 @@
 #include "geometry/solid.h"
 #include "mass/stability.h"
 #include "materials/palette.h"
+#include "simulators/mass_test_palette.h"
 #include "reducer/reducer_tree.h"
 #include "tuning/simulation_domain.h"
 
@@ -21,15 +22,6 @@ namespace spec2fab {
 namespace {
 
 using ::testing::HasSubstr;
-
-MaterialPalette light_and_heavy() {
-  std::vector<Material> materials(2);
-  materials[0].name = "light";
-  materials[0].density_kg_m3.value = 1000;
-  materials[1].name = "heavy";
-  materials[1].density_kg_m3.value = 3000;
-  return MaterialPalette(materials);
-}
 
 TEST(SupportPolygon, ABoxStandsOnItsBase) {
   const Mesh box = make_box(Vec3(0, 0, 0), Vec3(40, 30, 20), 3);

@@ -75,19 +75,15 @@ struct StandReport {
 class StandTranslator final : public TuningTranslator {
  public:
   struct Options {
-    std::array<double, 3> gravity{0, 0, -1};
-    double contact_tolerance_mm = 0.5;
+    StabilityOptions stability;  ///< gravity, contact tolerance, the mass grid
     double margin_mm = 1;
     double shell_mm = 2;
     std::array<int, 3> cells{6, 6, 8};
     std::string material = "VeroWhitePlus";
     std::vector<std::string> core_materials;
-    double voxel_mm = 0.5;
     template <class Declare, class Self>
     static void declare(Declare& d, Self& o) {
-      d.value(o.gravity, "gravity", "direction of gravity (any length but 0)");
-      d.number(o.contact_tolerance_mm, "contact_tolerance_mm", Range::at_least(0),
-               "surface points this close to the lowest (along gravity) touch the floor");
+      StabilityOptions::declare(d, o.stability);
       d.number(o.margin_mm, "margin_mm", Range::at_least(0),
                "least distance from the centre of mass's projection to the support polygon's edge");
       d.number(o.shell_mm, "shell_mm", Range::above(0), "the shell kept solid under the surface (printable)");
@@ -96,13 +92,8 @@ class StandTranslator final : public TuningTranslator {
       d.value(o.core_materials, "core_materials",
               "what a core cell may be: the first is the solid print's; \"void\" carves",
               Default{"[material, \"void\"]"});
-      d.number(o.voxel_mm, "voxel_mm", Range::above(0), "edge of the mass properties' sampling cells");
     }
-    bool check(std::string* why) const {
-      StabilityOptions stability;
-      stability.gravity = gravity;
-      return stability.check(why);
-    }
+    bool check(std::string* why) const { return stability.check(why); }
   };
 
   StandTranslator(const Properties& /*root*/, const Experiment& experiment)
@@ -136,7 +127,7 @@ class StandTranslator final : public TuningTranslator {
     // One tuner: the least change of mass, standing with the margin.
     const PartContext context = experiment.part_context();
     MassPropertiesOptions mass;
-    mass.voxel_mm = options_.voxel_mm;
+    mass.voxel_mm = options_.stability.voxel_mm;
     solid_mass_kg_ = solid_state(context).mass_kg;
     const OptimizerChoice optimizer(experiment.root(), "optimizer",
                                     nlohmann::json{{"type", "annealing"},
@@ -146,7 +137,7 @@ class StandTranslator final : public TuningTranslator {
     auto tuner = make_tuner("stand", make_mass_properties_simulator(mass, context), make_mass_difference_metric(),
                             make_mass_properties_goal(solid_mass_kg_, std::nullopt), optimizer.build());
     tuner->set_origin(where);
-    tuner->add_term({"stands", make_stability_simulator(stability_options(), context), make_stand_shortfall_metric(),
+    tuner->add_term({"stands", make_stability_simulator(options_.stability, context), make_stand_shortfall_metric(),
                      make_stands_goal(options_.margin_mm), TermRule{1, 0.0, 1e3}});
     tuner->set_node(*tree_, tree_->root());
     network_.add(std::move(tuner));
@@ -181,14 +172,6 @@ class StandTranslator final : public TuningTranslator {
   }
 
  private:
-  StabilityOptions stability_options() const {
-    StabilityOptions o;
-    o.gravity = options_.gravity;
-    o.contact_tolerance_mm = options_.contact_tolerance_mm;
-    o.voxel_mm = options_.voxel_mm;
-    return o;
-  }
-
   StandState state_of(const StabilityObservation& observed) const {
     StandState state;
     state.margin_mm = observed.margin_mm();
@@ -201,7 +184,7 @@ class StandTranslator final : public TuningTranslator {
 
   // The print as the tree holds it now.
   StandState simulate_state(const PartContext& context) {
-    stability_ = make_stability_simulator(stability_options(), context);
+    stability_ = make_stability_simulator(options_.stability, context);
     stability_->setup(tree_->root(), SimulationDomain(*tree_, tree_->root()));
     StabilityObservation observed;
     stability_->simulate(tree_->root(), observed);
@@ -233,7 +216,9 @@ class StandTranslator final : public TuningTranslator {
     std::unordered_map<const ReducerNode*, size_t> index;
     for (size_t i = 0; i < voxel.child_count(); ++i) index.emplace(&voxel.child(i), i);
     const Bounds& bounds = tree_->solid().bounds();
-    const double h = options_.voxel_mm;
+    // On the grid the mass properties sample, or finer.
+    const double h = options_.stability.voxel_mm > 0 ? options_.stability.voxel_mm
+                                                      : tree_->solid().bounds().size().maxCoeff() / 96;
     ReducerTree::Query query(*tree_);
     for (double z = bounds.lower.z() + h / 2; z < bounds.upper.z(); z += h) {
       for (double y = bounds.lower.y() + h / 2; y < bounds.upper.y(); y += h) {
@@ -259,7 +244,7 @@ class StandTranslator final : public TuningTranslator {
   void report(const RunRecord& /*record*/, RunContext& context) override {
     const PartContext part = context.experiment.part_context();
     StandReport report;
-    report.gravity = options_.gravity;
+    report.gravity = options_.stability.gravity;
     report.margin_goal_mm = options_.margin_mm;
     report.cells = options_.cells;
     report.core_cells = core_cells_;
@@ -275,9 +260,9 @@ class StandTranslator final : public TuningTranslator {
       report.carved_cells += tuned && id == kVoid;
     }
     const SupportPolygon support = SupportPolygon::of(context.experiment.solid().mesh(),
-                                                      Vec3(options_.gravity[0], options_.gravity[1],
-                                                           options_.gravity[2]),
-                                                      options_.contact_tolerance_mm);
+                                                      Vec3(options_.stability.gravity[0], options_.stability.gravity[1],
+                                                           options_.stability.gravity[2]),
+                                                      options_.stability.contact_tolerance_mm);
     report.support_area_mm2 = support.area_mm2();
     for (const Vec3& corner : support.corners()) report.support_polygon_mm.push_back({corner.x(), corner.y(), corner.z()});
     report.mass_change_g = (report.tuned.mass_kg - report.solid.mass_kg) * 1e3;
