@@ -15,6 +15,9 @@
 #include "core/file_write.h"
 #include "core/limits.h"
 #include "reducer/reducer_tree.h"
+#include "tuning/problem.h"
+#include "tuning/tuner.h"
+#include "tuning/simulation_domain.h"
 
 SPEC2FAB_LIMIT("mass_cells", 1e8, "cells the mass_properties simulator samples per evaluation (8 bytes each row)");
 
@@ -133,6 +136,24 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
   std::string failure() const override {
     return weightless_ ? "the print weighs nothing: every cell the simulator samples is void" : std::string();
   }
+
+  /// What make_mass_bound reads (after setup): the leaf sums, or null where
+  /// they do not apply.
+  struct LeafMasses {
+    std::vector<const MaterialNode*> leaves;
+    std::vector<double> leaf_volume_mm3;
+    double fixed_mass_kg = 0;  ///< every cell of every other leaf
+  };
+  std::optional<LeafMasses> leaf_masses() {
+    if (!leaf_sums_apply()) return std::nullopt;
+    const double cell = voxel_mm_ * voxel_mm_ * voxel_mm_;
+    LeafMasses out;
+    out.leaves = leaf_sums_.leaves;
+    for (const Moments& m : leaf_sums_.per_leaf) out.leaf_volume_mm3.push_back(m[0] * cell);
+    for (size_t id = 1; id < densities_.size(); ++id) out.fixed_mass_kg += densities_[id] * leaf_sums_.fixed[id][0] * cell;
+    return out;
+  }
+  double density(MaterialId id) const { return id < densities_.size() ? densities_[id] : 0.0; }
 
   static TypeDoc doc() {
     return {"Mass, centre of mass and inertia tensor of the whole print (the materials the tree assigns "
@@ -419,6 +440,84 @@ std::unique_ptr<SimulatorFor<MassPropertiesObservation>> make_mass_properties_si
     const MassPropertiesOptions& options, const PartContext& context) {
   return std::make_unique<MassPropertiesSimulator>(require_valid(options, "mass_properties"), context);
 }
+MassBound make_mass_bound(ReducerTree& tree, const SearchSpace& space, const MassPropertiesOptions& options,
+                          const PartContext& context) {
+  MassPropertiesSimulator simulator(require_valid(options, "mass_properties"), context);
+  simulator.setup(tree.root(), SimulationDomain(tree, tree.root()));
+  const auto sums = simulator.leaf_masses();
+  if (!sums) return {};
+  // Each entry of the space: its leaf and the density each of its choices gives.
+  struct Variable {
+    VariableDomain domain;
+    std::vector<double> densities;  // per admissible value of the domain, in its order
+    size_t leaf = 0;
+  };
+  std::vector<Variable> variables;
+  std::vector<char> in_space(sums->leaves.size(), 0);
+  for (size_t k = 0; k < space.dimension(); ++k) {
+    Parameter& parameter = *space.entries()[k].parameter;
+    if (parameter.kind() == ParameterKind::continuous) return {};
+    const auto owner = std::find_if(sums->leaves.begin(), sums->leaves.end(), [&](const MaterialNode* leaf) {
+      bool owns = false;
+      leaf->read_parameters([&](const std::string&, const Parameter& p) { owns = owns || &p == &parameter; });
+      return owns;
+    });
+    if (owner == sums->leaves.end()) return {};
+    Variable& variable = variables.emplace_back(Variable{VariableDomain::of(parameter), {}, 0});
+    variable.leaf = static_cast<size_t>(owner - sums->leaves.begin());
+    // The leaf's material for every value of this parameter, the others as they are.
+    auto& leaf = const_cast<MaterialNode&>(**owner);  // the tree is the caller's, non-const
+    const double value = parameter.value();
+    for (long long i = 0; i < variable.domain.cardinality(); ++i) {
+      parameter.set(variable.domain.admissible(i));
+      leaf.evaluate();
+      variable.densities.push_back(simulator.density(leaf.material(QueryPoint{}, LocalFrame{})));
+    }
+    parameter.set(value);
+    leaf.evaluate();
+    const auto [lo, hi] = std::minmax_element(variable.densities.begin(), variable.densities.end());
+    if (*hi > *lo) {
+      if (in_space[variable.leaf]) return {};  // two parameters turn one leaf's material
+      in_space[variable.leaf] = 1;
+    }
+  }
+  // Leaves this space does not tune keep the material they hold now.
+  double fixed = sums->fixed_mass_kg;
+  for (size_t j = 0; j < sums->leaves.size(); ++j) {
+    if (!in_space[j]) {
+      fixed += simulator.density(sums->leaves[j]->material(QueryPoint{}, LocalFrame{})) * sums->leaf_volume_mm3[j];
+    }
+  }
+  const std::vector<double> volumes = sums->leaf_volume_mm3;
+  return [variables, fixed, volumes](std::span<const double> x, int assigned, double target_kg) {
+    double lo = fixed, hi = fixed;
+    for (size_t k = 0; k < variables.size(); ++k) {
+      const Variable& v = variables[k];
+      const double volume = volumes[v.leaf];
+      if (static_cast<int>(k) < assigned) {
+        const auto index = static_cast<size_t>(v.domain.index_of(x[k]));
+        lo += v.densities[index] * volume;
+        hi += v.densities[index] * volume;
+      } else {
+        const auto [light, heavy] = std::minmax_element(v.densities.begin(), v.densities.end());
+        lo += *light * volume;
+        hi += *heavy * volume;
+      }
+    }
+    return std::max({0.0, lo - target_kg, target_kg - hi}) * 1e3;
+  };
+}
+
+bool set_mass_bound(Tuner& tuner, ReducerTree& tree, const MassPropertiesOptions& options,
+                    const PartContext& context) {
+  MassBound bound = make_mass_bound(tree, tuner.search_space(), options, context);
+  if (!bound) return false;
+  tuner.set_lower_bound([bound = std::move(bound)](std::span<const double> x, int assigned, const Observation& target) {
+    return bound(x, assigned, static_cast<const MassPropertiesObservation&>(target).mass_kg());
+  });
+  return true;
+}
+
 std::unique_ptr<GoalFor<MassPropertiesObservation>> make_mass_properties_goal(
     std::optional<double> mass_kg, std::optional<std::array<double, 3>> centre_mm) {
   return std::make_unique<MassPropertiesGoal>(mass_kg, centre_mm);

@@ -13,6 +13,7 @@
 /// mm) and "mass_difference" (grams) compare them.
 
 #include <array>
+#include <functional>
 #include <cstddef>
 #include <memory>
 #include <optional>
@@ -21,9 +22,13 @@
 #include <vector>
 
 #include "core/options.h"
+#include "core/search_space.h"
 #include "tuning/parts.h"
 
 namespace spec2fab {
+
+class ReducerTree;
+class Tuner;
 
 /// Mass (kg), centre of mass (mm, the run's frame), inertia about the centre
 /// of mass (kg·mm²: xx, yy, zz, xy, xz, yz, products of inertia as
@@ -68,6 +73,22 @@ struct CentreOffsetOptions {
 
 std::unique_ptr<SimulatorFor<MassPropertiesObservation>> make_mass_properties_simulator(
     const MassPropertiesOptions& options, const PartContext& context);
+
+/// A lower bound of mass_difference (grams) over every completion of a
+/// partial assignment — the first `assigned` values of x fixed, in the order
+/// of `space` (a tuner's search space on `tree`) — against a target mass
+/// (kg): the mass lies between the lightest and the heaviest choice of each
+/// unassigned leaf, summed over the same grid as the simulator's. For
+/// branch and bound (Tuner::set_lower_bound). Empty where a free parameter
+/// is not the material of a one-material leaf (ReducerNode::
+/// assigns_one_material), or a leaf's material turns on more than one.
+using MassBound = std::function<double(std::span<const double> x, int assigned, double target_kg)>;
+MassBound make_mass_bound(ReducerTree& tree, const SearchSpace& space, const MassPropertiesOptions& options,
+                          const PartContext& context);
+/// Sets make_mass_bound's bound as the lower bound of `tuner` (bound to a
+/// node of `tree`), whose objective is mass_difference against a goal's
+/// mass; false (and nothing set) where there is none.
+bool set_mass_bound(Tuner& tuner, ReducerTree& tree, const MassPropertiesOptions& options, const PartContext& context);
 /// A target mass and centre of mass (either may be left out: the metric that
 /// needs it says so).
 std::unique_ptr<GoalFor<MassPropertiesObservation>> make_mass_properties_goal(

@@ -103,17 +103,25 @@ TEST(BenchSanity, ExhaustiveAndBranchAndBoundReachTheKnownOptimum) {
 // stands, found by trying all 4,096 as the bench starts. Solid, the crane
 // falls (the start pays the penalty); exhaustive search reaches the optimum.
 TEST(BenchSanity, TheStandProblemsOptimumIsTheLeastCarvingThatStands) {
-  const BenchResult result = bench({"stand_crane"}, {entrant("exhaustive", {{"type", "exhaustive"}})}, "5000", 1);
+  const BenchResult result = bench({"stand_crane"},
+                                   {entrant("exhaustive", {{"type", "exhaustive"}}),
+                                    entrant("branch_and_bound", {{"type", "branch_and_bound"}})},
+                                   "5000", 1);
   ASSERT_EQ(result.problems.size(), 1u);
   const BenchProblem& problem = result.problems.front();
   EXPECT_EQ(problem.facts.assignments, 4096);
   ASSERT_TRUE(problem.facts.optimum);
   EXPECT_GT(*problem.facts.optimum, 0) << "standing needs some carving";
   EXPECT_LT(*problem.facts.optimum, 27.072) << "grams, no penalty: it stands";
-  ASSERT_EQ(result.runs.size(), 1u);
-  const BenchRun& run = result.runs.front();
-  EXPECT_GT(run.summary.initial_error, 1000) << "solid, it falls: the limited term's penalty";
-  EXPECT_DOUBLE_EQ(run.best(), *problem.facts.optimum);
+  ASSERT_EQ(result.runs.size(), 2u) << "branch and bound runs: the problem has the mass bound";
+  for (const BenchRun& run : result.runs) {
+    EXPECT_GT(run.summary.initial_error, 1000) << "solid, it falls: the limited term's penalty";
+    EXPECT_DOUBLE_EQ(run.best(), *problem.facts.optimum);
+    EXPECT_EQ(run.summary.termination, Termination::converged) << run.termination;
+  }
+  // The mass bound prunes: the optimum proven on a fraction of the carvings.
+  EXPECT_LT(runs_of(result, "branch_and_bound", "stand_crane")[0]->errors.size(),
+            runs_of(result, "exhaustive", "stand_crane")[0]->errors.size() / 4);
 }
 
 TEST(BenchSanity, ErtEqualsTheOneTheOptimizersSummariesGive) {

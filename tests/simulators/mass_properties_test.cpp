@@ -240,6 +240,49 @@ TEST_F(MassProperties, LeafSumsEqualSamplingEveryCell) {
   expect_same({0, 2, 1, 2}, R"({"value": 2, "choices": [2]})", "light");
 }
 
+// The mass bound for branch and bound: complete, it is the metric's error;
+// partial, it is never above the least error of any completion (all 3^k of
+// them tried), and it is 0 where the target lies within reach.
+TEST_F(MassProperties, TheMassBoundIsExactWhenCompleteAndBelowEveryCompletion) {
+  const Solid box(make_box(Vec3(0, 0, 0), Vec3(40, 30, 20), 2), UvSource::planar, 2);
+  auto tree = bound(R"({"type": "stratum", "depth_mm": 2, "shell": {"type": "layered", "material": "heavy"},
+      "core": {"type": "voxel", "size_mm": [9.5, 28, 18], "origin": [2, 2, 2],
+        "child": {"type": "layered", "material": {"value": "light", "choices": ["light", "heavy", "void"]}}}})",
+                    box);
+  SearchSpace space = tree->search_space();
+  ASSERT_EQ(space.dimension(), 4u);
+  const MassBound lower = make_mass_bound(*tree, space, {0.7}, PartContext{palette_});
+  ASSERT_TRUE(lower);
+  const double target_kg = 0.05;
+  const auto error_of = [&](const std::vector<double>& ids) {
+    space.set_values(ids);
+    tree->evaluate();
+    return std::abs(simulate(*tree, 0.7).mass_kg() - target_kg) * 1e3;
+  };
+  const std::vector<double> ids = {2, 0, 1, 2};  // heavy, void, light, heavy
+  EXPECT_NEAR(lower(ids, 4, target_kg), error_of(ids), 1e-9);
+  for (int assigned = 0; assigned < 4; ++assigned) {
+    double least = 1e300;
+    std::vector<double> x = ids;
+    for (int code = 0; code < 81; ++code) {  // every completion of the unassigned tail
+      int c = code;
+      bool repeat = false;
+      for (int k = 0; k < 4; ++k, c /= 3) {
+        if (k < assigned) repeat = repeat || c % 3 != 0;
+        else x[static_cast<size_t>(k)] = c % 3;
+      }
+      if (!repeat) least = std::min(least, error_of(x));
+    }
+    EXPECT_LE(lower(ids, assigned, target_kg), least + 1e-9) << assigned << " assigned";
+  }
+  EXPECT_EQ(lower(ids, 0, target_kg), 0) << "50 g lies between the lightest and the heaviest core";
+  EXPECT_GT(lower(ids, 0, 1.0), 0) << "1 kg lies beyond the heaviest";
+  // A free shell depth is no leaf's material: no bound.
+  auto depth = bound(R"({"type": "stratum", "depth_mm": {"value": 2, "choices": [1, 2]},
+      "shell": {"type": "layered", "material": "heavy"}, "core": {"type": "layered", "material": "light"}})", box);
+  EXPECT_FALSE(make_mass_bound(*depth, depth->search_space(), {0.7}, PartContext{palette_}));
+}
+
 TEST(MassMetrics, CentreOffsetIsAcrossGravityAndMassDifferenceInGrams) {
   MassPropertiesObservation simulated;
   simulated.data[MassPropertiesObservation::kMass] = 0.042;

@@ -87,7 +87,7 @@ class StandTranslator final : public TuningTranslator {
       d.number(o.margin_mm, "margin_mm", Range::at_least(0),
                "least distance from the centre of mass's projection to the support polygon's edge");
       d.number(o.shell_mm, "shell_mm", Range::above(0), "the shell kept solid under the surface (printable)");
-      d.number(o.cells, "cells", Range::closed(1, 64), "the core's voxel cells along x, y, z over the inner bounds");
+      d.number(o.cells, "cells", Range::closed(1, 64), "the core's voxel cells along x, y, z, tiling the shape's bounds");
       d.value(o.material, "material", "the shell's material, and the cells' when solid");
       d.value(o.core_materials, "core_materials",
               "what a core cell may be: the first is the solid print's; \"void\" carves",
@@ -103,18 +103,19 @@ class StandTranslator final : public TuningTranslator {
     if (options_.core_materials.empty()) options_.core_materials = {options_.material, "void"};
     const MaterialPalette& palette = experiment.palette();
     const Bounds& bounds = experiment.solid().bounds();
-    const Vec3 inner_lower = bounds.lower + Vec3::Constant(options_.shell_mm);
     const Vec3 inner_size = bounds.size() - Vec3::Constant(2 * options_.shell_mm);
     if ((inner_size.array() <= 0).any()) {
       throw InputError(fmt::format("{}/shell_mm: {} mm leaves no core in a shape {:.3g} x {:.3g} x {:.3g} mm",
                                    where, options_.shell_mm, bounds.size().x(), bounds.size().y(),
                                    bounds.size().z()));
     }
-    // stratum: the shell solid, the core in voxel cells of a material or void.
+    // stratum: the shell solid, the core in voxel cells of a material or
+    // void. The cells tile the shape's bounds exactly (a grid over the inner
+    // bounds alone would gain a row of cells where it stops short of them).
     VoxelOptions voxel;
-    voxel.size_mm.edges = {inner_size.x() / options_.cells[0], inner_size.y() / options_.cells[1],
-                           inner_size.z() / options_.cells[2]};
-    voxel.origin = {inner_lower.x(), inner_lower.y(), inner_lower.z()};
+    voxel.size_mm.edges = {bounds.size().x() / options_.cells[0], bounds.size().y() / options_.cells[1],
+                           bounds.size().z() / options_.cells[2]};
+    voxel.origin = {bounds.lower.x(), bounds.lower.y(), bounds.lower.z()};
     voxel.cells.child.node = make_solid_material(
         material_choice(palette, options_.core_materials.front(), options_.core_materials, where + "/core_materials"));
     StratumOptions stratum;
@@ -140,6 +141,8 @@ class StandTranslator final : public TuningTranslator {
     tuner->add_term({"stands", make_stability_simulator(options_.stability, context), make_stand_shortfall_metric(),
                      make_stands_goal(options_.margin_mm), TermRule{1, 0.0, 1e3}});
     tuner->set_node(*tree_, tree_->root());
+    // Branch and bound prunes on the mass a partial carving can reach.
+    set_mass_bound(*tuner, *tree_, mass, context);
     network_.add(std::move(tuner));
     Phase phase;
     phase.name = "cells";
