@@ -56,8 +56,9 @@ MaterialPalette::MaterialPalette(const MaterialLibrary& library, const PrinterPr
     }
     materials_.push_back(library.get(name));
   }
-  if (!printer.support_material.empty() && !library.contains(printer.support_material)) {
-    throw not_in_library("/support_material", printer.support_material);
+  if (!printer.support_material.empty()) {
+    if (!library.contains(printer.support_material)) throw not_in_library("/support_material", printer.support_material);
+    cavity_fill_ = library.get(printer.support_material);
   }
 }
 

@@ -3,6 +3,7 @@
 /// chosen printer holds (ids 1..n, in the printer's order), each resolved in
 /// the material library.
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -28,10 +29,17 @@ class MaterialPalette {
   bool contains(const std::string& name) const;
   std::vector<std::string> names() const;  ///< including "void"
   const std::string& printer_name() const { return printer_name_; }
+  /// What fills a cavity the print encloses: the printer's support material
+  /// (PolyJet jets its gel under every overhang, and none can leave a closed
+  /// cavity), or null where cavities stay empty (FDM bridges over them).
+  const Material* cavity_fill() const { return cavity_fill_ ? &*cavity_fill_ : nullptr; }
+  /// A palette whose cavities fill with `fill` (tests, tools).
+  void set_cavity_fill(Material fill) { cavity_fill_ = std::move(fill); }
 
  private:
   std::vector<Material> materials_;
   std::string printer_name_;
+  std::optional<Material> cavity_fill_;
 };
 
 }  // namespace spec2fab

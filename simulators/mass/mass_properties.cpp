@@ -74,6 +74,15 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
       }
       densities_[id] = material.density_kg_m3.value * 1e-9;  // kg/mm³
     }
+    // Void inside the solid weighs what fills the print's cavities (a
+    // PolyJet printer's support gel; nothing on FDM).
+    if (const Material* fill = context.palette.cavity_fill()) {
+      if (!(fill->density_kg_m3.value > 0)) {
+        throw InputError("mass_properties: the printer fills cavities with '" + fill->name +
+                         "', which has no density in the library");
+      }
+      densities_[kVoid] = fill->density_kg_m3.value * 1e-9;
+    }
   }
 
   std::string name() const override { return "mass_properties"; }
@@ -101,6 +110,7 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
     runs_.assign(runs, std::vector<Moments>(densities_.size()));
     rows_.assign(runs, std::vector<MaterialId>(static_cast<size_t>(grid_[0])));  // simulate allocates none
     leaf_sums_ = {};
+    solid_sums_.reset();
   }
 
   using SimulatorFor::simulate;
@@ -117,6 +127,12 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
       }
     } else {
       sample_cells(totals);
+      if (densities_[kVoid] > 0) {
+        // The cavities: the solid's cells less every material's.
+        totals[kVoid] = solid_sums();
+        for (size_t id = 1; id < totals.size(); ++id)
+          for (size_t k = 0; k < totals[id].size(); ++k) totals[kVoid][k] -= totals[id][k];
+      }
     }
     const double h = voxel_mm_;
     Moments mass{};  // ρ-weighted sums over every material
@@ -130,6 +146,9 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
       for (size_t k = 0; k < total.size(); ++k) mass[k] += densities_[id] * cell * total[k];
     }
     out.data[MassPropertiesObservation::kVolumes] = std::max(0.0, solid_volume_ - material_volume);
+    if (densities_[kVoid] > 0) {
+      for (size_t k = 0; k < mass.size(); ++k) mass[k] += densities_[kVoid] * cell * totals[kVoid][k];
+    }
     assemble(mass, out);
   }
 
@@ -150,14 +169,15 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
     LeafMasses out;
     out.leaves = leaf_sums_.leaves;
     for (const Moments& m : leaf_sums_.per_leaf) out.leaf_volume_mm3.push_back(m[0] * cell);
-    for (size_t id = 1; id < densities_.size(); ++id) out.fixed_mass_kg += densities_[id] * leaf_sums_.fixed[id][0] * cell;
+    for (size_t id = 0; id < densities_.size(); ++id) out.fixed_mass_kg += densities_[id] * leaf_sums_.fixed[id][0] * cell;
     return out;
   }
   double density(MaterialId id) const { return id < densities_.size() ? densities_[id] : 0.0; }
 
   static TypeDoc doc() {
     return {"Mass, centre of mass and inertia tensor of the whole print (the materials the tree assigns "
-            "and the library's densities; void weighs nothing), sampled at the centres of cubic cells over "
+            "and the library's densities; void inside the solid weighs what fills the printer's cavities: a "
+            "PolyJet printer's support gel, nothing on FDM), sampled at the centres of cubic cells over "
             "the solid's bounds, each cell a cube of its material. Reads the whole tree, whichever node it "
             "is bound to. Produces mass_properties: mass (kg), centre of mass (mm), inertia about it "
             "(kg mm^2) and each material's volume (mm^3).",
@@ -273,7 +293,7 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
             const auto found = index.find(&leaf);
             const size_t slot =
                 found != index.end() ? densities_.size() + found->second : leaf.material(point, frame);
-            if (slot == kVoid) continue;
+            // Void cells too (slot 0): they weigh what fills the cavities.
             add(run[slot], cell_moments(c.x(), c.y(), c.z()));
           }
         }
@@ -285,6 +305,33 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
     }
     sums.fixed.assign(total.begin(), total.begin() + static_cast<std::ptrdiff_t>(densities_.size()));
     sums.per_leaf.assign(total.begin() + static_cast<std::ptrdiff_t>(densities_.size()), total.end());
+  }
+
+  // Every cell inside the solid, once (only where cavities weigh something).
+  const Moments& solid_sums() {
+    if (solid_sums_) return *solid_sums_;
+    const int nx = static_cast<int>(grid_[0]), ny = static_cast<int>(grid_[1]), nz = static_cast<int>(grid_[2]);
+    const int runs = static_cast<int>(runs_.size());
+    std::vector<Moments> run_sums(static_cast<size_t>(runs));
+    const Vec3 lower = this->lower();
+    tbb::parallel_for(0, runs, [&](int r) {
+      ReducerTree::Query query(*tree_);
+      const int z_end = static_cast<int>(static_cast<long long>(nz) * (r + 1) / runs);
+      for (int z = static_cast<int>(static_cast<long long>(nz) * r / runs); z < z_end; ++z) {
+        for (int y = 0; y < ny; ++y) {
+          for (int x = 0; x < nx; ++x) {
+            const Vec3 p = lower + voxel_mm_ * Vec3(x + 0.5, y + 0.5, z + 0.5);
+            if (!query.query_point(p).surface.inside) continue;
+            const Vec3 c = p - centre_;
+            add(run_sums[static_cast<size_t>(r)], cell_moments(c.x(), c.y(), c.z()));
+          }
+        }
+      }
+    });
+    Moments total{};
+    for (const Moments& run : run_sums) add(total, run);  // in order: any thread count
+    solid_sums_ = total;
+    return *solid_sums_;
   }
 
   // Adds slice z's cells to `sums` (per material, about the grid's centre).
@@ -339,6 +386,7 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
   std::vector<std::vector<MaterialId>> rows_;  ///< per run of z slices: one row of materials
   std::vector<Moments> totals_;                 ///< per material, this evaluation
   LeafSums leaf_sums_;
+  std::optional<Moments> solid_sums_;  ///< every cell inside the solid
   std::vector<double> signature_now_;
   bool weightless_ = false;
 };

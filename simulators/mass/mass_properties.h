@@ -1,7 +1,8 @@
 #pragma once
 /// Mass properties of a print: its mass, centre of mass and inertia tensor
 /// from the materials the whole tree assigns and the library's densities
-/// (void weighs nothing). What standing (Make It Stand: the centre of mass
+/// (void inside the solid weighs what fills the printer's cavities: a
+/// PolyJet printer's support gel, nothing on FDM). What standing (Make It Stand: the centre of mass
 /// over the support) and lightness depend on.
 ///
 /// The "mass_properties" simulator samples the tree at the centres of cubic

@@ -283,6 +283,44 @@ TEST_F(MassProperties, TheMassBoundIsExactWhenCompleteAndBelowEveryCompletion) {
   EXPECT_FALSE(make_mass_bound(*depth, depth->search_space(), {0.7}, PartContext{palette_}));
 }
 
+// A printer whose cavities fill with its support (PolyJet): void inside the
+// solid weighs the fill's density, on both paths. A 40 × 30 × 20 box, light
+// for x < 10 and void above: 10 and 30 mm blocks of 1000 and 1100 kg/m³
+// (closed form, cells not cut); the voxel core of the leaf-sum test, its
+// cells void, light and heavy, against the same tree sampled cell by cell.
+TEST_F(MassProperties, CavitiesWeighWhatFillsThePrintersCavities) {
+  Material gel;
+  gel.name = "gel";
+  gel.density_kg_m3.value = 1100;
+  palette_.set_cavity_fill(gel);
+  const Solid box(make_box(Vec3(0, 0, 0), Vec3(40, 30, 20), 2), UvSource::planar, 2);
+  auto split = bound(R"({"type": "plane", "axis": "x", "offset_mm": 10,
+      "below": {"type": "layered", "material": "light"}, "above": {"type": "layered", "material": "void"}})", box);
+  const MassPropertiesObservation out = simulate(*split, 1.0);
+  const double m_light = 10.0 * 30 * 20 * 1e-6, m_gel = 30.0 * 30 * 20 * 1.1e-6;
+  EXPECT_NEAR(out.mass_kg(), m_light + m_gel, 1e-12);
+  EXPECT_NEAR(out.centre_mm()[0], (m_light * 5 + m_gel * 25) / (m_light + m_gel), 1e-9);
+  EXPECT_NEAR(out.volume_mm3(0), 30.0 * 30 * 20, 1e-6) << "the void inside, which the gel fills";
+
+  const auto tree_json = [](const std::string& depth) {
+    return R"({"type": "stratum", "depth_mm": )" + depth + R"(, "shell": {"type": "layered", "material": "heavy"},
+      "core": {"type": "voxel", "size_mm": [9.5, 28, 18], "origin": [2, 2, 2],
+        "child": {"type": "layered", "material": {"value": "light", "choices": ["light", "heavy", "void"]}}}})";
+  };
+  const std::vector<double> ids = {0, 1, 2, 0};
+  MassPropertiesObservation a, b;
+  for (const std::string depth : {"2", R"({"value": 2, "choices": [2]})"}) {  // leaf sums, then every cell
+    const Solid own(make_box(Vec3(0, 0, 0), Vec3(40, 30, 20), 2), UvSource::planar, 2);
+    auto tree = bound(tree_json(depth), own);
+    SearchSpace cells = tree->search_space("core");
+    cells.set_values(ids);
+    tree->evaluate();
+    (depth == "2" ? a : b) = simulate(*tree, 0.7);
+  }
+  for (size_t k = 0; k < a.data.size(); ++k) EXPECT_NEAR(a.data[k], b.data[k], 1e-9 * (1 + std::abs(b.data[k]))) << k;
+  EXPECT_GT(a.mass_kg(), 0.0) << "void cells weigh the gel";
+}
+
 TEST(MassMetrics, CentreOffsetIsAcrossGravityAndMassDifferenceInGrams) {
   MassPropertiesObservation simulated;
   simulated.data[MassPropertiesObservation::kMass] = 0.042;

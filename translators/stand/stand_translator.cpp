@@ -8,7 +8,10 @@
 // stand_shortfall against "stands", held at most 0). The support polygon
 // is the convex hull of the surface's lowest points within a contact
 // tolerance (mass/stability.h). Where the carving alone cannot move the
-// centre far enough, a denser material among the cells' choices can.
+// centre far enough, a denser material among the cells' choices can. A
+// carved cell is a cavity: empty on an FDM printer, filled with support gel
+// on a PolyJet one (MaterialPalette::cavity_fill), which the mass
+// properties weigh — there, carving moves the centre far less.
 
 #include <cmath>
 #include <limits>
@@ -79,7 +82,7 @@ class StandTranslator final : public TuningTranslator {
     double margin_mm = 1;
     double shell_mm = 2;
     std::array<int, 3> cells{6, 6, 8};
-    std::string material = "VeroWhitePlus";
+    std::string material;
     std::vector<std::string> core_materials;
     template <class Declare, class Self>
     static void declare(Declare& d, Self& o) {
@@ -88,7 +91,8 @@ class StandTranslator final : public TuningTranslator {
                "least distance from the centre of mass's projection to the support polygon's edge");
       d.number(o.shell_mm, "shell_mm", Range::above(0), "the shell kept solid under the surface (printable)");
       d.number(o.cells, "cells", Range::closed(1, 64), "the core's voxel cells along x, y, z, tiling the shape's bounds");
-      d.value(o.material, "material", "the shell's material, and the cells' when solid");
+      d.value(o.material, "material", "the shell's material, and the cells' when solid",
+              Default{"the printer's first model material"});
       d.value(o.core_materials, "core_materials",
               "what a core cell may be: the first is the solid print's; \"void\" carves",
               Default{"[material, \"void\"]"});
@@ -100,8 +104,9 @@ class StandTranslator final : public TuningTranslator {
       : options_(read_options<Options>(experiment.goal())) {
     const Properties goal = experiment.goal();
     const std::string where = goal.where();
-    if (options_.core_materials.empty()) options_.core_materials = {options_.material, "void"};
     const MaterialPalette& palette = experiment.palette();
+    if (options_.material.empty()) options_.material = palette.name(1);
+    if (options_.core_materials.empty()) options_.core_materials = {options_.material, "void"};
     const Bounds& bounds = experiment.solid().bounds();
     const Vec3 inner_size = bounds.size() - Vec3::Constant(2 * options_.shell_mm);
     if ((inner_size.array() <= 0).any()) {
