@@ -18,6 +18,7 @@
 #include <unordered_map>
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 #include <opencv2/imgproc.hpp>
 
 #include "core/image_write.h"
@@ -275,6 +276,15 @@ class StandTranslator final : public TuningTranslator {
     for (const Vec3& corner : support.corners()) report.support_polygon_mm.push_back({corner.x(), corner.y(), corner.z()});
     report.mass_change_g = (report.tuned.mass_kg - report.solid.mass_kg) * 1e3;
     report.mass_change_fraction = report.solid.mass_kg > 0 ? report.mass_change_g / (report.solid.mass_kg * 1e3) : 0;
+    if (!report.tuned.stands) {
+      const Material* fill = tree_->palette().cavity_fill();
+      spdlog::warn("stand: the tuned print still falls: its centre of mass is {:+.2f} mm from the support's edge, "
+                   "{} asked{}",
+                   report.tuned.margin_mm, options_.margin_mm,
+                   fill != nullptr ? "; on this printer carved cells fill with " + fill->name +
+                                         ", so carving moves the centre little (an FDM printer leaves them empty)"
+                                   : "; more cells, a thinner shell or a denser core material may help");
+    }
     write_preview(support, report, context.folder.path("preview/stand.png"));
     context.report.files.previews.push_back("preview/stand.png");
     context.report.add("stand", report);
