@@ -44,7 +44,7 @@ def main():
     parser.add_argument("--weights", type=float, nargs="+", default=[0.5, 1.8, 8])
     args = parser.parse_args()
     print(f"balance_box, {args.cells} core cells along x, exhaustive over {2 ** args.cells} carvings")
-    print("| term over_target | grams carved | offset (mm) | cells carved (x order) | tuning (s) |")
+    print("| term over_target | grams carved | offset (mm) | cells carved (x order) | whole run (s) |")
     print("|---|---|---|---|---|")
     with tempfile.TemporaryDirectory() as tmp:
         for weight in [*args.weights, None]:
