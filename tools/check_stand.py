@@ -12,6 +12,9 @@ along gravity) and the solid shape's centroid. It then checks that
   - its projection lies inside the support polygon with the goal's margin;
   - the shape printed solid (uniform density: the mesh's centroid) does not.
 
+Printers whose cavities fill with support (a "support_material" in the
+profile: PolyJet) are refused: this check weighs void voxels as empty.
+
   tools/check_stand.py EXPERIMENT.json RUN_FOLDER [--tolerance-mm 0.1]
 
 Prints what it measured, one line each, and exits 0 when every check holds,
@@ -137,12 +140,25 @@ def main():
         base = args.experiment.parent
         mesh = read_stl(base / experiment["geometry"]["mesh"])
         library = json.loads((base / experiment["materials"]).read_text())
+        printer = json.loads((base / experiment["printer"]).read_text())
         goal = experiment.get("goal", {})
         stand = result["stand"]
-    except (OSError, KeyError, ValueError) as error:
+        reported = np.array(stand["tuned"]["centre_mm"], dtype=np.float64)
+        reported_mass = float(stand["tuned"]["mass_kg"])
+        down = np.array(goal.get("gravity", [0, 0, -1]), dtype=np.float64)
+    except (OSError, KeyError, TypeError, ValueError) as error:
         print(f"check_stand: unusable input: {error}", file=sys.stderr)
         return 2
-    down = np.array(goal.get("gravity", [0, 0, -1]), dtype=np.float64)
+    if printer.get("support_material"):
+        # Its cavities fill with support (PolyJet): a void voxel inside the
+        # shell is not empty, and this check weighs void as nothing.
+        print(f"check_stand: printer {printer.get('name', '?')} fills cavities with {printer['support_material']}; "
+              "this check weighs void voxels as empty and covers printers without a support material (FDM)",
+              file=sys.stderr)
+        return 2
+    if not np.all(np.isfinite(down)) or not np.any(down):
+        print("check_stand: goal.gravity must be a finite direction, not [0, 0, 0]", file=sys.stderr)
+        return 2
     down /= np.linalg.norm(down)
     tolerance = goal.get("contact_tolerance_mm", 0.5)
     margin_goal = goal.get("margin_mm", 1.0)
@@ -160,13 +176,12 @@ def main():
     except (OSError, KeyError, ValueError) as error:
         print(f"check_stand: unusable slices: {error}", file=sys.stderr)
         return 2
-    reported = np.array(stand["tuned"]["centre_mm"])
     solid_centre = mesh_centroid(mesh)
     tuned_margin, solid_margin = margin(hull, projected(centre)), margin(hull, projected(solid_centre))
     distance = np.linalg.norm(centre - reported)
     print(f"support polygon: {len(hull)} corners, from {len(contact)} vertices within {tolerance} mm of the lowest")
     print(f"centre of mass from the slices: [{centre[0]:.3f}, {centre[1]:.3f}, {centre[2]:.3f}] mm, "
-          f"mass {mass * 1e3:.2f} g (report: {stand['tuned']['mass_kg'] * 1e3:.2f} g)")
+          f"mass {mass * 1e3:.2f} g (report: {reported_mass * 1e3:.2f} g)")
     print(f"reported centre of mass: [{reported[0]:.3f}, {reported[1]:.3f}, {reported[2]:.3f}] mm: "
           f"{distance:.3f} mm apart (at most {args.tolerance_mm})")
     print(f"tuned: {tuned_margin:+.3f} mm from the support's edge (at least {margin_goal} asked)")

@@ -168,7 +168,8 @@ BenchmarkFacts TunerBenchmark::facts() const {
     if (!spec_.contains("goal")) {
       facts.optimum = 0;  // the hidden reference reproduces its own simulation
     } else if (problem.has(Capability::discrete_only) && facts.assignments <= kEnumeratedAssignments) {
-      facts.optimum = smallest_error(problem);
+      const double smallest = smallest_error(problem);
+      if (std::isfinite(smallest)) facts.optimum = smallest;  // every assignment failing: unknown
     }
     for (Capability c : {Capability::gradient, Capability::residuals, Capability::lower_bound,
                          Capability::discrete_only})

@@ -38,10 +38,9 @@ std::vector<std::string> MassPropertiesObservation::write_files(const std::files
 }
 
 bool CentreOffsetOptions::check(std::string* why) const {
-  // The largest component, not the squared length: 1e-200 is a direction,
-  // and 1e200 must not overflow to a zero direction once normalised.
-  const double largest = std::max({std::abs(gravity[0]), std::abs(gravity[1]), std::abs(gravity[2])});
-  if (std::isfinite(largest) && largest > 0) return true;
+  // Every component finite (std::max would skip a NaN after the first), one of them not 0.
+  const bool finite = std::isfinite(gravity[0]) && std::isfinite(gravity[1]) && std::isfinite(gravity[2]);
+  if (finite && (gravity[0] != 0 || gravity[1] != 0 || gravity[2] != 0)) return true;
   *why = "gravity: a finite direction, not [0, 0, 0]";
   return false;
 }
@@ -271,9 +270,11 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
     for (size_t i = 0; i < sums.leaves.size(); ++i) index.emplace(sums.leaves[i], i);
     const size_t slots = densities_.size() + sums.leaves.size();  // materials, then the tuned leaves
     const int nx = static_cast<int>(grid_[0]), ny = static_cast<int>(grid_[1]), nz = static_cast<int>(grid_[2]);
-    // Fewer runs than sample_cells: each holds a sum per leaf. The count
-    // depends on the grid alone, so the sums do not depend on threads.
-    const int runs = std::min(nz, 64);
+    // Fewer runs than sample_cells: each holds a sum per leaf, and all of
+    // them at most 256 MB. The count depends on the grid and the leaves
+    // alone, so the sums do not depend on threads.
+    const double run_bytes = static_cast<double>(slots) * sizeof(Moments);
+    const int runs = std::max(1, std::min({nz, 64, static_cast<int>(std::min(64.0, 268435456.0 / run_bytes))}));
     std::vector<std::vector<Moments>> run_sums(static_cast<size_t>(runs), std::vector<Moments>(slots));
     const Vec3 lower = this->lower();
     const double h = voxel_mm_;
@@ -494,45 +495,51 @@ MassBound make_mass_bound(ReducerTree& tree, const SearchSpace& space, const Mas
   simulator.setup(tree.root(), SimulationDomain(tree, tree.root()));
   const auto sums = simulator.leaf_masses();
   if (!sums) return {};
-  // Each entry of the space: its leaf and the density each of its choices gives.
+  // Which leaf owns each parameter: one pass over the leaves.
+  std::unordered_map<const Parameter*, size_t> owner;
+  for (size_t j = 0; j < sums->leaves.size(); ++j) {
+    sums->leaves[j]->read_parameters([&](const std::string&, const Parameter& p) { owner.emplace(&p, j); });
+  }
+  // Each entry of the space: its leaf and the density each of its values
+  // gives, the leaf's other parameters as they are now.
   struct Variable {
     VariableDomain domain;
     std::vector<double> densities;  // per admissible value of the domain, in its order
     size_t leaf = 0;
+    bool weighs = false;  // it alone turns its leaf's density; the others leave their leaf fixed
   };
   std::vector<Variable> variables;
-  std::vector<char> in_space(sums->leaves.size(), 0);
-  for (size_t k = 0; k < space.dimension(); ++k) {
-    Parameter& parameter = *space.entries()[k].parameter;
-    if (parameter.kind() == ParameterKind::continuous) return {};
-    const auto owner = std::find_if(sums->leaves.begin(), sums->leaves.end(), [&](const MaterialNode* leaf) {
-      bool owns = false;
-      leaf->read_parameters([&](const std::string&, const Parameter& p) { owns = owns || &p == &parameter; });
-      return owns;
-    });
-    if (owner == sums->leaves.end()) return {};
-    Variable& variable = variables.emplace_back(Variable{VariableDomain::of(parameter), {}, 0});
-    variable.leaf = static_cast<size_t>(owner - sums->leaves.begin());
-    // The leaf's material for every value of this parameter, the others as they are.
-    auto& leaf = const_cast<MaterialNode&>(**owner);  // the tree is the caller's, non-const
-    const double value = parameter.value();
+  std::vector<int> turning(sums->leaves.size(), 0);  // variables that change each leaf's density
+  for (const SearchSpace::Entry& entry : space.entries()) {
+    Parameter& parameter = *entry.parameter;
+    const auto found = owner.find(&parameter);
+    if (parameter.kind() == ParameterKind::continuous || found == owner.end()) return {};
+    Variable& variable = variables.emplace_back(Variable{VariableDomain::of(parameter), {}, found->second, false});
+    auto& leaf = const_cast<MaterialNode&>(*sums->leaves[variable.leaf]);  // the caller's tree, non-const
+    // Restored however this ends: the tree is the caller's.
+    struct Restore {
+      Parameter& parameter;
+      MaterialNode& leaf;
+      double value;
+      ~Restore() {
+        parameter.set(value);
+        leaf.evaluate();
+      }
+    } restore{parameter, leaf, parameter.value()};
     for (long long i = 0; i < variable.domain.cardinality(); ++i) {
       parameter.set(variable.domain.admissible(i));
       leaf.evaluate();
       variable.densities.push_back(simulator.density(leaf.material(QueryPoint{}, LocalFrame{})));
     }
-    parameter.set(value);
-    leaf.evaluate();
     const auto [lo, hi] = std::minmax_element(variable.densities.begin(), variable.densities.end());
-    if (*hi > *lo) {
-      if (in_space[variable.leaf]) return {};  // two parameters turn one leaf's material
-      in_space[variable.leaf] = 1;
-    }
+    variable.weighs = *hi > *lo;
+    if (variable.weighs && ++turning[variable.leaf] > 1) return {};  // two parameters turn one leaf's density
   }
-  // Leaves this space does not tune keep the material they hold now.
+  // Every leaf no variable weighs keeps the material it holds now (counted
+  // once, whatever parameters of it the space holds).
   double fixed = sums->fixed_mass_kg;
   for (size_t j = 0; j < sums->leaves.size(); ++j) {
-    if (!in_space[j]) {
+    if (turning[j] == 0) {
       fixed += simulator.density(sums->leaves[j]->material(QueryPoint{}, LocalFrame{})) * sums->leaf_volume_mm3[j];
     }
   }
@@ -541,6 +548,7 @@ MassBound make_mass_bound(ReducerTree& tree, const SearchSpace& space, const Mas
     double lo = fixed, hi = fixed;
     for (size_t k = 0; k < variables.size(); ++k) {
       const Variable& v = variables[k];
+      if (!v.weighs) continue;
       const double volume = volumes[v.leaf];
       if (static_cast<int>(k) < assigned) {
         const auto index = static_cast<size_t>(v.domain.index_of(x[k]));
@@ -558,6 +566,9 @@ MassBound make_mass_bound(ReducerTree& tree, const SearchSpace& space, const Mas
 
 bool set_mass_bound(Tuner& tuner, ReducerTree& tree, const MassPropertiesOptions& options,
                     const PartContext& context) {
+  // The bound is of mass_properties' masses on this grid: the caller's tuner
+  // must simulate them so (its objective mass_difference, on options' grid).
+  if (tuner.simulator_name() != "mass_properties") return false;
   MassBound bound = make_mass_bound(tree, tuner.search_space(), options, context);
   if (!bound) return false;
   tuner.set_lower_bound([bound = std::move(bound)](std::span<const double> x, int assigned, const Observation& target) {

@@ -102,8 +102,9 @@ std::vector<std::string> StabilityObservation::write_files(const std::filesystem
 }
 
 bool StabilityOptions::check(std::string* why) const {
-  const double largest = std::max({std::abs(gravity[0]), std::abs(gravity[1]), std::abs(gravity[2])});
-  if (std::isfinite(largest) && largest > 0) return true;
+  // Every component finite (std::max would skip a NaN after the first), one of them not 0.
+  const bool finite = std::isfinite(gravity[0]) && std::isfinite(gravity[1]) && std::isfinite(gravity[2]);
+  if (finite && (gravity[0] != 0 || gravity[1] != 0 || gravity[2] != 0)) return true;
   *why = "gravity: a finite direction, not [0, 0, 0]";
   return false;
 }

@@ -43,7 +43,8 @@ const BenchmarkDescription kStandCrane{
     "stand_crane",
     "Make It Stand (issue 40): the crane's core, 4 x 1 x 3 cells each PLA or void (4,096 carvings); "
     "the least change of mass with the centre of mass at least 1 mm inside the foot (a term held at most 0, "
-    "penalty 1,000/mm). Discrete; no gradient, bound or residuals; the optimum by trying every carving.",
+    "penalty 1,000/mm). Discrete; a mass bound for branch and bound; no gradient or residuals; the optimum by "
+    "trying every carving.",
     "mass_properties and stability (1 mm cells, leaf sums)",
     "mass_difference (g) + 1000 x stand_shortfall (mm) beyond 0",
     "the solid crane's mass (28.57 g of PLA), standing with a 1 mm margin",

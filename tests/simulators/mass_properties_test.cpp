@@ -277,6 +277,26 @@ TEST_F(MassProperties, TheMassBoundIsExactWhenCompleteAndBelowEveryCompletion) {
   }
   EXPECT_EQ(lower(ids, 0, target_kg), 0) << "50 g lies between the lightest and the heaviest core";
   EXPECT_GT(lower(ids, 0, 1.0), 0) << "1 kg lies beyond the heaviest";
+  // Choices that weigh the same (void filled with a gel as dense as
+  // "heavy"): each leaf still counts once, so the complete bound is exact.
+  Material gel;
+  gel.name = "gel";
+  gel.density_kg_m3.value = 3000;
+  palette_.set_cavity_fill(gel);
+  const Solid same_box(make_box(Vec3(0, 0, 0), Vec3(40, 30, 20), 2), UvSource::planar, 2);
+  auto even = bound(R"({"type": "stratum", "depth_mm": 2, "shell": {"type": "layered", "material": "light"},
+      "core": {"type": "voxel", "size_mm": [9.5, 28, 18], "origin": [2, 2, 2],
+        "child": {"type": "layered", "material": {"value": "heavy", "choices": ["heavy", "void"]}}}})",
+                    same_box);
+  SearchSpace even_space = even->search_space();
+  const MassBound even_lower = make_mass_bound(*even, even_space, {0.7}, PartContext{palette_});
+  ASSERT_TRUE(even_lower);
+  const std::vector<double> carved = {2, 0, 2, 0};
+  even_space.set_values(carved);
+  even->evaluate();
+  const double even_error = std::abs(simulate(*even, 0.7).mass_kg() - target_kg) * 1e3;
+  EXPECT_NEAR(even_lower(carved, 4, target_kg), even_error, 1e-9);
+  EXPECT_NEAR(even_lower(carved, 0, target_kg), even_error, 1e-9) << "no choice changes the mass";
   // A free shell depth is no leaf's material: no bound.
   auto depth = bound(R"({"type": "stratum", "depth_mm": {"value": 2, "choices": [1, 2]},
       "shell": {"type": "layered", "material": "heavy"}, "core": {"type": "layered", "material": "light"}})", box);

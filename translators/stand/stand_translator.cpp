@@ -129,13 +129,14 @@ class StandTranslator final : public TuningTranslator {
     stratum.shell.node = make_solid_material(fixed_material(palette, options_.material, where + "/material"));
     stratum.core.node = make_voxel(std::move(voxel));
     set_tree(make_stratum(std::move(stratum)), goal, experiment);
-    core_cells_ = fix_empty_cells();
 
-    // One tuner: the least change of mass, standing with the margin.
+    // One tuner: the least change of mass, standing with the margin. The
+    // solid print first: its simulator refuses a grid past the mass_cells limit.
     const PartContext context = experiment.part_context();
     MassPropertiesOptions mass;
     mass.voxel_mm = options_.stability.voxel_mm;
     solid_mass_kg_ = solid_state(context).mass_kg;
+    core_cells_ = fix_empty_cells(where);
     const OptimizerChoice optimizer(experiment.root(), "optimizer",
                                     nlohmann::json{{"type", "annealing"},
                                                    {"iterations", 20000},
@@ -218,23 +219,32 @@ class StandTranslator final : public TuningTranslator {
   }
 
   // Cells that hold no part of the core (outside the solid, or all shell)
-  // stay fixed: the tuner has nothing to gain from them. Returns the rest.
-  int fix_empty_cells() {
+  // stay fixed: the tuner has nothing to gain from them. A cell holds core
+  // where the mass properties' grid (the same points: lower + h·(i + ½))
+  // samples it. Returns the rest.
+  int fix_empty_cells(const std::string& where) {
     ReducerNode& voxel = tree_->node("core");
     std::vector<char> used(voxel.child_count(), 0);
     std::unordered_map<const ReducerNode*, size_t> index;
     for (size_t i = 0; i < voxel.child_count(); ++i) index.emplace(&voxel.child(i), i);
     const Bounds& bounds = tree_->solid().bounds();
-    // On the grid the mass properties sample, or finer.
-    const double h = options_.stability.voxel_mm > 0 ? options_.stability.voxel_mm
-                                                      : tree_->solid().bounds().size().maxCoeff() / 96;
+    const double h = options_.stability.voxel_mm > 0 ? options_.stability.voxel_mm : bounds.size().maxCoeff() / 96;
+    const Vec3 cell = bounds.size().cwiseQuotient(Vec3(options_.cells[0], options_.cells[1], options_.cells[2]));
+    if (h > 0.5 * cell.minCoeff()) {
+      spdlog::warn("{}/voxel_mm: {:.3g} mm samples the core's {:.3g} mm cells coarsely: a cell the grid misses is "
+                   "left solid and not tuned; a finer voxel_mm (at most half a cell) tunes every one",
+                   where, h, cell.minCoeff());
+    }
+    int grid[3];
+    for (int k = 0; k < 3; ++k) grid[k] = std::max(1, static_cast<int>(std::ceil(bounds.size()[k] / h)));
     ReducerTree::Query query(*tree_);
-    for (double z = bounds.lower.z() + h / 2; z < bounds.upper.z(); z += h) {
-      for (double y = bounds.lower.y() + h / 2; y < bounds.upper.y(); y += h) {
-        for (double x = bounds.lower.x() + h / 2; x < bounds.upper.x(); x += h) {
-          const QueryPoint point = query.query_point(Vec3(x, y, z));
+    for (int z = 0; z < grid[2]; ++z) {
+      for (int y = 0; y < grid[1]; ++y) {
+        for (int x = 0; x < grid[0]; ++x) {
+          const Vec3 p = bounds.lower + h * Vec3(x + 0.5, y + 0.5, z + 0.5);
+          const QueryPoint point = query.query_point(p);
           if (!point.surface.inside) continue;
-          LocalFrame frame{x, y, z};
+          LocalFrame frame{p.x(), p.y(), p.z()};
           const auto found = index.find(&route_to_leaf(tree_->root(), point, frame));
           if (found != index.end()) used[found->second] = 1;
         }
