@@ -5,14 +5,16 @@
 /// it. Every allocation of Spec2Fab's own outside such a scope is still
 /// checked. Without the sanitizer it is nothing.
 
-#if defined(__SANITIZE_ADDRESS__)
+#include "core/sanitizer.h"
+
+#if SPEC2FAB_ASAN
 #include <sanitizer/lsan_interface.h>
 #endif
 
 namespace spec2fab {
 
 struct IgnoreThirdPartyLeaks {
-#if defined(__SANITIZE_ADDRESS__)
+#if SPEC2FAB_ASAN
   IgnoreThirdPartyLeaks() { __lsan_disable(); }
   ~IgnoreThirdPartyLeaks() { __lsan_enable(); }
 #else

@@ -25,6 +25,7 @@
 #include <ostream>
 #include <string>
 
+#include "core/sanitizer.h"
 #include "fem/mesh_cache.h"
 #include "fem/petsc/gamg_solver.h"
 #include "fem_support.h"
@@ -218,7 +219,7 @@ TEST_P(FemIndependent, AgreesWithCalculixOnATetgenMeshOfTheSameDensityWithin3Per
 // About 20-90 s per case: left to the Release build, the long ones to
 //   SPEC2FAB_LONG_CHECKS=1 build/tests/test_fem --gtest_filter='*Refined*'
 TEST_P(FemIndependent, RefinedApproachesCalculixBricks) {
-#if defined(__SANITIZE_ADDRESS__)
+#if SPEC2FAB_ASAN
   GTEST_SKIP() << "a minute of ccx and 90k-tet solves: the Release build runs it";
 #endif
   const Case& c = GetParam();
