@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <functional>
 #include <limits>
 #include <unordered_map>
 
@@ -230,24 +229,25 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
     std::vector<Moments> fixed;  ///< per material: the cells of every other leaf
   };
 
-  // The tree's signature; false when a free parameter is not a one-material leaf's.
+  // The tree's signature; false when a free parameter is not a one-material
+  // leaf's. Run every evaluation: it allocates nothing once `out` has grown.
   bool signature(std::vector<double>& out, std::vector<const MaterialNode*>* leaves) const {
     out.clear();
-    bool apply = true;
-    const std::function<void(const ReducerNode&)> visit = [&](const ReducerNode& node) {
-      const bool one_material = node.role() == ReducerNode::Role::material &&
-                                static_cast<const MaterialNode&>(node).assigns_one_material();
-      bool tuned = false;
-      node.read_parameters([&](const std::string& /*name*/, const Parameter& parameter) {
-        out.push_back(parameter.is_free() ? 1.0 : 0.0);
-        if (!parameter.is_free()) out.push_back(parameter.value());
-        tuned = tuned || parameter.is_free();
-      });
-      if (tuned && !one_material) apply = false;
-      if (tuned && one_material && leaves != nullptr) leaves->push_back(static_cast<const MaterialNode*>(&node));
-      for (size_t i = 0; i < node.child_count(); ++i) visit(node.child(i));
-    };
-    visit(tree_->root());
+    return add_signature(tree_->root(), out, leaves);
+  }
+  static bool add_signature(const ReducerNode& node, std::vector<double>& out,
+                            std::vector<const MaterialNode*>* leaves) {
+    bool tuned = false;
+    node.read_parameters([&](const std::string& /*name*/, const Parameter& parameter) {
+      out.push_back(parameter.is_free() ? 1.0 : 0.0);
+      if (!parameter.is_free()) out.push_back(parameter.value());
+      tuned = tuned || parameter.is_free();
+    });
+    const bool one_material = node.role() == ReducerNode::Role::material &&
+                              static_cast<const MaterialNode&>(node).assigns_one_material();
+    bool apply = !tuned || one_material;
+    if (tuned && one_material && leaves != nullptr) leaves->push_back(static_cast<const MaterialNode*>(&node));
+    for (size_t i = 0; i < node.child_count(); ++i) apply = add_signature(node.child(i), out, leaves) && apply;
     return apply;
   }
 
@@ -260,6 +260,29 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
     return leaf_sums_.apply;
   }
 
+  // Visits every grid cell's centre inside the solid, z slices split into
+  // `runs` runs (run r: slices [nz·r/runs, nz·(r+1)/runs)) handled in
+  // parallel: visit(r, query, point, p), p relative to the grid's centre in
+  // cell_moments' terms left to the caller.
+  template <class Visit>
+  void for_each_inside_cell(int runs, Visit&& visit) const {
+    const int nx = static_cast<int>(grid_[0]), ny = static_cast<int>(grid_[1]), nz = static_cast<int>(grid_[2]);
+    const Vec3 lower = this->lower();
+    tbb::parallel_for(0, runs, [&](int r) {
+      ReducerTree::Query query(*tree_);
+      const int z_end = static_cast<int>(static_cast<long long>(nz) * (r + 1) / runs);
+      for (int z = static_cast<int>(static_cast<long long>(nz) * r / runs); z < z_end; ++z) {
+        for (int y = 0; y < ny; ++y) {
+          for (int x = 0; x < nx; ++x) {
+            const Vec3 p = lower + voxel_mm_ * Vec3(x + 0.5, y + 0.5, z + 0.5);
+            const QueryPoint point = query.query_point(p);
+            if (point.surface.inside) visit(r, point, p);
+          }
+        }
+      }
+    });
+  }
+
   void take_leaf_sums() {
     LeafSums& sums = leaf_sums_;
     sums = {};
@@ -269,36 +292,21 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
     std::unordered_map<const ReducerNode*, size_t> index;
     for (size_t i = 0; i < sums.leaves.size(); ++i) index.emplace(sums.leaves[i], i);
     const size_t slots = densities_.size() + sums.leaves.size();  // materials, then the tuned leaves
-    const int nx = static_cast<int>(grid_[0]), ny = static_cast<int>(grid_[1]), nz = static_cast<int>(grid_[2]);
+    const int nz = static_cast<int>(grid_[2]);
     // Fewer runs than sample_cells: each holds a sum per leaf, and all of
     // them at most 256 MB. The count depends on the grid and the leaves
     // alone, so the sums do not depend on threads.
     const double run_bytes = static_cast<double>(slots) * sizeof(Moments);
     const int runs = std::max(1, std::min({nz, 64, static_cast<int>(std::min(64.0, 268435456.0 / run_bytes))}));
     std::vector<std::vector<Moments>> run_sums(static_cast<size_t>(runs), std::vector<Moments>(slots));
-    const Vec3 lower = this->lower();
-    const double h = voxel_mm_;
-    tbb::parallel_for(0, runs, [&](int r) {
-      ReducerTree::Query query(*tree_);
-      std::vector<Moments>& run = run_sums[static_cast<size_t>(r)];
-      const int z_end = static_cast<int>(static_cast<long long>(nz) * (r + 1) / runs);
-      for (int z = static_cast<int>(static_cast<long long>(nz) * r / runs); z < z_end; ++z) {
-        for (int y = 0; y < ny; ++y) {
-          for (int x = 0; x < nx; ++x) {
-            const Vec3 p = lower + h * Vec3(x + 0.5, y + 0.5, z + 0.5);
-            const QueryPoint point = query.query_point(p);
-            if (!point.surface.inside) continue;
-            LocalFrame frame{p.x(), p.y(), p.z()};  // the root's, as ReducerTree::walk starts
-            const MaterialNode& leaf = route_to_leaf(tree_->root(), point, frame);
-            const Vec3 c = p - centre_;
-            const auto found = index.find(&leaf);
-            const size_t slot =
-                found != index.end() ? densities_.size() + found->second : leaf.material(point, frame);
-            // Void cells too (slot 0): they weigh what fills the cavities.
-            add(run[slot], cell_moments(c.x(), c.y(), c.z()));
-          }
-        }
-      }
+    for_each_inside_cell(runs, [&](int r, const QueryPoint& point, const Vec3& p) {
+      LocalFrame frame{p.x(), p.y(), p.z()};  // the root's, as ReducerTree::walk starts
+      const MaterialNode& leaf = route_to_leaf(tree_->root(), point, frame);
+      const auto found = index.find(&leaf);
+      const size_t slot = found != index.end() ? densities_.size() + found->second : leaf.material(point, frame);
+      const Vec3 c = p - centre_;
+      // Void cells too (slot 0): they weigh what fills the cavities.
+      add(run_sums[static_cast<size_t>(r)][slot], cell_moments(c.x(), c.y(), c.z()));
     });
     std::vector<Moments> total(slots);
     for (const auto& run : run_sums) {
@@ -311,23 +319,10 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
   // Every cell inside the solid, once (only where cavities weigh something).
   const Moments& solid_sums() {
     if (solid_sums_) return *solid_sums_;
-    const int nx = static_cast<int>(grid_[0]), ny = static_cast<int>(grid_[1]), nz = static_cast<int>(grid_[2]);
-    const int runs = static_cast<int>(runs_.size());
-    std::vector<Moments> run_sums(static_cast<size_t>(runs));
-    const Vec3 lower = this->lower();
-    tbb::parallel_for(0, runs, [&](int r) {
-      ReducerTree::Query query(*tree_);
-      const int z_end = static_cast<int>(static_cast<long long>(nz) * (r + 1) / runs);
-      for (int z = static_cast<int>(static_cast<long long>(nz) * r / runs); z < z_end; ++z) {
-        for (int y = 0; y < ny; ++y) {
-          for (int x = 0; x < nx; ++x) {
-            const Vec3 p = lower + voxel_mm_ * Vec3(x + 0.5, y + 0.5, z + 0.5);
-            if (!query.query_point(p).surface.inside) continue;
-            const Vec3 c = p - centre_;
-            add(run_sums[static_cast<size_t>(r)], cell_moments(c.x(), c.y(), c.z()));
-          }
-        }
-      }
+    std::vector<Moments> run_sums(runs_.size());
+    for_each_inside_cell(static_cast<int>(runs_.size()), [&](int r, const QueryPoint&, const Vec3& p) {
+      const Vec3 c = p - centre_;
+      add(run_sums[static_cast<size_t>(r)], cell_moments(c.x(), c.y(), c.z()));
     });
     Moments total{};
     for (const Moments& run : run_sums) add(total, run);  // in order: any thread count
@@ -489,6 +484,18 @@ std::unique_ptr<SimulatorFor<MassPropertiesObservation>> make_mass_properties_si
     const MassPropertiesOptions& options, const PartContext& context) {
   return std::make_unique<MassPropertiesSimulator>(require_valid(options, "mass_properties"), context);
 }
+std::vector<std::pair<const ReducerNode*, double>> tuned_leaf_volumes(ReducerTree& tree,
+                                                                      const MassPropertiesOptions& options,
+                                                                      const PartContext& context) {
+  MassPropertiesSimulator simulator(require_valid(options, "mass_properties"), context);
+  simulator.setup(tree.root(), SimulationDomain(tree, tree.root()));
+  std::vector<std::pair<const ReducerNode*, double>> out;
+  if (const auto sums = simulator.leaf_masses()) {
+    for (size_t j = 0; j < sums->leaves.size(); ++j) out.emplace_back(sums->leaves[j], sums->leaf_volume_mm3[j]);
+  }
+  return out;
+}
+
 MassBound make_mass_bound(ReducerTree& tree, const SearchSpace& space, const MassPropertiesOptions& options,
                           const PartContext& context) {
   MassPropertiesSimulator simulator(require_valid(options, "mass_properties"), context);

@@ -20,6 +20,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/options.h"
@@ -74,6 +75,14 @@ struct CentreOffsetOptions {
 
 std::unique_ptr<SimulatorFor<MassPropertiesObservation>> make_mass_properties_simulator(
     const MassPropertiesOptions& options, const PartContext& context);
+
+/// The volume (mm³) mass_properties samples in each leaf its free
+/// parameters tune — one-material leaves whose cells it sums once (the
+/// leaf sums) — on `options`' grid over the whole tree; empty where the
+/// leaf sums do not apply (a free parameter that is no one-material leaf's).
+std::vector<std::pair<const ReducerNode*, double>> tuned_leaf_volumes(ReducerTree& tree,
+                                                                      const MassPropertiesOptions& options,
+                                                                      const PartContext& context);
 
 /// A lower bound of mass_difference (grams) over every completion of a
 /// partial assignment — the first `assigned` values of x fixed, in the order

@@ -205,6 +205,19 @@ TEST_F(MassProperties, LeafSumsEqualSamplingEveryCell) {
         "child": {"type": "layered", "material": {"value": "light", "choices": ["light", "heavy", "void"]}}}})";
   };
   auto reweighed = bound(tree_json("2"), box);
+  // Which path each tree takes: the leaf sums hold the core's four cells
+  // (together the 36 × 26 × 16 mm core on 0.7 mm cells, within a cell layer
+  // of its faces), and none where a geometry parameter is free.
+  const auto volumes = tuned_leaf_volumes(*reweighed, {0.7}, PartContext{palette_});
+  ASSERT_EQ(volumes.size(), 4u);
+  double core = 0;
+  for (const auto& [leaf, mm3] : volumes) core += mm3;
+  EXPECT_NEAR(core, 36.0 * 26 * 16, 0.7 * 2 * (36 * 26 + 36 * 16 + 26 * 16));
+  {
+    const Solid other(make_box(Vec3(0, 0, 0), Vec3(40, 30, 20), 2), UvSource::planar, 2);
+    auto free_depth = bound(tree_json(R"({"value": 2, "choices": [2]})"), other);
+    EXPECT_TRUE(tuned_leaf_volumes(*free_depth, {0.7}, PartContext{palette_}).empty());
+  }
   auto fast = make_mass_properties_simulator({0.7}, PartContext{palette_});
   fast->setup(reweighed->root(), SimulationDomain(*reweighed, reweighed->root()));
   // The same assignment on a tree that must be sampled cell by cell.

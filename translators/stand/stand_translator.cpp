@@ -136,7 +136,7 @@ class StandTranslator final : public TuningTranslator {
     MassPropertiesOptions mass;
     mass.voxel_mm = options_.stability.voxel_mm;
     solid_mass_kg_ = solid_state(context).mass_kg;
-    core_cells_ = fix_empty_cells(where);
+    core_cells_ = fix_empty_cells(where, context);
     const OptimizerChoice optimizer(experiment.root(), "optimizer",
                                     nlohmann::json{{"type", "annealing"},
                                                    {"iterations", 20000},
@@ -193,9 +193,13 @@ class StandTranslator final : public TuningTranslator {
   }
 
   // The print as the tree holds it now.
+  // One simulator for every state: its leaf sums are taken once and
+  // reweighed (again where the cells' freedom changed).
   StandState simulate_state(const PartContext& context) {
-    stability_ = make_stability_simulator(options_.stability, context);
-    stability_->setup(tree_->root(), SimulationDomain(*tree_, tree_->root()));
+    if (!stability_) {
+      stability_ = make_stability_simulator(options_.stability, context);
+      stability_->setup(tree_->root(), SimulationDomain(*tree_, tree_->root()));
+    }
     StabilityObservation observed;
     stability_->simulate(tree_->root(), observed);
     return state_of(observed);
@@ -220,13 +224,9 @@ class StandTranslator final : public TuningTranslator {
 
   // Cells that hold no part of the core (outside the solid, or all shell)
   // stay fixed: the tuner has nothing to gain from them. A cell holds core
-  // where the mass properties' grid (the same points: lower + h·(i + ½))
-  // samples it. Returns the rest.
-  int fix_empty_cells(const std::string& where) {
-    ReducerNode& voxel = tree_->node("core");
-    std::vector<char> used(voxel.child_count(), 0);
-    std::unordered_map<const ReducerNode*, size_t> index;
-    for (size_t i = 0; i < voxel.child_count(); ++i) index.emplace(&voxel.child(i), i);
+  // where the mass properties' own grid samples it (their leaf sums).
+  // Returns the rest.
+  int fix_empty_cells(const std::string& where, const PartContext& context) {
     const Bounds& bounds = tree_->solid().bounds();
     const double h = options_.stability.voxel_mm > 0 ? options_.stability.voxel_mm : bounds.size().maxCoeff() / 96;
     const Vec3 cell = bounds.size().cwiseQuotient(Vec3(options_.cells[0], options_.cells[1], options_.cells[2]));
@@ -235,25 +235,17 @@ class StandTranslator final : public TuningTranslator {
                    "left solid and not tuned; a finer voxel_mm (at most half a cell) tunes every one",
                    where, h, cell.minCoeff());
     }
-    int grid[3];
-    for (int k = 0; k < 3; ++k) grid[k] = std::max(1, static_cast<int>(std::ceil(bounds.size()[k] / h)));
-    ReducerTree::Query query(*tree_);
-    for (int z = 0; z < grid[2]; ++z) {
-      for (int y = 0; y < grid[1]; ++y) {
-        for (int x = 0; x < grid[0]; ++x) {
-          const Vec3 p = bounds.lower + h * Vec3(x + 0.5, y + 0.5, z + 0.5);
-          const QueryPoint point = query.query_point(p);
-          if (!point.surface.inside) continue;
-          LocalFrame frame{p.x(), p.y(), p.z()};
-          const auto found = index.find(&route_to_leaf(tree_->root(), point, frame));
-          if (found != index.end()) used[found->second] = 1;
-        }
-      }
-    }
+    MassPropertiesOptions mass;
+    mass.voxel_mm = options_.stability.voxel_mm;
+    std::unordered_map<const ReducerNode*, double> volume;
+    for (const auto& [leaf, mm3] : tuned_leaf_volumes(*tree_, mass, context)) volume.emplace(leaf, mm3);
+    ReducerNode& voxel = tree_->node("core");
     int count = 0;
     for (size_t i = 0; i < voxel.child_count(); ++i) {
-      count += used[i];
-      if (!used[i]) {
+      const auto found = volume.find(&voxel.child(i));
+      if (found != volume.end() && found->second > 0) {
+        ++count;
+      } else {
         voxel.child(i).visit_parameters([](const std::string&, Parameter& p) { p.set_free(false); });
       }
     }
