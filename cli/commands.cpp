@@ -312,7 +312,7 @@ PreparedSimulation prepare_simulation(const Properties& config, const std::strin
     return std::make_shared<const MaterialPalette>(*prepared.library, *prepared.printer);
   });
   // Under mpirun every rank prepares and runs the same simulation.
-  const PartContext context{*prepared.palette, prepared.cache.get(), ranks::size() > 1, &limits};
+  const PartContext context{*prepared.palette, prepared.cache.get(), ranks::size() > 1, &limits, prepared.printer.get()};
   const auto& simulators = SimulatorRegistry::instance();
   if (!simulators.contains(simulator)) {
     throw InputError("simulate: unknown simulator '" + simulator + "'" + did_you_mean(simulator, simulators.names()) +

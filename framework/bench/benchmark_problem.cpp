@@ -79,7 +79,7 @@ class TunerBenchmark::Instance final : public BenchmarkInstance {
       solid_ = std::make_unique<Solid>(*shared.mesh, UvSource::planar);
       tree_->bind(*solid_);
     }
-    const PartContext context{*shared.palette, shared.cache};
+    const PartContext context{*shared.palette, shared.cache, false, nullptr, &shared.printer};
     if (spec.has("goal")) {
       // A goal of its own (and any terms), as a tuner in an experiment has
       // them. The bench hands the tuner's problem to each optimizer itself:

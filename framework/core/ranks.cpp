@@ -93,6 +93,13 @@ void sum(std::vector<long long>& values) {
         "sum");
 }
 
+void max(std::vector<long long>& values) {
+  if (rank_count == 1) return;
+  check(MPI_Allreduce(MPI_IN_PLACE, values.data(), static_cast<int>(values.size()), MPI_LONG_LONG,
+                      MPI_MAX, MPI_COMM_WORLD),
+        "max");
+}
+
 std::string broadcast(const std::string& text) {
   if (rank_count == 1) return text;
   long long length = static_cast<long long>(text.size());
@@ -160,6 +167,7 @@ int rank() { return 0; }
 int size() { return 1; }
 void barrier() {}
 void sum(std::vector<long long>&) {}
+void max(std::vector<long long>&) {}
 std::string broadcast(const std::string& text) { return text; }
 std::vector<std::vector<std::uint8_t>> all_gather(const std::vector<std::uint8_t>& mine) { return {mine}; }
 void send(int, const std::vector<std::uint8_t>&) { throw std::logic_error("ranks::send without MPI"); }

@@ -35,6 +35,8 @@ inline bool root() { return rank() == 0; }
 void barrier();
 /// Element-wise sum over the ranks, the result on every rank.
 void sum(std::vector<long long>& values);
+/// Element-wise maximum over the ranks, in place (every rank gets it).
+void max(std::vector<long long>& values);
 /// Rank 0's `text` on every rank.
 std::string broadcast(const std::string& text);
 /// Every rank's `mine`, indexed by rank, on every rank.

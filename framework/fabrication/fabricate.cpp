@@ -193,6 +193,9 @@ FabricationReport fabricate(const ReducerTree& tree, const PrinterProfile& print
     material_surfaces.emplace(SurfaceSettings{stride, options.mesh_adaptivity, options.mesh_volume_tolerance, split});
     sinks.push_back(&*material_surfaces);
   }
+  // Every print's cost and time (a serial sink: its columns need z order).
+  PrintCensusSink census(printer.technology == "fdm");
+  sinks.push_back(&census);
   fabricator.time_sample_rows(writers.need_surfaces);
   spdlog::info("fabricating for {}: {}", printer.name, plan.describe());
   spdlog::debug("sampled rows: {:.3g} s per voxel on one thread", plan.sampled_seconds_per_voxel);
@@ -204,10 +207,12 @@ FabricationReport fabricate(const ReducerTree& tree, const PrinterProfile& print
       },
       first_layer, layer_count);
   progress.finish();
+  census.census().merge_ranks();  // every rank: a collective
   if (split) {
     ranks::sum(voxels);
     if (!ranks::root()) return report;  // rank 0 reports and writes the rest
   }
+  record.print = estimate_print(census.census(), printer, palette);
 
   nlohmann::json materials = material_census(palette, voxels, grid, material_surfaces);
   if (material_surfaces) record.mesh_voxel_mm = material_surfaces->mesh_grid().voxel_mm;

@@ -23,6 +23,7 @@
 #include "core/options.h"
 #include "core/properties.h"
 #include "core/report.h"
+#include "fabrication/print_estimate.h"
 #include "fabrication/print_writer.h"
 #include "materials/printer_profile.h"
 #include "reducer/reducer_tree.h"
@@ -108,6 +109,7 @@ struct FabricationRecord {
   std::optional<std::array<double, 3>> mesh_voxel_mm;
   std::optional<long long> void_voxels;
   std::optional<nlohmann::json> materials, files;
+  std::optional<PrintEstimate> print;
   template <class Fields, class Self>
   static void fields(Fields& f, Self& s) {
     f(s.printer, "printer", "the printer profile's name");
@@ -119,6 +121,7 @@ struct FabricationRecord {
     f(s.void_voxels, "void_voxels", "print voxels left empty inside the grid");
     f(s.materials, "materials", "per material name: voxels, volume, and each writer's figures (STL volume, ...)");
     f(s.files, "files", "per print writer, the files it wrote");
+    f(s.print, "print", "what the print costs and how long it takes, from its voxels (fabrication/print_estimate.h)");
   }
 };
 

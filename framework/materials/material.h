@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 
 namespace spec2fab {
@@ -39,6 +40,13 @@ struct Material {
   Sourced<double> youngs_modulus_pa;
   Sourced<double> poisson_ratio;
   Sourced<double> density_kg_m3;
+  /// Ultimate tensile strength (Pa); absent where the library gives none
+  /// (a goal on stress refuses such a material).
+  std::optional<Sourced<double>> tensile_strength_pa;
+
+  /// Price (US dollars per kg of material used); absent where the library
+  /// gives none (the print's cost then says which materials it left out).
+  std::optional<Sourced<double>> price_usd_per_kg;
 };
 
 }  // namespace spec2fab

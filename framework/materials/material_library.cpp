@@ -130,6 +130,13 @@ Material read_material(const Properties& entry) {
   // Isotropic stability bounds of linear elasticity.
   m.poisson_ratio = read_scalar(mechanical, "poisson_ratio", Range{-1, 0.5, true, true});
   m.density_kg_m3 = read_scalar(mechanical, "density_kg_m3", kPositive);
+  if (mechanical.has("tensile_strength_pa"))
+    m.tensile_strength_pa = read_scalar(mechanical, "tensile_strength_pa", kPositive);
+
+  if (entry.has("cost")) {
+    const Properties cost = entry.object("cost");
+    m.price_usd_per_kg = read_scalar(cost, "price_usd_per_kg", kNonNegative);
+  }
   return m;
 }
 

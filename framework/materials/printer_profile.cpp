@@ -114,6 +114,22 @@ PrinterProfile PrinterProfile::from_properties(const Properties& properties) {
     require_positive(properties, "nozzle_mm", printer.nozzle_mm);
   }
 
+  if (properties.has("print_time")) {
+    const Properties model = properties.object("print_time");
+    PrintTimeModel time;
+    time.source = model.get<std::string>("source");
+    if (printer.technology == "polyjet") {
+      time.jetting = read_options<JettingTime>(model);
+    } else if (printer.technology == "fdm") {
+      if (printer.nozzle_mm <= 0) properties.fail("print_time", "an fdm printer's time model needs its nozzle_mm");
+      time.extrusion = read_options<ExtrusionTime>(model);
+    } else {
+      properties.fail("print_time", "no print-time model for technology '" + printer.technology +
+                                        "' (there is one for polyjet and fdm)");
+    }
+    printer.print_time = std::move(time);
+  }
+
   printer.source = properties.get<std::string>("source", "");
   return printer;
 }

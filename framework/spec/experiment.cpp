@@ -89,6 +89,6 @@ Experiment Experiment::load(ExperimentSource source, const Limits& command_line)
   return experiment;
 }
 
-PartContext Experiment::part_context() const { return PartContext{palette(), &cache(), false, &limits_}; }
+PartContext Experiment::part_context() const { return PartContext{palette(), &cache(), false, &limits_, &printer()}; }
 
 }  // namespace spec2fab

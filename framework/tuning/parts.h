@@ -35,6 +35,8 @@
 
 namespace spec2fab {
 
+struct PrinterProfile;
+
 /// Values over a grid of cells covering a simulator's footprint, row by row
 /// from the lowest (a, b): what one part of a print hands the simulator of
 /// another (the transmittance of a texture over a caustic slab's exit face).
@@ -220,6 +222,8 @@ struct PartContext {
   /// The run's limits (core/limits.h); null: the declared defaults.
   const Limits* run_limits = nullptr;
   const Limits& limits() const { return run_limits != nullptr ? *run_limits : default_limits(); }
+  /// The run's printer (its print-time model); null outside a run.
+  const PrinterProfile* printer = nullptr;
 };
 
 using SimulatorRegistry = Registry<Simulator, const PartContext&>;

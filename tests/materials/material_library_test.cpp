@@ -121,6 +121,17 @@ TEST(MaterialLibrary, EveryShippedLibraryLoadsWithSourcedPlausibleValues) {
       check_source(m.youngs_modulus_pa, "youngs_modulus_pa");
       check_source(m.poisson_ratio, "poisson_ratio");
       check_source(m.density_kg_m3, "density_kg_m3");
+      // Every shipped material has a price (each run reports its cost); a
+      // strength where a data sheet gives one, and in the plausible range.
+      ASSERT_TRUE(m.price_usd_per_kg);
+      check_source(*m.price_usd_per_kg, "price_usd_per_kg");
+      EXPECT_GT(m.price_usd_per_kg->value, 5);
+      EXPECT_LT(m.price_usd_per_kg->value, 2000);
+      if (m.tensile_strength_pa) {
+        check_source(*m.tensile_strength_pa, "tensile_strength_pa");
+        EXPECT_GT(m.tensile_strength_pa->value, 1e5);
+        EXPECT_LT(m.tensile_strength_pa->value, 2e8);
+      }
 
       for (int c = 0; c < 3; ++c) {
         EXPECT_GE(m.absorption_per_mm.value[c], 0);

@@ -57,6 +57,11 @@ TEST(PrinterProfile, EveryShippedProfileLoads) {
         << "every shipped profile says where its figures come from";
     EXPECT_EQ(printer.origin, entry.path().string());
     for (double v : printer.voxel_mm()) EXPECT_GT(v, 0);
+    // Every run reports its print time: each shipped profile has a model for its technology.
+    ASSERT_TRUE(printer.print_time);
+    EXPECT_EQ(printer.print_time->jetting.has_value(), printer.technology == "polyjet");
+    EXPECT_EQ(printer.print_time->extrusion.has_value(), printer.technology == "fdm");
+    EXPECT_GT(printer.print_time->source.size(), 40u);
     ++count;
   }
   EXPECT_GE(count, 3);
@@ -144,6 +149,32 @@ TEST(PrinterProfile, OtherFieldErrors) {
                               "model_materials": ["a"]})"),
             "printer.json: /layer_mm: must be positive, got 0");
   EXPECT_EQ(printer_error(R"({"technology": "fdm"})"), "printer.json: /name: missing required key");
+}
+
+TEST(PrinterProfile, PrintTimeModelIsCheckedForItsTechnology) {
+  // A jetting model on a PolyJet printer reads its own keys and no other.
+  const PrinterProfile printer =
+      printer_from(printer_json(R"("print_time": {"swath_mm": 60, "source": "test"})"));
+  ASSERT_TRUE(printer.print_time && printer.print_time->jetting);
+  EXPECT_EQ(printer.print_time->jetting->swath_mm, 60);
+  EXPECT_THAT(printer_error(printer_json(R"("print_time": {"print_speed_mm_s": 60, "source": "test"})")),
+              HasSubstr("/print_time/print_speed_mm_s"));
+  EXPECT_THAT(printer_error(printer_json(R"("print_time": {"swath_mm": 50})")),
+              HasSubstr("/print_time/source: missing required key"));
+  EXPECT_THAT(printer_error(printer_json(R"("print_time": {"swath_mm": -1, "source": "t"})")),
+              HasSubstr("/print_time/swath_mm"));
+  EXPECT_EQ(printer_error(R"({"name": "T", "technology": "sla", "resolution_dpi": [1, 1], "layer_mm": 1,
+                              "build_volume_mm": [1, 1, 1], "model_materials": ["a"],
+                              "print_time": {"source": "t"}})"),
+            "printer.json: /print_time: no print-time model for technology 'sla' (there is one for polyjet and fdm)");
+  EXPECT_EQ(printer_error(R"({"name": "T", "technology": "fdm", "resolution_dpi": [1, 1], "layer_mm": 1,
+                              "build_volume_mm": [1, 1, 1], "model_materials": ["a"],
+                              "print_time": {"source": "t"}})"),
+            "printer.json: /print_time: an fdm printer's time model needs its nozzle_mm");
+  EXPECT_THAT(printer_error(R"({"name": "T", "technology": "fdm", "resolution_dpi": [1, 1], "layer_mm": 1,
+                              "build_volume_mm": [1, 1, 1], "model_materials": ["a"], "nozzle_mm": 0.4,
+                              "print_time": {"support": "sometimes", "source": "t"}})"),
+              HasSubstr("/print_time/support"));
 }
 
 }  // namespace
