@@ -145,7 +145,7 @@ class Cli : public ::testing::Test {
   static constexpr const char* kCoarsePrinter =
       R"({"name": "coarse", "technology": "polyjet", "resolution_dpi": [63.5, 63.5], "layer_mm": 0.4,
           "build_volume_mm": [200, 200, 200], "model_materials": ["VeroCyan", "VeroWhitePlus"],
-          "source": "test"})";
+          "print_time": {"source": "test: the jetting model's defaults"}, "source": "test"})";
   ~Cli() override { fs::remove_all(dir_); }
 
   // Writes an experiment whose paths point into datasets/.

@@ -46,10 +46,12 @@ TEST_F(Cli, MpiExportIsByteIdenticalToOneProcess) {
                                                                          "3mf": false, "render": false})"));
   ASSERT_EQ(run_spec2fab("run -q " + file.string() + " --out " + (dir_ / "run").string()).code, 0);
   std::ofstream(dir_ / "fine.json")
-      << R"({"name": "fine", "technology": "polyjet", "resolution_dpi": [127, 127], "layer_mm": 0.2,
+      << R"({"name": "fine", "technology": "fdm", "resolution_dpi": [127, 127], "layer_mm": 0.2, "nozzle_mm": 0.2,
              "build_volume_mm": [200, 200, 200], "model_materials": ["VeroCyan", "VeroWhitePlus"],
-             "source": "test"})";
+             "print_time": {"source": "test: the extrusion model's defaults"}, "source": "test"})";
   // 250 layers in mesh layers of 4 (0.8 mm): 63, split 32 + 31 and 21 x 3.
+  // An extruding printer: the print estimate's raster census is merged
+  // across the ranks (export.json's fabrication.print must match too).
   const std::string arguments = "export -q " + (dir_ / "run").string() + " --printer " + (dir_ / "fine.json").string() +
                                 " --mesh-voxel-mm 0.8 --out ";
   const Result one = run_spec2fab(arguments + (dir_ / "one").string());
