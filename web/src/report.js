@@ -61,6 +61,18 @@ function headlineCards(result, meanings) {
         el('div', { class: 'v', text: fmt(v) }), el('div', { class: 'k', text: parts.slice(-3).map(words).join(' › ') })));
     }
   }
+  // Every fabricated print's cost and time (fabrication.print), whatever the translator.
+  const print = result.fabrication?.print;
+  if (print && typeof print.cost_usd === 'number') {
+    cards.push(el('div', { class: 'card', title: meaningOf('fabrication.print.cost_usd', meanings) },
+      el('div', { class: 'v', text: `$${print.cost_usd.toFixed(2)}` }), el('div', { class: 'k', text: 'material cost' })));
+  }
+  if (print && typeof print.print_hours === 'number') {
+    const minutes = Math.round(print.print_hours * 60);
+    cards.push(el('div', { class: 'card', title: meaningOf('fabrication.print.print_hours', meanings) },
+      el('div', { class: 'v', text: `${Math.floor(minutes / 60)} h ${String(minutes % 60).padStart(2, '0')} min` }),
+      el('div', { class: 'k', text: `print time (${print.time_model} model)` })));
+  }
   return cards;
 }
 
