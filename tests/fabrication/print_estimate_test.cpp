@@ -3,6 +3,7 @@
 // FDM time model against an established slicer's own estimate (PrusaSlicer,
 // which shares nothing with this code) for the same STL and settings.
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
@@ -16,11 +17,15 @@
 
 #include <fmt/format.h>
 
+#include "core/error.h"
 #include "core/run_folder.h"
 #include "fabrication/fabricate.h"
 #include "fabrication/fabrication_support.h"
 #include "fabrication/print_estimate.h"
 #include "geometry/mesh_io.h"
+#include "geometry/primitives.h"
+#include "mass/print_estimate_simulator.h"
+#include "tuning/simulation_domain.h"
 #include "materials/material_library.h"
 
 namespace spec2fab {
@@ -143,6 +148,62 @@ TEST(PrintEstimate, NamesWhatHasNoPrice) {
   EXPECT_FALSE(estimate.cost_usd);
   EXPECT_EQ(estimate.unpriced, std::vector<std::string>{"PLA"});
   EXPECT_TRUE(estimate.print_hours);  // time needs no price
+}
+
+// The simulator a tuner weighs takes the same census as fabrication: on a
+// grid of the printer's own voxels the two give the same figures; and it
+// refuses a run whose printer has no time model or whose materials no price.
+TEST(PrintEstimate, TheSimulatorPricesWhatFabricationPrices) {
+  Solid solid(make_sphere(6.0, 48, 24), UvSource::planar);
+  const MaterialPalette palette({priced("Vero", 1175, 500)});
+  PrinterProfile printer = testing::coarse_printer(0.5, {"Vero"});
+  printer.print_time = PrintTimeModel{JettingTime{}, std::nullopt, "test"};
+  ReducerTree tree(Properties::parse(R"({"type": "stratum", "depth_mm": 1.5,
+      "shell": {"type": "layered", "material": "Vero"}, "core": {"type": "layered", "material": "void"}})",
+                                     "tree.json"),
+                   palette);
+  tree.bind(solid);
+  testing::TempDir dir("print_estimate_simulator");
+  RunFolder folder(dir.path / "run");
+  FabricationOptions options;
+  options.writers = {{"stl", false}, {"3mf", false}, {"render", false}};
+  options.progress = false;
+  const PrintEstimate fabricated = *fabricate(tree, printer, options, folder).record.print;
+
+  const PartContext context{palette, nullptr, false, nullptr, &printer};
+  auto simulator = make_print_estimate_simulator({0.5}, context);
+  simulator->setup(tree.root(), SimulationDomain(tree, tree.root()));
+  PrintEstimateObservation observed;
+  simulator->simulate(tree.root(), observed);
+  EXPECT_DOUBLE_EQ(observed.cost_usd(), *fabricated.cost_usd);
+  EXPECT_DOUBLE_EQ(observed.print_hours(), *fabricated.print_hours);
+  // The hollow sphere's cavity fills with nothing here (no support material):
+  // a 6 mm sphere's shell, about 4/3 π (6³ − 4.5³) mm³ of Vero.
+  EXPECT_NEAR(observed.data[PrintEstimateObservation::kModelVolume], 4.0 / 3 * std::numbers::pi * (216 - 91.125),
+              0.08 * 523);
+  // A budget: the metric is what the print goes past it.
+  const auto budget = make_print_budget_goal(0, 0);
+  EXPECT_DOUBLE_EQ(make_cost_metric()->error(observed, budget->typed_target()), observed.cost_usd());
+  EXPECT_DOUBLE_EQ(make_print_budget_goal(1e6, 0)->typed_target().cost_usd(), 1e6);
+  EXPECT_DOUBLE_EQ(make_cost_metric()->error(observed, make_print_budget_goal(1e6, 0)->typed_target()), 0);
+
+  PrinterProfile no_model = printer;
+  no_model.print_time.reset();
+  try {
+    make_print_estimate_simulator({0.5}, PartContext{palette, nullptr, false, nullptr, &no_model});
+    ADD_FAILURE() << "a printer without print_time";
+  } catch (const InputError& e) {
+    EXPECT_THAT(std::string(e.what()), ::testing::HasSubstr("has no print_time model"));
+  }
+  Material free = priced("Vero", 1175, 0);
+  free.price_usd_per_kg.reset();
+  const MaterialPalette unpriced({free});
+  try {
+    make_print_estimate_simulator({0.5}, PartContext{unpriced, nullptr, false, nullptr, &printer});
+    ADD_FAILURE() << "a material without a price";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), "print_estimate: material 'Vero' has no price in the library (cost.price_usd_per_kg)");
+  }
 }
 
 // Runs a command, returning its exit status and output.
