@@ -221,6 +221,7 @@ void Solid::Impl::walk_to_closer(int& triangle, TriangleProjection& hit, const V
 
 Solid::Impl::~Impl() {
   field.reset();
+  replaced_fields.clear();  // before the scene they may query
   if (scene != nullptr) rtcReleaseScene(scene);
 }
 
@@ -304,7 +305,7 @@ const SurfaceField& Solid::field(double interior_band_mm, double voxel_mm) const
     interior_band_mm = std::max(interior_band_mm, impl.field_band_mm);
     voxel_mm = std::min(voxel_mm, impl.field_voxel_mm);
   }
-  impl.field.reset();
+  if (impl.field) impl.replaced_fields.push_back(std::move(impl.field));
   const auto start = std::chrono::steady_clock::now();
   impl.field = std::make_unique<SurfaceField>(*this, voxel_mm, interior_band_mm, 2 * voxel_mm);
   spdlog::debug("surface field: {} band voxels of {:g} mm over a {:g} mm band (estimated {:.3g}), built in {:.3g} s",

@@ -27,6 +27,9 @@ struct Solid::Impl {
 
   // The narrow-band field, built on request (Solid::field).
   std::unique_ptr<SurfaceField> field;
+  /// Fields a wider band or a finer voxel replaced, kept alive: nodes bound
+  /// before hold references to the field they were given.
+  std::vector<std::unique_ptr<SurfaceField>> replaced_fields;
   double field_band_mm = 0, field_voxel_mm = 0;
 
   Impl(Mesh m, UvSource source, int axis);

@@ -184,6 +184,21 @@ TEST(SurfaceField, SolidCachesAndWidensTheField) {
   EXPECT_GE(finer.interior_band_mm(), 1.0);  // never narrower than before
 }
 
+// A tree bound before a wider band was asked for holds the field it was
+// given: the solid keeps it (it was destroyed, and such a tree read freed
+// memory, which the ASan build now reports here).
+TEST(SurfaceField, AReplacedFieldStaysUsableByWhoeverHoldsIt) {
+  const Solid solid(make_sphere(5, 32, 16), UvSource::mesh);
+  const SurfaceField& first = solid.field(0.5, 0.2);
+  SurfaceField::Sampler before(first);
+  const double depth = before.sample(Vec3(0, 0, 4.8)).depth_mm;
+  const SurfaceField& wider = solid.field(2.0, 0.2);
+  ASSERT_NE(&wider, &first);
+  SurfaceField::Sampler after(first);  // the first field, still alive
+  EXPECT_EQ(after.sample(Vec3(0, 0, 4.8)).depth_mm, depth);
+  EXPECT_EQ(first.interior_band_mm(), 0.5);
+}
+
 TEST(SurfaceField, SamplersAreIndependentPerThread) {
   const Solid solid(make_sphere(5, 32, 16), UvSource::mesh);
   const SurfaceField& field = solid.field(1.0);
