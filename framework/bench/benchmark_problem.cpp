@@ -147,6 +147,9 @@ TunerBenchmark::TunerBenchmark(nlohmann::json spec, const BenchmarkDescription& 
   facts_.goal = description.goal;
   facts_.variables = description.variables;
   const Properties properties = Properties::wrap(spec_, origin_, context.datasets);
+  // A problem is tuned to its own goal or to a hidden reference's simulation, never both.
+  if (spec_.contains("goal") == spec_.contains("reference"))
+    throw std::logic_error(origin_ + ": give \"goal\" or \"reference\", one of them");
   shared_->library = MaterialLibrary::load(properties.existing_file("materials"));
   shared_->printer = PrinterProfile::load(properties.existing_file("printer"));
   shared_->palette = std::make_unique<MaterialPalette>(shared_->library, shared_->printer);

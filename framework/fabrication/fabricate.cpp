@@ -212,6 +212,7 @@ FabricationReport fabricate(const ReducerTree& tree, const PrinterProfile& print
     ranks::sum(voxels);
     if (!ranks::root()) return report;  // rank 0 reports and writes the rest
   }
+  census.census().voxels = voxels;  // the fabricator's count, over every rank
   record.print = estimate_print(census.census(), printer, palette);
 
   nlohmann::json materials = material_census(palette, voxels, grid, material_surfaces);

@@ -25,34 +25,38 @@ void PrintCensusSink::consume(int z, const MaterialId* ids) {
   const FabricationGrid& grid = census_.grid;
   const int width = grid.size[0], height = grid.size[1];
   const double dx = grid.voxel_mm[0], dy = grid.voxel_mm[1];
-  const auto travel = [&](double mm) { ++census_.travels_um[std::llround(mm * 1e3)]; };
+  const auto columns = static_cast<size_t>(grid.slice_voxels());
+  // Every column's lowest and highest layer with material: branch-free, so
+  // that this serial stage keeps up with the parallel tree evaluation.
+  int* first = census_.first_layer.data();
+  int* last = census_.last_layer.data();
+  for (size_t c = 0; c < columns; ++c) {
+    const bool material = ids[c] != kVoid;
+    last[c] = material ? z : last[c];  // slices arrive in z order
+    first[c] = material && first[c] < 0 ? z : first[c];
+  }
+  if (!raster_) return;
   bool moved = false, forward = true;
   int previous_exit = 0, previous_row = 0;
   for (int y = 0; y < height; ++y) {
     const MaterialId* row = ids + static_cast<size_t>(y) * static_cast<size_t>(width);
-    int* first = census_.first_layer.data() + static_cast<size_t>(y) * static_cast<size_t>(width);
-    int* last = census_.last_layer.data() + static_cast<size_t>(y) * static_cast<size_t>(width);
     int low = -1, end = -1, run_start = -1;
     for (int x = 0; x < width; ++x) {
-      const MaterialId id = row[x];
-      ++census_.voxels[id];
-      if (id == kVoid) continue;
-      if (first[x] < 0) first[x] = z;
-      last[x] = z;  // slices arrive in z order
-      if (!raster_) continue;
+      if (row[x] == kVoid) continue;
       if (low < 0) {
         low = run_start = x;
       } else if (x > end + 1) {  // a gap: the line before it ends, a travel crosses it
         ++census_.lines[end + 1 - run_start];
-        travel((x - end - 1) * dx);
+        ++census_.gaps_um[std::llround((x - end - 1) * dx * 1e3)];
         run_start = x;
       }
       end = x;
     }
     if (low < 0) continue;
     ++census_.lines[end + 1 - run_start];
+    ++census_.rows;
     const int entry = forward ? low : end, exit = forward ? end : low;
-    if (moved) travel(std::hypot((entry - previous_exit) * dx, (y - previous_row) * dy));
+    if (moved) ++census_.row_changes_um[std::llround(std::hypot((entry - previous_exit) * dx, (y - previous_row) * dy) * 1e3)];
     previous_exit = exit;
     previous_row = y;
     moved = true;
@@ -87,7 +91,6 @@ void merge_histogram(Map& map) {
 
 void PrintCensus::merge_ranks() {
   if (ranks::size() <= 1) return;
-  ranks::sum(voxels);
   // The lowest layer as the highest of its negation; −1 (none) as the lowest value.
   constexpr long long kNone = std::numeric_limits<long long>::min() / 2;
   std::vector<long long> low(first_layer.size()), high(last_layer.size());
@@ -103,7 +106,11 @@ void PrintCensus::merge_ranks() {
   }
   // Counts of integers: the merged histograms are the same for any rank count.
   merge_histogram(lines);
-  merge_histogram(travels_um);
+  merge_histogram(gaps_um);
+  merge_histogram(row_changes_um);
+  std::vector<long long> row_count{rows};
+  ranks::sum(row_count);
+  rows = row_count[0];
 }
 
 const Material* support_material_of(const PrinterProfile& printer, const MaterialPalette& palette) {
@@ -111,6 +118,8 @@ const Material* support_material_of(const PrinterProfile& printer, const Materia
     const bool prints_support = printer.print_time && printer.print_time->extrusion &&
                                 printer.print_time->extrusion->support != "none";
     if (!prints_support || printer.model_materials.empty()) return nullptr;
+    // Its support material where it has one (soluble PVA), else the model's own.
+    if (const Material* support = palette.cavity_fill()) return support;
     return &palette.material(palette.id(printer.model_materials.front(), printer.origin));
   }
   return palette.cavity_fill();
@@ -143,7 +152,7 @@ void jetting_time(const PrintCensus& census, const JettingTime& model, double la
       if (top >= 0) topping[static_cast<size_t>(top)].add(x, y);
     }
   Box footprint;
-  double seconds = 0, passes = 0, layers = 0;
+  double seconds = 0, passes = 0;
   for (int z = depth - 1; z >= 0; --z) {
     footprint.add(topping[static_cast<size_t>(z)]);
     if (footprint.empty()) continue;
@@ -153,12 +162,10 @@ void jetting_time(const PrintCensus& census, const JettingTime& model, double la
     seconds += layers_per_census_layer *
                (layer_passes * (x_extent + model.overrun_mm) / model.scan_speed_mm_s + model.layer_overhead_s);
     passes += layers_per_census_layer * layer_passes;
-    layers += layers_per_census_layer;
   }
   out.time_model = "jetting";
   out.print_hours = seconds / 3600;
   out.passes = passes;
-  out.layers = layers;
 }
 
 /// The time (s) of a straight move of `length` from rest to rest at
@@ -182,21 +189,27 @@ void extrusion_time(const PrintCensus& census, const ExtrusionTime& model, const
   const double line_mm2 = spacing * printer.layer_mm;
   const double flow = std::min(model.max_volumetric_speed_mm3_s, model.print_speed_mm_s * line_mm2);
   const double speed = flow / line_mm2;
-  // Each census row and layer stands for this many of the printer's lines.
-  const double lines_per_census_line = layers_per_census_layer * grid.voxel_mm[1] / spacing;
-  double extruding = 0, travelling = 0;
+  const double a = model.acceleration_mm_s2, travel_speed = model.travel_speed_mm_s;
+  double extruding = 0, crossing = 0, changing = 0;
   for (const auto& [voxels, count] : census.lines)
-    extruding += static_cast<double>(count) * move_seconds(voxels * grid.voxel_mm[0], speed, model.acceleration_mm_s2);
-  for (const auto& [um, count] : census.travels_um) {
-    travelling += static_cast<double>(count) *
-                  move_seconds(static_cast<double>(um) * 1e-3, model.travel_speed_mm_s, model.acceleration_mm_s2);
-  }
-  int top = -1;
-  for (const int last : census.last_layer) top = std::max(top, last);
-  out.layers = layers_per_census_layer * (top + 1);
+    extruding += static_cast<double>(count) * move_seconds(voxels * grid.voxel_mm[0], speed, a);
+  for (const auto& [um, count] : census.gaps_um)
+    crossing += static_cast<double>(count) * move_seconds(static_cast<double>(um) * 1e-3, travel_speed, a);
+  for (const auto& [um, count] : census.row_changes_um)
+    changing += static_cast<double>(count) * move_seconds(static_cast<double>(um) * 1e-3, travel_speed, a);
+  // Each census row holds `lines_per_row` of the printer's lines: each
+  // crosses the row's gaps; between them, steps of one spacing; and the
+  // census's own row changes happen once per printer layer (a finer census
+  // than the lines: a share of them).
+  const double lines_per_row = grid.voxel_mm[1] / spacing;
+  const double steps = lines_per_row >= 1 ? (lines_per_row - 1) * static_cast<double>(census.rows) *
+                                                move_seconds(spacing, travel_speed, a) +
+                                                changing
+                                          : lines_per_row * changing;
+  const double travelling = layers_per_census_layer * (lines_per_row * crossing + steps);
   out.time_model = "extrusion";
-  out.extrusion_hours = (lines_per_census_line * extruding + support_mm3 / flow) / 3600;
-  out.travel_hours = lines_per_census_line * travelling / 3600;
+  out.extrusion_hours = (layers_per_census_layer * lines_per_row * extruding + support_mm3 / flow) / 3600;
+  out.travel_hours = travelling / 3600;
   out.layer_hours = out.layers * model.layer_overhead_s / 3600;
   out.print_hours = *out.extrusion_hours + *out.travel_hours + *out.layer_hours;
 }
@@ -221,9 +234,9 @@ PrintEstimate estimate_print(const PrintCensus& census, const PrinterProfile& pr
   const Material* support = support_material_of(printer, palette);
   double support_fraction = 1;  // of the supported volume printed
   long long support_voxels = below_top - material_voxels;
-  if (printer.technology == "fdm") {
+  if (support != nullptr && printer.technology == "fdm") {
     const ExtrusionTime& model = *printer.print_time->extrusion;  // support_material_of: a model exists
-    if (support != nullptr && model.support == "build_plate") support_voxels = below_first;
+    if (model.support == "build_plate") support_voxels = below_first;
     support_fraction = model.support_density;
   }
   if (support == nullptr) support_voxels = 0;
@@ -256,8 +269,11 @@ PrintEstimate estimate_print(const PrintCensus& census, const PrinterProfile& pr
   if (out.support) cost += out.support->cost_usd.value_or(0);
   if (out.unpriced.empty()) out.cost_usd = cost;
 
+  const double layers_per_census_layer = grid.voxel_mm[2] / printer.layer_mm;
+  int top = -1;
+  for (const int last : census.last_layer) top = std::max(top, last);
+  out.layers = layers_per_census_layer * (top + 1);
   if (printer.print_time) {
-    const double layers_per_census_layer = grid.voxel_mm[2] / printer.layer_mm;
     if (printer.print_time->jetting) jetting_time(census, *printer.print_time->jetting, layers_per_census_layer, out);
     if (printer.print_time->extrusion) {
       extrusion_time(census, *printer.print_time->extrusion, printer, out.support_volume_mm3 * support_fraction,

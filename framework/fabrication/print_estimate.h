@@ -30,16 +30,22 @@ namespace spec2fab {
 /// What the estimate needs of the print's voxels, on the grid it was taken on.
 struct PrintCensus {
   FabricationGrid grid;
-  std::vector<long long> voxels;             ///< per material id (0: empty voxels of the grid)
+  /// Voxels per material id (0: empty voxels of the grid): the fabricator's
+  /// own count (Fabricator::run's totals), which the caller puts here.
+  std::vector<long long> voxels;
   std::vector<int> first_layer, last_layer;  ///< per column x + y·size[0]: lowest, highest layer with material; −1 none
-  /// A raster's moves (taken only for an extruding printer): how many lines
-  /// of each length (in voxels along x) it extrudes, and how many moves of
-  /// each length (µm) it travels without extruding, all layers together.
+  /// A raster's moves (taken only for an extruding printer), all layers
+  /// together: how many lines of each length (voxels along x) it extrudes;
+  /// how many gaps of each length (µm) a row's lines leave between them;
+  /// how many moves of each length (µm) go from one row's end to the next
+  /// row's start; and how many rows hold material.
   std::map<int, long long> lines;
-  std::map<long long, long long> travels_um;
+  std::map<long long, long long> gaps_um, row_changes_um;
+  long long rows = 0;
 
   /// Under mpirun each rank took some layers: after this every rank holds
-  /// the whole print's census (exact: integers and each layer's own figure).
+  /// the whole print's census but `voxels` (exact: integers, counts and
+  /// each column's extremes).
   void merge_ranks();
 };
 
@@ -91,7 +97,8 @@ struct PrintEstimate {
     f(s.materials, "materials", "per model material printed: volume, mass, cost");
     f(s.support_material, "support_material", "what support is printed in (\"\": none)");
     f(s.support, "support", "the support printed: volume (at the printer's support density), mass, cost");
-    f(s.support_volume_mm3, "support_volume_mm3", "volume under overhangs and in cavities that support fills (mm³)");
+    f(s.support_volume_mm3, "support_volume_mm3",
+      "volume support fills (mm³): PolyJet under every overhang and in cavities; FDM as its profile's support says");
     f(s.cost_usd, "cost_usd", "material cost of the print (US$); absent when a material used has no price");
     f(s.unpriced, "unpriced", "materials used that the library gives no price");
     f(s.print_hours, "print_hours", "estimated print time (h) by the printer profile's print_time model");

@@ -40,8 +40,8 @@ struct Material {
   Sourced<double> youngs_modulus_pa;
   Sourced<double> poisson_ratio;
   Sourced<double> density_kg_m3;
-  /// Ultimate tensile strength (Pa); absent where the library gives none
-  /// (a goal on stress refuses such a material).
+  /// Ultimate tensile strength (Pa), where the data sheet gives one; for
+  /// goals that bound stress.
   std::optional<Sourced<double>> tensile_strength_pa;
 
   /// Price (US dollars per kg of material used); absent where the library

@@ -122,6 +122,9 @@ PrinterProfile PrinterProfile::from_properties(const Properties& properties) {
       time.jetting = read_options<JettingTime>(model);
     } else if (printer.technology == "fdm") {
       if (printer.nozzle_mm <= 0) properties.fail("print_time", "an fdm printer's time model needs its nozzle_mm");
+      // Lines of round-ended section (the model's) are at most as high as wide.
+      if (printer.layer_mm > printer.nozzle_mm)
+        properties.fail("print_time", "the extrusion model needs layer_mm no thicker than nozzle_mm");
       time.extrusion = read_options<ExtrusionTime>(model);
     } else {
       properties.fail("print_time", "no print-time model for technology '" + printer.technology +

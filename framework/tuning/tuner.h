@@ -190,6 +190,7 @@ class Tuner {
   /// The name of the first such simulator, for the message that refuses it.
   std::optional<std::string> simulator_reading_beyond_its_node() const;
   std::string simulator_name() const { return simulator_->name(); }
+  std::string metric_name() const { return metric_->name(); }
   /// The simulator's files for the last simulation (Simulator::write_report)
   /// into `folder`, its sections into `record`: what `spec2fab simulate`
   /// writes, for a run that keeps its solved state (the FEM's fem.vtu).

@@ -575,7 +575,7 @@ bool set_mass_bound(Tuner& tuner, ReducerTree& tree, const MassPropertiesOptions
                     const PartContext& context) {
   // The bound is of mass_properties' masses on this grid: the caller's tuner
   // must simulate them so (its objective mass_difference, on options' grid).
-  if (tuner.simulator_name() != "mass_properties") return false;
+  if (tuner.simulator_name() != "mass_properties" || tuner.metric_name() != "mass_difference") return false;
   MassBound bound = make_mass_bound(tree, tuner.search_space(), options, context);
   if (!bound) return false;
   tuner.set_lower_bound([bound = std::move(bound)](std::span<const double> x, int assigned, const Observation& target) {

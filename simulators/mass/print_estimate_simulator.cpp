@@ -87,7 +87,7 @@ class PrintEstimateSimulator final : public SimulatorFor<PrintEstimateObservatio
   void simulate(const ReducerNode& /*subtree*/, PrintEstimateObservation& out) override {
     if (!fabricator_) throw std::logic_error("print_estimate: simulate before setup");
     PrintCensusSink sink(printer_.technology == "fdm");
-    fabricator_->run({&sink});
+    sink.census().voxels = fabricator_->run({&sink});
     const PrintEstimate estimate = estimate_print(sink.census(), printer_, palette_);
     out.data.assign(PrintEstimateObservation::kSize, kNaN);
     double mass = 0, model = 0;

@@ -171,10 +171,14 @@ TEST(PrinterProfile, PrintTimeModelIsCheckedForItsTechnology) {
                               "build_volume_mm": [1, 1, 1], "model_materials": ["a"],
                               "print_time": {"source": "t"}})"),
             "printer.json: /print_time: an fdm printer's time model needs its nozzle_mm");
-  EXPECT_THAT(printer_error(R"({"name": "T", "technology": "fdm", "resolution_dpi": [1, 1], "layer_mm": 1,
+  EXPECT_THAT(printer_error(R"({"name": "T", "technology": "fdm", "resolution_dpi": [1, 1], "layer_mm": 0.2,
                               "build_volume_mm": [1, 1, 1], "model_materials": ["a"], "nozzle_mm": 0.4,
                               "print_time": {"support": "sometimes", "source": "t"}})"),
               HasSubstr("/print_time/support"));
+  EXPECT_EQ(printer_error(R"({"name": "T", "technology": "fdm", "resolution_dpi": [1, 1], "layer_mm": 1,
+                              "build_volume_mm": [1, 1, 1], "model_materials": ["a"], "nozzle_mm": 0.4,
+                              "print_time": {"source": "t"}})"),
+            "printer.json: /print_time: the extrusion model needs layer_mm no thicker than nozzle_mm");
 }
 
 }  // namespace
