@@ -3,7 +3,12 @@
 // tree on it and a coarse printer, so that a whole fabrication takes well
 // under a second.
 
+#include <sys/wait.h>
 #include <unistd.h>
+
+#include <array>
+#include <cstdio>
+#include <utility>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -64,6 +69,16 @@ struct PrintFixture {
   PrinterProfile printer;
   std::unique_ptr<ReducerTree> tree;
 };
+
+/// Runs a shell command, returning its exit status and output (stdout and stderr).
+inline std::pair<int, std::string> run_command(const std::string& command) {
+  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
+  std::string out;
+  std::array<char, 4096> buffer;
+  while (size_t n = fread(buffer.data(), 1, buffer.size(), pipe)) out.append(buffer.data(), n);
+  const int status = pclose(pipe);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
 
 /// A fresh temporary folder, removed with the object.
 struct TempDir {

@@ -155,6 +155,27 @@ TEST(PrintEstimate, NamesWhatHasNoPrice) {
   EXPECT_TRUE(estimate.print_hours);  // time needs no price
 }
 
+// A shell of `material` `depth_mm` thick over a void core, bound to `solid`.
+std::unique_ptr<ReducerTree> hollow(const Solid& solid, const MaterialPalette& palette, const std::string& material,
+                                    double depth_mm) {
+  const std::string json = fmt::format(R"({{"type": "stratum", "depth_mm": {}, "shell": {{"type": "layered", "material": "{}"}},
+      "core": {{"type": "layered", "material": "void"}}}})",
+                                       depth_mm, material);
+  auto tree = std::make_unique<ReducerTree>(Properties::parse(json, "tree.json"), palette);
+  tree->bind(solid);
+  return tree;
+}
+
+// The estimate fabrication reports for `tree` on `printer` (slices only).
+PrintEstimate fabricated_estimate(const ReducerTree& tree, const PrinterProfile& printer, const std::string& name) {
+  testing::TempDir dir(name);
+  RunFolder folder(dir.path / "run");
+  FabricationOptions options;
+  options.writers = {{"stl", false}, {"3mf", false}, {"render", false}};
+  options.progress = false;
+  return *fabricate(tree, printer, options, folder).record.print;
+}
+
 // The simulator a tuner weighs takes the same census as fabrication: on a
 // grid of the printer's own voxels the two give the same figures; and it
 // refuses a run whose printer has no time model or whose materials no price.
@@ -163,17 +184,9 @@ TEST(PrintEstimate, TheSimulatorPricesWhatFabricationPrices) {
   const MaterialPalette palette({priced("Vero", 1175, 500)});
   PrinterProfile printer = testing::coarse_printer(0.5, {"Vero"});
   printer.print_time = PrintTimeModel{JettingTime{}, std::nullopt, "test"};
-  ReducerTree tree(Properties::parse(R"({"type": "stratum", "depth_mm": 1.5,
-      "shell": {"type": "layered", "material": "Vero"}, "core": {"type": "layered", "material": "void"}})",
-                                     "tree.json"),
-                   palette);
-  tree.bind(solid);
-  testing::TempDir dir("print_estimate_simulator");
-  RunFolder folder(dir.path / "run");
-  FabricationOptions options;
-  options.writers = {{"stl", false}, {"3mf", false}, {"render", false}};
-  options.progress = false;
-  const PrintEstimate fabricated = *fabricate(tree, printer, options, folder).record.print;
+  const auto hollow_sphere = hollow(solid, palette, "Vero", 1.5);
+  const ReducerTree& tree = *hollow_sphere;
+  const PrintEstimate fabricated = fabricated_estimate(tree, printer, "print_estimate_simulator");
 
   const PartContext context{palette, nullptr, false, nullptr, &printer};
   auto simulator = make_print_estimate_simulator({0.5}, context);
@@ -220,17 +233,9 @@ TEST(PrintEstimate, ACoarserCensusScalesToThePrintersLinesAndLayers) {
   const MaterialPalette palette(library, printer);
   Solid solid(load_mesh(kDatasets / "meshes" / "crane_56x16x60.stl"), UvSource::planar);
   // A cavity in the column: gaps in its rows.
-  ReducerTree tree(Properties::parse(R"({"type": "stratum", "depth_mm": 2,
-      "shell": {"type": "layered", "material": "PLA"}, "core": {"type": "layered", "material": "void"}})",
-                                     "tree.json"),
-                   palette);
-  tree.bind(solid);
-  testing::TempDir dir("print_estimate_scaling");
-  RunFolder folder(dir.path / "run");
-  FabricationOptions options;
-  options.writers = {{"stl", false}, {"3mf", false}, {"render", false}};
-  options.progress = false;
-  const PrintEstimate fabricated = *fabricate(tree, printer, options, folder).record.print;
+  const auto hollow_crane = hollow(solid, palette, "PLA", 2);
+  const ReducerTree& tree = *hollow_crane;
+  const PrintEstimate fabricated = fabricated_estimate(tree, printer, "print_estimate_scaling");
   const PartContext context{palette, nullptr, false, nullptr, &printer};
   // Measured: 0.8 mm cells +1.5 % time, −3.1 % cost; 1.2 mm cells, coarser
   // than half the 2 mm shell, +5.0 % and +11 % (the shell's volume, sampled).
@@ -244,16 +249,6 @@ TEST(PrintEstimate, ACoarserCensusScalesToThePrintersLinesAndLayers) {
     EXPECT_NEAR(observed.print_hours() / *fabricated.print_hours, 1, 0.025) << voxel << " mm";
     EXPECT_NEAR(observed.cost_usd() / *fabricated.cost_usd, 1, 0.04) << voxel << " mm";
   }
-}
-
-// Runs a command, returning its exit status and output.
-std::pair<int, std::string> run(const std::string& command) {
-  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
-  std::string out;
-  std::array<char, 4096> buffer;
-  while (size_t n = fread(buffer.data(), 1, buffer.size(), pipe)) out.append(buffer.data(), n);
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
 }
 
 // PrusaSlicer's own estimate ("; estimated printing time (normal mode) =
@@ -315,7 +310,7 @@ TEST(PrintEstimate, FdmTimeAgreesWithPrusaSlicersEstimate) {
 
     const fs::path gcode = dir.path / (support ? "support.gcode" : "plain.gcode");
     const std::string spacing = fmt::format("{:.4f}", model.support_density > 0 ? 0.35 / model.support_density - 0.35 : 0);
-    const auto [code, out] = run(slicer.string() + " --export-gcode --datadir " + (dir.path / "prusa").string() + " " +
+    const auto [code, out] = testing::run_command(slicer.string() + " --export-gcode --datadir " + (dir.path / "prusa").string() + " " +
                                  settings +
                                  (support ? " --support-material --support-material-buildplate-only "
                                             "--support-material-extrusion-width 0.35 --support-material-spacing " +

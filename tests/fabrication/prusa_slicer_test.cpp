@@ -28,16 +28,6 @@ fs::path find_prusa_slicer() {
   return {};
 }
 
-// Runs a command, returning its exit status and output.
-std::pair<int, std::string> run(const std::string& command) {
-  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
-  std::string out;
-  std::array<char, 4096> buffer;
-  while (size_t n = fread(buffer.data(), 1, buffer.size(), pipe)) out.append(buffer.data(), n);
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
-
 TEST(PrusaSlicer, SlicesTheExportedStlAnd3mf) {
   const fs::path slicer = find_prusa_slicer();
   if (slicer.empty())
@@ -57,7 +47,7 @@ TEST(PrusaSlicer, SlicesTheExportedStlAnd3mf) {
     const fs::path gcode = dir.path / (fs::path(file).stem().string() +
                                        fs::path(file).extension().string() + ".gcode");
     const auto [code, out] =
-        run(slicer.string() + " --export-gcode --datadir " + (dir.path / "prusa").string() +
+        testing::run_command(slicer.string() + " --export-gcode --datadir " + (dir.path / "prusa").string() +
             " --output " + gcode.string() + " " + (dir.path / "run" / file).string());
     EXPECT_EQ(code, 0) << file << ":\n" << out;
     ASSERT_TRUE(fs::is_regular_file(gcode)) << file << ":\n" << out;
