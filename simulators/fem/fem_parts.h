@@ -25,4 +25,9 @@ std::unique_ptr<MetricFor<DisplacementsObservation>> make_shape_mse();
 std::unique_ptr<GoalFor<DisplacementsObservation>> make_deformed_shape_goal(const std::vector<Vec3>& rest,
                                                                            const std::vector<Vec3>& targets);
 
+/// The "stress_limit" goal: von Mises stress at most `mpa` (> 0).
+std::unique_ptr<GoalFor<DisplacementsObservation>> make_stress_limit_goal(double mpa);
+/// The "stress_excess" metric (MPa past the limit) on `measure`: "p99" or "max".
+std::unique_ptr<MetricFor<DisplacementsObservation>> make_stress_excess_metric(const std::string& measure);
+
 }  // namespace spec2fab::fem

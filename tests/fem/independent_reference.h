@@ -105,6 +105,7 @@ struct ReferenceOptions {
   double radius_edge = 1.5;         // tet4/tet10: TetGen's -q bound
   double hex_size_mm = 1.0;         // hex20r: cells divided evenly into elements at most this long
   int ccx_threads = 1;              // OMP_NUM_THREADS and CCX_NPROC_EQUATION_SOLVER for ccx
+  bool element_stress = false;      // also each element's von Mises stress (ccx's *EL PRINT S)
 };
 
 struct ReferenceResult {
@@ -113,6 +114,10 @@ struct ReferenceResult {
   double max_displacement_mm = 0;  // over all nodes
   double mesh_seconds = 0;         // TetGen (tets) or the grid (hex20r)
   double ccx_seconds = 0;          // the ccx run alone
+  // With element_stress: per element (the mesh's order), its von Mises
+  // stress (MPa, the mean over its integration points) and its material.
+  std::vector<double> von_mises_mpa;
+  std::vector<int> element_material;
 };
 
 namespace detail {
@@ -517,7 +522,7 @@ inline bool in_box(const Eigen::AlignedBox3d& box, const Eigen::Vector3d& x, dou
 }
 
 inline void write_deck(const Mesh& mesh, const GridModel& model, const Loading& loading,
-                       double tolerance, const std::filesystem::path& file) {
+                       double tolerance, const std::filesystem::path& file, bool element_stress = false) {
   std::ofstream out(file);
   out << "*HEADING\nIndependent reference: a multi-material box meshed by the test\n*NODE, "
          "NSET=Nall\n";
@@ -584,7 +589,14 @@ inline void write_deck(const Mesh& mesh, const GridModel& model, const Loading& 
         out << v + 1 << ", " << a + 1 << ", " << number(force[v][a]) << '\n';
     }
   }
-  out << "*NODE PRINT, NSET=Nall\nU\n*END STEP\n";
+  out << "*NODE PRINT, NSET=Nall\nU\n";
+  if (element_stress) {
+    for (size_t m = 0; m < model.materials.size(); ++m) {
+      if (std::find(mesh.material.begin(), mesh.material.end(), static_cast<int>(m)) != mesh.material.end())
+        out << "*EL PRINT, ELSET=M" << m << "\nS\n";
+    }
+  }
+  out << "*END STEP\n";
   if (!out) throw std::runtime_error("cannot write " + file.string());
 }
 
@@ -601,6 +613,11 @@ inline std::vector<Eigen::Vector3d> read_displacements(const std::filesystem::pa
     if (!block.empty() && rows == nodes) u.swap(block);
   };
   while (std::getline(in, line)) {
+    if (line.find("stresses") != std::string::npos) {  // the element blocks that follow
+      finish();
+      block.clear();
+      continue;
+    }
     if (line.find("displacements") != std::string::npos) {
       finish();
       block.assign(nodes, Eigen::Vector3d::Zero());
@@ -623,6 +640,36 @@ inline std::vector<Eigen::Vector3d> read_displacements(const std::filesystem::pa
   if (u.empty())
     throw std::runtime_error(file.string() + ": no complete block of nodal displacements");
   return u;
+}
+
+// Each element's von Mises stress (the mean over its integration points)
+// from the .dat file's "stresses (elem, integ.pnt.,sxx,syy,szz,sxy,sxz,syz)" blocks.
+inline std::vector<double> read_von_mises(const std::filesystem::path& file, size_t elements) {
+  std::ifstream in(file);
+  if (!in) throw std::runtime_error("cannot read " + file.string());
+  std::vector<double> sum(elements, 0.0);
+  std::vector<int> points(elements, 0);
+  bool in_block = false;
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.find("stresses") != std::string::npos) { in_block = true; continue; }
+    if (line.find("displacements") != std::string::npos) { in_block = false; continue; }
+    if (!in_block) continue;
+    std::istringstream fields(line);
+    long element, point;
+    double xx, yy, zz, xy, xz, yz;
+    if (!(fields >> element >> point >> xx >> yy >> zz >> xy >> xz >> yz)) continue;
+    if (element < 1 || static_cast<size_t>(element) > elements) continue;
+    const double von_mises = std::sqrt(0.5 * ((xx - yy) * (xx - yy) + (yy - zz) * (yy - zz) + (zz - xx) * (zz - xx)) +
+                                       3 * (xy * xy + xz * xz + yz * yz));
+    sum[element - 1] += von_mises;
+    ++points[element - 1];
+  }
+  for (size_t e = 0; e < elements; ++e) {
+    if (points[e] == 0) throw std::runtime_error(file.string() + ": no stress for element " + std::to_string(e + 1));
+    sum[e] /= points[e];
+  }
+  return sum;
 }
 
 // Displacement at a point, with the shape functions of the element holding it.
@@ -737,7 +784,7 @@ inline ReferenceResult calculix_reference(const GridModel& model, const Loading&
   const fs::path ccx = detail::find_program("ccx");
   if (ccx.empty()) throw std::runtime_error("ccx is not installed (Debian package calculix-ccx)");
   fs::remove(folder / "job.dat");
-  detail::write_deck(mesh, model, loading, tolerance, folder / "job.inp");
+  detail::write_deck(mesh, model, loading, tolerance, folder / "job.inp", options.element_stress);
   const std::string threads = std::to_string(std::max(1, options.ccx_threads));
   const std::string command = "OMP_NUM_THREADS=" + threads +
                               " CCX_NPROC_EQUATION_SOLVER=" + threads + " " +
@@ -759,6 +806,10 @@ inline ReferenceResult calculix_reference(const GridModel& model, const Loading&
   for (const auto& d : u)
     result.max_displacement_mm = std::max(result.max_displacement_mm, d.norm());
   for (const auto& p : probes) result.probes.push_back(detail::interpolate(mesh, u, p, tolerance));
+  if (options.element_stress) {
+    result.von_mises_mpa = detail::read_von_mises(folder / "job.dat", mesh.elements.size());
+    result.element_material = mesh.material;
+  }
   return result;
 }
 

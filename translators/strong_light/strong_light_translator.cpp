@@ -1,0 +1,253 @@
+// Strong and light (Stress Relief, Stava et al. 2012; Build-to-Last, Lu et
+// al. 2014), composed from the framework's pieces: a part under a load case
+// (a clamped box, a force spread over a loaded box) is given a solid shell
+// of a printable thickness (a Stratum node) over a core of Voxel cells,
+// each its material or void, and one tuner of two terms chooses the cells:
+// as light as it can be (mass_properties, mass_difference against 0 g)
+// while its von Mises stress under the load stays under the material's
+// tensile strength over a safety factor (fem, stress_excess against
+// stress_limit, held at most 0). Branch and bound prunes on the mass a
+// partial carving can reach; the stress term only adds, so the bound holds.
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include "core/options.h"
+#include "fem/displacements.h"
+#include "fem/fem_parts.h"
+#include "fem/fem_setup.h"
+#include "mass/mass_properties.h"
+#include "reducer/nodes/nodes.h"
+#include "reducer/reducer_tree.h"
+#include "spec/report_fields.h"
+#include "spec/tuning_translator.h"
+#include "tuning/optimizer.h"
+#include "tuning/simulation_domain.h"
+
+namespace spec2fab {
+namespace {
+
+/// The part in one state (printed solid, or tuned).
+struct StrengthState {
+  double mass_g = 0, stress_max_mpa = 0, stress_p99_mpa = 0;
+  bool within_limit = false;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.mass_g, "mass_g", "the part's mass");
+    f(s.stress_max_mpa, "stress_max_mpa", "the largest von Mises stress of a tet under the load");
+    f(s.stress_p99_mpa, "stress_p99_mpa", "the tets' 99th percentile");
+    f(s.within_limit, "within_limit", "whether the measured stress is at most the limit");
+  }
+};
+
+struct StrongLightReport {
+  std::string material, measure;
+  double tensile_strength_mpa = 0, safety_factor = 0, limit_mpa = 0;
+  std::array<int, 3> cells{};
+  int carved_cells = 0;
+  std::vector<std::string> assignment;
+  StrengthState solid, tuned;
+  double mass_saved_fraction = 0;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.material, "material", "the part's material");
+    f(s.measure, "measure", "which stress the limit holds: p99 or max");
+    f(s.tensile_strength_mpa, "tensile_strength_mpa", "the library's tensile strength of the material");
+    f(s.safety_factor, "safety_factor", "the strength is divided by it");
+    f(s.limit_mpa, "limit_mpa", "the stress allowed");
+    f(s.cells, "cells", "the core's voxel cells along x, y, z");
+    f(s.carved_cells, "carved_cells", "cells the tuner made void");
+    f(s.assignment, "assignment", "each cell's material, x fastest");
+    f(s.solid, "solid", "the part printed solid");
+    f(s.tuned, "tuned", "the tuned part");
+    f(s.mass_saved_fraction, "mass_saved_fraction", "1 − tuned mass / solid mass");
+  }
+};
+
+class StrongLightTranslator final : public TuningTranslator {
+ public:
+  struct Options {
+    double shell_mm = 1;
+    std::array<int, 3> cells{5, 1, 1};
+    std::string material;
+    double safety_factor = 2;
+    std::string measure = "p99";
+    std::array<double, 3> fixed_min{}, fixed_max{}, load_min{}, load_max{}, force_n{};
+    double max_tet_volume_mm3 = 2;
+    double voxel_mm = 0.5;
+    template <class Declare, class Self>
+    static void declare(Declare& d, Self& o) {
+      d.number(o.shell_mm, "shell_mm", Range::above(0), "the shell kept solid under the surface (printable)");
+      d.number(o.cells, "cells", Range::closed(1, 16), "the core's voxel cells along x, y, z, tiling the part's bounds");
+      d.value(o.material, "material", "the part's material (the library must give its tensile strength)",
+              Default{"the printer's first model material"});
+      d.number(o.safety_factor, "safety_factor", Range::closed(1, 100), "the strength is divided by it");
+      d.choice(o.measure, "measure", {"p99", "max"},
+               "the stress the limit holds: the tets' 99th percentile (a clamp's edge is singular) or the largest");
+      d.required(o.fixed_min, "fixed_min", "lower corner (mm) of the clamped box: mesh nodes in it are held");
+      d.required(o.fixed_max, "fixed_max", "its upper corner");
+      d.required(o.load_min, "load_min", "lower corner (mm) of the loaded box: the force spreads over the faces in it");
+      d.required(o.load_max, "load_max", "its upper corner");
+      d.required(o.force_n, "force_n", "the total force (N)");
+      d.number(o.max_tet_volume_mm3, "max_tet_volume_mm3", Range::closed(1e-3, 1e6), "largest tet of the FEM mesh");
+      d.number(o.voxel_mm, "voxel_mm", Range::above(0), "edge of the mass sampling cells");
+    }
+  };
+
+  StrongLightTranslator(const Properties& /*root*/, const Experiment& experiment)
+      : options_(read_options<Options>(experiment.goal())) {
+    const Properties goal = experiment.goal();
+    const std::string where = goal.where();
+    const MaterialPalette& palette = experiment.palette();
+    if (options_.material.empty()) options_.material = palette.name(1);
+    const Material& material = palette.material(palette.id(options_.material, where + "/material"));
+    if (!material.tensile_strength_pa) {
+      throw InputError(where + "/material: the library gives '" + options_.material +
+                       "' no tensile strength (mechanical.tensile_strength_pa)");
+    }
+    limit_mpa_ = material.tensile_strength_pa->value * 1e-6 / options_.safety_factor;
+    const Bounds& bounds = experiment.solid().bounds();
+    if (((bounds.size() - Vec3::Constant(2 * options_.shell_mm)).array() <= 0).any()) {
+      throw InputError(fmt::format("{}/shell_mm: {} mm leaves no core in a part {:.3g} x {:.3g} x {:.3g} mm", where,
+                                   options_.shell_mm, bounds.size().x(), bounds.size().y(), bounds.size().z()));
+    }
+    // stratum: the shell solid, the core in voxel cells of the material or void.
+    VoxelOptions voxel;
+    voxel.size_mm.edges = {bounds.size().x() / options_.cells[0], bounds.size().y() / options_.cells[1],
+                           bounds.size().z() / options_.cells[2]};
+    voxel.origin = {bounds.lower.x(), bounds.lower.y(), bounds.lower.z()};
+    voxel.cells.child.node = make_solid_material(
+        material_choice(palette, options_.material, {options_.material, "void"}, where + "/material"));
+    StratumOptions stratum;
+    stratum.depth_mm = fixed_number(options_.shell_mm, stratum.depth_mm);
+    stratum.shell.node = make_solid_material(fixed_material(palette, options_.material, where + "/material"));
+    stratum.core.node = make_voxel(std::move(voxel));
+    set_tree(make_stratum(std::move(stratum)), goal, experiment);
+
+    const auto corner = [](const std::array<double, 3>& a) { return Vec3(a[0], a[1], a[2]); };
+    fem_ = fem::FemSettings::defaults();
+    fem_.mesh.max_volume_mm3 = options_.max_tet_volume_mm3;
+    fem_.solve.nonlinear = false;
+    fem_.fixed = {{Eigen::AlignedBox3d(corner(options_.fixed_min), corner(options_.fixed_max)), Vec3::Zero(),
+                   where + "/fixed_min"}};
+    fem_.loads = {{Eigen::AlignedBox3d(corner(options_.load_min), corner(options_.load_max)), corner(options_.force_n),
+                   where + "/load_min"}};
+    where_ = where;
+
+    // One tuner: the least mass, the stress within its limit.
+    const PartContext context = experiment.part_context();
+    MassPropertiesOptions mass;
+    mass.voxel_mm = options_.voxel_mm;
+    const OptimizerChoice optimizer(experiment.root(), "optimizer", nlohmann::json{{"type", "branch_and_bound"}});
+    auto tuner = make_tuner("strong_light", make_mass_properties_simulator(mass, context), make_mass_difference_metric(),
+                            make_mass_properties_goal(0.0, std::nullopt), optimizer.build());
+    tuner->set_origin(where);
+    tuner->add_term({"stress", fem::make_fem_simulator(fem_, context, where), fem::make_stress_excess_metric(options_.measure),
+                     fem::make_stress_limit_goal(limit_mpa_), TermRule{1, 0.0, 1e3}});
+    tuner->set_node(*tree_, tree_->root());
+    set_mass_bound(*tuner, *tree_, mass, context);
+    network_.add(std::move(tuner));
+    Phase phase;
+    phase.name = "cells";
+    phase.tuners = {0};
+    schedule_.add(std::move(phase));
+  }
+
+  std::string summary() const override {
+    return fmt::format(
+        "strong_light (Stress Relief / Build-to-Last): a {} mm {} shell over {} x {} x {} core cells, each {} or "
+        "void; one tuner: the least mass with the von Mises stress ({}) under {:.3g} MPa (strength / {})",
+        options_.shell_mm, options_.material, options_.cells[0], options_.cells[1], options_.cells[2],
+        options_.material, options_.measure, limit_mpa_, options_.safety_factor);
+  }
+
+  static TypeDoc doc() {
+    TypeDoc doc{"Strong and light (Stress Relief, Stava et al. 2012; Build-to-Last, Lu et al. 2014): a part "
+                "clamped in one box and loaded by a force over another is given a solid shell (shell_mm) over a "
+                "core of voxel cells, each its material or void, as light as it can be while its von Mises stress "
+                "(the tets' 99th percentile, or the largest) stays under the library's tensile strength divided by "
+                "safety_factor. One tuner of two terms: mass_properties + mass_difference against 0 g (the "
+                "objective) and fem + stress_excess against stress_limit held at most 0; branch and bound prunes "
+                "on the mass bound. result.json's strong_light section gives the solid and the tuned part's mass "
+                "and stress.",
+                prefixed(option_docs<Options>(), "goal."),
+                R"({"translator": "strong_light", "goal": {"cells": [5, 1, 1], "fixed_min": [-1, -1, -1], )"
+                R"("fixed_max": [0.5, 11, 11], "load_min": [99.5, -1, -1], "load_max": [101, 11, 11], )"
+                R"("force_n": [0, 0, -20]}})"};
+    doc.properties.push_back({"optimizer", "optimizer", "branch_and_bound", "the cells' optimizer (any registered)"});
+    append(doc.properties, TreeOutputOptions::docs());
+    return doc;
+  }
+
+ private:
+  StrengthState state_now(const PartContext& context) {
+    if (!mass_) {
+      MassPropertiesOptions mass;
+      mass.voxel_mm = options_.voxel_mm;
+      mass_ = make_mass_properties_simulator(mass, context);
+      mass_->setup(tree_->root(), SimulationDomain(*tree_, tree_->root()));
+      fem_simulator_ = fem::make_fem_simulator(fem_, context, where_);
+      fem_simulator_->setup(tree_->root(), SimulationDomain(*tree_, tree_->root()));
+    }
+    MassPropertiesObservation mass;
+    mass_->simulate(tree_->root(), mass);
+    DisplacementsObservation stress;
+    fem_simulator_->simulate(tree_->root(), stress);
+    StrengthState state;
+    state.mass_g = mass.mass_kg() * 1e3;
+    state.stress_max_mpa = stress.stress_max_mpa;
+    state.stress_p99_mpa = stress.stress_p99_mpa;
+    state.within_limit = (options_.measure == "max" ? stress.stress_max_mpa : stress.stress_p99_mpa) <= limit_mpa_;
+    return state;
+  }
+
+  void report(const RunRecord& /*record*/, RunContext& context) override {
+    const PartContext part = context.experiment.part_context();
+    StrongLightReport report;
+    report.material = options_.material;
+    report.measure = options_.measure;
+    report.safety_factor = options_.safety_factor;
+    report.limit_mpa = limit_mpa_;
+    report.tensile_strength_mpa = limit_mpa_ * options_.safety_factor;
+    report.cells = options_.cells;
+    const ReducerNode& voxel = tree_->node("core");
+    for (size_t i = 0; i < voxel.child_count(); ++i) {
+      const MaterialId id = route_to_material(voxel.child(i), QueryPoint{}, LocalFrame{});
+      report.assignment.push_back(tree_->palette().name(id));
+      report.carved_cells += id == kVoid;
+    }
+    report.tuned = state_now(part);
+    // The part printed solid: every cell its material, then back.
+    SearchSpace space = tree_->search_space();
+    const std::vector<double> tuned = space.values();
+    space.set_values(std::vector<double>(tuned.size(), static_cast<double>(tree_->palette().id(options_.material, where_))));
+    tree_->evaluate();
+    report.solid = state_now(part);
+    space.set_values(tuned);
+    tree_->evaluate();
+    report.mass_saved_fraction = report.solid.mass_g > 0 ? 1 - report.tuned.mass_g / report.solid.mass_g : 0;
+    if (!report.tuned.within_limit) {
+      spdlog::warn("strong_light: the tuned part's stress ({} {:.3g} MPa) is past its limit of {:.3g} MPa: even "
+                   "solid it may be; a lower load, a thicker shell or a stronger material helps",
+                   options_.measure, options_.measure == "max" ? report.tuned.stress_max_mpa : report.tuned.stress_p99_mpa,
+                   limit_mpa_);
+    }
+    context.report.add("strong_light", report);
+  }
+
+  Options options_;
+  fem::FemSettings fem_;
+  std::string where_;
+  double limit_mpa_ = 0;
+  std::unique_ptr<SimulatorFor<MassPropertiesObservation>> mass_;
+  std::unique_ptr<SimulatorFor<DisplacementsObservation>> fem_simulator_;
+};
+
+}  // namespace
+}  // namespace spec2fab
+
+namespace spec2fab {
+SPEC2FAB_REPORT_FIELDS(strong_light, "strong_light", section_docs<StrongLightReport>("strong_light."))
+}  // namespace spec2fab
+
+SPEC2FAB_REGISTER(spec2fab::TranslatorRegistry, spec2fab::StrongLightTranslator, "strong_light")
