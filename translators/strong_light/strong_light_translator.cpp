@@ -180,7 +180,7 @@ class StrongLightTranslator final : public TuningTranslator {
   }
 
  private:
-  StrengthState state_now(const PartContext& context) {
+  StrengthState state_now(const PartContext& context, DisplacementsObservation* keep = nullptr) {
     if (!mass_) {
       MassPropertiesOptions mass;
       mass.voxel_mm = options_.voxel_mm;
@@ -198,6 +198,7 @@ class StrongLightTranslator final : public TuningTranslator {
     state.stress_max_mpa = stress.stress_max_mpa;
     state.stress_p99_mpa = stress.stress_p99_mpa;
     state.within_limit = (options_.measure == "max" ? stress.stress_max_mpa : stress.stress_p99_mpa) <= limit_mpa_;
+    if (keep != nullptr) *keep = std::move(stress);
     return state;
   }
 
@@ -216,7 +217,15 @@ class StrongLightTranslator final : public TuningTranslator {
       report.assignment.push_back(tree_->palette().name(id));
       report.carved_cells += id == kVoid;
     }
-    report.tuned = state_now(part);
+    DisplacementsObservation tuned_solution;
+    report.tuned = state_now(part, &tuned_solution);
+    // The tuned part's solve for ParaView and a look: fem/fem.vtu (tets,
+    // material, displacement, von Mises stress), fem/deformation.png.
+    const std::filesystem::path fem_folder = context.folder.path("fem");
+    std::filesystem::create_directories(fem_folder);
+    ReportSections fem_record;
+    fem_simulator_->write_report(tuned_solution, fem_folder, fem_record);
+    context.report.files.previews.push_back("fem/deformation.png");
     // The part printed solid: every cell its material, then back.
     SearchSpace space = tree_->search_space();
     const std::vector<double> tuned = space.values();
