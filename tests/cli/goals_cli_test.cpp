@@ -89,6 +89,23 @@ TEST_F(Cli, ATunerWeighingPrintTimeFindsAFasterPrintThatBalances) {
   EXPECT_LT(fast["fabrication"]["print"]["cost_usd"].get<double>(), least["fabrication"]["print"]["cost_usd"].get<double>());
 }
 
+// stand_leaning_tower_bronze: with a denser second material among the core's
+// choices the tower stands at the solid print's mass — carved at the top,
+// bronze-filled PLA low on the other side.
+TEST_F(Cli, TheLeaningTowerStandsWithBronzeInItsCoreAtItsSolidMass) {
+  const fs::path file = shipped_without_print(dir_, "stand_leaning_tower_bronze");
+  const Result r = run_spec2fab("run -q " + file.string() + " --out " + (dir_ / "run").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto stand = nlohmann::json::parse(read(dir_ / "run" / "result.json"))["stand"];
+  EXPECT_FALSE(stand["solid"]["stands"].get<bool>()) << stand.dump(2);
+  EXPECT_TRUE(stand["tuned"]["stands"].get<bool>()) << stand.dump(2);
+  EXPECT_LT(std::abs(stand["mass_change_g"].get<double>()), 0.5) << stand.dump(2);
+  int bronze = 0, carved = 0;
+  for (const auto& cell : stand["assignment"]) bronze += cell == "bronzeFill", carved += cell == "void";
+  EXPECT_GT(bronze, 0);
+  EXPECT_GT(carved, 0);
+}
+
 // strong_light_beam (Stress Relief / Build-to-Last): the cantilever keeps
 // the cell at its clamp solid and carves the other four, half the mass,
 // with the tets' 99th-percentile von Mises stress under PLA's 50 MPa / 2.

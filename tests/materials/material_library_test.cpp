@@ -147,7 +147,7 @@ TEST(MaterialLibrary, EveryShippedLibraryLoadsWithSourcedPlausibleValues) {
       EXPECT_GT(m.poisson_ratio.value, 0);
       EXPECT_LT(m.poisson_ratio.value, 0.5);
       EXPECT_GE(m.density_kg_m3.value, 800);
-      EXPECT_LE(m.density_kg_m3.value, 2500);
+      EXPECT_LE(m.density_kg_m3.value, 5000);  // metal-filled filaments (bronzeFill 3,900)
     }
   }
 }
