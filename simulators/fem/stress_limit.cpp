@@ -2,8 +2,11 @@
 // its load case stays under a limit (the material's strength over a safety
 // factor: Stress Relief, Stava et al. 2012; Build-to-Last, Lu et al. 2014).
 // The fem simulator observes each tet's von Mises stress, its largest value
-// and its 99th percentile; a clamp's edge is a singularity whose largest
-// value grows as the mesh refines, so the percentile is the default measure.
+// and its 99th percentile over the non-void tets, by count. A clamp's edge
+// and a cavity's re-entrant edges are singular: the largest value there
+// grows as the mesh refines. The percentile is steadier but no measure of
+// strength by itself: it depends on the mesh, and carving a lightly loaded
+// cell (fewer low-stress tets) raises it.
 
 #include <cmath>
 #include <limits>
@@ -49,7 +52,8 @@ class StressExcess final : public MetricFor<DisplacementsObservation> {
     template <class Declare, class Self>
     static void declare(Declare& d, Self& o) {
       d.choice(o.measure, "measure", {"p99", "max"},
-               "which stress: the tets' 99th percentile (robust at a clamp's singular edge) or their largest");
+               "which stress: the tets' 99th percentile (steadier at a clamp's singular edge, but mesh-dependent) "
+               "or their largest");
     }
   };
   StressExcess(const Properties& properties, const PartContext& /*context*/)

@@ -571,6 +571,22 @@ MassBound make_mass_bound(ReducerTree& tree, const SearchSpace& space, const Mas
   };
 }
 
+int fix_cells_without_volume(ReducerTree& tree, ReducerNode& cells, const MassPropertiesOptions& options,
+                             const PartContext& context) {
+  std::unordered_map<const ReducerNode*, double> volume;
+  for (const auto& [leaf, mm3] : tuned_leaf_volumes(tree, options, context)) volume.emplace(leaf, mm3);
+  int count = 0;
+  for (size_t i = 0; i < cells.child_count(); ++i) {
+    const auto found = volume.find(&cells.child(i));
+    if (found != volume.end() && found->second > 0) {
+      ++count;
+    } else {
+      cells.child(i).visit_parameters([](const std::string&, Parameter& p) { p.set_free(false); });
+    }
+  }
+  return count;
+}
+
 bool set_mass_bound(Tuner& tuner, ReducerTree& tree, const MassPropertiesOptions& options,
                     const PartContext& context) {
   // The bound is of mass_properties' masses on this grid: the caller's tuner

@@ -84,6 +84,14 @@ std::vector<std::pair<const ReducerNode*, double>> tuned_leaf_volumes(ReducerTre
                                                                       const MassPropertiesOptions& options,
                                                                       const PartContext& context);
 
+/// Fixes the free parameters of each child of `cells` (a node of `tree`,
+/// e.g. a voxel node of one-material leaves) that mass_properties samples
+/// no volume of on `options`' grid — cells outside the solid, or wholly
+/// under a shell — since a tuner has nothing to gain from them; returns how
+/// many children hold some volume (they stay free).
+int fix_cells_without_volume(ReducerTree& tree, ReducerNode& cells, const MassPropertiesOptions& options,
+                             const PartContext& context);
+
 /// A lower bound of mass_difference (grams) over every completion of a
 /// partial assignment — the first `assigned` values of x fixed, in the order
 /// of `space` (a tuner's search space on `tree`) — against a target mass

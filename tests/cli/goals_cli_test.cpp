@@ -3,6 +3,8 @@
 // value in result.json.
 
 #include "cli_support.h"
+#include "build_gates.h"
+#include "core/build_options.h"
 #include "fem/independent_reference.h"
 
 namespace spec2fab_cli_test {
@@ -113,19 +115,42 @@ TEST_F(Cli, TheLeaningTowerStandsWithBronzeInItsCoreAtItsSolidMass) {
 // `tetgen` program on the tuned beam's own boxes (its shell, the solid cell,
 // the cavity as a material 1e6 times softer), at the experiment's tet size.
 TEST_F(Cli, TheStrongLightBeamIsHalfAsHeavyWithinItsStressAsCalculixFindsIt) {
+  SPEC2FAB_SKIP_UNLESS(SPEC2FAB_WITH_TETGEN);  // the fem simulator meshes with it
   const fs::path file = shipped_without_print(dir_, "strong_light_beam");
   const Result r = run_spec2fab("run -q " + file.string() + " --out " + (dir_ / "run").string());
   ASSERT_EQ(r.code, 0) << r.out;
   const auto report = nlohmann::json::parse(read(dir_ / "run" / "result.json"))["strong_light"];
-  EXPECT_EQ(report["assignment"], nlohmann::json({"PLA", "void", "void", "void", "void"})) << report.dump(2);
+  // The reference below is built for this design.
+  ASSERT_EQ(report["assignment"], nlohmann::json({"PLA", "void", "void", "void", "void"})) << report.dump(2);
+  EXPECT_EQ(report["core_cells"], 5);
+  EXPECT_EQ(report["carved_cells"], 4);
   EXPECT_GE(report["mass_saved_fraction"].get<double>(), 0.4) << report.dump(2);
   const double limit = report["limit_mpa"].get<double>();
   EXPECT_DOUBLE_EQ(limit, 25);
   const double p99 = report["tuned"]["stress_p99_mpa"].get<double>();
   EXPECT_LE(p99, limit);
   EXPECT_TRUE(report["tuned"]["within_limit"].get<bool>());
-  // Beam theory at the solid part's root: F L c / I = 30 · 100 · 5 / (10⁴ / 12) = 18 MPa.
-  EXPECT_NEAR(report["solid"]["stress_max_mpa"].get<double>(), 18, 18 * 0.1);
+
+  // A closed form away from every singularity: the tip's deflection by
+  // Euler–Bernoulli, F/E [((L³ − (L − a)³)/3) / I₁ + ((L − a)³/3) / I₂],
+  // solid (I₁ = 10⁴/12 mm⁴) to a = 20 mm and hollow (I₂ = (10⁴ − 8⁴)/12)
+  // beyond: 5.42 mm. Linear tets are a little stiff, shear a little soft.
+  std::ifstream nodes(dir_ / "run" / "fem" / "displacements.csv");
+  std::string line;
+  std::getline(nodes, line);
+  double tip = 0;
+  while (std::getline(nodes, line)) {
+    std::istringstream fields(line);
+    double v[7];
+    char comma = 0;
+    fields >> v[0];
+    for (int k = 1; k < 7; ++k) fields >> comma >> v[k];
+    if (v[1] > 100 - 1e-6) tip = std::max(tip, -v[6]);
+  }
+  const double i1 = 1e4 / 12, i2 = (1e4 - 4096) / 12;
+  const double closed_form = 30.0 / 3000 * ((1e6 - 512e3) / 3 / i1 + 512e3 / 3 / i2);
+  std::printf("tip deflection %.3f mm, beam theory %.3f mm\n", tip, closed_form);
+  EXPECT_NEAR(tip / closed_form, 1, 0.05);
 
   namespace ref = spec2fab::fem::reference;
   if (!ref::calculix_and_tetgen_available()) GTEST_SKIP() << "ccx or tetgen is not installed (scripts/install-deps)";
@@ -158,7 +183,10 @@ TEST_F(Cli, TheStrongLightBeamIsHalfAsHeavyWithinItsStressAsCalculixFindsIt) {
   std::printf("tuned beam: p99 %.3f MPa (ccx C3D4 on %zu tetgen tets: %.3f), max %.3f (ccx %.3f)\n", p99,
               reference.elements, ccx_p99, report["tuned"]["stress_max_mpa"].get<double>(), ccx_max);
   // Measured: 21.43 against 21.77 MPa (−1.6 %); the largest, at the
-  // cavity's re-entrant edge, 31.78 against 30.37 MPa (+4.6 %).
+  // cavity's re-entrant edge, 31.78 against 30.37 MPa (+4.6 %). Both codes
+  // use linear tets of one size on TetGen meshes; the largest sits at a
+  // singular edge, so its agreement says the meshes are alike, not that it
+  // has converged (it grows as they refine).
   EXPECT_NEAR(p99 / ccx_p99, 1, 0.10);
   EXPECT_NEAR(report["tuned"]["stress_max_mpa"].get<double>() / ccx_max, 1, 0.10);
 }

@@ -8,7 +8,9 @@
 // every material interface), writes a CalculiX deck (one ELSET per material,
 // clamped nodes, consistent nodal forces for uniform tractions), runs
 // `ccx`, reads the nodal displacements back from the .dat file and
-// interpolates them at probe points with the element's own shape functions.
+// interpolates them at probe points with the element's own shape functions;
+// with `element_stress`, also each element's von Mises stress (ccx's *EL
+// PRINT S; the mean over its integration points of the one step solved).
 //   tet4, tet10  TetGen (the `tetgen` program, Debian package tetgen 1.5.0)
 //                meshes a PLC of the box with every cut plane as internal
 //                facets; a region point per cell (-A) tells each tet its cell.

@@ -237,19 +237,7 @@ class StandTranslator final : public TuningTranslator {
     }
     MassPropertiesOptions mass;
     mass.voxel_mm = options_.stability.voxel_mm;
-    std::unordered_map<const ReducerNode*, double> volume;
-    for (const auto& [leaf, mm3] : tuned_leaf_volumes(*tree_, mass, context)) volume.emplace(leaf, mm3);
-    ReducerNode& voxel = tree_->node("core");
-    int count = 0;
-    for (size_t i = 0; i < voxel.child_count(); ++i) {
-      const auto found = volume.find(&voxel.child(i));
-      if (found != volume.end() && found->second > 0) {
-        ++count;
-      } else {
-        voxel.child(i).visit_parameters([](const std::string&, Parameter& p) { p.set_free(false); });
-      }
-    }
-    return count;
+    return fix_cells_without_volume(*tree_, tree_->node("core"), mass, context);
   }
 
   void report(const RunRecord& /*record*/, RunContext& context) override {

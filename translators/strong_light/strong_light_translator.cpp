@@ -44,7 +44,7 @@ struct StrongLightReport {
   std::string material, measure;
   double tensile_strength_mpa = 0, safety_factor = 0, limit_mpa = 0;
   std::array<int, 3> cells{};
-  int carved_cells = 0;
+  int core_cells = 0, carved_cells = 0;
   std::vector<std::string> assignment;
   StrengthState solid, tuned;
   double mass_saved_fraction = 0;
@@ -56,7 +56,8 @@ struct StrongLightReport {
     f(s.safety_factor, "safety_factor", "the strength is divided by it");
     f(s.limit_mpa, "limit_mpa", "the stress allowed");
     f(s.cells, "cells", "the core's voxel cells along x, y, z");
-    f(s.carved_cells, "carved_cells", "cells the tuner made void");
+    f(s.core_cells, "core_cells", "cells that hold part of the core (the others are tuned by nothing)");
+    f(s.carved_cells, "carved_cells", "core cells the tuner made void");
     f(s.assignment, "assignment", "each cell's material, x fastest");
     f(s.solid, "solid", "the part printed solid");
     f(s.tuned, "tuned", "the tuned part");
@@ -66,6 +67,9 @@ struct StrongLightReport {
 
 class StrongLightTranslator final : public TuningTranslator {
  public:
+  /// Grams of mass per MPa past the limit: no part this builds for (up to
+  /// a kilogram) may trade a thousandth of an MPa for a lighter carving.
+  static constexpr double kPenaltyPerMpa = 1e6;
   struct Options {
     double shell_mm = 1;
     std::array<int, 3> cells{5, 1, 1};
@@ -78,7 +82,7 @@ class StrongLightTranslator final : public TuningTranslator {
     template <class Declare, class Self>
     static void declare(Declare& d, Self& o) {
       d.number(o.shell_mm, "shell_mm", Range::above(0), "the shell kept solid under the surface (printable)");
-      d.number(o.cells, "cells", Range::closed(1, 16), "the core's voxel cells along x, y, z, tiling the part's bounds");
+      d.number(o.cells, "cells", Range::closed(1, 64), "the core's voxel cells along x, y, z, tiling the part's bounds (at most 64 in all)");
       d.value(o.material, "material", "the part's material (the library must give its tensile strength)",
               Default{"the printer's first model material"});
       d.number(o.safety_factor, "safety_factor", Range::closed(1, 100), "the strength is divided by it");
@@ -91,6 +95,27 @@ class StrongLightTranslator final : public TuningTranslator {
       d.required(o.force_n, "force_n", "the total force (N)");
       d.number(o.max_tet_volume_mm3, "max_tet_volume_mm3", Range::closed(1e-3, 1e6), "largest tet of the FEM mesh");
       d.number(o.voxel_mm, "voxel_mm", Range::above(0), "edge of the mass sampling cells");
+    }
+    bool check(std::string* why) const {
+      for (int k = 0; k < 3; ++k) {
+        if (fixed_min[k] > fixed_max[k]) {
+          *why = "fixed_max: each coordinate at least fixed_min's";
+          return false;
+        }
+        if (load_min[k] > load_max[k]) {
+          *why = "load_max: each coordinate at least load_min's";
+          return false;
+        }
+      }
+      if (force_n[0] == 0 && force_n[1] == 0 && force_n[2] == 0) {
+        *why = "force_n: a load of 0 N stresses nothing (every cell would be carved)";
+        return false;
+      }
+      if (cells[0] * cells[1] * cells[2] > 64) {
+        *why = "cells: at most 64 in all (each assignment branch and bound keeps is an FEM solve)";
+        return false;
+      }
+      return true;
     }
   };
 
@@ -105,7 +130,8 @@ class StrongLightTranslator final : public TuningTranslator {
       throw InputError(where + "/material: the library gives '" + options_.material +
                        "' no tensile strength (mechanical.tensile_strength_pa)");
     }
-    limit_mpa_ = material.tensile_strength_pa->value * 1e-6 / options_.safety_factor;
+    strength_mpa_ = material.tensile_strength_pa->value * 1e-6;
+    limit_mpa_ = strength_mpa_ / options_.safety_factor;
     const Bounds& bounds = experiment.solid().bounds();
     if (((bounds.size() - Vec3::Constant(2 * options_.shell_mm)).array() <= 0).any()) {
       throw InputError(fmt::format("{}/shell_mm: {} mm leaves no core in a part {:.3g} x {:.3g} x {:.3g} mm", where,
@@ -138,12 +164,16 @@ class StrongLightTranslator final : public TuningTranslator {
     const PartContext context = experiment.part_context();
     MassPropertiesOptions mass;
     mass.voxel_mm = options_.voxel_mm;
-    const OptimizerChoice optimizer(experiment.root(), "optimizer", nlohmann::json{{"type", "branch_and_bound"}});
+    core_cells_ = fix_cells_without_volume(*tree_, tree_->node("core"), mass, context);
+    // Voids first (their bound is lowest): a light design that holds is
+    // found early and prunes everything heavier.
+    const OptimizerChoice optimizer(experiment.root(), "optimizer",
+                                    nlohmann::json{{"type", "branch_and_bound"}, {"value_order", "best_bound_first"}});
     auto tuner = make_tuner("strong_light", make_mass_properties_simulator(mass, context), make_mass_difference_metric(),
                             make_mass_properties_goal(0.0, std::nullopt), optimizer.build());
     tuner->set_origin(where);
     tuner->add_term({"stress", fem::make_fem_simulator(fem_, context, where), fem::make_stress_excess_metric(options_.measure),
-                     fem::make_stress_limit_goal(limit_mpa_), TermRule{1, 0.0, 1e3}});
+                     fem::make_stress_limit_goal(limit_mpa_), TermRule{1, 0.0, kPenaltyPerMpa}});
     tuner->set_node(*tree_, tree_->root());
     set_mass_bound(*tuner, *tree_, mass, context);
     network_.add(std::move(tuner));
@@ -156,9 +186,10 @@ class StrongLightTranslator final : public TuningTranslator {
   std::string summary() const override {
     return fmt::format(
         "strong_light (Stress Relief / Build-to-Last): a {} mm {} shell over {} x {} x {} core cells, each {} or "
-        "void; one tuner: the least mass with the von Mises stress ({}) under {:.3g} MPa (strength / {})",
+        "void ({} hold core); one tuner: the least mass with the von Mises stress ({}) under {:.3g} MPa (strength / "
+        "{})",
         options_.shell_mm, options_.material, options_.cells[0], options_.cells[1], options_.cells[2],
-        options_.material, options_.measure, limit_mpa_, options_.safety_factor);
+        options_.material, core_cells_, options_.measure, limit_mpa_, options_.safety_factor);
   }
 
   static TypeDoc doc() {
@@ -167,14 +198,18 @@ class StrongLightTranslator final : public TuningTranslator {
                 "core of voxel cells, each its material or void, as light as it can be while its von Mises stress "
                 "(the tets' 99th percentile, or the largest) stays under the library's tensile strength divided by "
                 "safety_factor. One tuner of two terms: mass_properties + mass_difference against 0 g (the "
-                "objective) and fem + stress_excess against stress_limit held at most 0; branch and bound prunes "
-                "on the mass bound. result.json's strong_light section gives the solid and the tuned part's mass "
-                "and stress.",
+                "objective) and fem + stress_excess against stress_limit held at most 0 (a penalty of 1e6 g per "
+                "MPa); branch and bound, voids first, prunes on the mass bound. The percentile is over the "
+                "remaining tets, by count: carving a lightly loaded cell raises it, and it depends on the mesh. "
+                "On a PolyJet printer carved cells fill with support gel, which the mass weighs. result.json's "
+                "strong_light section gives the solid and the tuned part's mass and stress; fem/ holds the tuned "
+                "part's solve (fem.vtu, deformation.png).",
                 prefixed(option_docs<Options>(), "goal."),
                 R"({"translator": "strong_light", "goal": {"cells": [5, 1, 1], "fixed_min": [-1, -1, -1], )"
                 R"("fixed_max": [0.5, 11, 11], "load_min": [99.5, -1, -1], "load_max": [101, 11, 11], )"
                 R"("force_n": [0, 0, -20]}})"};
-    doc.properties.push_back({"optimizer", "optimizer", "branch_and_bound", "the cells' optimizer (any registered)"});
+    doc.properties.push_back({"optimizer", "optimizer", "branch_and_bound, best_bound_first",
+                              "the cells' optimizer (any registered)"});
     append(doc.properties, TreeOutputOptions::docs());
     return doc;
   }
@@ -209,13 +244,16 @@ class StrongLightTranslator final : public TuningTranslator {
     report.measure = options_.measure;
     report.safety_factor = options_.safety_factor;
     report.limit_mpa = limit_mpa_;
-    report.tensile_strength_mpa = limit_mpa_ * options_.safety_factor;
+    report.tensile_strength_mpa = strength_mpa_;
     report.cells = options_.cells;
+    report.core_cells = core_cells_;
     const ReducerNode& voxel = tree_->node("core");
     for (size_t i = 0; i < voxel.child_count(); ++i) {
       const MaterialId id = route_to_material(voxel.child(i), QueryPoint{}, LocalFrame{});
       report.assignment.push_back(tree_->palette().name(id));
-      report.carved_cells += id == kVoid;
+      bool tuned = false;
+      voxel.child(i).read_parameters([&](const std::string&, const Parameter& p) { tuned = tuned || p.is_free(); });
+      report.carved_cells += tuned && id == kVoid;
     }
     DisplacementsObservation tuned_solution;
     report.tuned = state_now(part, &tuned_solution);
@@ -229,7 +267,8 @@ class StrongLightTranslator final : public TuningTranslator {
     // The part printed solid: every cell its material, then back.
     SearchSpace space = tree_->search_space();
     const std::vector<double> tuned = space.values();
-    space.set_values(std::vector<double>(tuned.size(), static_cast<double>(tree_->palette().id(options_.material, where_))));
+    space.set_values(
+        std::vector<double>(tuned.size(), static_cast<double>(tree_->palette().id(options_.material, where_ + "/material"))));
     tree_->evaluate();
     report.solid = state_now(part);
     space.set_values(tuned);
@@ -247,7 +286,8 @@ class StrongLightTranslator final : public TuningTranslator {
   Options options_;
   fem::FemSettings fem_;
   std::string where_;
-  double limit_mpa_ = 0;
+  double strength_mpa_ = 0, limit_mpa_ = 0;
+  int core_cells_ = 0;
   std::unique_ptr<SimulatorFor<MassPropertiesObservation>> mass_;
   std::unique_ptr<SimulatorFor<DisplacementsObservation>> fem_simulator_;
 };
