@@ -23,6 +23,7 @@
 
 #include "core/image_write.h"
 #include "core/options.h"
+#include "../pieces/shell_cells.h"
 #include "mass/mass_properties.h"
 #include "mass/stability.h"
 #include "reducer/nodes/nodes.h"
@@ -108,27 +109,10 @@ class StandTranslator final : public TuningTranslator {
     const MaterialPalette& palette = experiment.palette();
     if (options_.material.empty()) options_.material = palette.name(1);
     if (options_.core_materials.empty()) options_.core_materials = {options_.material, "void"};
-    const Bounds& bounds = experiment.solid().bounds();
-    const Vec3 inner_size = bounds.size() - Vec3::Constant(2 * options_.shell_mm);
-    if ((inner_size.array() <= 0).any()) {
-      throw InputError(fmt::format("{}/shell_mm: {} mm leaves no core in a shape {:.3g} x {:.3g} x {:.3g} mm",
-                                   where, options_.shell_mm, bounds.size().x(), bounds.size().y(),
-                                   bounds.size().z()));
-    }
-    // stratum: the shell solid, the core in voxel cells of a material or
-    // void. The cells tile the shape's bounds exactly (a grid over the inner
-    // bounds alone would gain a row of cells where it stops short of them).
-    VoxelOptions voxel;
-    voxel.size_mm.edges = {bounds.size().x() / options_.cells[0], bounds.size().y() / options_.cells[1],
-                           bounds.size().z() / options_.cells[2]};
-    voxel.origin = {bounds.lower.x(), bounds.lower.y(), bounds.lower.z()};
-    voxel.cells.child.node = make_solid_material(
-        material_choice(palette, options_.core_materials.front(), options_.core_materials, where + "/core_materials"));
-    StratumOptions stratum;
-    stratum.depth_mm = fixed_number(options_.shell_mm, stratum.depth_mm);
-    stratum.shell.node = make_solid_material(fixed_material(palette, options_.material, where + "/material"));
-    stratum.core.node = make_voxel(std::move(voxel));
-    set_tree(make_stratum(std::move(stratum)), goal, experiment);
+    // stratum: the shell solid, the core in voxel cells of a material or void.
+    set_tree(make_shell_cells({options_.shell_mm, options_.cells, options_.material, options_.core_materials},
+                              experiment, where, "core_materials"),
+             goal, experiment);
 
     // One tuner: the least change of mass, standing with the margin. The
     // solid print first: its simulator refuses a grid past the mass_cells limit.
@@ -250,14 +234,9 @@ class StandTranslator final : public TuningTranslator {
     report.materials = options_.core_materials;
     report.tuned = simulate_state(part);
     report.solid = solid_state(part);
-    const ReducerNode& voxel = tree_->node("core");
-    for (size_t i = 0; i < voxel.child_count(); ++i) {
-      const MaterialId id = route_to_material(voxel.child(i), QueryPoint{}, LocalFrame{});
-      report.assignment.push_back(tree_->palette().name(id));
-      bool tuned = false;
-      voxel.child(i).read_parameters([&](const std::string&, const Parameter& p) { tuned = tuned || p.is_free(); });
-      report.carved_cells += tuned && id == kVoid;
-    }
+    const CellAssignment cells = cell_assignment(*tree_);
+    report.assignment = cells.materials;
+    report.carved_cells = cells.carved;
     const SupportPolygon support = SupportPolygon::of(context.experiment.solid().mesh(),
                                                       Vec3(options_.stability.gravity[0], options_.stability.gravity[1],
                                                            options_.stability.gravity[2]),

@@ -13,6 +13,7 @@
 #include <spdlog/spdlog.h>
 
 #include "core/options.h"
+#include "../pieces/shell_cells.h"
 #include "fem/displacements.h"
 #include "fem/fem_parts.h"
 #include "fem/fem_setup.h"
@@ -132,23 +133,10 @@ class StrongLightTranslator final : public TuningTranslator {
     }
     strength_mpa_ = material.tensile_strength_pa->value * 1e-6;
     limit_mpa_ = strength_mpa_ / options_.safety_factor;
-    const Bounds& bounds = experiment.solid().bounds();
-    if (((bounds.size() - Vec3::Constant(2 * options_.shell_mm)).array() <= 0).any()) {
-      throw InputError(fmt::format("{}/shell_mm: {} mm leaves no core in a part {:.3g} x {:.3g} x {:.3g} mm", where,
-                                   options_.shell_mm, bounds.size().x(), bounds.size().y(), bounds.size().z()));
-    }
     // stratum: the shell solid, the core in voxel cells of the material or void.
-    VoxelOptions voxel;
-    voxel.size_mm.edges = {bounds.size().x() / options_.cells[0], bounds.size().y() / options_.cells[1],
-                           bounds.size().z() / options_.cells[2]};
-    voxel.origin = {bounds.lower.x(), bounds.lower.y(), bounds.lower.z()};
-    voxel.cells.child.node = make_solid_material(
-        material_choice(palette, options_.material, {options_.material, "void"}, where + "/material"));
-    StratumOptions stratum;
-    stratum.depth_mm = fixed_number(options_.shell_mm, stratum.depth_mm);
-    stratum.shell.node = make_solid_material(fixed_material(palette, options_.material, where + "/material"));
-    stratum.core.node = make_voxel(std::move(voxel));
-    set_tree(make_stratum(std::move(stratum)), goal, experiment);
+    set_tree(make_shell_cells({options_.shell_mm, options_.cells, options_.material, {options_.material, "void"}},
+                              experiment, where, "material"),
+             goal, experiment);
 
     const auto corner = [](const std::array<double, 3>& a) { return Vec3(a[0], a[1], a[2]); };
     fem_ = fem::FemSettings::defaults();
@@ -247,14 +235,9 @@ class StrongLightTranslator final : public TuningTranslator {
     report.tensile_strength_mpa = strength_mpa_;
     report.cells = options_.cells;
     report.core_cells = core_cells_;
-    const ReducerNode& voxel = tree_->node("core");
-    for (size_t i = 0; i < voxel.child_count(); ++i) {
-      const MaterialId id = route_to_material(voxel.child(i), QueryPoint{}, LocalFrame{});
-      report.assignment.push_back(tree_->palette().name(id));
-      bool tuned = false;
-      voxel.child(i).read_parameters([&](const std::string&, const Parameter& p) { tuned = tuned || p.is_free(); });
-      report.carved_cells += tuned && id == kVoid;
-    }
+    const CellAssignment cells = cell_assignment(*tree_);
+    report.assignment = cells.materials;
+    report.carved_cells = cells.carved;
     DisplacementsObservation tuned_solution;
     report.tuned = state_now(part, &tuned_solution);
     // The tuned part's solve for ParaView and a look: fem/fem.vtu (tets,
