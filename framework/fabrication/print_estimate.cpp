@@ -178,8 +178,8 @@ double move_seconds(double length, double speed, double acceleration) {
 }
 
 /// Extrusion: the raster's lines at the speed the flow allows, its travel at
-/// travel speed, both accelerating from rest; support at the flow limit
-/// (its lines are not modelled); a fixed time per layer.
+/// travel speed, both accelerating from rest; support at the lines' flow
+/// (its own lines are not modelled); a fixed time per layer.
 void extrusion_time(const PrintCensus& census, const ExtrusionTime& model, const PrinterProfile& printer,
                     double support_mm3, double layers_per_census_layer, PrintEstimate& out) {
   const FabricationGrid& grid = census.grid;
@@ -242,7 +242,7 @@ PrintEstimate estimate_print(const PrintCensus& census, const PrinterProfile& pr
   if (support == nullptr) support_voxels = 0;
   out.support_volume_mm3 = static_cast<double>(support_voxels) * voxel_mm3;
 
-  double cost = 0, model_mm3 = 0;
+  double cost = 0;
   const auto use_of = [&](const Material& material, double volume_mm3) {
     MaterialUse use;
     use.volume_mm3 = volume_mm3;
@@ -257,7 +257,6 @@ PrintEstimate estimate_print(const PrintCensus& census, const PrinterProfile& pr
   for (size_t id = 1; id < census.voxels.size(); ++id) {
     if (census.voxels[id] == 0) continue;
     const double volume = static_cast<double>(census.voxels[id]) * voxel_mm3;
-    model_mm3 += volume;
     const Material& material = palette.material(static_cast<MaterialId>(id));
     out.materials[material.name] = use_of(material, volume);
   }

@@ -89,7 +89,7 @@ struct PrintEstimate {
   std::vector<std::string> unpriced;             ///< materials used without a price
   std::optional<double> print_hours;             ///< absent without a time model in the profile
   std::string time_model;                        ///< "jetting", "extrusion" or ""
-  double layers = 0;                             ///< the printer's layers from the lowest to the highest voxel
+  double layers = 0;                             ///< the printer's layers from the tray to the highest material voxel
   std::optional<double> passes;                  ///< jetting: head passes in all
   std::optional<double> extrusion_hours, travel_hours, layer_hours;  ///< extrusion: the parts of print_hours
   template <class Fields, class Self>
@@ -118,7 +118,8 @@ PrintEstimate estimate_print(const PrintCensus& census, const PrinterProfile& pr
                              const MaterialPalette& palette);
 
 /// The material the printer builds support in (its support material; an
-/// FDM printer's first model material), or null where it prints none.
+/// FDM printer without one, its first model material), or null where it
+/// prints none.
 const Material* support_material_of(const PrinterProfile& printer, const MaterialPalette& palette);
 
 }  // namespace spec2fab

@@ -1,7 +1,8 @@
 // Bench problem "fast_balance" (spec2fab bench): the print-time objective
 // of datasets/experiments/fast_balance_box.json on a finer core — the 40 ×
 // 30 × 20 mm box's 2 mm PLA shell over 3 × 2 × 2 core cells (12.67 × 14 ×
-// 9 mm, tiling the 38 × 28 × 18 mm inside the shell's outer face), each PLA or void (4,096 carvings), on the FDM printer. One tuner of
+// 9 mm, tiling x, y, z from 2 mm to the box's far faces, as balance_box's
+// cells do), each PLA or void (4,096 carvings), on the FDM printer. One tuner of
 // two terms: the print's time (print_estimate on 1 mm cells: raster lines
 // with acceleration, travel over every cavity, a time per layer) and, held
 // at most 1.5 mm (penalty 1,000 per mm past it), the centre of mass's distance across gravity from x =

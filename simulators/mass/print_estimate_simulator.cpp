@@ -104,7 +104,8 @@ class PrintEstimateSimulator final : public SimulatorFor<PrintEstimateObservatio
 
   static TypeDoc doc() {
     return {"What the print costs and how long it takes: the census fabrication takes (each material's volume, "
-            "support under overhangs and in cavities, raster travel) on cells of voxel_mm over the solid, priced "
+            "support where the printer puts it (PolyJet: under every overhang and in cavities; FDM: as its "
+            "profile's support says), raster travel) on cells of voxel_mm over the solid, priced "
             "with the library's cost.price_usd_per_kg and timed with the printer profile's print_time model "
             "(layers and raster rows scaled to the printer's). The same model as result.json's "
             "fabrication.print, which uses the printer's own voxels. Needs the run's printer and a price for "

@@ -322,8 +322,8 @@ TEST(PrintEstimate, FdmTimeAgreesWithPrusaSlicersEstimate) {
     ASSERT_TRUE(std::isfinite(slicer_hours) && std::isfinite(slicer_cm3)) << gcode;
     double ours_cm3 = ours.materials.at("PLA").volume_mm3 / 1e3;
     if (ours.support) ours_cm3 += ours.support->volume_mm3 / 1e3;
-    // Measured: 1.648 h against 1.689 h (−2.4 %) plain; 1.872 against 2.029 h
-    // (−7.7 %) with support, whose many short lines the model leaves out.
+    // Measured: 1.647 h against 1.689 h (−2.5 %) plain; 1.871 against 2.029 h
+    // (−7.8 %) with support, whose many short lines the model leaves out.
     std::printf("support %d: ours %.4f h, %.3f cm3; PrusaSlicer %.4f h, %.3f cm3\n", support, *ours.print_hours,
                 ours_cm3, slicer_hours, slicer_cm3);
     EXPECT_NEAR(*ours.print_hours / slicer_hours, 1.0, support ? 0.12 : 0.05)

@@ -195,7 +195,7 @@ class StrongLightTranslator final : public TuningTranslator {
                 prefixed(option_docs<Options>(), "goal."),
                 R"({"translator": "strong_light", "goal": {"cells": [5, 1, 1], "fixed_min": [-1, -1, -1], )"
                 R"("fixed_max": [0.5, 11, 11], "load_min": [99.5, -1, -1], "load_max": [101, 11, 11], )"
-                R"("force_n": [0, 0, -20]}})"};
+                R"("force_n": [0, 0, -30]}})"};
     doc.properties.push_back({"optimizer", "optimizer", "branch_and_bound, best_bound_first",
                               "the cells' optimizer (any registered)"});
     append(doc.properties, TreeOutputOptions::docs());
