@@ -51,6 +51,8 @@ class CMakeBuild(build_ext):
         target = pathlib.Path(self.get_ext_fullpath(ext.name))
         target.parent.mkdir(parents=True, exist_ok=True)
         shutil.copy2(built, target)
+        # The mesh reader program beside the extension, where load_mesh looks for it.
+        shutil.copy2(build_dir / "spec2fab-read-mesh", target.parent / "spec2fab-read-mesh")
 
 
 setup(ext_modules=[CMakeExtension("spec2fab._spec2fab")], cmdclass={"build_ext": CMakeBuild})

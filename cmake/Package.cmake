@@ -43,6 +43,7 @@ endfunction()
 spec2fab_external_libraries(SPEC2FAB_EXTERNAL_LIBRARIES ${SPEC2FAB_MODULES})
 
 install(TARGETS spec2fab RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+install(TARGETS spec2fab-read-mesh RUNTIME DESTINATION ${CMAKE_INSTALL_LIBEXECDIR})  # load_mesh looks there
 install(FILES $<TARGET_FILE:spec2fab_modules> DESTINATION ${CMAKE_INSTALL_LIBDIR} RENAME libspec2fab.a)
 if(TARGET spec2fab_tetgen_archive)
   install(FILES $<TARGET_FILE:spec2fab_tetgen_archive> DESTINATION ${CMAKE_INSTALL_LIBDIR} RENAME libspec2fab_tetgen.a)

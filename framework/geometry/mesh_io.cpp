@@ -12,7 +12,9 @@
 #include <cstdlib>
 #include <string_view>
 
+#include <dlfcn.h>
 #include <fcntl.h>
+#include <spawn.h>
 #include <poll.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -222,45 +224,140 @@ bool take_raw(std::string_view& in, std::vector<T>& values) {
   return true;
 }
 
-/// Runs Assimp in a child process: its readers crash (SIGSEGV, aborted
+/// What the reader process sends back: 'M' and the mesh's arrays, or 'E'
+/// and the refusal's text.
+std::string read_mesh_answer(const std::filesystem::path& file, double scale_to_mm) {
+  std::string answer;
+  try {
+    const Mesh mesh = import_with_assimp(file, scale_to_mm);
+    answer.push_back('M');  // not = "M": g++ 12 warns falsely (-Wrestrict) on assigning a literal here
+    append_raw(answer, mesh.vertices);
+    append_raw(answer, mesh.triangles);
+    append_raw(answer, mesh.corner_uv);
+  } catch (const std::exception& e) {
+    answer.assign(1, 'E');
+    answer += e.what();
+  }
+  return answer;
+}
+
+// The reader runs with the default action of every deadly signal, so that
+// the parent sees a crash as one (a fuzzer's or sanitizer's handler would
+// report it as its own, or exit with a code of its own), and without
+// stderr: what a crash prints (a sanitizer's report) is not the user's line.
+void become_reader_process() {
+  for (int signal : {SIGSEGV, SIGBUS, SIGABRT, SIGFPE, SIGILL}) std::signal(signal, SIG_DFL);
+  if (const int quiet = open("/dev/null", O_WRONLY); quiet >= 0) dup2(quiet, STDERR_FILENO);
+}
+
+[[noreturn]] void send_and_exit(int fd, const std::string& answer) {
+  for (size_t sent = 0; sent < answer.size();) {
+    const ssize_t n = write(fd, answer.data() + sent, answer.size() - sent);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) _exit(3);
+    sent += static_cast<size_t>(n);
+  }
+  _exit(0);
+}
+
+constexpr const char* kReaderProgramName = "spec2fab-read-mesh";
+
+bool is_program(const std::filesystem::path& file) {
+  std::error_code error;
+  return !file.empty() && std::filesystem::is_regular_file(file, error) && access(file.c_str(), X_OK) == 0;
+}
+
+/// The program spec2fab-read-mesh: named by SPEC2FAB_MESH_READER, else
+/// beside the code that holds this function (the command, or the Python
+/// module's library), beside the running program, where `cmake --install`
+/// put it, or in the build tree that made this code. Empty when none is.
+std::filesystem::path reader_program() {
+  static const std::filesystem::path found = [] {
+    if (const char* named = std::getenv("SPEC2FAB_MESH_READER"); named != nullptr && *named != '\0') {
+      if (!is_program(named))
+        throw InputError(std::string("SPEC2FAB_MESH_READER=") + named + ": not an executable file (unset it to use " +
+                         kReaderProgramName + " beside spec2fab)");
+      return std::filesystem::path(named);
+    }
+    std::vector<std::filesystem::path> places;
+    std::error_code error;
+    if (Dl_info info{}; dladdr(reinterpret_cast<void*>(&mesh_reader_main), &info) != 0 && info.dli_fname != nullptr)
+      places.push_back(std::filesystem::weakly_canonical(info.dli_fname, error).parent_path() / kReaderProgramName);
+    places.push_back(std::filesystem::read_symlink("/proc/self/exe", error).parent_path() / kReaderProgramName);
+#ifdef SPEC2FAB_MESH_READER_INSTALLED
+    places.emplace_back(SPEC2FAB_MESH_READER_INSTALLED);
+#endif
+#ifdef SPEC2FAB_MESH_READER_BUILT
+    places.emplace_back(SPEC2FAB_MESH_READER_BUILT);
+#endif
+    for (const auto& place : places)
+      if (is_program(place)) return place;
+    return std::filesystem::path();
+  }();
+  return found;
+}
+
+/// Starts spec2fab-read-mesh on the file, its stdout the pipe's write end.
+/// A new program, not a fork of this one: a fork of a process with threads
+/// (TBB's workers, the pools libraries start when loaded) may inherit a lock
+/// another thread held — the allocator's, under a sanitizer — and hang in
+/// its first allocation; posix_spawn starts the program afresh.
+/// Returns posix_spawn's error number (0: started).
+int spawn_reader(const std::filesystem::path& program, const std::filesystem::path& file, double scale_to_mm,
+                 int write_end, pid_t& child) {
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, write_end, STDOUT_FILENO);
+  posix_spawnattr_t attributes;
+  posix_spawnattr_init(&attributes);
+  // Not the signals this process blocks (SIGINT and SIGTERM, for its signal
+  // thread) nor the actions it set: the reader is killed like any program.
+  sigset_t none, reset;
+  sigemptyset(&none);
+  sigemptyset(&reset);
+  for (int signal : {SIGINT, SIGTERM, SIGPIPE, SIGHUP, SIGQUIT}) sigaddset(&reset, signal);
+  posix_spawnattr_setsigmask(&attributes, &none);
+  posix_spawnattr_setsigdefault(&attributes, &reset);
+  posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETSIGMASK | POSIX_SPAWN_SETSIGDEF);
+  const std::string scale = fmt::format("{:.17g}", scale_to_mm);
+  std::string program_text = program.string(), file_text = file.string();
+  char* arguments[] = {program_text.data(), file_text.data(), const_cast<char*>(scale.c_str()), nullptr};
+  const int error = posix_spawn(&child, program_text.c_str(), &actions, &attributes, arguments, environ);
+  posix_spawn_file_actions_destroy(&actions);
+  posix_spawnattr_destroy(&attributes);
+  return error;
+}
+
+/// Runs Assimp in another process: its readers crash (SIGSEGV, aborted
 /// assertions) and loop forever on some malformed files, which must cost a
-/// clear refusal, not the run. The child sends back the mesh, or the
-/// refusal's text; a child that dies, or takes longer than `seconds`, is
-/// named as such.
+/// clear refusal, not the run. That process is spec2fab-read-mesh where it
+/// is found (reader_program), else a fork of this one. It sends back the
+/// mesh, or the refusal's text; one that dies, or takes longer than
+/// `seconds`, is named as such.
 Mesh import_isolated(const std::filesystem::path& file, double scale_to_mm, const Limits& limits) {
   const double seconds = limits.get("mesh_read_seconds");
+  const std::filesystem::path program = reader_program();
   int pipe_ends[2];
   if (pipe2(pipe_ends, O_CLOEXEC) != 0) return import_with_assimp(file, scale_to_mm);
-  const pid_t child = fork();
-  if (child < 0) {
-    close(pipe_ends[0]);
-    close(pipe_ends[1]);
-    return import_with_assimp(file, scale_to_mm);
-  }
-  if (child == 0) {
-    close(pipe_ends[0]);
-    // Die by the signal, so that the parent sees it (a fuzzer's or
-    // sanitizer's handler would report the child's crash as the parent's).
-    for (int signal : {SIGSEGV, SIGBUS, SIGABRT, SIGFPE, SIGILL}) std::signal(signal, SIG_DFL);
-    // What a crash prints (a sanitizer's report) is not the user's one line.
-    if (const int quiet = open("/dev/null", O_WRONLY); quiet >= 0) dup2(quiet, STDERR_FILENO);
-    std::string answer;
-    try {
-      const Mesh mesh = import_with_assimp(file, scale_to_mm);
-      answer.push_back('M');  // not = "M": g++ 12 warns falsely (-Wrestrict) on assigning a literal here
-      append_raw(answer, mesh.vertices);
-      append_raw(answer, mesh.triangles);
-      append_raw(answer, mesh.corner_uv);
-    } catch (const std::exception& e) {
-      answer.assign(1, 'E');
-      answer += e.what();
+  pid_t child = -1;
+  if (!program.empty()) {
+    if (const int error = spawn_reader(program, file, scale_to_mm, pipe_ends[1], child); error != 0) {
+      close(pipe_ends[0]);
+      close(pipe_ends[1]);
+      fail(file, "read", "cannot start the mesh reader " + program.string() + ": " + std::strerror(error));
     }
-    for (size_t sent = 0; sent < answer.size();) {
-      const ssize_t n = write(pipe_ends[1], answer.data() + sent, answer.size() - sent);
-      if (n <= 0) _exit(3);
-      sent += static_cast<size_t>(n);
+  } else {
+    child = fork();
+    if (child < 0) {
+      close(pipe_ends[0]);
+      close(pipe_ends[1]);
+      return import_with_assimp(file, scale_to_mm);
     }
-    _exit(0);
+    if (child == 0) {
+      close(pipe_ends[0]);
+      become_reader_process();
+      send_and_exit(pipe_ends[1], read_mesh_answer(file, scale_to_mm));
+    }
   }
   close(pipe_ends[1]);
   std::string answer;
@@ -319,6 +416,16 @@ Mesh load_mesh(const std::filesystem::path& file, double scale_to_mm, const Limi
   if (process == MeshReaderProcess::this_one || std::getenv("OMPI_COMM_WORLD_SIZE") != nullptr)
     return import_with_assimp(file, scale_to_mm);
   return import_isolated(file, scale_to_mm, limits);
+}
+
+void mesh_reader_main(int argc, char** argv) {
+  become_reader_process();
+  if (argc != 3) send_and_exit(STDOUT_FILENO, "Espec2fab-read-mesh: give a mesh file and its scale to mm (run by spec2fab)");
+  char* end = nullptr;
+  const double scale_to_mm = std::strtod(argv[2], &end);
+  if (end == argv[2] || *end != '\0' || !(scale_to_mm > 0))
+    send_and_exit(STDOUT_FILENO, std::string("Espec2fab-read-mesh: not a positive scale: ") + argv[2]);
+  send_and_exit(STDOUT_FILENO, read_mesh_answer(argv[1], scale_to_mm));
 }
 
 namespace {

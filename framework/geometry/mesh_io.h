@@ -19,7 +19,7 @@ namespace spec2fab {
 /// Each format's own grammar (OFF and PLY counts, a binary STL's size) is
 /// checked before Assimp sees the file. Assimp's readers have crashed or
 /// hung on malformed files these checks now refuse, so by default they still
-/// run in a child process: a reader that dies, or takes longer than
+/// run in a process of their own (mesh_reader_main): a reader that dies, or takes longer than
 /// `limits`' "mesh_read_seconds" (the run's; 60 s by default), is
 /// a refusal naming the file.
 enum class MeshReaderProcess {
@@ -28,6 +28,16 @@ enum class MeshReaderProcess {
 };
 Mesh load_mesh(const std::filesystem::path& file, double scale_to_mm = 1.0, const Limits& limits = default_limits(),
                MeshReaderProcess process = MeshReaderProcess::automatic);
+
+/// The program spec2fab-read-mesh (cli/read_mesh_main.cpp), which
+/// load_mesh starts to read a file in a process of its own: arguments the
+/// file and its scale to mm; writes the mesh, or the refusal, to stdout in
+/// load_mesh's own encoding; never returns. load_mesh looks for the program
+/// in SPEC2FAB_MESH_READER, beside the code that calls it, beside the
+/// running program, where it was installed, in the build tree; without it,
+/// the reader runs in a fork of this process (which can hang where another
+/// thread held a lock — the allocator's under a sanitizer — as it forked).
+[[noreturn]] void mesh_reader_main(int argc, char** argv);
 
 /// Writes a mesh (format from the extension: .obj, .stl, .ply) — used to make
 /// datasets and test fixtures.

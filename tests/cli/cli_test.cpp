@@ -196,6 +196,34 @@ TEST_F(Cli, OpenMeshIsRejectedWithItsDefect) {
   EXPECT_THAT(single_line(r.out), HasSubstr("open.obj: not closed: 3 boundary edges"));
 }
 
+// Assimp runs in spec2fab-read-mesh, a program of its own (not a fork of a
+// process with threads, which hung once in CI). Stand-ins for it, named by
+// SPEC2FAB_MESH_READER, show that a reader that dies or hangs is a refusal
+// naming the file, and that a variable naming no program is said so.
+TEST_F(Cli, TheMeshReaderIsAProgramWhoseCrashOrHangIsARefusal) {
+  const fs::path sphere = kDatasets / "meshes/sphere_r25.obj";
+  const std::string validate = " " + std::string(SPEC2FAB_CLI_PATH) + " validate " +
+                               experiment("e", valid_body(kTree)).string();
+  const Result fine = run_spec2fab("validate " + experiment("e", valid_body(kTree)).string());
+  EXPECT_EQ(fine.code, 0) << fine.out;
+
+  std::ofstream(dir_ / "crash.sh") << "#!/bin/sh\nkill -SEGV $$\n";
+  std::ofstream(dir_ / "hang.sh") << "#!/bin/sh\nexec sleep 30\n";
+  for (const char* script : {"crash.sh", "hang.sh"})
+    fs::permissions(dir_ / script, fs::perms::owner_all);
+  const Result crashed = run_command("SPEC2FAB_MESH_READER=" + (dir_ / "crash.sh").string() + validate);
+  EXPECT_EQ(crashed.code, 2);
+  EXPECT_THAT(single_line(crashed.out),
+              HasSubstr(sphere.string() + ": cannot read mesh: the mesh reader (Assimp) crashed on it (Segmentation fault)"));
+  const Result hung =
+      run_command("SPEC2FAB_MESH_READER=" + (dir_ / "hang.sh").string() + validate + " --limit mesh_read_seconds=0.5");
+  EXPECT_EQ(hung.code, 2);
+  EXPECT_THAT(single_line(hung.out), HasSubstr(sphere.string() + ": cannot read mesh: the mesh reader (Assimp) did not finish in 0.5 s"));
+  const Result missing = run_command("SPEC2FAB_MESH_READER=" + (dir_ / "none").string() + validate);
+  EXPECT_EQ(missing.code, 2);
+  EXPECT_THAT(single_line(missing.out), HasSubstr("SPEC2FAB_MESH_READER=" + (dir_ / "none").string() + ": not an executable file"));
+}
+
 // docs/parts.md is what the registries declare, regenerated, byte for byte.
 TEST_F(Cli, PartsReferenceInDocsIsCurrent) {
   // docs/parts.md documents the full build.
