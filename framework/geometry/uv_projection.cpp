@@ -57,8 +57,12 @@ Vec2 UvProjection::operator()(const Vec3& p) const {
   const Vec3& hi = bounds_.upper;
   switch (source_) {
     case UvSource::mesh:  // no projection asked for: fall back to planar
-    case UvSource::planar:
-      return {fraction(p[a_], lo[a_], hi[a_]), fraction(p[b_], lo[b_], hi[b_])};
+    case UvSource::planar: {
+      // u along the first of the other axes in x, y, z order, v along the
+      // second: a picture on uv_axis y lies in x (across) and z (up).
+      const int u = std::min(a_, b_), v = std::max(a_, b_);
+      return {fraction(p[u], lo[u], hi[u]), fraction(p[v], lo[v], hi[v])};
+    }
     case UvSource::cylindrical: {
       const Vec3 d = p - bounds_.center();
       return {turn_fraction(d[a_], d[b_]), fraction(p[axis_], lo[axis_], hi[axis_])};

@@ -10,7 +10,7 @@ namespace spec2fab {
 
 enum class UvSource {
   mesh,         ///< the mesh's own texture coordinates (interpolated on each triangle)
-  planar,       ///< (u,v) from the two axes other than `axis`, normalised to the bounds
+  planar,       ///< (u,v) from the two axes other than `axis`, in x, y, z order, normalised to the bounds
   cylindrical,  ///< u = angle around `axis` / 2π, v = height along it, normalised to the bounds
   spherical,    ///< u = longitude / 2π, v = colatitude / π, about the bounds' centre, pole on `axis`
 };

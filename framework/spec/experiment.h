@@ -69,7 +69,7 @@ struct GeometryKeys {
              "where surface coordinates (u, v) come from: the mesh's texture coordinates, or a projection of the "
              "closest surface point about the bounds");
     d.choice(o.uv_axis, "uv_axis", {"x", "y", "z"},
-             "axis of the projection (planar: normal; cylindrical: axis; spherical: pole)");
+             "axis of the projection (planar: its normal, u and v along the other two in x, y, z order; cylindrical: axis; spherical: pole)");
     d.number(o.field_voxel_mm, "field_voxel_mm", Range::closed(0, 1e3),
              "cell of the narrow-band field behind depth and (u, v) queries; 0: chosen from the shape; smaller is "
              "more exact near sharp features and slower to build");

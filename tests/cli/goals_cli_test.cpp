@@ -21,6 +21,8 @@ fs::path shipped_without_print(const fs::path& dir, const std::string& name, boo
     experiment[key] = (shipped / experiment[key].get<std::string>()).string();
   }
   experiment["geometry"]["mesh"] = (shipped / experiment["geometry"]["mesh"].get<std::string>()).string();
+  if (experiment["goal"].contains("texture"))
+    experiment["goal"]["texture"]["image"] = (shipped / experiment["goal"]["texture"]["image"].get<std::string>()).string();
   experiment["output"] = {{"slices", slices}, {"stl", false}, {"3mf", false}, {"render", false}};
   const fs::path file = dir / (name + ".json");
   std::ofstream(file) << experiment.dump(2);
@@ -215,6 +217,53 @@ TEST_F(Cli, TheCraneFallsSolidAndStandsTunedAsItsSlicesShow) {
                                    file.string() + " " + run.string());
   EXPECT_EQ(check.code, 0) << check.out;
   EXPECT_THAT(check.out, HasSubstr("ok: centres agree"));
+}
+
+// stand_textured_tower: Make It Stand composed with the texture piece. The
+// tower's faces carry a picture in bronzeFill over PLA, looked up before the
+// cells are tuned, so the bronze is weighed: printed solid with its picture
+// the tower falls further out than the plain one's centroid (-1.000 mm);
+// tuned (carved at the top, bronze low) it stands with its margin, and
+// check_stand.py finds the same centre in the print's slices. A shell
+// thinner than the inks, or a texture by tuners, is refused in one line.
+TEST_F(Cli, TheTexturedTowerStandsWithItsBronzePictureWeighed) {
+  const fs::path file = shipped_without_print(dir_, "stand_textured_tower", /*slices=*/true);
+  const fs::path run = dir_ / "run";
+  const Result r = run_spec2fab("run -q " + file.string() + " --out " + run.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto result = nlohmann::json::parse(read(run / "result.json"));
+  const auto& stand = result["stand"];
+  EXPECT_FALSE(stand["solid"]["stands"].get<bool>()) << stand.dump(2);
+  EXPECT_LT(stand["solid"]["margin_mm"].get<double>(), -1.02) << "the bronze picture weighs on the leaning side";
+  EXPECT_TRUE(stand["tuned"]["stands"].get<bool>()) << stand.dump(2);
+  EXPECT_GE(stand["tuned"]["margin_mm"].get<double>(), 1.0);
+  const auto& texture = stand["texture"];
+  EXPECT_EQ(texture["inks"], nlohmann::json({"bronzeFill"})) << texture.dump(2);
+  EXPECT_EQ(texture["method"], "lookup");
+  EXPECT_EQ(texture["printable_stacks"], 3) << "0, 0.4 and 0.8 mm of bronze";
+  EXPECT_GT(texture["delta_e00"]["pixels"].get<int>(), 1000);
+  EXPECT_GT(result["fabrication"]["print"]["materials"]["bronzeFill"]["volume_mm3"].get<double>(), 0);
+  for (const char* preview : {"stand.png", "goal_vs_achieved.png", "look.obj", "look.png"})
+    EXPECT_TRUE(fs::exists(run / "preview" / preview)) << preview;
+
+  const Result check = run_command(std::string(SPEC2FAB_PYTHON) + " " + SPEC2FAB_TOOLS_DIR + "/check_stand.py " +
+                                   file.string() + " " + run.string());
+  EXPECT_EQ(check.code, 0) << check.out;
+  EXPECT_THAT(check.out, HasSubstr("ok: centres agree"));
+
+  nlohmann::json thin = nlohmann::json::parse(read(file));
+  thin["goal"]["shell_mm"] = 1.0;
+  std::ofstream(dir_ / "thin.json") << thin.dump();
+  const Result refused = run_spec2fab("validate " + (dir_ / "thin.json").string());
+  EXPECT_EQ(refused.code, 2);
+  EXPECT_THAT(single_line(refused.out),
+              HasSubstr("/goal/shell_mm: 1 mm is thinner than the texture's 1.2 mm (its thickest stack and a step"));
+  nlohmann::json tuners = nlohmann::json::parse(read(file));
+  tuners["goal"]["texture"]["method"] = "tuners";
+  std::ofstream(dir_ / "tuners.json") << tuners.dump();
+  const Result by_tuners = run_spec2fab("validate " + (dir_ / "tuners.json").string());
+  EXPECT_EQ(by_tuners.code, 2);
+  EXPECT_THAT(single_line(by_tuners.out), HasSubstr("/goal/texture/method: stand prints its texture by lookup"));
 }
 
 }  // namespace

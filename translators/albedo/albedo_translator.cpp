@@ -166,7 +166,7 @@ class AlbedoTranslator final : public TuningTranslator {
     if (!texture_.lookup()) previews.push_back("preview/convergence.png");
     write_predicted_look(achieved, context.folder.path("preview/render.png"));
     previews.push_back("preview/render.png");
-    texture_.write_look(achieved, solid_.mesh(), context.folder);
+    texture_.write_look(achieved, solid_, context.folder);
   }
 
 

@@ -206,7 +206,7 @@ class DeformationTextureTranslator final : public TuningTranslator {
     context.report.add("texture", texture_.report(achieved));
     texture_.write_preview({&texture_.image().pixels, &achieved},
                            context.folder.path("preview/texture_goal_vs_achieved.png"));
-    texture_.write_look(achieved, context.experiment.solid().mesh(), context.folder);
+    texture_.write_look(achieved, context.experiment.solid(), context.folder);
     // The cells' tuner ran last: its run is the record's last.
     DeformationReport deformation{elastic_.report(network_, *tree_, record.runs.back().summary, context), {}};
     if (options_.compare_without_shell)

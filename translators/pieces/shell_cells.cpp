@@ -9,7 +9,7 @@
 
 namespace spec2fab {
 
-NodePtr make_shell_cells(const ShellCells& shell, const Experiment& experiment, const std::string& where,
+NodePtr make_shell_cells(ShellCells shell, const Experiment& experiment, const std::string& where,
                          const std::string& cell_key) {
   const MaterialPalette& palette = experiment.palette();
   const Bounds& bounds = experiment.solid().bounds();
@@ -27,7 +27,8 @@ NodePtr make_shell_cells(const ShellCells& shell, const Experiment& experiment, 
       material_choice(palette, shell.cell_materials.front(), shell.cell_materials, where + "/" + cell_key));
   StratumOptions stratum;
   stratum.depth_mm = fixed_number(shell.shell_mm, stratum.depth_mm);
-  stratum.shell.node = make_solid_material(fixed_material(palette, shell.shell_material, where + "/material"));
+  stratum.shell.node = shell.shell ? std::move(shell.shell)
+                                   : make_solid_material(fixed_material(palette, shell.shell_material, where + "/material"));
   stratum.core.node = make_voxel(std::move(voxel));
   return make_stratum(std::move(stratum));
 }

@@ -21,12 +21,15 @@ struct ShellCells {
   std::array<int, 3> cells{1, 1, 1};
   std::string shell_material;
   std::vector<std::string> cell_materials;  ///< the first is every cell's start
+  /// What the shell is instead of solid shell_material (a texture's
+  /// stratum of inks over it): any node whose frame is the shell's.
+  NodePtr shell = nullptr;
 };
 
 /// The tree; InputError at `where`/shell_mm when the shell leaves no core
 /// in the experiment's shape, at `where`/material or /core_materials for a
 /// material the printer does not hold (`cell_key` names the latter).
-NodePtr make_shell_cells(const ShellCells& shell, const Experiment& experiment, const std::string& where,
+NodePtr make_shell_cells(ShellCells shell, const Experiment& experiment, const std::string& where,
                          const std::string& cell_key);
 
 /// Each cell's material now, and how many tuned (free) cells are void.

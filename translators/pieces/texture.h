@@ -281,11 +281,12 @@ class TexturePiece {
   void write_preview(const std::vector<const std::vector<Rgb>*>& panels, const std::filesystem::path& file) const {
     write_colour_panels(panels, columns_[0], columns_[1], file, top_row_at_highest_v_);
   }
-  /// The look for report.html's 3D view: `mesh` with its surface
-  /// coordinates (preview/look.obj) and the colours `achieved` in them
-  /// (preview/look.png, at most 1024 px a side). Nothing for a mesh without
-  /// uvs or of more than 200,000 triangles (the page's limit).
-  void write_look(const std::vector<Rgb>& achieved, const Mesh& mesh, const RunFolder& folder) const;
+  /// The look for report.html's 3D view: the solid's mesh with its surface
+  /// coordinates (preview/look.obj: the mesh's own, else the solid's
+  /// projection at each corner) and the colours `achieved` in them
+  /// (preview/look.png, at most 1024 px a side). Nothing for a mesh of more
+  /// than 200,000 triangles (the page's limit).
+  void write_look(const std::vector<Rgb>& achieved, const Solid& solid, const RunFolder& folder) const;
   bool diffusion() const { return diffusion_; }
   double step_mm() const { return step_mm_; }
   /// The thickest stack: every ink at its thickest.

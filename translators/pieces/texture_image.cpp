@@ -114,9 +114,20 @@ DeltaE delta_e_statistics(const std::vector<Rgb>& goal, const std::vector<Rgb>& 
   return {d.size(), mean, p95, d.back()};
 }
 
-void TexturePiece::write_look(const std::vector<Rgb>& achieved, const Mesh& mesh, const RunFolder& folder) const {
+void TexturePiece::write_look(const std::vector<Rgb>& achieved, const Solid& solid, const RunFolder& folder) const {
   constexpr size_t kMostTriangles = 200000;  // beyond, the page would outgrow its budget (report/run_page.cpp)
-  if (!mesh.has_uv() || mesh.triangles.size() > kMostTriangles) return;
+  const Mesh& mesh = solid.mesh();
+  if (mesh.triangles.size() > kMostTriangles) return;
+  // A mesh without uvs (an STL) has them from the solid's projection, per corner.
+  std::vector<Vec2> projected;
+  if (!mesh.has_uv()) {
+    projected.reserve(3 * mesh.triangles.size());
+    for (size_t t = 0; t < mesh.triangles.size(); ++t)
+      for (int k = 0; k < 3; ++k)
+        projected.push_back(
+            solid.closest_point_on_triangle(static_cast<int>(t), mesh.vertices[static_cast<size_t>(mesh.triangles[t][k])]).uv);
+  }
+  const std::vector<Vec2>& corner_uv = mesh.has_uv() ? mesh.corner_uv : projected;
   const std::array<int, 2> columns = columns_;
   cv::Mat look(columns[1], columns[0], CV_8UC3);
   for (int j = 0; j < columns[1]; ++j)
@@ -134,7 +145,7 @@ void TexturePiece::write_look(const std::vector<Rgb>& achieved, const Mesh& mesh
   write_image(folder.path("preview/look.png"), look);
   std::string obj = "# spec2fab: the shape with its surface coordinates; preview/look.png holds the predicted colours\n";
   for (const Vec3& v : mesh.vertices) obj += fmt::format("v {:.6g} {:.6g} {:.6g}\n", v.x(), v.y(), v.z());
-  for (const Vec2& uv : mesh.corner_uv) obj += fmt::format("vt {:.6g} {:.6g}\n", uv.x(), uv.y());
+  for (const Vec2& uv : corner_uv) obj += fmt::format("vt {:.6g} {:.6g}\n", uv.x(), uv.y());
   for (size_t t = 0; t < mesh.triangles.size(); ++t) {
     const Eigen::Vector3i& f = mesh.triangles[t];
     obj += fmt::format("f {}/{} {}/{} {}/{}\n", f[0] + 1, 3 * t + 1, f[1] + 1, 3 * t + 2, f[2] + 1, 3 * t + 3);

@@ -12,6 +12,12 @@
 // carved cell is a cavity: empty on an FDM printer, filled with support gel
 // on a PolyJet one (MaterialPalette::cavity_fill), which the mass
 // properties weigh — there, carving moves the centre far less.
+//
+// With goal.texture, the shell carries a picture: the texture piece
+// (pieces/texture.h, method lookup) puts its ink stacks in a stratum at the
+// surface, over the shell's material. The stacks are chosen before the
+// cells are tuned, so the inks' weight is part of what must stand (a dense
+// ink, such as bronzeFill on the FDM dual printer, moves the centre itself).
 
 #include <cmath>
 #include <limits>
@@ -24,9 +30,11 @@
 #include "core/image_write.h"
 #include "core/options.h"
 #include "../pieces/shell_cells.h"
+#include "../pieces/texture.h"
 #include "mass/mass_properties.h"
 #include "mass/stability.h"
 #include "reducer/nodes/nodes.h"
+#include "reducer/nodes/stack_grid.h"
 #include "reducer/reducer_tree.h"
 #include "spec/report_fields.h"
 #include "spec/tuning_translator.h"
@@ -59,6 +67,7 @@ struct StandReport {
   std::vector<std::string> materials, assignment;
   StandState solid, tuned;
   double mass_change_g = 0, mass_change_fraction = 0;
+  std::optional<TextureReport> texture;
   template <class Fields, class Self>
   static void fields(Fields& f, Self& s) {
     f(s.gravity, "gravity", "the direction of gravity");
@@ -74,8 +83,20 @@ struct StandReport {
     f(s.tuned, "tuned", "the tuned print");
     f(s.mass_change_g, "mass_change_g", "tuned mass minus solid mass");
     f(s.mass_change_fraction, "mass_change_fraction", "that, as a fraction of the solid mass");
+    f(s.texture, "texture", "the picture on the shell (goal.texture), against its goal");
   }
 };
+
+// The texture's keys, under goal.texture; its inks lie on the shell's material.
+TextureOptions texture_options() {
+  TextureOptions options;
+  options.offers_lookup = true;
+  options.default_inks_text = "the printer's model materials but the shell's and clear ones";
+  // The picture's top row at the highest v: upright on the faces a planar
+  // projection along x or y maps (v is z there).
+  options.top_row_at_highest_v = true;
+  return options;
+}
 
 class StandTranslator final : public TuningTranslator {
  public:
@@ -109,10 +130,18 @@ class StandTranslator final : public TuningTranslator {
     const MaterialPalette& palette = experiment.palette();
     if (options_.material.empty()) options_.material = palette.name(1);
     if (options_.core_materials.empty()) options_.core_materials = {options_.material, "void"};
-    // stratum: the shell solid, the core in voxel cells of a material or void.
-    set_tree(make_shell_cells({options_.shell_mm, options_.cells, options_.material, options_.core_materials},
+    // stratum: the shell solid (or a texture's inks over it), the core in
+    // voxel cells of a material or void.
+    set_tree(make_shell_cells({options_.shell_mm, options_.cells, options_.material, options_.core_materials,
+                               goal.has("texture") ? textured_shell(goal, experiment) : nullptr},
                               experiment, where, "core_materials"),
              goal, experiment);
+    if (texture_) {
+      // Looked up now: the mass properties below weigh the inks chosen.
+      stacks_ = texture_->choose_stacks(texture_->diffusion());
+      stack_grid_->set_cells(stacks_);
+      tree_->evaluate();
+    }
 
     // One tuner: the least change of mass, standing with the margin. The
     // solid print first: its simulator refuses a grid past the mass_cells limit.
@@ -142,11 +171,15 @@ class StandTranslator final : public TuningTranslator {
   }
 
   std::string summary() const override {
+    const std::string texture =
+        texture_ ? fmt::format(" under a texture of {} x {} columns ({})", texture_->columns()[0],
+                               texture_->columns()[1], fmt::join(texture_->inks(), ", "))
+                 : std::string();
     return fmt::format(
-        "stand (Make It Stand): a {} mm {} shell over {} x {} x {} core cells ({} hold core), each one of {}; one "
+        "stand (Make It Stand): a {} mm {} shell{} over {} x {} x {} core cells ({} hold core), each one of {}; one "
         "tuner: the least change of mass with the centre of mass at least {} mm inside the support polygon",
-        options_.shell_mm, options_.material, options_.cells[0], options_.cells[1], options_.cells[2], core_cells_,
-        fmt::join(options_.core_materials, ", "), options_.margin_mm);
+        options_.shell_mm, options_.material, texture, options_.cells[0], options_.cells[1], options_.cells[2],
+        core_cells_, fmt::join(options_.core_materials, ", "), options_.margin_mm);
   }
 
   static TypeDoc doc() {
@@ -156,9 +189,14 @@ class StandTranslator final : public TuningTranslator {
                 "hull of its lowest points within contact_tolerance_mm) while its mass changes as little as it "
                 "can. One tuner of two terms: mass_properties + mass_difference (the objective) and stability + "
                 "stand_shortfall held at most 0. result.json's stand section says whether it stands solid and "
-                "tuned; preview/stand.png draws both centres over the support polygon.",
+                "tuned; preview/stand.png draws both centres over the support polygon. With goal.texture the "
+                "shell's surface carries a picture (the texture piece, method lookup: ink stacks over the "
+                "shell's material), chosen before the cells so that its inks are weighed.",
                 prefixed(option_docs<Options>(), "goal."),
                 R"({"translator": "stand", "goal": {"cells": [6, 6, 8], "margin_mm": 1}})"};
+    doc.properties.push_back({"goal.texture", "object", "none",
+                              "a picture on the shell: the keys below, as the albedo translator's goal has them"});
+    append(doc.properties, prefixed(option_docs(texture_options()), "goal.texture."));
     doc.properties.push_back(
         {"optimizer", "optimizer", "annealing, 20000 iterations", "the cells' optimizer (any registered)"});
     append(doc.properties, TreeOutputOptions::docs());
@@ -224,6 +262,33 @@ class StandTranslator final : public TuningTranslator {
     return fix_cells_without_volume(*tree_, tree_->node("core"), mass, context);
   }
 
+  // The shell's surface stratum: the texture's ink stacks (one column per
+  // (u, v) cell) over one step of the shell's material, the rest of the
+  // shell below it.
+  NodePtr textured_shell(const Properties& goal, const Experiment& experiment) {
+    const Properties texture_goal = goal.object("texture");
+    texture_.emplace(texture_goal, experiment, texture_options(), options_.material);
+    if (!texture_->lookup())
+      texture_goal.fail("method", "stand prints its texture by lookup (tuners per column would come before the "
+                                  "cells' tuner, which is not built)");
+    const double inks_mm = texture_->ink_mm() + texture_->step_mm();
+    if (inks_mm > options_.shell_mm)
+      goal.fail("shell_mm", fmt::format("{:g} mm is thinner than the texture's {:g} mm (its thickest stack and a step "
+                                        "of {} under it); give at least that",
+                                        options_.shell_mm, inks_mm, options_.material));
+    const LookupEstimate estimate = texture_->lookup_estimate();
+    spdlog::info("texture: {} x {} columns over {} printable stacks: ~{:.1f} s, ~{:.0f} MB", texture_->columns()[0],
+                 texture_->columns()[1], estimate.printable_stacks, estimate.seconds, estimate.megabytes);
+    const MaterialPalette& palette = experiment.palette();
+    StratumOptions inks;
+    inks.depth_mm = fixed_number(inks_mm, inks.depth_mm);
+    auto grid = texture_->stack_grid(palette, options_.material);
+    stack_grid_ = grid.get();  // the lookup sets its cells
+    inks.shell.node = std::move(grid);
+    inks.core.node = make_solid_material(fixed_material(palette, options_.material, goal.where("material")));
+    return make_stratum(std::move(inks));
+  }
+
   void report(const RunRecord& /*record*/, RunContext& context) override {
     const PartContext part = context.experiment.part_context();
     StandReport report;
@@ -256,6 +321,14 @@ class StandTranslator final : public TuningTranslator {
     }
     write_preview(support, report, context.folder.path("preview/stand.png"));
     context.report.files.previews.push_back("preview/stand.png");
+    if (texture_) {
+      const std::vector<Rgb> achieved = texture_->colours_of(stacks_);
+      report.texture = texture_->report(achieved);
+      texture_->write_preview({&texture_->image().pixels, &achieved},
+                              context.folder.path("preview/goal_vs_achieved.png"));
+      context.report.files.previews.push_back("preview/goal_vs_achieved.png");
+      texture_->write_look(achieved, tree_->solid(), context.folder);
+    }
     context.report.add("stand", report);
   }
 
@@ -354,6 +427,9 @@ class StandTranslator final : public TuningTranslator {
   int core_cells_ = 0;
   double solid_mass_kg_ = 0;
   std::unique_ptr<SimulatorFor<StabilityObservation>> stability_;
+  std::optional<TexturePiece> texture_;
+  std::vector<std::uint32_t> stacks_;    ///< each texture column's stack
+  StackGridNode* stack_grid_ = nullptr;  ///< the texture's grid, owned by tree_
 };
 
 }  // namespace
