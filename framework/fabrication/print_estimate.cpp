@@ -13,12 +13,17 @@
 namespace spec2fab {
 
 void PrintCensusSink::begin(const FabricationGrid& grid, const MaterialPalette& palette) {
-  census_ = {};
+  // Reset in place: a sink reused run after run (the print_estimate
+  // simulator's) keeps its per-column arrays' memory.
   census_.grid = grid;
   census_.voxels.assign(palette.size(), 0);
   const auto columns = static_cast<size_t>(grid.slice_voxels());
   census_.first_layer.assign(columns, -1);
   census_.last_layer.assign(columns, -1);
+  census_.lines.clear();
+  census_.gaps_um.clear();
+  census_.row_changes_um.clear();
+  census_.rows = 0;
 }
 
 void PrintCensusSink::consume(int z, const MaterialId* ids) {

@@ -28,6 +28,7 @@
 namespace spec2fab {
 
 /// What the estimate needs of the print's voxels, on the grid it was taken on.
+/// PrintCensusSink::begin resets every field in place (a field added here is reset there too).
 struct PrintCensus {
   FabricationGrid grid;
   /// Voxels per material id (0: empty voxels of the grid): the fabricator's

@@ -268,27 +268,34 @@ bool is_program(const std::filesystem::path& file) {
 }
 
 /// The program spec2fab-read-mesh: named by SPEC2FAB_MESH_READER, else
-/// beside the code that holds this function (the command, or the Python
-/// module's library), beside the running program, where `cmake --install`
-/// put it, or in the build tree that made this code. Empty when none is.
+/// beside the shared library that holds this function (the Python module),
+/// beside the running program, in the build tree that made this code, or
+/// where `cmake --install` put it. Only absolute places: a program found by
+/// a relative name would be whatever the working folder holds. Empty when
+/// none is.
 std::filesystem::path reader_program() {
   static const std::filesystem::path found = [] {
+    std::error_code error;
     if (const char* named = std::getenv("SPEC2FAB_MESH_READER"); named != nullptr && *named != '\0') {
       if (!is_program(named))
         throw InputError(std::string("SPEC2FAB_MESH_READER=") + named + ": not an executable file (unset it to use " +
                          kReaderProgramName + " beside spec2fab)");
-      return std::filesystem::path(named);
+      return std::filesystem::absolute(named, error);
     }
     std::vector<std::filesystem::path> places;
-    std::error_code error;
+    const auto beside = [&](const std::filesystem::path& file) {
+      if (file.is_absolute()) places.push_back(file.parent_path() / kReaderProgramName);
+    };
+    // dladdr names a shared object by the path it was loaded from, but the
+    // main program by its argv[0]: relative names are skipped by `beside`.
     if (Dl_info info{}; dladdr(reinterpret_cast<void*>(&mesh_reader_main), &info) != 0 && info.dli_fname != nullptr)
-      places.push_back(std::filesystem::weakly_canonical(info.dli_fname, error).parent_path() / kReaderProgramName);
-    places.push_back(std::filesystem::read_symlink("/proc/self/exe", error).parent_path() / kReaderProgramName);
-#ifdef SPEC2FAB_MESH_READER_INSTALLED
-    places.emplace_back(SPEC2FAB_MESH_READER_INSTALLED);
-#endif
+      beside(info.dli_fname);
+    beside(std::filesystem::read_symlink("/proc/self/exe", error));
 #ifdef SPEC2FAB_MESH_READER_BUILT
     places.emplace_back(SPEC2FAB_MESH_READER_BUILT);
+#endif
+#ifdef SPEC2FAB_MESH_READER_INSTALLED
+    places.emplace_back(SPEC2FAB_MESH_READER_INSTALLED);
 #endif
     for (const auto& place : places)
       if (is_program(place)) return place;
@@ -311,14 +318,12 @@ int spawn_reader(const std::filesystem::path& program, const std::filesystem::pa
   posix_spawnattr_t attributes;
   posix_spawnattr_init(&attributes);
   // Not the signals this process blocks (SIGINT and SIGTERM, for its signal
-  // thread) nor the actions it set: the reader is killed like any program.
-  sigset_t none, reset;
+  // thread). exec resets handled signals; ignored ones (nohup's SIGHUP) stay
+  // ignored, as for any program this one starts.
+  sigset_t none;
   sigemptyset(&none);
-  sigemptyset(&reset);
-  for (int signal : {SIGINT, SIGTERM, SIGPIPE, SIGHUP, SIGQUIT}) sigaddset(&reset, signal);
   posix_spawnattr_setsigmask(&attributes, &none);
-  posix_spawnattr_setsigdefault(&attributes, &reset);
-  posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETSIGMASK | POSIX_SPAWN_SETSIGDEF);
+  posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETSIGMASK);
   const std::string scale = fmt::format("{:.17g}", scale_to_mm);
   std::string program_text = program.string(), file_text = file.string();
   char* arguments[] = {program_text.data(), file_text.data(), const_cast<char*>(scale.c_str()), nullptr};
@@ -386,6 +391,11 @@ Mesh import_isolated(const std::filesystem::path& file, double scale_to_mm, cons
   if (timed_out)
     fail(file, "read", fmt::format("the mesh reader (Assimp) did not finish in {:g} s; the file is malformed or far "
                                    "too large {}", seconds, limits.how_to_change("mesh_read_seconds")));
+  // A reader program that exits with a status of its own is not at the
+  // file's door: a missing library (127), a broken install.
+  if (!program.empty() && WIFEXITED(status) && WEXITSTATUS(status) != 0)
+    fail(file, "read", fmt::format("the mesh reader {} exited with status {} (a broken install? run it alone to see "
+                                   "why)", program.string(), WEXITSTATUS(status)));
   if (WIFSIGNALED(status) || !WIFEXITED(status) || WEXITSTATUS(status) != 0 || answer.empty()) {
     const int signal = WIFSIGNALED(status) ? WTERMSIG(status) : 0;
     fail(file, "read", std::string("the mesh reader (Assimp) crashed on it") +

@@ -33,8 +33,9 @@ Mesh load_mesh(const std::filesystem::path& file, double scale_to_mm = 1.0, cons
 /// load_mesh starts to read a file in a process of its own: arguments the
 /// file and its scale to mm; writes the mesh, or the refusal, to stdout in
 /// load_mesh's own encoding; never returns. load_mesh looks for the program
-/// in SPEC2FAB_MESH_READER, beside the code that calls it, beside the
-/// running program, where it was installed, in the build tree; without it,
+/// in SPEC2FAB_MESH_READER, beside the shared library that calls it, beside
+/// the running program, in the build tree, where it was installed (absolute
+/// places only); without it,
 /// the reader runs in a fork of this process (which can hang where another
 /// thread held a lock — the allocator's under a sanitizer — as it forked).
 [[noreturn]] void mesh_reader_main(int argc, char** argv);

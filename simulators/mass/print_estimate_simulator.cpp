@@ -1,6 +1,7 @@
 /// The "print_estimate" simulator, the "print_budget" goal and the
 /// "cost_usd" and "print_hours" metrics (print_estimate_simulator.h).
 
+#include <optional>
 #include "mass/print_estimate_simulator.h"
 
 #include <algorithm>
@@ -75,6 +76,7 @@ class PrintEstimateSimulator final : public SimulatorFor<PrintEstimateObservatio
     census_printer_.dpi = {25.4 / voxel, 25.4 / voxel};
     census_printer_.layer_mm = voxel;
     fabricator_ = std::make_unique<Fabricator>(domain.tree(), census_printer_);
+    sink_.emplace(printer_.technology == "fdm");
     const double cells = fabricator_->plan().grid.needed_voxels, limit = limits_.get("mass_cells");
     if (cells > limit) {
       throw InputError(fmt::format("print_estimate: {:.3g} cells of {:.3g} mm over the solid's bounds, past the limit "
@@ -86,7 +88,7 @@ class PrintEstimateSimulator final : public SimulatorFor<PrintEstimateObservatio
   using SimulatorFor::simulate;
   void simulate(const ReducerNode& /*subtree*/, PrintEstimateObservation& out) override {
     if (!fabricator_) throw std::logic_error("print_estimate: simulate before setup");
-    PrintCensusSink sink(printer_.technology == "fdm");
+    PrintCensusSink& sink = *sink_;
     sink.census().voxels = fabricator_->run({&sink});
     const PrintEstimate estimate = estimate_print(sink.census(), printer_, palette_);
     out.data.assign(PrintEstimateObservation::kSize, kNaN);
@@ -120,6 +122,7 @@ class PrintEstimateSimulator final : public SimulatorFor<PrintEstimateObservatio
   const Limits& limits_;
   PrinterProfile printer_, census_printer_;
   std::unique_ptr<Fabricator> fabricator_;
+  std::optional<PrintCensusSink> sink_;  ///< reused: its per-column arrays are not allocated per evaluation
 };
 
 class PrintBudget final : public GoalFor<PrintEstimateObservation> {

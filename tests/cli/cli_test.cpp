@@ -204,13 +204,21 @@ TEST_F(Cli, TheMeshReaderIsAProgramWhoseCrashOrHangIsARefusal) {
   const fs::path sphere = kDatasets / "meshes/sphere_r25.obj";
   const std::string validate = " " + std::string(SPEC2FAB_CLI_PATH) + " validate " +
                                experiment("e", valid_body(kTree)).string();
-  const Result fine = run_spec2fab("validate " + experiment("e", valid_body(kTree)).string());
+  // The program itself, named: the mesh is read (without the variable a
+  // missing program would fall back to a fork and pass unseen).
+  const fs::path reader = fs::path(SPEC2FAB_CLI_PATH).parent_path() / "spec2fab-read-mesh";
+  const Result fine = run_command("SPEC2FAB_MESH_READER=" + reader.string() + validate);
   EXPECT_EQ(fine.code, 0) << fine.out;
 
   std::ofstream(dir_ / "crash.sh") << "#!/bin/sh\nkill -SEGV $$\n";
   std::ofstream(dir_ / "hang.sh") << "#!/bin/sh\nexec sleep 30\n";
-  for (const char* script : {"crash.sh", "hang.sh"})
+  std::ofstream(dir_ / "broken.sh") << "#!/bin/sh\nexit 127\n";  // what ld.so says of a missing library
+  for (const char* script : {"crash.sh", "hang.sh", "broken.sh"})
     fs::permissions(dir_ / script, fs::perms::owner_all);
+  const Result broken = run_command("SPEC2FAB_MESH_READER=" + (dir_ / "broken.sh").string() + validate);
+  EXPECT_EQ(broken.code, 2);
+  EXPECT_THAT(single_line(broken.out), HasSubstr(": cannot read mesh: the mesh reader " + (dir_ / "broken.sh").string() +
+                                                 " exited with status 127 (a broken install?"));
   const Result crashed = run_command("SPEC2FAB_MESH_READER=" + (dir_ / "crash.sh").string() + validate);
   EXPECT_EQ(crashed.code, 2);
   EXPECT_THAT(single_line(crashed.out),

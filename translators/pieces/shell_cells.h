@@ -9,12 +9,13 @@
 #include <string>
 #include <vector>
 
+#include "core/search_space.h"
 #include "reducer/node.h"
+#include "reducer/reducer_tree.h"
 
 namespace spec2fab {
 
 class Experiment;
-class ReducerTree;
 
 struct ShellCells {
   double shell_mm = 2;
@@ -38,5 +39,25 @@ struct CellAssignment {
   int carved = 0;
 };
 CellAssignment cell_assignment(ReducerTree& tree);
+
+/// Returns f() evaluated with every free cell `material` (the part printed
+/// solid); the cells are set back and the tree evaluated again afterwards,
+/// also when f throws.
+template <class F>
+auto with_cells_solid(ReducerTree& tree, MaterialId material, F&& f) {
+  struct Restore {
+    ReducerTree& tree;
+    SearchSpace space;
+    std::vector<double> values;
+    ~Restore() {
+      space.set_values(values);
+      tree.evaluate();
+    }
+  } restore{tree, tree.search_space(), {}};
+  restore.values = restore.space.values();
+  restore.space.set_values(std::vector<double>(restore.values.size(), static_cast<double>(material)));
+  tree.evaluate();
+  return f();
+}
 
 }  // namespace spec2fab

@@ -282,8 +282,8 @@ class TexturePiece {
     write_colour_panels(panels, columns_[0], columns_[1], file, top_row_at_highest_v_);
   }
   /// The look for report.html's 3D view: the solid's mesh with its surface
-  /// coordinates (preview/look.obj: the mesh's own, else the solid's
-  /// projection at each corner) and the colours `achieved` in them
+  /// coordinates (preview/look.obj: the mesh's own, or the solid's
+  /// projection at each corner when it projects) and the colours `achieved` in them
   /// (preview/look.png, at most 1024 px a side). Nothing for a mesh of more
   /// than 200,000 triangles (the page's limit).
   void write_look(const std::vector<Rgb>& achieved, const Solid& solid, const RunFolder& folder) const;

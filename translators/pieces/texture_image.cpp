@@ -118,16 +118,29 @@ void TexturePiece::write_look(const std::vector<Rgb>& achieved, const Solid& sol
   constexpr size_t kMostTriangles = 200000;  // beyond, the page would outgrow its budget (report/run_page.cpp)
   const Mesh& mesh = solid.mesh();
   if (mesh.triangles.size() > kMostTriangles) return;
-  // A mesh without uvs (an STL) has them from the solid's projection, per corner.
+  // The uvs the colours were laid out in: the mesh's own, or the solid's
+  // projection at each corner (an STL; or any mesh under "uv": planar,
+  // cylindrical, spherical). A triangle across a projection's seam (u from
+  // ~1 to ~0) has its low corners moved past 1: the viewer repeats the
+  // picture, so it shows the columns by the seam instead of all of them.
+  const bool own = solid.uv_source() == UvSource::mesh;
   std::vector<Vec2> projected;
-  if (!mesh.has_uv()) {
+  if (!own) {
     projected.reserve(3 * mesh.triangles.size());
-    for (size_t t = 0; t < mesh.triangles.size(); ++t)
+    for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+      Vec2 corner[3];
       for (int k = 0; k < 3; ++k)
-        projected.push_back(
-            solid.closest_point_on_triangle(static_cast<int>(t), mesh.vertices[static_cast<size_t>(mesh.triangles[t][k])]).uv);
+        corner[k] =
+            solid.closest_point_on_triangle(static_cast<int>(t), mesh.vertices[static_cast<size_t>(mesh.triangles[t][k])]).uv;
+      const double low = std::min({corner[0].x(), corner[1].x(), corner[2].x()});
+      const double high = std::max({corner[0].x(), corner[1].x(), corner[2].x()});
+      for (Vec2& c : corner) {
+        if (high - low > 0.5 && c.x() < 0.5) c.x() += 1;
+        projected.push_back(c);
+      }
+    }
   }
-  const std::vector<Vec2>& corner_uv = mesh.has_uv() ? mesh.corner_uv : projected;
+  const std::vector<Vec2>& corner_uv = own ? mesh.corner_uv : projected;
   const std::array<int, 2> columns = columns_;
   cv::Mat look(columns[1], columns[0], CV_8UC3);
   for (int j = 0; j < columns[1]; ++j)

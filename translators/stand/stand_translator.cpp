@@ -229,15 +229,7 @@ class StandTranslator final : public TuningTranslator {
 
   // The print with every cell its first material (the start).
   StandState solid_state(const PartContext& context) {
-    SearchSpace space = tree_->search_space();
-    const std::vector<double> start = space.values();
-    std::vector<double> solid(start.size(), static_cast<double>(first_core_material()));
-    space.set_values(solid);
-    tree_->evaluate();
-    const StandState state = simulate_state(context);
-    space.set_values(start);
-    tree_->evaluate();
-    return state;
+    return with_cells_solid(*tree_, first_core_material(), [&] { return simulate_state(context); });
   }
 
   MaterialId first_core_material() const {
@@ -267,10 +259,11 @@ class StandTranslator final : public TuningTranslator {
   // shell below it.
   NodePtr textured_shell(const Properties& goal, const Experiment& experiment) {
     const Properties texture_goal = goal.object("texture");
-    texture_.emplace(texture_goal, experiment, texture_options(), options_.material);
-    if (!texture_->lookup())
+    // Refused before the piece simulates every printable stack.
+    if (texture_goal.has("method") && texture_goal.get<std::string>("method") != "lookup")
       texture_goal.fail("method", "stand prints its texture by lookup (tuners per column would come before the "
                                   "cells' tuner, which is not built)");
+    texture_.emplace(texture_goal, experiment, texture_options(), options_.material);
     const double inks_mm = texture_->ink_mm() + texture_->step_mm();
     if (inks_mm > options_.shell_mm)
       goal.fail("shell_mm", fmt::format("{:g} mm is thinner than the texture's {:g} mm (its thickest stack and a step "

@@ -247,15 +247,8 @@ class StrongLightTranslator final : public TuningTranslator {
     ReportSections fem_record;
     fem_simulator_->write_report(tuned_solution, fem_folder, fem_record);
     context.report.files.previews.push_back("fem/deformation.png");
-    // The part printed solid: every cell its material, then back.
-    SearchSpace space = tree_->search_space();
-    const std::vector<double> tuned = space.values();
-    space.set_values(
-        std::vector<double>(tuned.size(), static_cast<double>(tree_->palette().id(options_.material, where_ + "/material"))));
-    tree_->evaluate();
-    report.solid = state_now(part);
-    space.set_values(tuned);
-    tree_->evaluate();
+    report.solid = with_cells_solid(*tree_, tree_->palette().id(options_.material, where_ + "/material"),
+                                    [&] { return state_now(part); });
     report.mass_saved_fraction = report.solid.mass_g > 0 ? 1 - report.tuned.mass_g / report.solid.mass_g : 0;
     if (!report.tuned.within_limit) {
       spdlog::warn("strong_light: the tuned part's stress ({} {:.3g} MPa) is past its limit of {:.3g} MPa: even "

@@ -93,6 +93,7 @@ class Viewer {
       const texture = new THREE.TextureLoader().load(this.images[mesh.texture].data, () => this.render());
       texture.colorSpace = THREE.SRGBColorSpace;
       texture.flipY = true;
+      texture.wrapS = THREE.RepeatWrapping;  // u past 1 across a projection's seam (texture_image.cpp)
       material = this.material([1, 1, 1], { map: texture });
     } else {
       material = this.material(mesh.color || [0.7, 0.7, 0.7], mesh.opacity ? { transparent: true, opacity: mesh.opacity } : {});
