@@ -77,38 +77,40 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
     const Solid& solid = domain.require_solid(name());
     domain_ = domain;
     check_mesh_fits(solid.volume(), settings_.mesh, where_ + "/max_tet_volume_mm3", limits_);
-    meshed_ = conformed_mesh(solid, domain.tree(), settings_.mesh, settings_.follow_interfaces, cache_, &mesh_reused_);
-    mesh_ = &meshed_->mesh;
-    conform_ = meshed_->conform;
-    timings_.mesh = mesh_reused_ ? 0.0 : meshed_->mesh_seconds;
-    timings_.conform = mesh_reused_ ? 0.0 : meshed_->conform_seconds;
-    moving_interfaces_ = settings_.follow_interfaces ? tuned_interface_parameters(domain.tree()) : std::vector<std::string>{};
-    if (!moving_interfaces_.empty() && !mesh_reused_) {
+    moving_interfaces_.clear();
+    stepped_.clear();
+    parked_.clear();
+    std::vector<std::string> continuous, stepped;
+    if (settings_.follow_interfaces) {
+      for (const TunedInterface& moving : tuned_interfaces(domain.tree())) {
+        moving_interfaces_.push_back(moving.path);
+        const bool steps = moving.parameter->kind() != ParameterKind::continuous;
+        (steps ? stepped : continuous).push_back(moving.path);
+        if (steps) stepped_.push_back(moving.parameter);
+      }
+    }
+    stepped_values(mesh_key_);
+    make_mesh();
+    if (!mesh_reused_ && !continuous.empty()) {
       spdlog::info("fem: tuned {} move(s) interfaces; the mesh follows them where they are now, and later tets "
                    "take their material by centroid (re-meshing per evaluation would make the error jump with "
                    "TetGen's points)",
-                   fmt::join(moving_interfaces_, ", "));
+                   fmt::join(continuous, ", "));
     }
-    const auto rest = Clock::now();
-    boundary_ = mesh_->boundary_faces();
-    constraints_ = make_constraints(*mesh_, boundary_, settings_);
-    probes_ = locate_probes(*mesh_, settings_.probes, where_ + "/probes");
-    solver_ = std::make_unique<ElasticSolver>(*mesh_, constraints_.fixed, settings_.linear_solver, across_ranks_);
-    centroids_.resize(mesh_->tets.size());
-    for (size_t t = 0; t < mesh_->tets.size(); ++t) centroids_[t] = mesh_->centroid(t);
-    materials_.resize(mesh_->tets.size());
-    lambda_.resize(mesh_->tets.size());
-    mu_.resize(mesh_->tets.size());
-    active_.resize(mesh_->tets.size());
-    displacement_.assign(3 * mesh_->nodes.size(), 0.0);
-    timings_.assemble_setup = seconds_since(rest);
-    spdlog::debug("fem: {} nodes, {} tets ({} for the plain solid), {} free DOFs; mesh {:.2f} s", mesh_->nodes.size(),
-                  mesh_->tets.size(), meshed_->plain_tets, solver_->free_dofs(), timings_.mesh);
+    if (!mesh_reused_ && !stepped.empty()) {
+      spdlog::info("fem: tuned {} move(s) interfaces in steps; each value they take gets a mesh that follows "
+                   "them (the last {} kept)",
+                   fmt::join(stepped, ", "), kKeptMeshes);
+    }
   }
 
   void simulate(const ReducerNode& /*subtree*/, DisplacementsObservation& out) override {
     if (!solver_) throw std::logic_error("fem: simulate before setup");
     const auto start = Clock::now();
+    if (!stepped_.empty()) {
+      stepped_values(key_now_);
+      if (key_now_ != mesh_key_) switch_mesh();
+    }
     domain_.materials_at(centroids_, materials_);
     for (size_t t = 0; t < materials_.size(); ++t) {
       const MaterialId id = materials_[t];
@@ -282,6 +284,86 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
   struct Timings {
     double mesh = 0, conform = 0, assemble_setup = 0, solve = 0;
   };
+  /// Meshes kept for the values of stepped interfaces met before (one
+  /// solver each): a branch and bound over a shell's thickness comes back.
+  static constexpr size_t kKeptMeshes = 8;
+  struct MeshState {
+    std::vector<double> key;
+    std::shared_ptr<const ConformedMesh> meshed;
+    bool reused = false;
+    std::vector<Face> boundary;
+    Constraints constraints;
+    std::vector<ProbeLocation> probes;
+    std::unique_ptr<ElasticSolver> solver;
+    std::vector<Vec3> centroids;
+    Timings timings;
+  };
+
+  void stepped_values(std::vector<double>& out) const {
+    out.clear();
+    for (const Parameter* parameter : stepped_) out.push_back(parameter->value());
+  }
+
+  // The mesh for the tree's interfaces as they are now, its constraints,
+  // probes and solver.
+  void make_mesh() {
+    const Solid& solid = domain_.require_solid(name());
+    meshed_ = conformed_mesh(solid, domain_.tree(), settings_.mesh, settings_.follow_interfaces, cache_, &mesh_reused_);
+    mesh_ = &meshed_->mesh;
+    conform_ = meshed_->conform;
+    timings_.mesh = mesh_reused_ ? 0.0 : meshed_->mesh_seconds;
+    timings_.conform = mesh_reused_ ? 0.0 : meshed_->conform_seconds;
+    const auto rest = Clock::now();
+    boundary_ = mesh_->boundary_faces();
+    constraints_ = make_constraints(*mesh_, boundary_, settings_);
+    probes_ = locate_probes(*mesh_, settings_.probes, where_ + "/probes");
+    solver_ = std::make_unique<ElasticSolver>(*mesh_, constraints_.fixed, settings_.linear_solver, across_ranks_);
+    centroids_.resize(mesh_->tets.size());
+    for (size_t t = 0; t < mesh_->tets.size(); ++t) centroids_[t] = mesh_->centroid(t);
+    materials_.resize(mesh_->tets.size());
+    lambda_.resize(mesh_->tets.size());
+    mu_.resize(mesh_->tets.size());
+    active_.resize(mesh_->tets.size());
+    displacement_.assign(3 * mesh_->nodes.size(), 0.0);
+    timings_.assemble_setup = seconds_since(rest);
+    spdlog::debug("fem: {} nodes, {} tets ({} for the plain solid), {} free DOFs; mesh {:.2f} s", mesh_->nodes.size(),
+                  mesh_->tets.size(), meshed_->plain_tets, solver_->free_dofs(), timings_.mesh);
+  }
+
+  // A stepped interface moved: the mesh made for where it is now, kept from
+  // before or made; the one left is kept for a return. Every mesh is a
+  // function of the tree's interfaces alone, so the answer does not depend
+  // on the order the values came in.
+  void switch_mesh() {
+    MeshState left{mesh_key_, std::move(meshed_), mesh_reused_, std::move(boundary_), std::move(constraints_),
+                   std::move(probes_), std::move(solver_), std::move(centroids_), timings_};
+    const auto kept = std::find_if(parked_.begin(), parked_.end(), [&](const MeshState& s) { return s.key == key_now_; });
+    if (kept != parked_.end()) {
+      MeshState& back = *kept;
+      meshed_ = std::move(back.meshed);
+      mesh_ = &meshed_->mesh;
+      conform_ = meshed_->conform;
+      mesh_reused_ = back.reused;
+      boundary_ = std::move(back.boundary);
+      constraints_ = std::move(back.constraints);
+      probes_ = std::move(back.probes);
+      solver_ = std::move(back.solver);
+      centroids_ = std::move(back.centroids);
+      timings_ = back.timings;
+      parked_.erase(kept);
+      const size_t tets = mesh_->tets.size();
+      materials_.resize(tets);
+      lambda_.resize(tets);
+      mu_.resize(tets);
+      active_.resize(tets);
+      displacement_.assign(3 * mesh_->nodes.size(), 0.0);
+    } else {
+      make_mesh();
+    }
+    mesh_key_ = key_now_;
+    parked_.push_back(std::move(left));
+    if (parked_.size() > kKeptMeshes) parked_.erase(parked_.begin());  // the longest unused
+  }
   FemSettings settings_;
   std::string where_;
   const MaterialPalette* palette_;
@@ -294,6 +376,9 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
   bool mesh_reused_ = false;
   ConformReport conform_;
   std::vector<std::string> moving_interfaces_;  // tuned parameters that move a followed interface
+  std::vector<const Parameter*> stepped_;         // those of them that take steps: a mesh per value
+  std::vector<double> mesh_key_, key_now_;        // their values the mesh was made for; now
+  std::vector<MeshState> parked_;                 // meshes made for other values, the latest last
   std::vector<Face> boundary_;
   Constraints constraints_;
   std::vector<ProbeLocation> probes_;

@@ -53,11 +53,11 @@ bool elastically_uniform(const ReducerNode& subtree, const MaterialPalette& pale
 }
 
 void collect_moving(const ReducerNode& node, const std::string& path, const MaterialPalette& palette,
-                    std::vector<std::string>& out) {
+                    std::vector<TunedInterface>& out) {
   if (elastically_uniform(node, palette)) return;
   if (node.interface_count() > 0) {
     node.read_parameters([&](const std::string& name, const Parameter& parameter) {
-      if (parameter.is_free() && parameter.kind() != ParameterKind::choice) out.push_back(path + name);
+      if (parameter.is_free() && parameter.kind() != ParameterKind::choice) out.push_back({path + name, &parameter});
     });
   }
   for (size_t i = 0; i < node.child_count(); ++i)
@@ -346,9 +346,15 @@ class Conformer {
 
 }  // namespace
 
+std::vector<TunedInterface> tuned_interfaces(const ReducerTree& tree) {
+  std::vector<TunedInterface> out;
+  collect_moving(tree.root(), "", tree.palette(), out);
+  return out;
+}
+
 std::vector<std::string> tuned_interface_parameters(const ReducerTree& tree) {
   std::vector<std::string> out;
-  collect_moving(tree.root(), "", tree.palette(), out);
+  for (const TunedInterface& moving : tuned_interfaces(tree)) out.push_back(moving.path);
   return out;
 }
 

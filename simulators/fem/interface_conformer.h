@@ -53,12 +53,23 @@ struct ConformReport {
 /// further by a material node's own interfaces (a layered stack's layers).
 ConformReport conform_to_interfaces(TetMesh& mesh, const ReducerTree& tree, std::vector<int>* labels = nullptr);
 
-/// The free continuous parameters that move an interface the mesh follows
-/// (a plane's tuned offset, a layer's tuned thickness), as parameter paths.
-/// The mesh is made once, at setup; moving interfaces are then seen through
-/// the tets' centroids. Re-meshing at each evaluation was not chosen: the
-/// error would jump whenever TetGen placed its points differently, which
-/// gradient-free and gradient optimizers alike read as noise.
+/// The free numeric parameters that move an interface the mesh follows (a
+/// plane's tuned offset, a layer's tuned thickness, a stratum's tuned
+/// depth), with their paths; material choices and interfaces inside an
+/// elastically uniform subtree are not among them.
+///
+/// A continuous one is seen through the tets' centroids on the mesh made at
+/// setup: re-meshing at each evaluation would make the error jump whenever
+/// TetGen placed its points differently, which gradient-free and gradient
+/// optimizers alike read as noise. A discrete one (a step, a few values)
+/// gets a mesh of its own for each value it takes, so the interface is
+/// followed exactly wherever the tuner puts it.
+struct TunedInterface {
+  std::string path;
+  const Parameter* parameter = nullptr;
+};
+std::vector<TunedInterface> tuned_interfaces(const ReducerTree& tree);
+/// Their paths alone.
 std::vector<std::string> tuned_interface_parameters(const ReducerTree& tree);
 
 }  // namespace spec2fab::fem

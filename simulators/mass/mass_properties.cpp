@@ -57,6 +57,14 @@ using Moments = std::array<double, 10>;
 /// count, and memory that does not grow with the slices.
 constexpr int kSliceRuns = 256;
 
+/// A parameter of a few values in steps (at most kMaxSteps), whose each
+/// value may move where the tree's leaves lie: the leaf sums and the mass
+/// bound take it value by value.
+constexpr long long kMaxSteps = 64;
+bool takes_steps(const Parameter& parameter) {
+  return parameter.kind() == ParameterKind::discrete && parameter.cardinality() <= kMaxSteps;
+}
+
 class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservation> {
  public:
   using Options = MassPropertiesOptions;
@@ -108,6 +116,7 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
     runs_.assign(runs, std::vector<Moments>(densities_.size()));
     rows_.assign(runs, std::vector<MaterialId>(static_cast<size_t>(grid_[0])));  // simulate allocates none
     leaf_sums_ = {};
+    kept_sums_.clear();
     solid_sums_.reset();
   }
 
@@ -220,7 +229,9 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
   // current materials. The same cells as sample_cells, in O(leaves) per
   // evaluation instead of O(cells). The sums are taken again when anything
   // else in the tree changed (its signature: every other parameter's value
-  // and every parameter's freedom).
+  // and every parameter's freedom); a stepped parameter of no leaf (a
+  // shell's thickness in steps) only changes the signature, and the sums of
+  // the last kKeptSums signatures are kept for its return.
   struct LeafSums {
     bool taken = false, apply = false;
     std::vector<double> signature;
@@ -238,13 +249,17 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
   static bool add_signature(const ReducerNode& node, std::vector<double>& out,
                             std::vector<const MaterialNode*>* leaves) {
     bool tuned = false;
-    node.read_parameters([&](const std::string& /*name*/, const Parameter& parameter) {
-      out.push_back(parameter.is_free() ? 1.0 : 0.0);
-      if (!parameter.is_free()) out.push_back(parameter.value());
-      tuned = tuned || parameter.is_free();
-    });
     const bool one_material = node.role() == ReducerNode::Role::material &&
                               static_cast<const MaterialNode&>(node).assigns_one_material();
+    node.read_parameters([&](const std::string& /*name*/, const Parameter& parameter) {
+      // A stepped parameter of no one-material leaf (a shell's thickness in
+      // steps) is part of the signature by its value: each value it takes
+      // has its leaf sums, taken when it first comes.
+      const bool stepped = parameter.is_free() && !one_material && takes_steps(parameter);
+      out.push_back(parameter.is_free() ? 1.0 : 0.0);
+      if (!parameter.is_free() || stepped) out.push_back(parameter.value());
+      tuned = tuned || (parameter.is_free() && !stepped);
+    });
     bool apply = !tuned || one_material;
     if (tuned && one_material && leaves != nullptr) leaves->push_back(static_cast<const MaterialNode*>(&node));
     for (size_t i = 0; i < node.child_count(); ++i) apply = add_signature(node.child(i), out, leaves) && apply;
@@ -255,6 +270,18 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
     if (leaf_sums_.taken) {
       signature(signature_now_, nullptr);
       if (signature_now_ == leaf_sums_.signature) return leaf_sums_.apply;
+      // Sums taken for an earlier signature (a stepped parameter's value
+      // met before): swapped back in; the ones left are kept.
+      const auto kept = std::find_if(kept_sums_.begin(), kept_sums_.end(),
+                                     [&](const LeafSums& sums) { return sums.signature == signature_now_; });
+      if (kept != kept_sums_.end()) {
+        std::swap(*kept, leaf_sums_);
+        return leaf_sums_.apply;
+      }
+      if (leaf_sums_.apply) {
+        kept_sums_.push_back(std::move(leaf_sums_));
+        if (kept_sums_.size() > kKeptSums) kept_sums_.erase(kept_sums_.begin());
+      }
     }
     take_leaf_sums();
     return leaf_sums_.apply;
@@ -382,6 +409,8 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
   std::vector<std::vector<MaterialId>> rows_;  ///< per run of z slices: one row of materials
   std::vector<Moments> totals_;                 ///< per material, this evaluation
   LeafSums leaf_sums_;
+  static constexpr size_t kKeptSums = 16;
+  std::vector<LeafSums> kept_sums_;  ///< for other values of stepped parameters, the latest last
   std::optional<Moments> solid_sums_;  ///< every cell inside the solid
   std::vector<double> signature_now_;
   bool weightless_ = false;
@@ -500,39 +529,81 @@ MassBound make_mass_bound(ReducerTree& tree, const SearchSpace& space, const Mas
                           const PartContext& context) {
   MassPropertiesSimulator simulator(require_valid(options, "mass_properties"), context);
   simulator.setup(tree.root(), SimulationDomain(tree, tree.root()));
-  const auto sums = simulator.leaf_masses();
-  if (!sums) return {};
+  const std::vector<SearchSpace::Entry>& entries = space.entries();
+  // The stepped parameters of no leaf (a shell's thickness in steps) come
+  // first in the space, which branch and bound assigns in order; each of
+  // their combinations has its own leaf sums.
+  size_t steps = 0;
+  long long combinations = 1;
+  for (const auto probe = simulator.leaf_masses(); probe && steps < entries.size(); ++steps) {
+    const Parameter& parameter = *entries[steps].parameter;
+    bool a_leafs = false;
+    for (const MaterialNode* leaf : probe->leaves)
+      leaf->read_parameters([&](const std::string&, const Parameter& p) { a_leafs = a_leafs || &p == &parameter; });
+    if (a_leafs || !takes_steps(parameter)) break;
+    combinations *= parameter.cardinality();
+    if (combinations > kMaxSteps) return {};
+  }
+  // Restored however this ends: the tree is the caller's.
+  struct Restore {
+    ReducerTree& tree;
+    std::vector<std::pair<Parameter*, double>> values;
+    ~Restore() {
+      for (auto& [parameter, value] : values) parameter->set(value);
+      tree.evaluate();
+    }
+  } restore{tree, {}};
+  for (size_t g = 0; g < steps; ++g) restore.values.emplace_back(entries[g].parameter, entries[g].parameter->value());
+  // Per combination (the first stepped parameter slowest): the leaf sums.
+  std::vector<MassPropertiesSimulator::LeafMasses> sums;
+  std::vector<std::vector<long long>> indices;
+  for (long long c = 0; c < combinations; ++c) {
+    std::vector<long long> index(steps);
+    long long rest = c;
+    for (size_t g = steps; g-- > 0;) {
+      const long long n = entries[g].parameter->cardinality();
+      index[g] = rest % n;
+      rest /= n;
+      entries[g].parameter->set(entries[g].parameter->admissible(index[g]));
+    }
+    if (steps > 0) tree.evaluate();
+    auto leaf_sums = simulator.leaf_masses();
+    if (!leaf_sums || (!sums.empty() && leaf_sums->leaves != sums.front().leaves)) return {};
+    sums.push_back(std::move(*leaf_sums));
+    indices.push_back(std::move(index));
+  }
+  const std::vector<const MaterialNode*>& leaves = sums.front().leaves;
   // Which leaf owns each parameter: one pass over the leaves.
   std::unordered_map<const Parameter*, size_t> owner;
-  for (size_t j = 0; j < sums->leaves.size(); ++j) {
-    sums->leaves[j]->read_parameters([&](const std::string&, const Parameter& p) { owner.emplace(&p, j); });
+  for (size_t j = 0; j < leaves.size(); ++j) {
+    leaves[j]->read_parameters([&](const std::string&, const Parameter& p) { owner.emplace(&p, j); });
   }
-  // Each entry of the space: its leaf and the density each of its values
-  // gives, the leaf's other parameters as they are now.
+  // Each entry of the space past the stepped ones: its leaf and the density
+  // each of its values gives, the leaf's other parameters as they are now.
   struct Variable {
     VariableDomain domain;
     std::vector<double> densities;  // per admissible value of the domain, in its order
-    size_t leaf = 0;
+    size_t leaf = 0, position = 0;  // position: in the space
     bool weighs = false;  // it alone turns its leaf's density; the others leave their leaf fixed
   };
   std::vector<Variable> variables;
-  std::vector<int> turning(sums->leaves.size(), 0);  // variables that change each leaf's density
-  for (const SearchSpace::Entry& entry : space.entries()) {
-    Parameter& parameter = *entry.parameter;
+  std::vector<int> turning(leaves.size(), 0);  // variables that change each leaf's density
+  for (size_t position = steps; position < entries.size(); ++position) {
+    Parameter& parameter = *entries[position].parameter;
     const auto found = owner.find(&parameter);
     if (parameter.kind() == ParameterKind::continuous || found == owner.end()) return {};
-    Variable& variable = variables.emplace_back(Variable{VariableDomain::of(parameter), {}, found->second, false});
-    auto& leaf = const_cast<MaterialNode&>(*sums->leaves[variable.leaf]);  // the caller's tree, non-const
-    // Restored however this ends: the tree is the caller's.
-    struct Restore {
+    Variable& variable =
+        variables.emplace_back(Variable{VariableDomain::of(parameter), {}, found->second, position, false});
+    auto& leaf = const_cast<MaterialNode&>(*leaves[variable.leaf]);  // the caller's tree, non-const
+    struct RestoreLeaf {
       Parameter& parameter;
       MaterialNode& leaf;
       double value;
-      ~Restore() {
+      ~RestoreLeaf() {
         parameter.set(value);
         leaf.evaluate();
       }
-    } restore{parameter, leaf, parameter.value()};
+    } restore_leaf{parameter, leaf, parameter.value()};
     for (long long i = 0; i < variable.domain.cardinality(); ++i) {
       parameter.set(variable.domain.admissible(i));
       leaf.evaluate();
@@ -542,32 +613,48 @@ MassBound make_mass_bound(ReducerTree& tree, const SearchSpace& space, const Mas
     variable.weighs = *hi > *lo;
     if (variable.weighs && ++turning[variable.leaf] > 1) return {};  // two parameters turn one leaf's density
   }
-  // Every leaf no variable weighs keeps the material it holds now (counted
-  // once, whatever parameters of it the space holds).
-  double fixed = sums->fixed_mass_kg;
-  for (size_t j = 0; j < sums->leaves.size(); ++j) {
-    if (turning[j] == 0) {
-      fixed += simulator.density(sums->leaves[j]->material(QueryPoint{}, LocalFrame{})) * sums->leaf_volume_mm3[j];
+  // Per combination: every leaf no variable weighs keeps the material it
+  // holds now (counted once, whatever parameters of it the space holds).
+  struct Combination {
+    std::vector<long long> index;  // of each stepped parameter's value
+    double fixed = 0;
+    std::vector<double> volumes;
+  };
+  std::vector<Combination> combos;
+  for (size_t c = 0; c < sums.size(); ++c) {
+    Combination& combo = combos.emplace_back(Combination{indices[c], sums[c].fixed_mass_kg, sums[c].leaf_volume_mm3});
+    for (size_t j = 0; j < leaves.size(); ++j) {
+      if (turning[j] == 0)
+        combo.fixed += simulator.density(leaves[j]->material(QueryPoint{}, LocalFrame{})) * combo.volumes[j];
     }
   }
-  const std::vector<double> volumes = sums->leaf_volume_mm3;
-  return [variables, fixed, volumes](std::span<const double> x, int assigned, double target_kg) {
-    double lo = fixed, hi = fixed;
-    for (size_t k = 0; k < variables.size(); ++k) {
-      const Variable& v = variables[k];
-      if (!v.weighs) continue;
-      const double volume = volumes[v.leaf];
-      if (static_cast<int>(k) < assigned) {
-        const auto index = static_cast<size_t>(v.domain.index_of(x[k]));
-        lo += v.densities[index] * volume;
-        hi += v.densities[index] * volume;
-      } else {
-        const auto [light, heavy] = std::minmax_element(v.densities.begin(), v.densities.end());
-        lo += *light * volume;
-        hi += *heavy * volume;
+  std::vector<VariableDomain> stepped;
+  for (size_t g = 0; g < steps; ++g) stepped.push_back(VariableDomain::of(*entries[g].parameter));
+  // The least over the combinations the assigned stepped values allow.
+  return [variables, combos, stepped](std::span<const double> x, int assigned, double target_kg) {
+    double bound = std::numeric_limits<double>::infinity();
+    for (const Combination& combo : combos) {
+      bool allowed = true;
+      for (size_t g = 0; g < stepped.size() && static_cast<int>(g) < assigned; ++g)
+        allowed = allowed && stepped[g].index_of(x[g]) == combo.index[g];
+      if (!allowed) continue;
+      double lo = combo.fixed, hi = combo.fixed;
+      for (const Variable& v : variables) {
+        if (!v.weighs) continue;
+        const double volume = combo.volumes[v.leaf];
+        if (static_cast<int>(v.position) < assigned) {
+          const auto index = static_cast<size_t>(v.domain.index_of(x[v.position]));
+          lo += v.densities[index] * volume;
+          hi += v.densities[index] * volume;
+        } else {
+          const auto [light, heavy] = std::minmax_element(v.densities.begin(), v.densities.end());
+          lo += *light * volume;
+          hi += *heavy * volume;
+        }
       }
+      bound = std::min(bound, std::max({0.0, lo - target_kg, target_kg - hi}) * 1e3);
     }
-    return std::max({0.0, lo - target_kg, target_kg - hi}) * 1e3;
+    return bound;
   };
 }
 

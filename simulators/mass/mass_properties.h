@@ -86,8 +86,9 @@ std::vector<std::pair<const ReducerNode*, double>> tuned_leaf_volumes(ReducerTre
 
 /// Fixes the free parameters of each child of `cells` (a node of `tree`,
 /// e.g. a voxel node of one-material leaves) that mass_properties samples
-/// no volume of on `options`' grid — cells outside the solid, or wholly
-/// under a shell — since a tuner has nothing to gain from them; returns how
+/// no volume of on `options`' grid with the tree as it is now — cells
+/// outside the solid, or wholly under a shell (a tuned shell at its
+/// thinnest, then) — since a tuner has nothing to gain from them; returns how
 /// many children hold some volume (they stay free).
 int fix_cells_without_volume(ReducerTree& tree, ReducerNode& cells, const MassPropertiesOptions& options,
                              const PartContext& context);
@@ -97,9 +98,13 @@ int fix_cells_without_volume(ReducerTree& tree, ReducerNode& cells, const MassPr
 /// of `space` (a tuner's search space on `tree`) — against a target mass
 /// (kg): the mass lies between the lightest and the heaviest choice of each
 /// unassigned leaf, summed over the same grid as the simulator's. For
-/// branch and bound (Tuner::set_lower_bound). Empty where a free parameter
-/// is not the material of a one-material leaf (ReducerNode::
-/// assigns_one_material), or a leaf's material turns on more than one.
+/// branch and bound (Tuner::set_lower_bound). Stepped parameters of no leaf
+/// (a stratum's depth with a step, at most 64 combinations) may come first
+/// in the space: each combination of their values has its leaf volumes,
+/// and the bound is the least over the combinations the assigned ones
+/// allow. Empty where any other free parameter is not the material of a
+/// one-material leaf (ReducerNode::assigns_one_material), or a leaf's
+/// material turns on more than one.
 using MassBound = std::function<double(std::span<const double> x, int assigned, double target_kg)>;
 MassBound make_mass_bound(ReducerTree& tree, const SearchSpace& space, const MassPropertiesOptions& options,
                           const PartContext& context);

@@ -4,6 +4,7 @@
 // layered block that converges only because the mesh follows its layers.
 
 #include <cmath>
+#include <map>
 
 #include "fem/hypre/amg_solver.h"
 #include "fem/petsc/gamg_solver.h"
@@ -239,6 +240,47 @@ TEST(FemReference, TwoMaterialBarIsSpringsInSeries) {
       EXPECT_GT(relative, 1e-4) << "a straddling tet smears the interface";
     }
   }
+}
+
+// The same bar with its interface tuned: in steps, each offset the tuner
+// takes gets a mesh on it, so springs in series hold exactly at every step,
+// in any order (a return finds its mesh kept); a continuous offset is seen
+// through the centroids of the mesh made where it started, within a tet.
+TEST(FemReference, AnInterfaceTunedInStepsIsMeshedAtEachStep) {
+  const MaterialPalette palette({testing::elastic_material("stiff", 1e9, 0.0),
+                                 testing::elastic_material("soft", 1e8, 0.0)});
+  const auto bar = [&](const std::string& offset) {
+    return std::make_unique<testing::FemRun>(
+        palette, Vec3(0, 0, 0), Vec3(20, 2, 2),
+        R"({"type": "plane", "axis": "x", "offset_mm": )" + offset +
+            R"(, "below": {"type": "layered", "material": "stiff"}, "above": {"type": "layered", "material": "soft"}})",
+        R"({"max_tet_volume_mm3": 0.5, "nonlinear": false, "fixed": [{"min": [0, 0, 0], "max": [0, 2, 2]}],
+            "loads": [{"min": [20, 0, 0], "max": [20, 2, 2], "force_n": [2, 0, 0]}], "probes": [[20, 1, 1]]})");
+  };
+  const auto set_offset = [](testing::FemRun& run, double offset) {
+    SearchSpace space = run.tree->search_space();
+    space.set_values({offset});
+    run.tree->evaluate();
+  };
+  const auto exact = [](double offset) { return 2.0 / 4.0 * (offset / 1000.0 + (20 - offset) / 100.0); };
+  auto stepped = bar(R"({"value": 7.3, "min": 5.3, "max": 9.3, "step": 2})");
+  std::map<double, double> first;
+  for (const double offset : {7.3, 9.3, 5.3, 7.3, 9.3}) {
+    set_offset(*stepped, offset);
+    const double tip = stepped->run().xyz_mm[0];
+    std::printf("offset %.1f mm in steps: u(L) = %.9f mm, springs in series %.9f mm\n", offset, tip, exact(offset));
+    EXPECT_NEAR(tip / exact(offset), 1, 1e-9) << offset;
+    if (first.count(offset)) {
+      EXPECT_EQ(tip, first[offset]) << "the same mesh, kept, for a return to " << offset;
+    }
+    first.emplace(offset, tip);
+  }
+  auto continuous = bar(R"({"value": 7.3, "min": 5.3, "max": 9.3})");
+  set_offset(*continuous, 9.3);
+  const double smeared = continuous->run().xyz_mm[0];
+  std::printf("offset 9.3 mm moved continuously: u(L) = %.9f mm (relative %.2e)\n", smeared,
+              smeared / exact(9.3) - 1);
+  EXPECT_GT(std::abs(smeared / exact(9.3) - 1), 1e-4) << "tets straddle the moved interface";
 }
 
 // Four bonded 2.5 mm layers, soft/stiff/soft/stiff, sheared by a force on the

@@ -316,6 +316,69 @@ TEST_F(MassProperties, TheMassBoundIsExactWhenCompleteAndBelowEveryCompletion) {
   EXPECT_FALSE(make_mass_bound(*depth, depth->search_space(), {0.7}, PartContext{palette_}));
 }
 
+// A shell's thickness tuned in steps (a stratum depth with a step, first in
+// the space) with the cells: each depth has its own leaf sums, which agree
+// with sampling every cell of the same tree at that depth, whichever depth
+// came before; and the mass bound is exact when complete and never above
+// the least error of any completion (every depth and cell value tried),
+// with the depth assigned or not.
+TEST_F(MassProperties, AShellThicknessInStepsHasLeafSumsAndABoundPerThickness) {
+  const Solid box(make_box(Vec3(0, 0, 0), Vec3(40, 30, 20), 2), UvSource::planar, 2);
+  const std::string core = R"("core": {"type": "voxel", "size_mm": [20, 30, 20], "origin": [0, 0, 0],
+        "child": {"type": "layered", "material": {"value": "light", "choices": ["light", "heavy", "void"]}}}})";
+  auto tree = bound(R"({"type": "stratum", "depth_mm": {"value": 2, "min": 2, "max": 4, "step": 1},
+      "shell": {"type": "layered", "material": "heavy"}, )" + core, box);
+  SearchSpace space = tree->search_space();
+  ASSERT_EQ(space.dimension(), 3u);
+  EXPECT_EQ(space.entries()[0].name, "depth_mm");
+  const MassBound lower = make_mass_bound(*tree, space, {0.7}, PartContext{palette_});
+  ASSERT_TRUE(lower) << "a stepped depth ahead of the cells has a bound";
+  EXPECT_EQ(space.values(), (std::vector<double>{2, 1, 1})) << "the tree is left as it was";
+  auto fast = make_mass_properties_simulator({0.7}, PartContext{palette_});
+  fast->setup(tree->root(), SimulationDomain(*tree, tree->root()));
+  const double target_kg = 0.01;
+  const auto error_of = [&](const std::vector<double>& x) {
+    space.set_values(x);
+    tree->evaluate();
+    MassPropertiesObservation out;
+    fast->simulate(tree->root(), out);
+    return std::abs(out.mass_kg() - target_kg) * 1e3;
+  };
+  // Against the same depth fixed and every cell sampled (a one-value choice).
+  for (const std::vector<double>& x : {std::vector<double>{3, 2, 0}, {2, 0, 1}, {4, 1, 2}, {3, 0, 0}}) {
+    const double fast_error = error_of(x);
+    const Solid same_box(make_box(Vec3(0, 0, 0), Vec3(40, 30, 20), 2), UvSource::planar, 2);
+    auto sampled = bound(R"({"type": "stratum", "depth_mm": {"value": )" + std::to_string(x[0]) +
+                             R"(, "choices": [)" + std::to_string(x[0]) + R"(]},
+        "shell": {"type": "layered", "material": "heavy"}, )" + core, same_box);
+    EXPECT_TRUE(tuned_leaf_volumes(*sampled, {0.7}, PartContext{palette_}).empty());
+    SearchSpace cells = sampled->search_space("core");
+    cells.set_values({x[1], x[2]});
+    sampled->evaluate();
+    const double sampled_error = std::abs(simulate(*sampled, 0.7).mass_kg() - target_kg) * 1e3;
+    EXPECT_NEAR(fast_error, sampled_error, 1e-9) << "depth " << x[0];
+    EXPECT_NEAR(lower(x, 3, target_kg), fast_error, 1e-9) << "depth " << x[0];
+  }
+  // Every completion of every prefix of x.
+  const std::vector<double> x = {3, 2, 0};
+  for (int assigned = 0; assigned < 3; ++assigned) {
+    double least = 1e300;
+    for (double depth : {2.0, 3.0, 4.0}) {
+      for (int a = 0; a < 3; ++a) {
+        for (int b = 0; b < 3; ++b) {
+          const std::vector<double> y = {depth, static_cast<double>(a), static_cast<double>(b)};
+          bool agrees = true;
+          for (int k = 0; k < assigned; ++k) agrees = agrees && y[static_cast<size_t>(k)] == x[static_cast<size_t>(k)];
+          if (agrees) least = std::min(least, error_of(y));
+        }
+      }
+    }
+    EXPECT_LE(lower(x, assigned, target_kg), least + 1e-9) << assigned << " assigned";
+    EXPECT_GT(lower(x, assigned, target_kg), 0) << "10 g is lighter than any completion";
+  }
+  EXPECT_LT(lower(x, 0, target_kg), lower(x, 1, target_kg)) << "the thinnest shell, open, weighs less than 3 mm";
+}
+
 // A printer whose cavities fill with its support (PolyJet): void inside the
 // solid weighs the fill's density, on both paths. A 40 × 30 × 20 box, light
 // for x < 10 and void above: 10 and 30 mm blocks of 1000 and 1100 kg/m³

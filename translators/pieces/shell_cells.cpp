@@ -13,9 +13,10 @@ NodePtr make_shell_cells(ShellCells shell, const Experiment& experiment, const s
                          const std::string& cell_key) {
   const MaterialPalette& palette = experiment.palette();
   const Bounds& bounds = experiment.solid().bounds();
-  if (((bounds.size() - Vec3::Constant(2 * shell.shell_mm)).array() <= 0).any()) {
+  const double thickest = shell.shell_mm.is_free() ? shell.shell_mm.upper() : shell.shell_mm.value();
+  if (((bounds.size() - Vec3::Constant(2 * thickest)).array() <= 0).any()) {
     throw InputError(fmt::format("{}/shell_mm: {} mm leaves no core in a shape {:.3g} x {:.3g} x {:.3g} mm", where,
-                                 shell.shell_mm, bounds.size().x(), bounds.size().y(), bounds.size().z()));
+                                 thickest, bounds.size().x(), bounds.size().y(), bounds.size().z()));
   }
   // The cells tile the shape's bounds exactly (a grid over the inner bounds
   // alone would gain a row of cells where it stops short of them).
@@ -26,7 +27,7 @@ NodePtr make_shell_cells(ShellCells shell, const Experiment& experiment, const s
   voxel.cells.child.node = make_solid_material(
       material_choice(palette, shell.cell_materials.front(), shell.cell_materials, where + "/" + cell_key));
   StratumOptions stratum;
-  stratum.depth_mm = fixed_number(shell.shell_mm, stratum.depth_mm);
+  stratum.depth_mm = shell.shell_mm;
   stratum.shell.node = shell.shell ? std::move(shell.shell)
                                    : make_solid_material(fixed_material(palette, shell.shell_material, where + "/material"));
   stratum.core.node = make_voxel(std::move(voxel));

@@ -18,7 +18,9 @@ namespace spec2fab {
 class Experiment;
 
 struct ShellCells {
-  double shell_mm = 2;
+  /// The shell's thickness: fixed, or free in steps (a tuner picks it with
+  /// the cells; the mass bound and the FEM take it value by value).
+  Parameter shell_mm = Parameter::continuous(2, 0, 1e3);
   std::array<int, 3> cells{1, 1, 1};
   std::string shell_material;
   std::vector<std::string> cell_materials;  ///< the first is every cell's start
@@ -41,8 +43,9 @@ struct CellAssignment {
 CellAssignment cell_assignment(ReducerTree& tree);
 
 /// Returns f() evaluated with every free cell `material` (the part printed
-/// solid); the cells are set back and the tree evaluated again afterwards,
-/// also when f throws.
+/// solid: every free material choice; a tuned shell keeps its thickness);
+/// the cells are set back and the tree evaluated again afterwards, also
+/// when f throws.
 template <class F>
 auto with_cells_solid(ReducerTree& tree, MaterialId material, F&& f) {
   struct Restore {
@@ -55,7 +58,10 @@ auto with_cells_solid(ReducerTree& tree, MaterialId material, F&& f) {
     }
   } restore{tree, tree.search_space(), {}};
   restore.values = restore.space.values();
-  restore.space.set_values(std::vector<double>(restore.values.size(), static_cast<double>(material)));
+  std::vector<double> solid = restore.values;
+  for (size_t i = 0; i < solid.size(); ++i)
+    if (restore.space.parameter(i).kind() == ParameterKind::choice) solid[i] = static_cast<double>(material);
+  restore.space.set_values(solid);
   tree.evaluate();
   return f();
 }

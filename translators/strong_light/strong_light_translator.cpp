@@ -2,7 +2,10 @@
 // al. 2014), composed from the framework's pieces: a part under a load case
 // (a clamped box, a force spread over a loaded box) is given a solid shell
 // of a printable thickness (a Stratum node) over a core of Voxel cells,
-// each its material or void, and one tuner of two terms chooses the cells:
+// each its material or void, and one tuner of two terms chooses the
+// shell's thickness (given in steps: its depth parameter, first in the
+// search, so branch and bound takes each thickness with its cells) and the
+// cells:
 // as light as it can be (mass_properties, mass_difference against 0 g)
 // while its von Mises stress under the load stays under the material's
 // tensile strength over a safety factor (fem, stress_excess against
@@ -47,6 +50,9 @@ struct StrongLightReport {
   std::array<int, 3> cells{};
   int core_cells = 0, carved_cells = 0;
   std::vector<std::string> assignment;
+  double shell_mm = 0;
+  bool shell_tuned = false;
+  std::vector<double> shell_choices_mm;
   StrengthState solid, tuned;
   double mass_saved_fraction = 0;
   template <class Fields, class Self>
@@ -56,6 +62,9 @@ struct StrongLightReport {
     f(s.tensile_strength_mpa, "tensile_strength_mpa", "the library's tensile strength of the material");
     f(s.safety_factor, "safety_factor", "the strength is divided by it");
     f(s.limit_mpa, "limit_mpa", "the stress allowed");
+    f(s.shell_mm, "shell_mm", "the shell's thickness: as tuned, or as given");
+    f(s.shell_tuned, "shell_tuned", "whether the tuner chose the thickness (goal.shell_mm with a step)");
+    f(s.shell_choices_mm, "shell_choices_mm", "the thicknesses it chose from (the one given, when fixed)");
     f(s.cells, "cells", "the core's voxel cells along x, y, z");
     f(s.core_cells, "core_cells", "cells that hold part of the core (the others are tuned by nothing)");
     f(s.carved_cells, "carved_cells", "core cells the tuner made void");
@@ -72,7 +81,7 @@ class StrongLightTranslator final : public TuningTranslator {
   /// a kilogram) may trade a thousandth of an MPa for a lighter carving.
   static constexpr double kPenaltyPerMpa = 1e6;
   struct Options {
-    double shell_mm = 1;
+    Parameter shell_mm = Parameter::continuous(1, 0, 1e3);
     std::array<int, 3> cells{5, 1, 1};
     std::string material;
     double safety_factor = 2;
@@ -82,7 +91,9 @@ class StrongLightTranslator final : public TuningTranslator {
     double voxel_mm = 0.5;
     template <class Declare, class Self>
     static void declare(Declare& d, Self& o) {
-      d.number(o.shell_mm, "shell_mm", Range::above(0), "the shell kept solid under the surface (printable)");
+      d.parameter(o.shell_mm, "shell_mm",
+                  "the shell kept solid under the surface (printable): a thickness, or {\"value\", \"min\", "
+                  "\"max\", \"step\"} for the tuner to choose it in steps with the cells (from the thinnest)");
       d.number(o.cells, "cells", Range::closed(1, 64), "the core's voxel cells along x, y, z, tiling the part's bounds (at most 64 in all)");
       d.value(o.material, "material", "the part's material (the library must give its tensile strength)",
               Default{"the printer's first model material"});
@@ -98,6 +109,21 @@ class StrongLightTranslator final : public TuningTranslator {
       d.number(o.voxel_mm, "voxel_mm", Range::above(0), "edge of the mass sampling cells");
     }
     bool check(std::string* why) const {
+      if (!(shell_mm.value() > 0) || (shell_mm.is_free() && !(shell_mm.lower() > 0))) {
+        *why = "shell_mm: above 0 mm (a printable shell)";
+        return false;
+      }
+      if (shell_mm.is_free() && shell_mm.kind() != ParameterKind::discrete) {
+        *why = "shell_mm: a tuned thickness takes a \"step\" (each thickness is a mesh of its own, and branch "
+               "and bound needs values to branch on)";
+        return false;
+      }
+      if (shell_mm.is_free() && shell_mm.cardinality() > 16) {
+        *why = fmt::format("shell_mm: {} thicknesses to choose from; at most 16 (each is a mesh and a search of the "
+                           "cells): a larger step",
+                           shell_mm.cardinality());
+        return false;
+      }
       for (int k = 0; k < 3; ++k) {
         if (fixed_min[k] > fixed_max[k]) {
           *why = "fixed_max: each coordinate at least fixed_min's";
@@ -133,9 +159,13 @@ class StrongLightTranslator final : public TuningTranslator {
     }
     strength_mpa_ = material.tensile_strength_pa->value * 1e-6;
     limit_mpa_ = strength_mpa_ / options_.safety_factor;
-    // stratum: the shell solid, the core in voxel cells of the material or void.
-    set_tree(make_shell_cells({options_.shell_mm, options_.cells, options_.material, {options_.material, "void"}},
-                              experiment, where, "material"),
+    // stratum: the shell solid, the core in voxel cells of the material or
+    // void. A tuned shell starts at its thinnest: the cells it leaves some
+    // core at that thickness are the ones tuned.
+    Parameter shell = options_.shell_mm;
+    if (shell.is_free()) shell.set(shell.lower());
+    set_tree(make_shell_cells({shell, options_.cells, options_.material, {options_.material, "void"}}, experiment,
+                              where, "material"),
              goal, experiment);
 
     const auto corner = [](const std::array<double, 3>& a) { return Vec3(a[0], a[1], a[2]); };
@@ -166,28 +196,35 @@ class StrongLightTranslator final : public TuningTranslator {
     set_mass_bound(*tuner, *tree_, mass, context);
     network_.add(std::move(tuner));
     Phase phase;
-    phase.name = "cells";
+    phase.name = options_.shell_mm.is_free() ? "shell and cells" : "cells";
     phase.tuners = {0};
     schedule_.add(std::move(phase));
   }
 
   std::string summary() const override {
+    const Parameter& shell = options_.shell_mm;
+    const std::string thickness =
+        shell.is_free() ? fmt::format("{:g}–{:g} mm (tuned in {:g} mm steps)", shell.lower(), shell.upper(), shell.step())
+                        : fmt::format("{:g} mm", shell.value());
     return fmt::format(
-        "strong_light (Stress Relief / Build-to-Last): a {} mm {} shell over {} x {} x {} core cells, each {} or "
+        "strong_light (Stress Relief / Build-to-Last): a {} {} shell over {} x {} x {} core cells, each {} or "
         "void ({} hold core); one tuner: the least mass with the von Mises stress ({}) under {:.3g} MPa (strength / "
         "{})",
-        options_.shell_mm, options_.material, options_.cells[0], options_.cells[1], options_.cells[2],
+        thickness, options_.material, options_.cells[0], options_.cells[1], options_.cells[2],
         options_.material, core_cells_, options_.measure, limit_mpa_, options_.safety_factor);
   }
 
   static TypeDoc doc() {
     TypeDoc doc{"Strong and light (Stress Relief, Stava et al. 2012; Build-to-Last, Lu et al. 2014): a part "
-                "clamped in one box and loaded by a force over another is given a solid shell (shell_mm) over a "
-                "core of voxel cells, each its material or void, as light as it can be while its von Mises stress "
+                "clamped in one box and loaded by a force over another is given a solid shell (shell_mm, fixed or "
+                "tuned in steps) over a core of voxel cells, each its material or void, as light as it can be while "
+                "its von Mises stress "
                 "(the tets' 99th percentile, or the largest) stays under the library's tensile strength divided by "
                 "safety_factor. One tuner of two terms: mass_properties + mass_difference against 0 g (the "
                 "objective) and fem + stress_excess against stress_limit held at most 0 (a penalty of 1e6 g per "
-                "MPa); branch and bound, voids first, prunes on the mass bound. The percentile is over the "
+                "MPa); branch and bound, voids first, prunes on the mass bound (the least over the thicknesses "
+                "left, while the shell's is open). Each thickness is meshed with the shell's inner surface as an "
+                "interface. The percentile is over the "
                 "remaining tets, by count: carving a lightly loaded cell raises it, and it depends on the mesh. "
                 "On a PolyJet printer carved cells fill with support gel, which the mass weighs. result.json's "
                 "strong_light section gives the solid and the tuned part's mass and stress; fem/ holds the tuned "
@@ -235,6 +272,16 @@ class StrongLightTranslator final : public TuningTranslator {
     report.tensile_strength_mpa = strength_mpa_;
     report.cells = options_.cells;
     report.core_cells = core_cells_;
+    tree_->root().read_parameters([&](const std::string& name, const Parameter& depth) {
+      if (name == "depth_mm") report.shell_mm = depth.value();
+    });
+    report.shell_tuned = options_.shell_mm.is_free();
+    if (report.shell_tuned) {
+      for (long long i = 0; i < options_.shell_mm.cardinality(); ++i)
+        report.shell_choices_mm.push_back(options_.shell_mm.admissible(i));
+    } else {
+      report.shell_choices_mm = {options_.shell_mm.value()};
+    }
     const CellAssignment cells = cell_assignment(*tree_);
     report.assignment = cells.materials;
     report.carved_cells = cells.carved;
