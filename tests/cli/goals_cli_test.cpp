@@ -112,7 +112,7 @@ TEST_F(Cli, TheLeaningTowerStandsWithBronzeInItsCoreAtItsSolidMass) {
 
 // strong_light_beam (Stress Relief / Build-to-Last): the tuner chooses the
 // shell's thickness with the cells. A 1 mm shell would keep two cells at
-// the clamp solid (7.6 g); the 1.5 mm shell carries the load with every
+// the clamp solid (7.7 g); the 1.5 mm shell carries the load with every
 // cell carved (6.5 g), the tets' 99th-percentile von Mises stress under
 // PLA's 50 MPa / 2. The stress is checked by CalculiX (C3D4) on a mesh this
 // test makes: the `tetgen` program on the tuned beam's own boxes (its
