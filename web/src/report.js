@@ -29,7 +29,7 @@ const MEANINGS = {
   initial_error: 'the tuner’s error at its start',
 };
 const HEADLINE = ['ssim', 'psnr_db', 'relative_rmse', 'mean', 'p95', 'low_pass_delta_e00', 'shape_mse_mm2', 'probe_rms_mm',
-  'nodes_pruned', 'leaves_evaluated', 'fraction_of_exhaustive', 'profile_relative_rms', 'margin_mm', 'mass_change_g', 'mass_saved_fraction', 'stress_p99_mpa'];
+  'nodes_pruned', 'leaves_evaluated', 'fraction_of_exhaustive', 'profile_relative_rms', 'margin_mm', 'mass_change_g', 'shell_mm', 'mass_saved_fraction', 'stress_p99_mpa'];
 const SHARED = new Set(['spec2fab_version', 'experiment', 'translator', 'seed', 'inputs', 'tree', 'material_census', 'tuning',
   'fabrication', 'files', 'warnings']);
 
