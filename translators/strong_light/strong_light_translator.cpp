@@ -85,7 +85,7 @@ class StrongLightTranslator final : public TuningTranslator {
     std::array<int, 3> cells{5, 1, 1};
     std::string material;
     double safety_factor = 2;
-    std::string measure = "p99";
+    std::string measure = "max";
     std::array<double, 3> fixed_min{}, fixed_max{}, load_min{}, load_max{}, force_n{};
     double max_tet_volume_mm3 = 2;
     double voxel_mm = 0.5;
@@ -98,8 +98,9 @@ class StrongLightTranslator final : public TuningTranslator {
       d.value(o.material, "material", "the part's material (the library must give its tensile strength)",
               Default{"the printer's first model material"});
       d.number(o.safety_factor, "safety_factor", Range::closed(1, 100), "the strength is divided by it");
-      d.choice(o.measure, "measure", {"p99", "max"},
-               "the stress the limit holds: the tets' 99th percentile (a clamp's edge is singular) or the largest");
+      d.choice(o.measure, "measure", {"max", "p99"},
+               "the stress the limit holds: the largest of any tet, or the tets' 99th percentile (steadier where a "
+               "clamp's edge is singular)");
       d.required(o.fixed_min, "fixed_min", "lower corner (mm) of the clamped box: mesh nodes in it are held");
       d.required(o.fixed_max, "fixed_max", "its upper corner");
       d.required(o.load_min, "load_min", "lower corner (mm) of the loaded box: the force spreads over the faces in it");
@@ -219,7 +220,7 @@ class StrongLightTranslator final : public TuningTranslator {
                 "clamped in one box and loaded by a force over another is given a solid shell (shell_mm, fixed or "
                 "tuned in steps) over a core of voxel cells, each its material or void, as light as it can be while "
                 "its von Mises stress "
-                "(the tets' 99th percentile, or the largest) stays under the library's tensile strength divided by "
+                "(the largest, or the tets' 99th percentile) stays under the library's tensile strength divided by "
                 "safety_factor. One tuner of two terms: mass_properties + mass_difference against 0 g (the "
                 "objective) and fem + stress_excess against stress_limit held at most 0 (a penalty of 1e6 g per "
                 "MPa); branch and bound, voids first, prunes on the mass bound (the least over the thicknesses "
