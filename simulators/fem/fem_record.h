@@ -28,6 +28,7 @@ struct FemMeshRecord {
   long long interface_facets_merged = 0, curved_interfaces_cut_in = 0, edges_split_after_tetgen = 0,
             nodes_snapped_after_tetgen = 0, subtrees_elastically_uniform = 0;
   std::vector<std::string> interfaces_moved_by_tuned_parameters;
+  long long meshes_since_setup = 0;
   long long free_dofs = 0;
   double cholesky_factor_nonzeros = 0, cholesky_factor_flops = 0, volume_mm3 = 0;
   template <class Fields, class Self>
@@ -44,7 +45,10 @@ struct FemMeshRecord {
     f(s.nodes_snapped_after_tetgen, "nodes_snapped_after_tetgen", "nodes moved onto them instead");
     f(s.subtrees_elastically_uniform, "subtrees_elastically_uniform", "subtrees left whole: one E and nu throughout");
     f(s.interfaces_moved_by_tuned_parameters, "interfaces_moved_by_tuned_parameters",
-      "tuned parameters that move a followed interface (the centroid rule then decides)");
+      "tuned parameters that move a followed interface (in steps, a mesh for each value; otherwise the centroid rule "
+      "decides)");
+    f(s.meshes_since_setup, "meshes_since_setup",
+      "meshes made (or taken from the run's cache) since setup: 1, or one per value of stepped interfaces met");
     f(s.free_dofs, "free_dofs", "unknowns of the linear systems");
     f(s.cholesky_factor_nonzeros, "cholesky_factor_nonzeros", "nonzeros of the Cholesky factor");
     f(s.cholesky_factor_flops, "cholesky_factor_flops", "flops of one factorisation");

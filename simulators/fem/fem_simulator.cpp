@@ -80,27 +80,41 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
     moving_interfaces_.clear();
     stepped_.clear();
     parked_.clear();
-    std::vector<std::string> continuous, stepped;
+    meshes_made_ = 0;
+    std::vector<std::string> stepped;
+    bool any_continuous = false;
+    long long combinations = 1;
     if (settings_.follow_interfaces) {
       for (const TunedInterface& moving : tuned_interfaces(domain.tree())) {
         moving_interfaces_.push_back(moving.path);
-        const bool steps = moving.parameter->kind() != ParameterKind::continuous;
-        (steps ? stepped : continuous).push_back(moving.path);
-        if (steps) stepped_.push_back(moving.parameter);
+        if (moving.parameter->kind() == ParameterKind::continuous) {
+          any_continuous = true;
+        } else {
+          stepped.push_back(moving.path);
+          stepped_.push_back(moving.parameter);
+          combinations = std::min(combinations * moving.parameter->cardinality(), static_cast<long long>(kKeptMeshes) + 1);
+        }
       }
     }
+    // A mesh per step only where every moving interface takes steps, and
+    // few of them: a mesh made beside a continuous one would follow it
+    // wherever the search had put it, and the answer would depend on the
+    // order of the evaluations.
+    const bool per_step = !stepped_.empty() && !any_continuous && combinations <= static_cast<long long>(kKeptMeshes);
+    if (!per_step) stepped_.clear();
     stepped_values(mesh_key_);
     make_mesh();
-    if (!mesh_reused_ && !continuous.empty()) {
+    if (mesh_reused_ || moving_interfaces_.empty()) return;
+    if (per_step) {
+      spdlog::info("fem: tuned {} move(s) interfaces in steps; each of the {} values they may take gets a mesh "
+                   "that follows them, made when it first comes",
+                   fmt::join(stepped, ", "), combinations);
+    } else {
       spdlog::info("fem: tuned {} move(s) interfaces; the mesh follows them where they are now, and later tets "
-                   "take their material by centroid (re-meshing per evaluation would make the error jump with "
-                   "TetGen's points)",
-                   fmt::join(continuous, ", "));
-    }
-    if (!mesh_reused_ && !stepped.empty()) {
-      spdlog::info("fem: tuned {} move(s) interfaces in steps; each value they take gets a mesh that follows "
-                   "them (the last {} kept)",
-                   fmt::join(stepped, ", "), kKeptMeshes);
+                   "take their material by centroid ({})",
+                   fmt::join(moving_interfaces_, ", "),
+                   any_continuous ? "re-meshing per evaluation would make the error jump with TetGen's points"
+                                  : fmt::format("more than {} values: a mesh for each would not pay", kKeptMeshes));
     }
   }
 
@@ -238,6 +252,7 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
     mesh.nodes_snapped_after_tetgen = meshed_->cut_after.nodes_snapped;
     mesh.subtrees_elastically_uniform = conform_.subtrees_uniform;
     mesh.interfaces_moved_by_tuned_parameters = moving_interfaces_;
+    mesh.meshes_since_setup = meshes_made_;
     mesh.free_dofs = solver_->free_dofs();
     mesh.cholesky_factor_nonzeros = solver_->factor_nonzeros();
     mesh.cholesky_factor_flops = solver_->factor_flops();
@@ -284,9 +299,10 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
   struct Timings {
     double mesh = 0, conform = 0, assemble_setup = 0, solve = 0;
   };
-  /// Meshes kept for the values of stepped interfaces met before (one
-  /// solver each): a branch and bound over a shell's thickness comes back.
-  static constexpr size_t kKeptMeshes = 8;
+  /// Meshes for the values of stepped interfaces met before, at most
+  /// this many (more values: the centroid rule); kept without their
+  /// solvers, which a return builds again.
+  static constexpr size_t kKeptMeshes = 16;
   struct MeshState {
     std::vector<double> key;
     std::shared_ptr<const ConformedMesh> meshed;
@@ -294,7 +310,6 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
     std::vector<Face> boundary;
     Constraints constraints;
     std::vector<ProbeLocation> probes;
-    std::unique_ptr<ElasticSolver> solver;
     std::vector<Vec3> centroids;
     Timings timings;
   };
@@ -309,6 +324,7 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
   void make_mesh() {
     const Solid& solid = domain_.require_solid(name());
     meshed_ = conformed_mesh(solid, domain_.tree(), settings_.mesh, settings_.follow_interfaces, cache_, &mesh_reused_);
+    ++meshes_made_;
     mesh_ = &meshed_->mesh;
     conform_ = meshed_->conform;
     timings_.mesh = mesh_reused_ ? 0.0 : meshed_->mesh_seconds;
@@ -331,39 +347,49 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
   }
 
   // A stepped interface moved: the mesh made for where it is now, kept from
-  // before or made; the one left is kept for a return. Every mesh is a
-  // function of the tree's interfaces alone, so the answer does not depend
-  // on the order the values came in.
+  // before or made; the one left is kept for a return. With every moving
+  // interface stepped, each mesh is a function of the stepped values alone,
+  // so the answer does not depend on the order the values came in.
   void switch_mesh() {
     MeshState left{mesh_key_, std::move(meshed_), mesh_reused_, std::move(boundary_), std::move(constraints_),
-                   std::move(probes_), std::move(solver_), std::move(centroids_), timings_};
+                   std::move(probes_), std::move(centroids_), timings_};
     const auto kept = std::find_if(parked_.begin(), parked_.end(), [&](const MeshState& s) { return s.key == key_now_; });
-    if (kept != parked_.end()) {
-      MeshState& back = *kept;
-      meshed_ = std::move(back.meshed);
-      mesh_ = &meshed_->mesh;
-      conform_ = meshed_->conform;
-      mesh_reused_ = back.reused;
-      boundary_ = std::move(back.boundary);
-      constraints_ = std::move(back.constraints);
-      probes_ = std::move(back.probes);
-      solver_ = std::move(back.solver);
-      centroids_ = std::move(back.centroids);
-      timings_ = back.timings;
-      parked_.erase(kept);
-      const size_t tets = mesh_->tets.size();
-      materials_.resize(tets);
-      lambda_.resize(tets);
-      mu_.resize(tets);
-      active_.resize(tets);
-      displacement_.assign(3 * mesh_->nodes.size(), 0.0);
-    } else {
-      make_mesh();
+    try {
+      if (kept != parked_.end()) {
+        MeshState back = std::move(*kept);
+        parked_.erase(kept);
+        use_mesh(std::move(back));
+      } else {
+        make_mesh();
+      }
+    } catch (...) {
+      use_mesh(std::move(left));  // as it was: a later simulate() or report reads a whole mesh
+      throw;
     }
     mesh_key_ = key_now_;
     parked_.push_back(std::move(left));
-    if (parked_.size() > kKeptMeshes) parked_.erase(parked_.begin());  // the longest unused
   }
+
+  // A kept mesh back in use, with a solver built for it.
+  void use_mesh(MeshState&& state) {
+    meshed_ = std::move(state.meshed);
+    mesh_ = &meshed_->mesh;
+    conform_ = meshed_->conform;
+    mesh_reused_ = state.reused;
+    boundary_ = std::move(state.boundary);
+    constraints_ = std::move(state.constraints);
+    probes_ = std::move(state.probes);
+    centroids_ = std::move(state.centroids);
+    timings_ = state.timings;
+    solver_ = std::make_unique<ElasticSolver>(*mesh_, constraints_.fixed, settings_.linear_solver, across_ranks_);
+    const size_t tets = mesh_->tets.size();
+    materials_.resize(tets);
+    lambda_.resize(tets);
+    mu_.resize(tets);
+    active_.resize(tets);
+    displacement_.assign(3 * mesh_->nodes.size(), 0.0);
+  }
+
   FemSettings settings_;
   std::string where_;
   const MaterialPalette* palette_;
@@ -379,6 +405,7 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
   std::vector<const Parameter*> stepped_;         // those of them that take steps: a mesh per value
   std::vector<double> mesh_key_, key_now_;        // their values the mesh was made for; now
   std::vector<MeshState> parked_;                 // meshes made for other values, the latest last
+  int meshes_made_ = 0;                           // by setup and for stepped values, since setup
   std::vector<Face> boundary_;
   Constraints constraints_;
   std::vector<ProbeLocation> probes_;

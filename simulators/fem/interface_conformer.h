@@ -61,9 +61,10 @@ ConformReport conform_to_interfaces(TetMesh& mesh, const ReducerTree& tree, std:
 /// A continuous one is seen through the tets' centroids on the mesh made at
 /// setup: re-meshing at each evaluation would make the error jump whenever
 /// TetGen placed its points differently, which gradient-free and gradient
-/// optimizers alike read as noise. A discrete one (a step, a few values)
-/// gets a mesh of its own for each value it takes, so the interface is
-/// followed exactly wherever the tuner puts it.
+/// optimizers alike read as noise. Where every one of them is discrete (a
+/// step) and their values combine in at most 16 ways, the fem simulator
+/// gives each combination it meets a mesh of its own, so the interfaces
+/// are followed exactly wherever the tuner puts them.
 struct TunedInterface {
   std::string path;
   const Parameter* parameter = nullptr;

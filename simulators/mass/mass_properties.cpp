@@ -275,7 +275,10 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
       const auto kept = std::find_if(kept_sums_.begin(), kept_sums_.end(),
                                      [&](const LeafSums& sums) { return sums.signature == signature_now_; });
       if (kept != kept_sums_.end()) {
-        std::swap(*kept, leaf_sums_);
+        LeafSums back = std::move(*kept);
+        kept_sums_.erase(kept);
+        kept_sums_.push_back(std::move(leaf_sums_));
+        leaf_sums_ = std::move(back);
         return leaf_sums_.apply;
       }
       if (leaf_sums_.apply) {
@@ -543,6 +546,20 @@ MassBound make_mass_bound(ReducerTree& tree, const SearchSpace& space, const Mas
     if (a_leafs || !takes_steps(parameter)) break;
     combinations *= parameter.cardinality();
     if (combinations > kMaxSteps) return {};
+  }
+  // Every other stepped parameter of the tree must be fixed: one free in
+  // another tuner's space would move the leaves' volumes under this bound.
+  if (const auto probe = simulator.leaf_masses()) {
+    std::unordered_map<const Parameter*, bool> in_leaf;
+    for (const MaterialNode* leaf : probe->leaves)
+      leaf->read_parameters([&](const std::string&, const Parameter& p) { in_leaf.emplace(&p, true); });
+    const SearchSpace free = tree.search_space();
+    for (const SearchSpace::Entry& entry : free.entries()) {
+      if (in_leaf.count(entry.parameter) > 0 || !takes_steps(*entry.parameter)) continue;
+      bool first = false;
+      for (size_t g = 0; g < steps; ++g) first = first || entries[g].parameter == entry.parameter;
+      if (!first) return {};
+    }
   }
   // Restored however this ends: the tree is the caller's.
   struct Restore {

@@ -78,8 +78,9 @@ std::unique_ptr<SimulatorFor<MassPropertiesObservation>> make_mass_properties_si
 
 /// The volume (mm³) mass_properties samples in each leaf its free
 /// parameters tune — one-material leaves whose cells it sums once (the
-/// leaf sums) — on `options`' grid over the whole tree; empty where the
-/// leaf sums do not apply (a free parameter that is no one-material leaf's).
+/// leaf sums) — on `options`' grid over the whole tree, at the values its
+/// stepped parameters have now; empty where the leaf sums do not apply (a
+/// free parameter that is no one-material leaf's and takes no steps).
 std::vector<std::pair<const ReducerNode*, double>> tuned_leaf_volumes(ReducerTree& tree,
                                                                       const MassPropertiesOptions& options,
                                                                       const PartContext& context);

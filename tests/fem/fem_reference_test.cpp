@@ -3,7 +3,11 @@
 // against the elastica, a two-material bar against springs in series, and a
 // layered block that converges only because the mesh follows its layers.
 
+#include <unistd.h>
+
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <map>
 
 #include "fem/hypre/amg_solver.h"
@@ -244,7 +248,9 @@ TEST(FemReference, TwoMaterialBarIsSpringsInSeries) {
 
 // The same bar with its interface tuned: in steps, each offset the tuner
 // takes gets a mesh on it, so springs in series hold exactly at every step,
-// in any order (a return finds its mesh kept); a continuous offset is seen
+// in any order, and a return finds its mesh kept (three meshes for five
+// evaluations over three values; the report's files are the current
+// mesh's). A continuous offset, or one of more than 16 steps, is seen
 // through the centroids of the mesh made where it started, within a tet.
 TEST(FemReference, AnInterfaceTunedInStepsIsMeshedAtEachStep) {
   const MaterialPalette palette({testing::elastic_material("stiff", 1e9, 0.0),
@@ -263,6 +269,21 @@ TEST(FemReference, AnInterfaceTunedInStepsIsMeshedAtEachStep) {
     run.tree->evaluate();
   };
   const auto exact = [](double offset) { return 2.0 / 4.0 * (offset / 1000.0 + (20 - offset) / 100.0); };
+  namespace fs = std::filesystem;
+  const fs::path folder = fs::temp_directory_path() / ("spec2fab_stepped_" + std::to_string(::getpid()));
+  fs::create_directories(folder);
+  // simulation.json's "mesh" record after a report, and the rows of its displacements.csv.
+  const auto report = [&](testing::FemRun& run) {
+    ReportSections sections;
+    run.simulator->write_report(*run.observation, folder, sections);
+    nlohmann::json written;
+    sections.write_into(written);
+    std::ifstream csv(folder / "displacements.csv");
+    long rows = -1;  // the header
+    for (std::string line; std::getline(csv, line);) ++rows;
+    EXPECT_EQ(rows, written["mesh"]["nodes"].get<long>()) << "the files are the current mesh's";
+    return written["mesh"];
+  };
   auto stepped = bar(R"({"value": 7.3, "min": 5.3, "max": 9.3, "step": 2})");
   std::map<double, double> first;
   for (const double offset : {7.3, 9.3, 5.3, 7.3, 9.3}) {
@@ -275,12 +296,19 @@ TEST(FemReference, AnInterfaceTunedInStepsIsMeshedAtEachStep) {
     }
     first.emplace(offset, tip);
   }
-  auto continuous = bar(R"({"value": 7.3, "min": 5.3, "max": 9.3})");
-  set_offset(*continuous, 9.3);
-  const double smeared = continuous->run().xyz_mm[0];
-  std::printf("offset 9.3 mm moved continuously: u(L) = %.9f mm (relative %.2e)\n", smeared,
-              smeared / exact(9.3) - 1);
-  EXPECT_GT(std::abs(smeared / exact(9.3) - 1), 1e-4) << "tets straddle the moved interface";
+  EXPECT_EQ(report(*stepped)["meshes_since_setup"], 3) << "one mesh per value, kept for the returns";
+
+  for (const std::string offset : {R"({"value": 7.3, "min": 5.3, "max": 9.3})",
+                                   R"({"value": 7.3, "min": 5.3, "max": 9.3, "step": 0.2})"}) {
+    auto moved = bar(offset);
+    set_offset(*moved, 9.3);
+    const double smeared = moved->run().xyz_mm[0];
+    std::printf("offset 9.3 mm moved (%s): u(L) = %.9f mm (relative %.2e)\n", offset.c_str(), smeared,
+                smeared / exact(9.3) - 1);
+    EXPECT_GT(std::abs(smeared / exact(9.3) - 1), 1e-4) << offset << ": tets straddle the moved interface";
+    EXPECT_EQ(report(*moved)["meshes_since_setup"], 1) << offset;
+  }
+  fs::remove_all(folder);
 }
 
 // Four bonded 2.5 mm layers, soft/stiff/soft/stiff, sheared by a force on the

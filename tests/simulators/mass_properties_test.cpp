@@ -321,7 +321,8 @@ TEST_F(MassProperties, TheMassBoundIsExactWhenCompleteAndBelowEveryCompletion) {
 // with sampling every cell of the same tree at that depth, whichever depth
 // came before; and the mass bound is exact when complete and never above
 // the least error of any completion (every depth and cell value tried),
-// with the depth assigned or not.
+// with the depth assigned or not; a space of the cells alone, the depth
+// free outside it, has none.
 TEST_F(MassProperties, AShellThicknessInStepsHasLeafSumsAndABoundPerThickness) {
   const Solid box(make_box(Vec3(0, 0, 0), Vec3(40, 30, 20), 2), UvSource::planar, 2);
   const std::string core = R"("core": {"type": "voxel", "size_mm": [20, 30, 20], "origin": [0, 0, 0],
@@ -377,6 +378,8 @@ TEST_F(MassProperties, AShellThicknessInStepsHasLeafSumsAndABoundPerThickness) {
     EXPECT_GT(lower(x, assigned, target_kg), 0) << "10 g is lighter than any completion";
   }
   EXPECT_LT(lower(x, 0, target_kg), lower(x, 1, target_kg)) << "the thinnest shell, open, weighs less than 3 mm";
+  // The cells alone, the depth left free for someone else to move: no bound.
+  EXPECT_FALSE(make_mass_bound(*tree, tree->search_space("core"), {0.7}, PartContext{palette_}));
 }
 
 // A printer whose cavities fill with its support (PolyJet): void inside the

@@ -13,7 +13,9 @@ NodePtr make_shell_cells(ShellCells shell, const Experiment& experiment, const s
                          const std::string& cell_key) {
   const MaterialPalette& palette = experiment.palette();
   const Bounds& bounds = experiment.solid().bounds();
-  const double thickest = shell.shell_mm.is_free() ? shell.shell_mm.upper() : shell.shell_mm.value();
+  const Parameter& depth = shell.shell_mm;
+  const double thickest =
+      depth.is_free() && depth.cardinality() > 0 ? depth.admissible(depth.cardinality() - 1) : depth.value();
   if (((bounds.size() - Vec3::Constant(2 * thickest)).array() <= 0).any()) {
     throw InputError(fmt::format("{}/shell_mm: {} mm leaves no core in a shape {:.3g} x {:.3g} x {:.3g} mm", where,
                                  thickest, bounds.size().x(), bounds.size().y(), bounds.size().z()));

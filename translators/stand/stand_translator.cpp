@@ -132,7 +132,7 @@ class StandTranslator final : public TuningTranslator {
     if (options_.core_materials.empty()) options_.core_materials = {options_.material, "void"};
     // stratum: the shell solid (or a texture's inks over it), the core in
     // voxel cells of a material or void.
-    set_tree(make_shell_cells({Parameter::continuous(options_.shell_mm, 0, 1e3), options_.cells, options_.material,
+    set_tree(make_shell_cells({fixed_number(options_.shell_mm, StratumOptions{}.depth_mm), options_.cells, options_.material,
                                options_.core_materials,
                                goal.has("texture") ? textured_shell(goal, experiment) : nullptr},
                               experiment, where, "core_materials"),

@@ -205,7 +205,8 @@ class StrongLightTranslator final : public TuningTranslator {
   std::string summary() const override {
     const Parameter& shell = options_.shell_mm;
     const std::string thickness =
-        shell.is_free() ? fmt::format("{:g}–{:g} mm (tuned in {:g} mm steps)", shell.lower(), shell.upper(), shell.step())
+        shell.is_free() ? fmt::format("{:g}–{:g} mm (tuned in {:g} mm steps)", shell.lower(),
+                                      shell.admissible(shell.cardinality() - 1), shell.step())
                         : fmt::format("{:g} mm", shell.value());
     return fmt::format(
         "strong_light (Stress Relief / Build-to-Last): a {} {} shell over {} x {} x {} core cells, each {} or "
