@@ -50,15 +50,26 @@ function flatten(value, prefix, out) {
 
 function headlineCards(result, meanings) {
   const cards = [];
+  // A subset's figure equal to its whole's (ΔE00 over the out-of-gamut
+  // pixels when every pixel is out of gamut) is shown once, named by the
+  // shorter path: leaf=value -> [index in cards, path].
+  const shown = new Map();
+  const card = (path, v) => el('div', { class: 'card', title: meaningOf(path, meanings) },
+    el('div', { class: 'v', text: fmt(v) }), el('div', { class: 'k', text: path.split('.').slice(-3).map(words).join(' › ') }));
   for (const [name, value] of Object.entries(result)) {
     if (SHARED.has(name)) continue;
     for (const [path, v] of flatten(value, name, [])) {
       const leaf = path.split('.').pop();
-      if (!HEADLINE.includes(leaf) || typeof v !== 'number' || cards.length >= 8) continue;
+      if (!HEADLINE.includes(leaf) || typeof v !== 'number') continue;
       if (path.includes('initial') || path.includes('nearest_only')) continue;
-      const parts = path.split('.');
-      cards.push(el('div', { class: 'card', title: meaningOf(path, meanings) },
-        el('div', { class: 'v', text: fmt(v) }), el('div', { class: 'k', text: parts.slice(-3).map(words).join(' › ') })));
+      const twin = shown.get(`${leaf}=${v}`);
+      if (twin) {
+        if (path.split('.').length < twin[1].split('.').length) cards[twin[0]] = card(path, v), twin[1] = path;
+        continue;
+      }
+      if (cards.length >= 8) continue;
+      shown.set(`${leaf}=${v}`, [cards.length, path]);
+      cards.push(card(path, v));
     }
   }
   // Every fabricated print's cost and time (fabrication.print), whatever the translator.
