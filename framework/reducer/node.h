@@ -109,6 +109,21 @@ class ReducerNode {
   /// (ReducerTree::Query::material_row). False by default, which is always
   /// safe.
   virtual bool decided_by_interfaces() const { return false; }
+  /// An axis-aligned piece of this node's region (BoxPieces).
+  struct BoxPiece {
+    size_t child = 0;          ///< a geometry node's child
+    MaterialId material = 0;   ///< a material node's material there
+    Eigen::AlignedBox3d box;   ///< in this node's incoming frame
+    Vec3 shift = Vec3::Zero(); ///< the child's frame is this one less `shift`
+  };
+  /// Where this node's output within `box` (an axis-aligned box of its
+  /// incoming frame) changes only across axis-aligned planes and it hands
+  /// its children frames that are shifts of its own, the pieces: a geometry
+  /// node's children's boxes, a material node's boxes of one material each
+  /// (its current values). Sums that integrate exactly instead of sampling
+  /// take them (mass/mass_properties.h). False, the default, where the node
+  /// cannot (curved or slanted interfaces, frames that are no shifts).
+  virtual bool box_pieces(const Eigen::AlignedBox3d& /*box*/, std::vector<BoxPiece>& /*out*/) const { return false; }
   /// Capabilities a node offers are declared, not discovered by casts: the
   /// height surface a cutting node (Plane, Paraboloid, BSpline) cuts along,
   /// which the caustics simulators mesh directly; null for any other node.

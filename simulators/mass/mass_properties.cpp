@@ -13,6 +13,8 @@
 #include "core/error.h"
 #include "core/file_write.h"
 #include "core/limits.h"
+#include "geometry/box_moments.h"
+#include "geometry/solid.h"
 #include "reducer/reducer_tree.h"
 #include "tuning/problem.h"
 #include "tuning/tuner.h"
@@ -57,6 +59,9 @@ using Moments = std::array<double, 10>;
 /// count, and memory that does not grow with the slices.
 constexpr int kSliceRuns = 256;
 
+/// Pieces times triangles past which exact sums cost more than sampling.
+constexpr double kMaxExactWork = 2e7;
+
 /// A parameter of a few values in steps (at most kMaxSteps), whose each
 /// value may move where the tree's leaves lie: the leaf sums and the mass
 /// bound take it value by value.
@@ -97,6 +102,7 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
   void setup(const ReducerNode& /*subtree*/, const SimulationDomain& domain) override {
     const Solid& solid = domain.require_solid(name());
     tree_ = &domain.tree();
+    solid_ = &solid;
     const Bounds& bounds = solid.bounds();
     voxel_mm_ = options_.voxel_mm > 0 ? options_.voxel_mm : bounds.size().maxCoeff() / 96;
     double cells = 1;
@@ -125,8 +131,10 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
     if (tree_ == nullptr) throw std::logic_error("mass_properties: simulate before setup");
     std::vector<Moments>& totals = totals_;
     totals.assign(densities_.size(), Moments{});
+    exact_ = false;
     if (leaf_sums_apply()) {
       // Each tuned leaf's cells, added by the material it holds now.
+      exact_ = leaf_sums_.exact;
       totals = leaf_sums_.fixed;
       for (size_t i = 0; i < leaf_sums_.leaves.size(); ++i) {
         const MaterialId id = leaf_sums_.leaves[i]->material(QueryPoint{}, LocalFrame{});
@@ -184,8 +192,11 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
   static TypeDoc doc() {
     return {"Mass, centre of mass and inertia tensor of the whole print (the materials the tree assigns "
             "and the library's densities; void inside the solid weighs what fills the printer's cavities: a "
-            "PolyJet printer's support gel, nothing on FDM), sampled at the centres of cubic cells over "
-            "the solid's bounds, each cell a cube of its material. Reads the whole tree, whichever node it "
+            "PolyJet printer's support gel, nothing on FDM). Exact per voxel cell and layer where every node "
+            "of the tree splits its region into axis-aligned boxes (voxel, layered): each box is integrated "
+            "over the solid's mesh. Otherwise (a stratum, a plane) sampled at the centres of cubic cells "
+            "(voxel_mm) over the solid's bounds, each cell a cube of its material. Reads the whole tree, "
+            "whichever node it "
             "is bound to. Produces mass_properties: mass (kg), centre of mass (mm), inertia about it "
             "(kg mm^2) and each material's volume (mm^3).",
             option_docs<Options>(), R"({"type": "mass_properties", "voxel_mm": 0.5})"};
@@ -234,6 +245,7 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
   // the last kKeptSums signatures are kept for its return.
   struct LeafSums {
     bool taken = false, apply = false;
+    bool exact = false;  ///< integrated over the pieces' boxes, not sampled
     std::vector<double> signature;
     std::vector<const MaterialNode*> leaves;  ///< the tuned one-material leaves, depth first
     std::vector<Moments> per_leaf;
@@ -322,6 +334,7 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
     std::unordered_map<const ReducerNode*, size_t> index;
     for (size_t i = 0; i < sums.leaves.size(); ++i) index.emplace(sums.leaves[i], i);
     const size_t slots = densities_.size() + sums.leaves.size();  // materials, then the tuned leaves
+    if (take_exact_sums(index, slots)) return;
     const int nz = static_cast<int>(grid_[2]);
     // Fewer runs than sample_cells: each holds a sum per leaf, and all of
     // them at most 256 MB. The count depends on the grid and the leaves
@@ -344,6 +357,70 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
     }
     sums.fixed.assign(total.begin(), total.begin() + static_cast<std::ptrdiff_t>(densities_.size()));
     sums.per_leaf.assign(total.begin() + static_cast<std::ptrdiff_t>(densities_.size()), total.end());
+  }
+
+  // Where every node of the tree splits its region into axis-aligned boxes
+  // (voxel cells, layers: ReducerNode::box_pieces) down to its material
+  // leaves, each piece is integrated exactly over the solid's mesh
+  // (geometry/box_moments.h) instead of sampled: sums in units of a
+  // sampling cell's volume, so the rest reads them alike. False (nothing
+  // taken) where a node cannot, or the pieces times the mesh's triangles
+  // would cost more than sampling.
+  bool take_exact_sums(const std::unordered_map<const ReducerNode*, size_t>& index, size_t slots) {
+    struct Piece {
+      Eigen::AlignedBox3d box;  // world
+      size_t slot;
+    };
+    std::vector<Piece> pieces;
+    const Bounds& bounds = solid_->bounds();
+    const Eigen::AlignedBox3d whole(bounds.lower, bounds.upper);
+    std::vector<ReducerNode::BoxPiece> split;
+    // Depth first from the root, whose frame is the world's.
+    const std::function<bool(const ReducerNode&, const Eigen::AlignedBox3d&, const Vec3&)> walk =
+        [&](const ReducerNode& node, const Eigen::AlignedBox3d& box, const Vec3& offset) {
+          if (node.role() == ReducerNode::Role::material) {
+            const auto& leaf = static_cast<const MaterialNode&>(node);
+            const Eigen::AlignedBox3d world(box.min() + offset, box.max() + offset);
+            if (const auto found = index.find(&node); found != index.end()) {
+              pieces.push_back({world, densities_.size() + found->second});
+              return true;
+            }
+            if (leaf.assigns_one_material()) {
+              pieces.push_back({world, leaf.material(QueryPoint{}, LocalFrame{})});
+              return true;
+            }
+            split.clear();
+            if (!node.box_pieces(box, split)) return false;
+            for (const auto& piece : split)
+              pieces.push_back({Eigen::AlignedBox3d(piece.box.min() + offset, piece.box.max() + offset), piece.material});
+            return true;
+          }
+          std::vector<ReducerNode::BoxPiece> children;
+          if (!node.box_pieces(box, children)) return false;
+          for (const auto& piece : children) {
+            const Eigen::AlignedBox3d inner(piece.box.min() - piece.shift, piece.box.max() - piece.shift);
+            if (!walk(node.child(piece.child), inner, offset + piece.shift)) return false;
+          }
+          return true;
+        };
+    if (!walk(tree_->root(), whole, Vec3::Zero())) return false;
+    const Mesh& mesh = solid_->mesh();
+    if (static_cast<double>(pieces.size()) * static_cast<double>(mesh.triangles.size()) > kMaxExactWork) return false;
+    std::vector<Moments> total(slots);
+    const double cell = voxel_mm_ * voxel_mm_ * voxel_mm_;
+    std::vector<Moments> moments(pieces.size());
+    tbb::parallel_for(size_t{0}, pieces.size(), [&](size_t i) {
+      const auto exact = box_moments(mesh, pieces[i].box, centre_);
+      // A piece beside the solid: its signed pieces cancel to rounding.
+      if (std::abs(exact[0]) <= 1e-12 * std::max(1.0, pieces[i].box.volume())) return;
+      for (size_t k = 0; k < exact.size(); ++k) moments[i][k] = exact[k] / cell;
+    });
+    for (size_t i = 0; i < pieces.size(); ++i) add(total[pieces[i].slot], moments[i]);  // in order: any thread count
+    LeafSums& sums = leaf_sums_;
+    sums.exact = true;
+    sums.fixed.assign(total.begin(), total.begin() + static_cast<std::ptrdiff_t>(densities_.size()));
+    sums.per_leaf.assign(total.begin() + static_cast<std::ptrdiff_t>(densities_.size()), total.end());
+    return true;
   }
 
   // Every cell inside the solid, once (only where cavities weigh something).
@@ -390,7 +467,7 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
       return;
     }
     const Vec3 c(s[1] / m, s[2] / m, s[3] / m);  // relative to the grid's centre
-    const double own = m * voxel_mm_ * voxel_mm_ / 6;
+    const double own = exact_ ? 0.0 : m * voxel_mm_ * voxel_mm_ / 6;  // a sampled cube's own inertia
     const double ixx = s[5] + s[6] + own - m * (c.y() * c.y() + c.z() * c.z());
     const double iyy = s[4] + s[6] + own - m * (c.x() * c.x() + c.z() * c.z());
     const double izz = s[4] + s[5] + own - m * (c.x() * c.x() + c.y() * c.y());
@@ -405,6 +482,8 @@ class MassPropertiesSimulator final : public SimulatorFor<MassPropertiesObservat
   Limits limits_;  // the run's, copied: a part may outlive the context it was built in
   std::vector<double> densities_;  ///< kg/mm³ per palette id
   const ReducerTree* tree_ = nullptr;
+  const Solid* solid_ = nullptr;
+  bool exact_ = false;  ///< this evaluation's sums are exact (take_exact_sums)
   double voxel_mm_ = 0, solid_volume_ = 0;
   Vec3 grid_ = Vec3::Ones();     ///< cells along x, y, z
   Vec3 centre_ = Vec3::Zero();  ///< of the grid: sums about it keep their digits

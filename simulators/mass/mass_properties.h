@@ -5,10 +5,16 @@
 /// PolyJet printer's support gel, nothing on FDM). What standing (Make It Stand: the centre of mass
 /// over the support) and lightness depend on.
 ///
-/// The "mass_properties" simulator samples the tree at the centres of cubic
-/// cells of a stated edge covering the solid's bounds (each cell a small
-/// cube of its material: its own inertia counts), summed in runs of z slices
-/// added in a fixed order, so the result is the same for any thread count. The goal
+/// The "mass_properties" simulator is exact per voxel cell and layer where
+/// the tree allows: where every node down to the material leaves splits its
+/// region into axis-aligned boxes (voxel cells, layered slabs:
+/// ReducerNode::box_pieces), each piece is integrated over the solid's mesh
+/// exactly (geometry/box_moments.h), whatever the grid. Otherwise (a
+/// stratum's shell, a slanted plane) it samples the tree at the centres of
+/// cubic cells of a stated edge covering the solid's bounds (each cell a
+/// small cube of its material: its own inertia counts), summed in runs of z
+/// slices added in a fixed order, so the result is the same for any thread
+/// count. The goal
 /// "mass_properties" holds a target mass and centre; the metrics
 /// "centre_offset" (the centres' distance across the direction of gravity,
 /// mm) and "mass_difference" (grams) compare them.
@@ -57,7 +63,8 @@ struct MassPropertiesOptions {
   template <class Declare, class Self>
   static void declare(Declare& d, Self& o) {
     d.number(o.voxel_mm, "voxel_mm", Range::at_least(0),
-             "edge of the sampling cells; 0: the solid's longest extent / 96", Default{"longest extent / 96"});
+             "edge of the sampling cells where the tree is not integrated exactly; 0: the solid's longest extent / 96",
+             Default{"longest extent / 96"});
   }
 };
 

@@ -1,6 +1,7 @@
 // Layered material node: k layers of given thickness and material along the
 // local depth axis w; one layer is a constant material; void is a material.
 
+#include <cmath>
 #include <limits>
 
 #include "core/options.h"
@@ -76,6 +77,23 @@ class LayeredNode final : public ClonableNode<LayeredNode, MaterialNode> {
 
   // One unbounded layer: its fill is never reached.
   bool assigns_one_material() const override { return layers_.size() == 1 && !layers_.front().thickness_mm; }
+
+  // Layers are slabs along w (the frame's third axis): boxes.
+  bool box_pieces(const Eigen::AlignedBox3d& box, std::vector<BoxPiece>& out) const override {
+    double below = -std::numeric_limits<double>::infinity();
+    const auto add = [&](double lower, double upper, MaterialId id) {
+      Eigen::AlignedBox3d piece = box;
+      piece.min().z() = std::max(box.min().z(), lower);
+      piece.max().z() = std::min(box.max().z(), upper);
+      if (piece.min().z() < piece.max().z()) out.push_back({0, id, piece, Vec3::Zero()});
+    };
+    for (size_t i = 0; i < boundaries_.size(); ++i) {
+      add(below, boundaries_[i], ids_[i]);
+      below = boundaries_[i];
+    }
+    if (std::isfinite(below)) add(below, std::numeric_limits<double>::infinity(), beyond_);
+    return true;
+  }
 
   bool decided_by_interfaces() const override { return true; }
   // Every finite layer boundary (whether the materials on either side differ

@@ -2,6 +2,7 @@
 // domain; each cell has its own child.
 
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "core/options.h"
@@ -94,6 +95,24 @@ class VoxelNode final : public ClonableNode<VoxelNode, GeometryNode> {
     const int c = static_cast<int>(child);
     const int index[3] = {c % counts_[0], (c / counts_[0]) % counts_[1], c / (counts_[0] * counts_[1])};
     return cell_frame(index, frame);
+  }
+  // Each cell a box (the outer cells reach beyond the grid, as route()
+  // clamps to them), its frame shifted to its corner.
+  bool box_pieces(const Eigen::AlignedBox3d& box, std::vector<BoxPiece>& out) const override {
+    constexpr double kFar = std::numeric_limits<double>::infinity();
+    for (size_t child = 0; child < children_.size(); ++child) {
+      const int c = static_cast<int>(child);
+      const int index[3] = {c % counts_[0], (c / counts_[0]) % counts_[1], c / (counts_[0] * counts_[1])};
+      BoxPiece piece;
+      piece.child = child;
+      for (int k = 0; k < 3; ++k) {
+        piece.shift[k] = origin_[k] + index[k] * size_[k];
+        piece.box.min()[k] = std::max(box.min()[k], index[k] == 0 ? -kFar : piece.shift[k]);
+        piece.box.max()[k] = std::min(box.max()[k], index[k] == counts_[k] - 1 ? kFar : piece.shift[k] + size_[k]);
+      }
+      if (!piece.box.isEmpty()) out.push_back(piece);
+    }
+    return true;
   }
   // The inner cell faces: along a, then b, then w.
   int interface_count() const override { return counts_[0] + counts_[1] + counts_[2] - 3; }
