@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <vector>
 
 namespace spec2fab {
@@ -89,21 +90,28 @@ void add_polyhedron(const Polyhedron& solid, double sign, Moments& m) {
 
 std::array<double, 10> box_moments(const Mesh& mesh, const Eigen::AlignedBox3d& box, const Vec3& origin) {
   Moments m{};
-  if (box.isEmpty() || mesh.triangles.empty()) return m;
+  if (mesh.triangles.empty() || !(box.min().array() < box.max().array()).all()) return m;
+  if (!box.min().allFinite() || !box.max().allFinite()) throw std::invalid_argument("box_moments: an unbounded box");
   // Everything relative to `origin`: the integrals keep their digits.
   const Eigen::AlignedBox3d b(box.min() - origin, box.max() - origin);
-  const Vec3 apex = b.center();
+  Eigen::AlignedBox3d reach;
+  for (const Vec3& v : mesh.vertices) reach.extend(v - origin);
+  // The apex beyond the mesh along −x, level with the box's centre: only
+  // the tetrahedra whose triangles lie across the box's shadow along x
+  // reach the box; the others are passed over unclipped.
+  const Vec3 apex(reach.min().x() - 0.5 * reach.sizes().x() - 1, b.center().y(), b.center().z());
   const double outward = mesh.signed_volume() < 0 ? -1.0 : 1.0;
-  const double tolerance = 1e-12 * std::max(1.0, b.sizes().norm());
+  const double tolerance = 1e-12 * std::max(1.0, (reach.sizes().norm() + b.sizes().norm()));
   Polyhedron solid, scratch;
   for (const Eigen::Vector3i& t : mesh.triangles) {
     const Vec3 p1 = mesh.vertices[static_cast<size_t>(t[0])] - origin, p2 = mesh.vertices[static_cast<size_t>(t[1])] - origin,
                p3 = mesh.vertices[static_cast<size_t>(t[2])] - origin;
+    Eigen::AlignedBox3d bounds(apex);
+    bounds.extend(p1).extend(p2).extend(p3);
+    if (!bounds.intersects(b)) continue;
     const double turn = (p1 - apex).dot((p2 - apex).cross(p3 - apex));
     if (turn == 0) continue;
     const double sign = (turn > 0 ? 1.0 : -1.0) * outward;
-    Eigen::AlignedBox3d bounds(apex);
-    bounds.extend(p1).extend(p2).extend(p3);
     if (b.contains(bounds)) {  // wholly inside: no clipping
       add_tetrahedron(apex, p1, p2, p3, sign, m);
       continue;

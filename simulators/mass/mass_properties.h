@@ -9,7 +9,10 @@
 /// the tree allows: where every node down to the material leaves splits its
 /// region into axis-aligned boxes (voxel cells, layered slabs:
 /// ReducerNode::box_pieces), each piece is integrated over the solid's mesh
-/// exactly (geometry/box_moments.h), whatever the grid. Otherwise (a
+/// exactly (geometry/box_moments.h), whatever the grid — where the leaf
+/// sums below apply (no free parameter but one-material leaves' materials
+/// and stepped ones) and the pieces times the mesh's triangles stay under
+/// 2e6; a debug line says which path ran. Otherwise (a
 /// stratum's shell, a slanted plane) it samples the tree at the centres of
 /// cubic cells of a stated edge covering the solid's bounds (each cell a
 /// small cube of its material: its own inertia counts), summed in runs of z

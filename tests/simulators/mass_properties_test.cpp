@@ -253,6 +253,48 @@ TEST_F(MassProperties, VoxelCellsAndLayersAreExactOnAnyGrid) {
   EXPECT_GT(std::abs(sampled / exact - 1), 1e-3) << "the grid the exact path does not need";
 }
 
+// Tuned voxel cells on the exact path: a grid whose origin lies inside the
+// box (its outer cells reach past the grid, as route() clamps to them),
+// each cell light, heavy or void, against the cells' boxes in closed form
+// at a 6.7 mm grid; and the mass bound, complete, is the metric's error.
+TEST_F(MassProperties, TunedVoxelCellsAreExactAndSoIsTheirBound) {
+  const Solid box(make_box(Vec3(-20, -15, -10), Vec3(20, 15, 10), 2), UvSource::planar, 2);
+  auto tree = bound(R"({"type": "voxel", "size_mm": 15, "origin": [-12, -8, -4],
+      "child": {"type": "layered", "material": {"value": "light", "choices": ["light", "heavy", "void"]}}})", box);
+  SearchSpace space = tree->search_space();
+  ASSERT_EQ(space.dimension(), 6u) << "3 x 2 x 1 cells";
+  const std::vector<double> ids = {0, 1, 2, 2, 0, 1};  // void, light, heavy, ...
+  space.set_values(ids);
+  tree->evaluate();
+  const MassPropertiesObservation out = simulate(*tree, 6.7);
+  // The cells' boxes: x at -20 | 3 | 18 | 20, y at -15 | 7 | 15, z whole.
+  const double xs[] = {-20, 3, 18, 20}, ys[] = {-15, 7, 15};
+  const double density[] = {0, 1e-6, 3e-6};  // void, light, heavy (kg/mm³)
+  double mass = 0;
+  Eigen::Vector3d first = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d second = Eigen::Matrix3d::Zero();  // ∫ρ x xᵀ
+  for (int c = 0; c < 6; ++c) {
+    const int i = c % 3, j = c / 3;
+    const Eigen::Vector3d lo(xs[i], ys[j], -10), hi(xs[i + 1], ys[j + 1], 10), size = hi - lo, mid = (lo + hi) / 2;
+    const double m = density[static_cast<size_t>(ids[static_cast<size_t>(c)])] * size.prod();
+    mass += m;
+    first += m * mid;
+    second += m * mid * mid.transpose();
+    second += m / 12 * size.cwiseProduct(size).asDiagonal().toDenseMatrix();
+  }
+  const Eigen::Vector3d centre = first / mass;
+  const Eigen::Matrix3d spread = second - mass * centre * centre.transpose();  // ∫ρ d dᵀ about the centre
+  const Eigen::Matrix3d inertia = spread.trace() * Eigen::Matrix3d::Identity() - spread;
+  EXPECT_NEAR(out.mass_kg(), mass, 1e-12 * mass);
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(out.centre_mm()[k], centre[k], 1e-9) << "axis " << k;
+  const double* got = out.data.data() + MassPropertiesObservation::kInertia;
+  const double expected[] = {inertia(0, 0), inertia(1, 1), inertia(2, 2), inertia(0, 1), inertia(0, 2), inertia(1, 2)};
+  for (int k = 0; k < 6; ++k) EXPECT_NEAR(got[k], expected[k], 1e-9 * inertia(0, 0)) << "component " << k;
+  const MassBound lower = make_mass_bound(*tree, space, {6.7}, PartContext{palette_});
+  ASSERT_TRUE(lower);
+  EXPECT_NEAR(lower(ids, 6, 0.01), std::abs(mass - 0.01) * 1e3, 1e-9);
+}
+
 // A voxel core whose cells' materials are the only free parameters is summed
 // per cell once and reweighed (the leaf sums); a free stratum depth (one
 // choice: the same geometry) makes the simulator sample every cell each

@@ -110,7 +110,7 @@ class VoxelNode final : public ClonableNode<VoxelNode, GeometryNode> {
         piece.box.min()[k] = std::max(box.min()[k], index[k] == 0 ? -kFar : piece.shift[k]);
         piece.box.max()[k] = std::min(box.max()[k], index[k] == counts_[k] - 1 ? kFar : piece.shift[k] + size_[k]);
       }
-      if (!piece.box.isEmpty()) out.push_back(piece);
+      if ((piece.box.min().array() < piece.box.max().array()).all()) out.push_back(piece);
     }
     return true;
   }
