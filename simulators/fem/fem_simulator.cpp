@@ -333,14 +333,9 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
     boundary_ = mesh_->boundary_faces();
     constraints_ = make_constraints(*mesh_, boundary_, settings_);
     probes_ = locate_probes(*mesh_, settings_.probes, where_ + "/probes");
-    solver_ = std::make_unique<ElasticSolver>(*mesh_, constraints_.fixed, settings_.linear_solver, across_ranks_);
     centroids_.resize(mesh_->tets.size());
     for (size_t t = 0; t < mesh_->tets.size(); ++t) centroids_[t] = mesh_->centroid(t);
-    materials_.resize(mesh_->tets.size());
-    lambda_.resize(mesh_->tets.size());
-    mu_.resize(mesh_->tets.size());
-    active_.resize(mesh_->tets.size());
-    displacement_.assign(3 * mesh_->nodes.size(), 0.0);
+    make_solver();
     timings_.assemble_setup = seconds_since(rest);
     spdlog::debug("fem: {} nodes, {} tets ({} for the plain solid), {} free DOFs; mesh {:.2f} s", mesh_->nodes.size(),
                   mesh_->tets.size(), meshed_->plain_tets, solver_->free_dofs(), timings_.mesh);
@@ -381,6 +376,12 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
     probes_ = std::move(state.probes);
     centroids_ = std::move(state.centroids);
     timings_ = state.timings;
+    make_solver();
+  }
+
+  // The solver for the mesh in use, and the per-tet and per-node arrays
+  // simulate() fills.
+  void make_solver() {
     solver_ = std::make_unique<ElasticSolver>(*mesh_, constraints_.fixed, settings_.linear_solver, across_ranks_);
     const size_t tets = mesh_->tets.size();
     materials_.resize(tets);

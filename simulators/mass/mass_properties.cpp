@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <unordered_map>
+#include <unordered_set>
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -626,30 +627,26 @@ MassBound make_mass_bound(ReducerTree& tree, const SearchSpace& space, const Mas
   // The stepped parameters of no leaf (a shell's thickness in steps) come
   // first in the space, which branch and bound assigns in order; each of
   // their combinations has its own leaf sums.
+  const auto probe = simulator.leaf_masses();
+  if (!probe) return {};
+  std::unordered_set<const Parameter*> of_leaves;
+  for (const MaterialNode* leaf : probe->leaves)
+    leaf->read_parameters([&](const std::string&, const Parameter& p) { of_leaves.insert(&p); });
   size_t steps = 0;
   long long combinations = 1;
-  for (const auto probe = simulator.leaf_masses(); probe && steps < entries.size(); ++steps) {
+  for (; steps < entries.size(); ++steps) {
     const Parameter& parameter = *entries[steps].parameter;
-    bool a_leafs = false;
-    for (const MaterialNode* leaf : probe->leaves)
-      leaf->read_parameters([&](const std::string&, const Parameter& p) { a_leafs = a_leafs || &p == &parameter; });
-    if (a_leafs || !takes_steps(parameter)) break;
+    if (of_leaves.count(&parameter) > 0 || !takes_steps(parameter)) break;
     combinations *= parameter.cardinality();
     if (combinations > kMaxSteps) return {};
   }
   // Every other stepped parameter of the tree must be fixed: one free in
   // another tuner's space would move the leaves' volumes under this bound.
-  if (const auto probe = simulator.leaf_masses()) {
-    std::unordered_map<const Parameter*, bool> in_leaf;
-    for (const MaterialNode* leaf : probe->leaves)
-      leaf->read_parameters([&](const std::string&, const Parameter& p) { in_leaf.emplace(&p, true); });
-    const SearchSpace free = tree.search_space();
-    for (const SearchSpace::Entry& entry : free.entries()) {
-      if (in_leaf.count(entry.parameter) > 0 || !takes_steps(*entry.parameter)) continue;
-      bool first = false;
-      for (size_t g = 0; g < steps; ++g) first = first || entries[g].parameter == entry.parameter;
-      if (!first) return {};
-    }
+  const SearchSpace free = tree.search_space();
+  for (const SearchSpace::Entry& entry : free.entries()) {
+    if (of_leaves.count(entry.parameter) > 0 || !takes_steps(*entry.parameter)) continue;
+    const auto first = entries.begin(), last = entries.begin() + static_cast<std::ptrdiff_t>(steps);
+    if (std::none_of(first, last, [&](const SearchSpace::Entry& e) { return e.parameter == entry.parameter; })) return {};
   }
   // Restored however this ends: the tree is the caller's.
   struct Restore {
