@@ -25,7 +25,6 @@ namespace spec2fab::fem {
 namespace elastic_detail {
 
 using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
-inline constexpr size_t kPairs = kElementPairs;
 using Clock = std::chrono::steady_clock;
 
 inline double seconds_since(Clock::time_point start) {
@@ -40,9 +39,8 @@ struct ElasticSolver::Impl {
   std::vector<TetRest> rest;
   std::vector<int> dof_index;   // full DOF -> free index, or -1
   int free_count = 0;
-  // Per tet, for each of its 78 local pairs i <= j (column-major upper
-  // triangle; element matrices are symmetric): the position of the global
-  // lower-triangle entry in the matrix's value array, or -1 (a fixed DOF).
+  // Where each tet's element matrix lands in the matrix's value array
+  // (StiffnessPattern::scatter: 18 positions per tet).
   std::vector<int> scatter;
   std::vector<int> diagonal;  // position of each free DOF's diagonal entry
   SparseMatrix stiffness;     // lower triangle of the free-free block
@@ -91,7 +89,7 @@ struct ElasticSolver::Impl {
       }
       if (!tangent) continue;
       if (linear_tangent) linear_tet_stiffness(rest[t], lambda[t], mu[t], k);
-      add_element(t, k, values);
+      add_element(mesh, t, k, values);
     }
     if (tangent) hold_untouched_nodes(values);
     return energy;
@@ -105,18 +103,13 @@ struct ElasticSolver::Impl {
     for (size_t t = 0; t < mesh.tets.size(); ++t) {
       if (!active[t]) continue;
       linear_tet_stiffness(rest[t], lambda[t], mu[t], k);
-      add_element(t, k, values);
+      add_element(mesh, t, k, values);
     }
     hold_untouched_nodes(values);
   }
 
-  void add_element(size_t t, const Mat12& k, double* values) const {
-    const int* map = &scatter[kPairs * t];
-    for (int j = 0; j < 12; ++j) {
-      for (int i = 0; i <= j; ++i, ++map) {
-        if (*map >= 0) values[*map] += k(i, j);
-      }
-    }
+  void add_element(const TetMesh& mesh, size_t t, const Mat12& k, double* values) const {
+    add_element_matrix(scatter, diagonal, dof_index, mesh.tets[t], t, k, values);
   }
 
   // Nodes no active tet touches: keep them where they are.

@@ -91,16 +91,19 @@ StiffnessPattern stiffness_pattern(const TetMesh& mesh, const std::vector<int>& 
   };
   pattern.diagonal.resize(static_cast<size_t>(free_count));
   for (int i = 0; i < free_count; ++i) pattern.diagonal[static_cast<size_t>(i)] = position(i, i);
-  pattern.scatter.assign(kElementPairs * mesh.tets.size(), -1);
+  pattern.scatter.assign(kScatterPerTet * mesh.tets.size(), -1);
   for (size_t t = 0; t < mesh.tets.size(); ++t) {
     const Tet& tet = mesh.tets[t];
-    int* map = &pattern.scatter[kElementPairs * t];
-    for (int j = 0; j < 12; ++j) {
-      const int gj = dof_index[3 * static_cast<size_t>(tet[static_cast<size_t>(j / 3)]) + static_cast<size_t>(j % 3)];
-      for (int i = 0; i <= j; ++i, ++map) {
-        const int gi = dof_index[3 * static_cast<size_t>(tet[static_cast<size_t>(i / 3)]) + static_cast<size_t>(i % 3)];
-        if (gi >= 0 && gj >= 0) *map = position(std::max(gi, gj), std::min(gi, gj));
-      }
+    int* base = &pattern.scatter[kScatterPerTet * t];
+    for (int edge = 0; edge < kTetEdges; ++edge, base += 3) {
+      int low = tet[static_cast<size_t>(kTetEdgeNodes[edge][0])], high = tet[static_cast<size_t>(kTetEdgeNodes[edge][1])];
+      // As add_element_matrix orders them: by the nodes' last free DOF.
+      if (last_free_dof(dof_index, low) > last_free_dof(dof_index, high)) std::swap(low, high);
+      const int high_first = first_free_dof(dof_index, high);
+      if (high_first < 0) continue;
+      for (size_t d = 0; d < 3; ++d)
+        if (const int column = dof_index[3 * static_cast<size_t>(low) + d]; column >= 0)
+          base[d] = position(high_first, column);
     }
   }
   return pattern;
