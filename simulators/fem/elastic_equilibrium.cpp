@@ -6,8 +6,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <stdexcept>
+
+#include "core/ranks.h"
 
 namespace spec2fab::fem {
 
@@ -65,9 +69,27 @@ struct ElasticSolver::Impl::Equilibrium {
       if (const int i = m.dof_index[d]; i >= 0) u[d] += m.step[i];
     }
     // The linear system's own residual b − K·Δ (a matrix product, not another
-    // pass over the elements).
+    // pass over the elements); with the rows split over the ranks, each
+    // rank's rows are whole in its matrix, and their sums are added.
     m.saved_residual.noalias() = m.stiffness.selfadjointView<Eigen::Lower>() * m.step;
-    const double r = (m.residual - m.saved_residual).norm();
+    double r = 0;
+    if (m.node_owned.empty()) {
+      r = (m.residual - m.saved_residual).norm();
+    } else {
+      double mine = 0;
+      for (size_t d = 0; d < dofs; ++d) {
+        const int i = m.dof_index[d];
+        if (i >= 0 && m.owns_dof(d)) mine += (m.residual[i] - m.saved_residual[i]) * (m.residual[i] - m.saved_residual[i]);
+      }
+      std::vector<std::uint8_t> bytes(sizeof mine);
+      std::memcpy(bytes.data(), &mine, sizeof mine);
+      for (const std::vector<std::uint8_t>& theirs : ranks::all_gather(bytes)) {
+        double part = 0;
+        std::memcpy(&part, theirs.data(), sizeof part);
+        r += part;
+      }
+      r = std::sqrt(r);
+    }
     report.relative_residual = reference > 0 ? r / reference : r;
     report.newton_iterations = 1;
     report.load_steps = 1;

@@ -18,7 +18,8 @@ ElasticSolver::ElasticSolver(const TetMesh& mesh, const std::vector<char>& fixed
   m.kind = linear_solver;
   const std::vector<int> node_order = m.number_free_dofs(mesh, fixed);
   m.shape_rest(mesh);
-  StiffnessPattern pattern = stiffness_pattern(mesh, m.dof_index, m.free_count);
+  m.split_rows(mesh, node_order, distributed);
+  StiffnessPattern pattern = stiffness_pattern(mesh, m.dof_index, m.free_count, m.node_owned);
   m.stiffness = std::move(pattern.lower);
   m.diagonal = std::move(pattern.diagonal);
   m.scatter = std::move(pattern.scatter);
@@ -42,6 +43,14 @@ double ElasticSolver::multigrid_complexity() const {
 }
 
 int ElasticSolver::solve_ranks() const { return impl_->gamg ? impl_->gamg->ranks() : 1; }
+
+size_t ElasticSolver::assembled_tets() const {
+  const Impl& m = *impl_;
+  if (m.tet_assembled.empty()) return mesh_.tets.size();
+  return static_cast<size_t>(std::count(m.tet_assembled.begin(), m.tet_assembled.end(), 1));
+}
+
+long long ElasticSolver::stiffness_entries() const { return impl_->stiffness.nonZeros(); }
 
 void ElasticSolver::set_materials(std::span<const double> lambda, std::span<const double> mu,
                                   std::span<const char> active) {

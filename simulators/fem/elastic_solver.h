@@ -107,6 +107,10 @@ class ElasticSolver {
   double factor_flops() const;     ///< flops of one numeric factorisation
   double multigrid_complexity() const;  ///< multigrids: Σ nnz over their levels / nnz(K) (after a solve)
   int solve_ranks() const;              ///< MPI ranks a linear solve is spread over (1 unless distributed)
+  /// Tets whose stiffness this process assembles: all of them, but those
+  /// touching its own rows where the solve is spread over the ranks.
+  size_t assembled_tets() const;
+  long long stiffness_entries() const;  ///< entries of this process's lower triangle
 
  private:
   struct Impl;

@@ -56,6 +56,15 @@ struct ElasticSolver::Impl {
   std::vector<double> lambda, mu;
   std::vector<char> active;
   std::vector<char> node_active;
+  // A solve spread over the ranks (gamg under mpirun) assembles only the
+  // rows this rank owns: those of `node_owned`, from the tets touching one
+  // (`tet_assembled`). Empty: every row. Forces and energy are still summed
+  // over every tet on every rank (one pass over the elements, replicated,
+  // and the same numbers as one process).
+  std::vector<char> node_owned, tet_assembled;
+
+  bool assembles(size_t t) const { return tet_assembled.empty() || tet_assembled[t]; }
+  bool owns_dof(size_t dof) const { return node_owned.empty() || node_owned[dof / 3]; }
 
   // Work buffers, sized once.
   Eigen::VectorXd residual, step;
@@ -82,12 +91,13 @@ struct ElasticSolver::Impl {
         const auto v = static_cast<size_t>(tet[static_cast<size_t>(a)]);
         for (int d = 0; d < 3; ++d) x[3 * a + d] = mesh.nodes[v][d] + u[3 * v + static_cast<size_t>(d)];
       }
-      energy += tet_forces(rest[t], lambda[t], mu[t], x, corotated, f, tangent && !linear_tangent ? &k : nullptr);
+      const bool assemble = tangent && assembles(t);
+      energy += tet_forces(rest[t], lambda[t], mu[t], x, corotated, f, assemble && !linear_tangent ? &k : nullptr);
       for (int a = 0; a < 4; ++a) {
         const auto v = static_cast<size_t>(tet[static_cast<size_t>(a)]);
         for (int d = 0; d < 3; ++d) forces[3 * v + static_cast<size_t>(d)] += f[3 * a + d];
       }
-      if (!tangent) continue;
+      if (!assemble) continue;
       if (linear_tangent) linear_tet_stiffness(rest[t], lambda[t], mu[t], k);
       add_element(mesh, t, k, values);
     }
@@ -101,7 +111,7 @@ struct ElasticSolver::Impl {
     std::fill(values, values + stiffness.nonZeros(), 0.0);
     Mat12 k;
     for (size_t t = 0; t < mesh.tets.size(); ++t) {
-      if (!active[t]) continue;
+      if (!active[t] || !assembles(t)) continue;
       linear_tet_stiffness(rest[t], lambda[t], mu[t], k);
       add_element(mesh, t, k, values);
     }
@@ -117,7 +127,8 @@ struct ElasticSolver::Impl {
     for (size_t v = 0; v < node_active.size(); ++v) {
       if (node_active[v]) continue;
       for (size_t d = 0; d < 3; ++d) {
-        if (const int i = dof_index[3 * v + d]; i >= 0) values[diagonal[static_cast<size_t>(i)]] = 1.0;
+        const int i = dof_index[3 * v + d];
+        if (i >= 0 && diagonal[static_cast<size_t>(i)] >= 0) values[diagonal[static_cast<size_t>(i)]] = 1.0;
       }
     }
   }
@@ -202,6 +213,20 @@ struct ElasticSolver::Impl {
                        "is singular (rigid motion is free); give a \"fixed\" region");
     }
     return node_order;
+  }
+
+  /// Under mpirun with gamg: which nodes' rows this rank owns (the run of
+  /// the node order GamgSolver gives it), and the tets that touch them.
+  void split_rows(const TetMesh& mesh, const std::vector<int>& node_order, bool distributed) {
+    if (kind != LinearSolver::elastic_multigrid || !distributed) return;
+    const GamgSolver::Partition part = GamgSolver::partition(node_order.size(), true);
+    if (part.size < 2) return;
+    node_owned.assign(mesh.nodes.size(), 0);
+    for (size_t place = part.first_place; place < part.end_place; ++place)
+      node_owned[static_cast<size_t>(node_order[place])] = 1;
+    tet_assembled.assign(mesh.tets.size(), 0);
+    for (size_t t = 0; t < mesh.tets.size(); ++t)
+      for (int v : mesh.tets[t]) tet_assembled[t] |= node_owned[static_cast<size_t>(v)];
   }
 
   /// Each tet's rest shape (its inverse edge matrix and volume).

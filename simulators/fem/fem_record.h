@@ -65,6 +65,7 @@ struct FemSolveRecord {
   long cg_iterations = 0;
   double multigrid_operator_complexity = 0;
   int ranks = 1;
+  long long assembled_tets = 0, stiffness_entries = 0;
   double max_displacement_mm = 0;
   template <class Fields, class Self>
   static void fields(Fields& f, Self& s) {
@@ -81,6 +82,8 @@ struct FemSolveRecord {
     f(s.cg_iterations, "cg_iterations", "CG iterations, all solves (the iterative solvers)");
     f(s.multigrid_operator_complexity, "multigrid_operator_complexity", "nnz over the levels / nnz(K)");
     f(s.ranks, "ranks", "MPI ranks a solve is spread over");
+    f(s.assembled_tets, "assembled_tets", "tets whose stiffness rank 0 assembles (those touching its rows when spread)");
+    f(s.stiffness_entries, "stiffness_entries", "entries of rank 0's lower triangle of the stiffness");
     f(s.max_displacement_mm, "max_displacement_mm", "the largest node displacement");
   }
 };

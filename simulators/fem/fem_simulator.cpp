@@ -276,6 +276,8 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
     solve.cg_iterations = report_.cg_iterations;
     solve.multigrid_operator_complexity = solver_->multigrid_complexity();
     solve.ranks = solver_->solve_ranks();
+    solve.assembled_tets = static_cast<long long>(solver_->assembled_tets());
+    solve.stiffness_entries = solver_->stiffness_entries();
     solve.max_displacement_mm = max_displacement_mm;
     return solve;
   }

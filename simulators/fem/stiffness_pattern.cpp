@@ -13,41 +13,50 @@ struct NodeGraph {
   std::vector<int> start, neighbours;
 };
 
-NodeGraph node_graph(const TetMesh& mesh) {
+/// `kept` (empty: every node): only the tets touching a kept node count.
+NodeGraph node_graph(const TetMesh& mesh, const std::vector<char>& kept) {
   const size_t node_count = mesh.nodes.size();
-  NodeGraph graph{std::vector<int>(node_count + 1, 0), std::vector<int>(16 * mesh.tets.size())};
+  auto counts = [&](const Tet& tet) {
+    return kept.empty() || std::any_of(tet.begin(), tet.end(), [&](int v) { return kept[static_cast<size_t>(v)] != 0; });
+  };
+  NodeGraph graph{std::vector<int>(node_count + 1, 0), {}};
   std::vector<int>& start = graph.start;
   std::vector<int>& adjacency = graph.neighbours;
   for (const Tet& tet : mesh.tets)
-    for (int a : tet) start[static_cast<size_t>(a) + 1] += 4;
+    if (counts(tet))
+      for (int a : tet) start[static_cast<size_t>(a) + 1] += 4;
   for (size_t v = 0; v < node_count; ++v) start[v + 1] += start[v];
+  adjacency.resize(static_cast<size_t>(start[node_count]));
   std::vector<int> cursor(start.begin(), start.end() - 1);
   for (const Tet& tet : mesh.tets)
-    for (int a : tet)
-      for (int b : tet) adjacency[static_cast<size_t>(cursor[static_cast<size_t>(a)]++)] = b;
-  int kept = 0;
+    if (counts(tet))
+      for (int a : tet)
+        for (int b : tet) adjacency[static_cast<size_t>(cursor[static_cast<size_t>(a)]++)] = b;
+  int written = 0;
   for (size_t v = 0; v < node_count; ++v) {
     const auto begin = adjacency.begin() + start[v], end = adjacency.begin() + start[v + 1];
     std::sort(begin, end);
     const auto unique_end = std::unique(begin, end);
-    start[v] = kept;
-    kept = static_cast<int>(std::copy(begin, unique_end, adjacency.begin() + kept) - adjacency.begin());
+    start[v] = written;
+    written = static_cast<int>(std::copy(begin, unique_end, adjacency.begin() + written) - adjacency.begin());
   }
-  start[node_count] = kept;
-  adjacency.resize(static_cast<size_t>(kept));
+  start[node_count] = written;
+  adjacency.resize(static_cast<size_t>(written));
   adjacency.shrink_to_fit();
   return graph;
 }
 
 /// Column c of the lower triangle: the free DOFs of c's node's neighbours
-/// numbered c or above, in order.
+/// numbered c or above, in order (with `kept`, only where c's node or the
+/// neighbour is kept).
 void lower_pattern(const NodeGraph& graph, const std::vector<int>& dof_index, int free_count,
-                   Eigen::SparseMatrix<double, Eigen::ColMajor, int>& lower) {
+                   const std::vector<char>& kept, Eigen::SparseMatrix<double, Eigen::ColMajor, int>& lower) {
   const size_t node_count = graph.start.size() - 1;
   std::vector<int> column_start(static_cast<size_t>(free_count) + 1, 0);
   auto for_each_row = [&](size_t v, int column, auto&& visit) {
     for (int k = graph.start[v]; k < graph.start[v + 1]; ++k) {
       const auto w = static_cast<size_t>(graph.neighbours[static_cast<size_t>(k)]);
+      if (!kept.empty() && !kept[v] && !kept[w]) continue;
       for (size_t e = 0; e < 3; ++e) {
         if (const int row = dof_index[3 * w + e]; row >= column) visit(row);
       }
@@ -79,15 +88,18 @@ void lower_pattern(const NodeGraph& graph, const std::vector<int>& dof_index, in
 
 }  // namespace
 
-StiffnessPattern stiffness_pattern(const TetMesh& mesh, const std::vector<int>& dof_index, int free_count) {
+StiffnessPattern stiffness_pattern(const TetMesh& mesh, const std::vector<int>& dof_index, int free_count,
+                                   const std::vector<char>& kept) {
   StiffnessPattern pattern;
-  lower_pattern(node_graph(mesh), dof_index, free_count, pattern.lower);
+  lower_pattern(node_graph(mesh, kept), dof_index, free_count, kept, pattern.lower);
   const int* outer = pattern.lower.outerIndexPtr();
   const int* inner = pattern.lower.innerIndexPtr();
+  // The entry's position, or -1 where the pattern left it out (`kept`).
   auto position = [&](int row, int col) {
     const int* begin = inner + outer[col];
     const int* end = inner + outer[col + 1];
-    return static_cast<int>(std::lower_bound(begin, end, row) - inner);
+    const int* at = std::lower_bound(begin, end, row);
+    return at != end && *at == row ? static_cast<int>(at - inner) : -1;
   };
   pattern.diagonal.resize(static_cast<size_t>(free_count));
   for (int i = 0; i < free_count; ++i) pattern.diagonal[static_cast<size_t>(i)] = position(i, i);

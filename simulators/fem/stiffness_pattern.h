@@ -30,18 +30,22 @@ inline constexpr size_t kScatterPerTet = 3 * kTetEdges;
 struct StiffnessPattern {
   /// Lower triangle of the free-free block, values zero.
   Eigen::SparseMatrix<double, Eigen::ColMajor, int> lower;
-  std::vector<int> diagonal;  ///< position of each free DOF's diagonal entry in lower's values
+  std::vector<int> diagonal;  ///< position of each free DOF's diagonal entry in lower's values (-1: left out)
   /// Per tet, for each edge (kTetEdgeNodes) and each axis d of the edge's
   /// node whose free DOFs come first ("low"): the position in lower's
   /// values where column (low, d) meets the other node's first free row;
-  /// that node's further free rows follow it. -1 where (low, d) is fixed or
-  /// the other node has no free DOF.
+  /// that node's further free rows follow it. -1 where (low, d) is fixed,
+  /// the other node has no free DOF, or the pattern leaves the pair out.
   std::vector<int> scatter;
 };
 
 /// `dof_index`: for each of the 3 DOFs of each node, its free index or -1,
-/// a node's free DOFs consecutive; `free_count` free DOFs in all.
-StiffnessPattern stiffness_pattern(const TetMesh& mesh, const std::vector<int>& dof_index, int free_count);
+/// a node's free DOFs consecutive; `free_count` free DOFs in all. `kept`
+/// (one flag per node; empty: all): only the entries of a kept node's rows
+/// and columns, from the tets that touch one — the rows one rank of a
+/// distributed solve owns.
+StiffnessPattern stiffness_pattern(const TetMesh& mesh, const std::vector<int>& dof_index, int free_count,
+                                   const std::vector<char>& kept = {});
 
 /// A node's first free DOF, or -1 when all three are fixed.
 inline int first_free_dof(const std::vector<int>& dof_index, int node) {
@@ -73,6 +77,7 @@ void add_element_matrix(const std::vector<int>& scatter, const std::vector<int>&
       const int column = dof[3 * a + d];
       if (column < 0) continue;
       const int at = diagonal[static_cast<size_t>(column)];
+      if (at < 0) continue;  // a node whose rows this pattern leaves out
       for (int e = d; e < 3; ++e)
         if (const int row = dof[3 * a + e]; row >= 0) values[at + row - column] += k(3 * a + d, 3 * a + e);
     }

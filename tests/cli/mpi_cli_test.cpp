@@ -185,6 +185,14 @@ TEST_F(Cli, MpiSimulateFemSpreadsItsSolveOverTheRanks) {
     const auto record = nlohmann::json::parse(read(out / "simulation.json"));
     EXPECT_EQ(record["solve"]["ranks"], ranks);
     EXPECT_EQ(record["solve"]["linear_solver"], "gamg");
+    // Each rank assembles its own rows: rank 0 about 1/ranks of the tets
+    // (those touching its nodes) and of the stiffness's entries.
+    const auto whole = nlohmann::json::parse(read(dir_ / "one" / "simulation.json"));
+    const double tets = whole["mesh"]["tets"], entries = whole["solve"]["stiffness_entries"];
+    EXPECT_EQ(whole["solve"]["assembled_tets"], whole["mesh"]["tets"]);
+    EXPECT_LT(record["solve"]["assembled_tets"].get<double>(), tets * (1.3 / ranks)) << ranks << " ranks";
+    EXPECT_LT(record["solve"]["stiffness_entries"].get<double>(), entries * (1.3 / ranks)) << ranks << " ranks";
+    EXPECT_GT(record["solve"]["assembled_tets"].get<double>(), tets * (0.7 / ranks)) << ranks << " ranks";
   }
 }
 

@@ -189,10 +189,23 @@ void GamgSolver::Impl::number_rows(const std::vector<int>& dof_of_free, std::spa
     if (i > 0 && row_of_free[i] <= row_of_free[i - 1])
       throw std::logic_error("GamgSolver: the free DOFs must be numbered along node_order");
   }
-  const auto count = static_cast<long long>(node_count);
-  const long long first_node = count * rank / size, end_node = count * (rank + 1) / size;
+  const auto [first_node, end_node] = ranks::share(static_cast<long long>(node_count), rank, size);
   first_row = static_cast<PetscInt>(3 * first_node);
   end_row = static_cast<PetscInt>(3 * end_node);
+}
+
+GamgSolver::Partition GamgSolver::partition(size_t node_count, bool distributed) {
+  std::lock_guard lock(petsc_mutex());
+  start_petsc(distributed);
+  Partition part;
+  if (distributed) {
+    MPI_Comm_rank(PETSC_COMM_WORLD, &part.rank);
+    MPI_Comm_size(PETSC_COMM_WORLD, &part.size);
+  }
+  const auto [first, end] = ranks::share(static_cast<long long>(node_count), part.rank, part.size);
+  part.first_place = static_cast<size_t>(first);
+  part.end_place = static_cast<size_t>(end);
+  return part;
 }
 
 void GamgSolver::Impl::local_pattern(const Matrix& lower) {
@@ -385,6 +398,7 @@ int GamgSolver::last_iterations() const { return 0; }
 double GamgSolver::last_relative_residual() const { return 0; }
 double GamgSolver::operator_complexity() const { return 0; }
 int GamgSolver::ranks() const { return 1; }
+GamgSolver::Partition GamgSolver::partition(size_t node_count, bool) { return {0, 1, 0, node_count}; }
 
 }  // namespace spec2fab::fem
 

@@ -73,6 +73,16 @@ class GamgSolver {
   /// Ranks the solve is spread over (1 unless distributed under mpirun).
   int ranks() const;
 
+  /// This process's rank and the number of ranks a solver made with
+  /// `distributed` will spread its solve over (starting PETSc if it was
+  /// not), and the run of places in `node_order` whose rows it owns: what a
+  /// caller needs to assemble only the rows this rank owns.
+  struct Partition {
+    int rank = 0, size = 1;
+    size_t first_place = 0, end_place = 0;
+  };
+  static Partition partition(size_t node_count, bool distributed);
+
   static bool available();
 
  private:
