@@ -96,9 +96,11 @@ struct GamgSolver::Impl {
   PetscInt first_row = 0, end_row = 0;  // this rank's
   std::vector<PetscInt> row_of_free;  // free DOF -> row (increasing)
   // This rank's rows of the full matrix in CSR form. Seq: PETSc's matrix
-  // uses these very arrays (no copy). MPI: PETSc copies them, and `values`
-  // carries each setup's numbers over.
-  std::vector<PetscInt> row_start, columns, cursor;
+  // uses these very arrays (no copy). MPI: PETSc copies them, and each
+  // setup carries its numbers over in a `values` of its own, freed before
+  // the multigrid is built (the prescribed rows' identity at
+  // `identity_slots`).
+  std::vector<PetscInt> row_start, columns, cursor, identity_slots;
   std::vector<PetscScalar> values;
   Mat matrix = nullptr;
   Vec rhs = nullptr, solution = nullptr, gathered = nullptr;
@@ -237,6 +239,7 @@ void GamgSolver::Impl::local_pattern(const Matrix& lower) {
     if (!prescribed[r]) continue;
     columns[static_cast<size_t>(row_start[r])] = first_row + static_cast<PetscInt>(r);
     values[static_cast<size_t>(row_start[r])] = 1.0;
+    identity_slots.push_back(row_start[r]);
   }
   for_each_entry(lower, [&](PetscInt slot, PetscInt column, int) { columns[static_cast<size_t>(slot)] = column; });
 }
@@ -249,7 +252,8 @@ void GamgSolver::Impl::create_matrix() {
     check(MatSetBlockSize(matrix, 3), "matrix block size");
     check(MatSetType(matrix, MATMPIAIJ), "matrix type");
     check(MatMPIAIJSetPreallocationCSR(matrix, row_start.data(), columns.data(), values.data()), "matrix pattern");
-    columns = {};  // PETSc has its own copy; `values` stays, for the updates
+    columns = {};  // PETSc has its own copies
+    values = {};
   } else {
     check(MatCreateSeqAIJWithArrays(PETSC_COMM_SELF, local, local, row_start.data(), columns.data(),
                                     values.data(), &matrix),
@@ -312,11 +316,14 @@ void GamgSolver::setup(const Matrix& lower) {
   [[maybe_unused]] const IgnoreThirdPartyLeaks ignore;
   Impl& m = *impl_;
   const double* from = lower.valuePtr();
-  PetscScalar* to = m.values.data();
-  m.for_each_entry(lower, [&](PetscInt slot, PetscInt, int k) { to[slot] = from[k]; });
   if (m.size > 1) {
-    check(MatUpdateMPIAIJWithArray(m.matrix, to), "matrix values");
+    std::vector<PetscScalar> values(static_cast<size_t>(m.row_start.back()), 0.0);
+    for (PetscInt slot : m.identity_slots) values[static_cast<size_t>(slot)] = 1.0;
+    m.for_each_entry(lower, [&](PetscInt slot, PetscInt, int k) { values[static_cast<size_t>(slot)] = from[k]; });
+    check(MatUpdateMPIAIJWithArray(m.matrix, values.data()), "matrix values");
   } else {
+    PetscScalar* to = m.values.data();
+    m.for_each_entry(lower, [&](PetscInt slot, PetscInt, int k) { to[slot] = from[k]; });
     // PETSc's matrix holds `values` itself: tell it that they changed.
     PetscScalar* same = nullptr;
     check(MatSeqAIJGetArray(m.matrix, &same), "matrix values");
