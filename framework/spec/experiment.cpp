@@ -1,6 +1,7 @@
 #include "spec/experiment.h"
 
 #include "core/limits.h"
+#include "core/ranks.h"
 
 #include <fmt/format.h>
 
@@ -89,6 +90,10 @@ Experiment Experiment::load(ExperimentSource source, const Limits& command_line)
   return experiment;
 }
 
-PartContext Experiment::part_context() const { return PartContext{palette(), &cache(), false, &limits_, &printer()}; }
+PartContext Experiment::part_context() const {
+  PartContext context{palette(), &cache(), false, &limits_, &printer()};
+  context.every_rank_builds = ranks::size() > 1;  // every rank runs the translator
+  return context;
+}
 
 }  // namespace spec2fab

@@ -101,6 +101,10 @@ class Simulator {
   /// depend on their timing, and differ between threads and ranks): the
   /// schedule refuses it.
   virtual bool reads_beyond_subtree() const { return false; }
+  /// Whether its solves are spread over the MPI ranks of a run, so that
+  /// every rank must make the same calls: a tuner using it may not run in a
+  /// parallel phase (which gives each tuner to one rank).
+  virtual bool spreads_over_ranks() const { return false; }
 
   /// Inputs that come from outside the subtree — state an earlier schedule
   /// phase hands over by name through Tuner::set_simulator_input (a coupling
@@ -224,6 +228,12 @@ struct PartContext {
   const Limits& limits() const { return run_limits != nullptr ? *run_limits : default_limits(); }
   /// The run's printer (its print-time model); null outside a run.
   const PrinterProfile* printer = nullptr;
+  /// Every MPI rank builds this part, and makes the same calls where its
+  /// tuner runs in a serial phase (`mpirun … spec2fab run`; a parallel
+  /// phase gives each tuner to one rank): a simulator may spread its solves
+  /// over the ranks where told to (Simulator::spreads_over_ranks), which
+  /// keeps its tuner out of parallel phases.
+  bool every_rank_builds = false;
 };
 
 using SimulatorRegistry = Registry<Simulator, const PartContext&>;

@@ -82,6 +82,16 @@ std::optional<std::pair<size_t, size_t>> tuner_reading_a_neighbour(TunerNetwork&
   return std::nullopt;
 }
 
+std::optional<std::string> spreading_tuner_problem(TunerNetwork& network, const std::vector<size_t>& tuners) {
+  for (size_t t : tuners) {
+    if (const auto simulator = network.tuner(t).simulator_spreading_over_ranks())
+      return "tuner '" + network.tuner(t).name() + "' cannot run in a parallel phase: its " + *simulator +
+             " simulator spreads each solve over the MPI ranks (spread_over_ranks), so every rank must run it, "
+             "and a parallel phase gives each tuner to one rank; make the phase serial";
+  }
+  return std::nullopt;
+}
+
 std::string reading_a_neighbour_problem(TunerNetwork& network, std::pair<size_t, size_t> pair) {
   const Tuner& reader = network.tuner(pair.first);
   return "tuners '" + reader.name() + "' and '" + network.tuner(pair.second).name() +
@@ -260,6 +270,8 @@ std::vector<std::vector<size_t>> runnable_classes(const Phase& phase, const std:
                                 network.tuner(overlap->first).name() + "' and '" +
                                 network.tuner(overlap->second).name() + "' in parallel, but their subtrees overlap");
   }
+  if (const auto spreading = spreading_tuner_problem(network, tuners))
+    throw std::invalid_argument("schedule: phase '" + phase.name + "': " + *spreading);
   auto classes = network.colour_classes(tuners);
   if (const auto reading = tuner_reading_a_neighbour(network, classes))
     throw std::invalid_argument("schedule: phase '" + phase.name + "': " + reading_a_neighbour_problem(network, *reading));

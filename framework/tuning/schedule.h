@@ -273,6 +273,11 @@ std::optional<std::pair<size_t, size_t>> tuner_reading_a_neighbour(TunerNetwork&
                                                                    const std::vector<std::vector<size_t>>& classes);
 /// The sentence that refuses such a pair.
 std::string reading_a_neighbour_problem(TunerNetwork& network, std::pair<size_t, size_t> pair);
+/// The sentence that refuses the first of `tuners` (a parallel phase's)
+/// whose simulator spreads its solves over the MPI ranks, or nullopt: a
+/// parallel phase gives each tuner to one rank, and the others would never
+/// join its solves.
+std::optional<std::string> spreading_tuner_problem(TunerNetwork& network, const std::vector<size_t>& tuners);
 
 /// The seed of one tuner run (SplitMix64 of the inputs).
 std::uint64_t tuner_seed(std::uint64_t run_seed, size_t phase, int sweep, size_t tuner);

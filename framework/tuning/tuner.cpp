@@ -212,6 +212,14 @@ std::optional<std::string> Tuner::simulator_reading_beyond_its_node() const {
   return std::nullopt;
 }
 
+std::optional<std::string> Tuner::simulator_spreading_over_ranks() const {
+  if (simulator_->spreads_over_ranks()) return simulator_->name();
+  for (const auto& term : terms_) {
+    if (term->parts.simulator->spreads_over_ranks()) return term->parts.simulator->name();
+  }
+  return std::nullopt;
+}
+
 std::vector<TermValue> Tuner::term_values() const {
   const double first = metric_->error(*simulated_, goal_->target());
   std::vector<TermValue> values{{"objective", simulator_->name(), metric_->name(), first, weight_ * first, weight_, {}}};

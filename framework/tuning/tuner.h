@@ -189,6 +189,10 @@ class Tuner {
   bool reads_beyond_its_node() const { return simulator_reading_beyond_its_node().has_value(); }
   /// The name of the first such simulator, for the message that refuses it.
   std::optional<std::string> simulator_reading_beyond_its_node() const;
+  /// The name of the first simulator of its terms whose solves are spread
+  /// over the MPI ranks (Simulator::spreads_over_ranks): every rank must run
+  /// this tuner, so it may not run in a parallel phase.
+  std::optional<std::string> simulator_spreading_over_ranks() const;
   std::string simulator_name() const { return simulator_->name(); }
   std::string metric_name() const { return metric_->name(); }
   /// The simulator's files for the last simulation (Simulator::write_report)

@@ -75,6 +75,7 @@ std::unique_ptr<TuningPlan> build_tuning_plan(const Properties& goal, ReducerTre
                               "parameters at once); make the phase serial");
       }
       const std::vector<size_t> members = phase.members(plan->network.size());
+      if (const auto spreading = spreading_tuner_problem(plan->network, members)) spec.fail("mode", *spreading);
       if (const auto reading = tuner_reading_a_neighbour(plan->network, plan->network.colour_classes(members)))
         spec.fail("mode", reading_a_neighbour_problem(plan->network, *reading));
     }

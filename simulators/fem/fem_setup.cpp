@@ -95,6 +95,7 @@ struct FemOptions {
   int load_steps = 10, max_newton_iterations = 30;
   double tolerance = 1e-9;
   std::string linear_solver = "cholesky";
+  std::optional<bool> spread_over_ranks;
   bool write_calculix_deck = false;
 
   template <class Declare, class Self>
@@ -117,6 +118,11 @@ struct FemOptions {
              "smoothed-aggregation multigrid on the rigid-body modes (gamg, PETSc: fastest on big meshes, "
              "distributed under mpirun), with algebraic multigrid (amg, hypre BoomerAMG: smallest); or with "
              "incomplete Cholesky (cg: small, slow)");
+    d.value(o.spread_over_ranks, "spread_over_ranks",
+            "under mpirun, with gamg: spread each solve over the ranks (every rank assembling its own rows); in "
+            "`spec2fab run` the tuner must then be in a serial phase, and the outputs match one process to ~1e-8 "
+            "rather than byte for byte",
+            Default{"true in spec2fab simulate, false in spec2fab run"});
     d.value(o.write_calculix_deck, "write_calculix_deck",
             "also write calculix.inp: the same mesh, materials and loads for CalculiX (ccx)");
   }
@@ -128,6 +134,11 @@ struct FemOptions {
     }
     if ((linear_solver == "amg" && !AmgSolver::available()) || (linear_solver == "gamg" && !GamgSolver::available())) {
       *why = "linear_solver: " + left_out_of_build("linear solver", linear_solver);
+      return false;
+    }
+    if (spread_over_ranks.value_or(false) && linear_solver != "gamg") {
+      *why = "spread_over_ranks: only the linear solver \"gamg\" spreads its solves over the ranks (this one is \"" +
+             linear_solver + "\")";
       return false;
     }
     return true;
@@ -172,6 +183,7 @@ FemSettings settings_from(const FemOptions& o) {
   s.solve.max_newton_iterations = o.max_newton_iterations;
   s.solve.tolerance = o.tolerance;
   s.write_calculix_deck = o.write_calculix_deck;
+  s.spread_over_ranks = o.spread_over_ranks;
   s.linear_solver = *std::find_if(std::begin(kLinearSolvers), std::end(kLinearSolvers),
                                   [&](LinearSolver k) { return o.linear_solver == to_string(k); });
   return s;

@@ -38,6 +38,9 @@ struct FemSettings {
   std::vector<Vec3> probes;
   SolveOptions solve;
   LinearSolver linear_solver = LinearSolver::cholesky;
+  /// Under mpirun, with gamg: spread each solve over the ranks. Unset: as
+  /// the command does (PartContext: simulate spreads, run does not).
+  std::optional<bool> spread_over_ranks;
   bool write_calculix_deck = false;  ///< write_report also writes calculix.inp
 
   static FemSettings read(const Properties& properties);

@@ -51,8 +51,8 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
         palette_(&context.palette),
         cache_(context.cache),
         limits_(context.limits()),
-        across_ranks_(context.solve_across_ranks) {
-    if (across_ranks_ && settings_.linear_solver != LinearSolver::elastic_multigrid)
+        across_ranks_(spread_over_ranks(settings_, context)) {
+    if (context.solve_across_ranks && settings_.linear_solver != LinearSolver::elastic_multigrid)
       spdlog::warn("fem: under mpirun only the linear solver \"gamg\" spreads its solves over the ranks; "
                    "\"{}\" solves the same system on every rank", to_string(settings_.linear_solver));
     // Lamé parameters (MPa = N/mm²) of every material the tree may assign.
@@ -72,6 +72,19 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
   }
 
   std::string name() const override { return "fem"; }
+  // Told to spread in a run: every rank must make the same calls, so its
+  // tuner stays out of parallel phases (a check that holds without mpirun).
+  bool spreads_over_ranks() const override { return settings_.spread_over_ranks.value_or(false); }
+
+  /// `spread_over_ranks` as the command means it: `simulate` (every rank
+  /// makes the same calls) spreads unless told not to; `run` only where
+  /// told to, since its outputs are otherwise byte-identical for any rank
+  /// count. gamg alone spreads.
+  static bool spread_over_ranks(const FemSettings& settings, const PartContext& context) {
+    if (settings.linear_solver != LinearSolver::elastic_multigrid) return false;
+    if (context.solve_across_ranks) return settings.spread_over_ranks.value_or(true);
+    return context.every_rank_builds && settings.spread_over_ranks.value_or(false);
+  }
 
   void setup(const ReducerNode& /*subtree*/, const SimulationDomain& domain) override {
     const Solid& solid = domain.require_solid(name());
@@ -341,6 +354,9 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
     timings_.assemble_setup = seconds_since(rest);
     spdlog::debug("fem: {} nodes, {} tets ({} for the plain solid), {} free DOFs; mesh {:.2f} s", mesh_->nodes.size(),
                   mesh_->tets.size(), meshed_->plain_tets, solver_->free_dofs(), timings_.mesh);
+    if (solver_->solve_ranks() > 1)
+      spdlog::info("fem: {}: each solve spread over {} ranks, this one assembling {} of {} tets", where_,
+                   solver_->solve_ranks(), solver_->assembled_tets(), mesh_->tets.size());
   }
 
   // A stepped interface moved: the mesh made for where it is now, kept from

@@ -221,6 +221,59 @@ TEST_F(Cli, MpiRunWithGamgTunersIsByteIdenticalToOneProcess) {
   EXPECT_EQ(timing["tuner_runs_per_rank"], nlohmann::json::array({2, 2, 2})) << timing.dump();
 }
 
+// With "spread_over_ranks": true an FEM tuner of a run spreads each solve
+// over the ranks, as `simulate` does: every rank runs the serial phase, and
+// each assembles its own rows. The outputs then match one process to
+// rounding, not byte for byte (the ground rule holds where the experiment
+// does not ask for this); the tuned tree is the same. A parallel phase, which
+// gives each tuner to one rank, is refused for such a tuner, and so is the
+// option with a solver that cannot spread.
+TEST_F(Cli, MpiRunSpreadsFemSolvesOverTheRanksWhereTold) {
+  if (!SPEC2FAB_WITH_MPI || !SPEC2FAB_WITH_PETSC || !SPEC2FAB_WITH_TETGEN)
+    GTEST_SKIP() << "needs MPI, PETSc and TetGen in the build";
+  if (run_command("command -v mpirun").code != 0) GTEST_SKIP() << "mpirun not installed";
+  auto spread = [](std::string body) {
+    const std::string solver = R"("linear_solver": "gamg",)";
+    for (size_t at = body.find(solver); at != std::string::npos; at = body.find(solver, at + 1))
+      body.insert(at + solver.size(), R"( "spread_over_ranks": true,)");
+    return body;
+  };
+  const std::string output = R"({"slices": false, "stl": false, "3mf": false, "render": false})";
+  const fs::path file = experiment("spread", spread(two_fem_tuners_body("serial", "gamg", output)));
+  const Result one = run_spec2fab("run -q --threads 1 " + file.string() + " --out " + (dir_ / "one").string());
+  ASSERT_EQ(one.code, 0) << one.out;
+  const fs::path out = dir_ / "ranks2";
+  const Result r = run_command(mpirun(2) + "timeout 300 " + SPEC2FAB_CLI_PATH + " run --threads 1 " + file.string() +
+                               " --out " + out.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  // Rank 0 says it assembles part of each tuner's mesh.
+  EXPECT_THAT(r.out, HasSubstr("/goal/tuners/0/simulator: each solve spread over 2 ranks, this one assembling"));
+  EXPECT_THAT(r.out, HasSubstr("/goal/tuners/1/simulator: each solve spread over 2 ranks, this one assembling"));
+  EXPECT_EQ(read(out / "tree.json"), read(dir_ / "one" / "tree.json"));
+  const auto alone = nlohmann::json::parse(read(dir_ / "one" / "result.json"));
+  const auto spread_out = nlohmann::json::parse(read(out / "result.json"));
+  const auto& runs = alone["tuning"]["tuner_runs"];
+  ASSERT_EQ(runs.size(), 2u);
+  for (size_t k = 0; k < runs.size(); ++k) {
+    const double expected = runs[k]["final_error"], got = spread_out["tuning"]["tuner_runs"][k]["final_error"];
+    EXPECT_NEAR(got, expected, 1e-8 * expected) << "tuner run " << k;
+  }
+
+  const fs::path parallel = experiment("spread_parallel", spread(two_fem_tuners_body("parallel", "gamg", output)));
+  const Result refused = run_spec2fab("-q validate " + parallel.string());
+  EXPECT_EQ(refused.code, 2) << refused.out;
+  EXPECT_THAT(single_line(refused.out),
+              HasSubstr("/goal/schedule/0/mode: tuner 'near' cannot run in a parallel phase: its fem simulator "
+                        "spreads each solve over the MPI ranks (spread_over_ranks)"));
+  std::string cholesky = spread(two_fem_tuners_body("serial", "gamg", output));
+  for (size_t at = cholesky.find("\"gamg\""); at != std::string::npos; at = cholesky.find("\"gamg\"", at))
+    cholesky.replace(at, 6, "\"cholesky\"");
+  const Result wrong_solver = run_spec2fab("-q validate " + experiment("spread_cholesky", cholesky).string());
+  EXPECT_EQ(wrong_solver.code, 2) << wrong_solver.out;
+  EXPECT_THAT(single_line(wrong_solver.out),
+              HasSubstr("/goal/tuners/0/simulator/spread_over_ranks: only the linear solver \"gamg\" spreads"));
+}
+
 TEST_F(Cli, UnderMpirunOnlyRunExportAndSimulateSplitTheirWork) {
   if (!SPEC2FAB_WITH_MPI) GTEST_SKIP() << "built without MPI (SPEC2FAB_WITH_MPI=OFF)";
   if (run_command("command -v mpirun").code != 0) GTEST_SKIP() << "mpirun not installed";
