@@ -92,18 +92,66 @@ std::vector<Triangle> read_stl(const std::string& file) {
   return triangles;
 }
 
+/// An axis-aligned box.
+struct Box {
+  double low[3] = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+                   std::numeric_limits<double>::infinity()};
+  double high[3] = {-std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+                    -std::numeric_limits<double>::infinity()};
+  void extend(const V3& p) {
+    for (int k = 0; k < 3; ++k) {
+      low[k] = std::min(low[k], p[k]);
+      high[k] = std::max(high[k], p[k]);
+    }
+  }
+  void extend(const Box& b) {
+    for (int k = 0; k < 3; ++k) {
+      low[k] = std::min(low[k], b.low[k]);
+      high[k] = std::max(high[k], b.high[k]);
+    }
+  }
+  bool empty() const { return !(low[0] <= high[0]); }
+  double centre(int k) const { return low[k] + high[k]; }
+};
+
+/// The box of the part of `t` over the x–y rectangle [x0, x1] × [y0, y1]
+/// (the triangle clipped to it, Sutherland–Hodgman); empty if none.
+Box clipped_box(const Triangle& t, double x0, double x1, double y0, double y1) {
+  std::vector<V3> polygon{t.a, t.b, t.c}, next;
+  const auto clip = [&](int axis, double bound, bool keep_below) {
+    next.clear();
+    for (size_t i = 0; i < polygon.size(); ++i) {
+      const V3& p = polygon[i];
+      const V3& q = polygon[(i + 1) % polygon.size()];
+      const bool p_in = keep_below ? p[axis] <= bound : p[axis] >= bound;
+      const bool q_in = keep_below ? q[axis] <= bound : q[axis] >= bound;
+      if (p_in) next.push_back(p);
+      if (p_in != q_in) next.push_back(p + (q - p) * ((bound - p[axis]) / (q[axis] - p[axis])));
+    }
+    polygon.swap(next);
+  };
+  clip(0, x0, false);
+  clip(0, x1, true);
+  clip(1, y0, false);
+  clip(1, y1, true);
+  Box box;
+  for (const V3& p : polygon) box.extend(p);
+  return box;
+}
+
 /// A bounding-volume hierarchy over the triangles, split at the median of
-/// the longest axis.
+/// the longest axis. A triangle much wider than the mesh's typical one (a
+/// slab's flat bottom, fanned from its rim) is entered once per tile of
+/// the x–y plane it crosses, with the box of its part there: its whole box
+/// would swell every node it falls in, and every ray would visit them (on
+/// the ring's STL, 518 nodes and 495 triangle tests per ray and segment).
 class Bvh {
  public:
   explicit Bvh(std::vector<Triangle> triangles) : triangles_(std::move(triangles)) {
-    order_.resize(triangles_.size());
-    std::iota(order_.begin(), order_.end(), 0u);
-    nodes_.reserve(2 * triangles_.size() / kLeaf + 2);
-    build(0, static_cast<uint32_t>(order_.size()));
-    std::vector<Triangle> sorted;
-    for (uint32_t t : order_) sorted.push_back(triangles_[t]);
-    triangles_ = std::move(sorted);
+    std::vector<Ref> refs = make_references();
+    nodes_.reserve(2 * refs.size() / kLeaf + 2);
+    nodes_.emplace_back();
+    fill(refs, 0, 0, static_cast<uint32_t>(refs.size()));
   }
 
   /// Nearest hit beyond t_min: its distance and triangle, or false.
@@ -116,13 +164,14 @@ class Bvh {
     bool found = false;
     while (top > 0) {
       const Node& node = nodes_[stack[--top]];
-      if (!box_hit(node, origin, inverse, t_min, t_hit)) continue;
+      if (!box_hit(node.box, origin, inverse, t_min, t_hit)) continue;
       if (node.count > 0) {
         for (uint32_t k = node.first; k < node.first + node.count; ++k) {
           double t;
-          if (triangle_hit(triangles_[k], origin, direction, t) && t > t_min && t < t_hit) {
+          const uint32_t index = leaf_triangles_[k];
+          if (triangle_hit(triangles_[index], origin, direction, t) && t > t_min && t < t_hit) {
             t_hit = t;
-            hit = k;
+            hit = index;
             found = true;
           }
         }
@@ -134,55 +183,86 @@ class Bvh {
     return found;
   }
   const Triangle& triangle(uint32_t k) const { return triangles_[k]; }
+  size_t reference_count() const { return leaf_triangles_.size(); }
 
  private:
   static constexpr uint32_t kLeaf = 4;
   struct Node {
-    double low[3], high[3];
-    uint32_t first = 0, count = 0;  ///< leaf: triangles [first, first + count); inner: children first, first + 1
+    Box box;
+    uint32_t first = 0, count = 0;  ///< leaf: leaf_triangles_[first, first + count); inner: children first, first + 1
+  };
+  struct Ref {
+    Box box;
+    uint32_t triangle;
   };
 
-  void build(uint32_t begin, uint32_t end) {
-    nodes_.emplace_back();
-    fill(0, begin, end);
+  /// One reference per triangle, or per x–y tile for the wide ones.
+  std::vector<Ref> make_references() const {
+    std::vector<double> widths;
+    widths.reserve(triangles_.size());
+    std::vector<Box> boxes(triangles_.size());
+    for (size_t t = 0; t < triangles_.size(); ++t) {
+      for (const V3* p : {&triangles_[t].a, &triangles_[t].b, &triangles_[t].c}) boxes[t].extend(*p);
+      widths.push_back(std::max(boxes[t].high[0] - boxes[t].low[0], boxes[t].high[1] - boxes[t].low[1]));
+    }
+    std::vector<double> sorted = widths;
+    std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2), sorted.end());
+    const double typical = std::max(sorted[sorted.size() / 2], 1e-9);
+    std::vector<Ref> refs;
+    refs.reserve(triangles_.size());
+    for (size_t t = 0; t < triangles_.size(); ++t) {
+      const Box& b = boxes[t];
+      if (widths[t] <= 16 * typical) {
+        refs.push_back({b, static_cast<uint32_t>(t)});
+        continue;
+      }
+      // Tiles of 4 typical widths, at most 256 along a side.
+      const double tile = std::max(4 * typical, widths[t] / 256);
+      const auto tiles = [&](int k) { return std::max(1, static_cast<int>(std::ceil((b.high[k] - b.low[k]) / tile))); };
+      for (int i = 0, ni = tiles(0); i < ni; ++i) {
+        for (int j = 0, nj = tiles(1); j < nj; ++j) {
+          const double x0 = b.low[0] + i * tile, y0 = b.low[1] + j * tile;
+          Box part = clipped_box(triangles_[t], x0, std::min(x0 + tile, b.high[0]), y0, std::min(y0 + tile, b.high[1]));
+          if (part.empty()) continue;
+          // The cut points are rounded: a hit on a tile's edge must stay
+          // inside the box of one of its two tiles.
+          for (int k = 0; k < 3; ++k) {
+            part.low[k] = std::max(part.low[k] - 1e-7, b.low[k]);
+            part.high[k] = std::min(part.high[k] + 1e-7, b.high[k]);
+          }
+          refs.push_back({part, static_cast<uint32_t>(t)});
+        }
+      }
+    }
+    return refs;
   }
 
-  /// Fills node `index` with triangles [begin, end) of order_.
-  void fill(uint32_t index, uint32_t begin, uint32_t end) {
+  /// Fills node `index` with references [begin, end) of `refs`.
+  void fill(std::vector<Ref>& refs, uint32_t index, uint32_t begin, uint32_t end) {
     Node node;
-    for (int k = 0; k < 3; ++k) {
-      node.low[k] = std::numeric_limits<double>::infinity();
-      node.high[k] = -node.low[k];
-    }
-    for (uint32_t i = begin; i < end; ++i)
-      for (const V3* p : {&triangles_[order_[i]].a, &triangles_[order_[i]].b, &triangles_[order_[i]].c})
-        for (int k = 0; k < 3; ++k) {
-          node.low[k] = std::min(node.low[k], (*p)[k]);
-          node.high[k] = std::max(node.high[k], (*p)[k]);
-        }
+    for (uint32_t i = begin; i < end; ++i) node.box.extend(refs[i].box);
     if (end - begin <= kLeaf) {
-      node.first = begin;
+      node.first = static_cast<uint32_t>(leaf_triangles_.size());
       node.count = end - begin;
+      for (uint32_t i = begin; i < end; ++i) leaf_triangles_.push_back(refs[i].triangle);
       nodes_[index] = node;
       return;
     }
     int axis = 0;
     for (int k = 1; k < 3; ++k)
-      if (node.high[k] - node.low[k] > node.high[axis] - node.low[axis]) axis = k;
+      if (node.box.high[k] - node.box.low[k] > node.box.high[axis] - node.box.low[axis]) axis = k;
     const uint32_t middle = begin + (end - begin) / 2;
-    std::nth_element(order_.begin() + begin, order_.begin() + middle, order_.begin() + end, [&](uint32_t s, uint32_t t) {
-      const Triangle &p = triangles_[s], &q = triangles_[t];
-      return p.a[axis] + p.b[axis] + p.c[axis] < q.a[axis] + q.b[axis] + q.c[axis];
-    });
+    std::nth_element(refs.begin() + begin, refs.begin() + middle, refs.begin() + end,
+                     [&](const Ref& p, const Ref& q) { return p.box.centre(axis) < q.box.centre(axis); });
     node.first = static_cast<uint32_t>(nodes_.size());  // the two children, side by side
     node.count = 0;
     nodes_[index] = node;
     nodes_.resize(nodes_.size() + 2);
-    fill(node.first, begin, middle);
-    fill(node.first + 1, middle, end);
+    fill(refs, node.first, begin, middle);
+    fill(refs, node.first + 1, middle, end);
   }
 
-  static bool box_hit(const Node& n, const V3& o, const V3& inverse, double t_min, double t_max) {
+  static bool box_hit(const Box& n, const V3& o, const V3& inverse, double t_min, double t_max) {
     double low = t_min, high = t_max;
     for (int k = 0; k < 3; ++k) {
       double t0 = (n.low[k] - o[k]) * inverse[k], t1 = (n.high[k] - o[k]) * inverse[k];
@@ -213,7 +293,7 @@ class Bvh {
   }
 
   std::vector<Triangle> triangles_;
-  std::vector<uint32_t> order_;
+  std::vector<uint32_t> leaf_triangles_;
   std::vector<Node> nodes_;
 };
 

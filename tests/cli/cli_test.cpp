@@ -949,6 +949,66 @@ TEST_F(Cli, CausticCheckSeesAFlatBoardPassTheBeamUnchanged) {
   EXPECT_THAT(single_line(missing.out), HasSubstr("cannot open"));
 }
 
+// A slab's flat bottom fanned from its centre to a fine rim (as caustic STLs
+// may close a height field) has triangles 20 times wider than the top's:
+// caustic_check enters them once per tile of the plane they cross, so that
+// their boxes do not swell the hierarchy. Under oblique light the bottom
+// bends every ray, so a ray that slipped between the tiles would land
+// elsewhere: the fanned board must cast the gridded one's image exactly.
+TEST_F(Cli, CausticCheckTracesAFannedBottomLikeAGriddedOne) {
+  const fs::path uniform = dir_ / "uniform.pgm";
+  {
+    std::ofstream out(uniform, std::ios::binary);
+    out << "P5 4 4 255\n" << std::string(16, static_cast<char>(255));
+  }
+  // 60 x 60 x 8 mm: a 40 x 40 grid on top, a fan of 160 triangles below.
+  const fs::path fanned = dir_ / "fanned_board.stl";
+  {
+    std::ofstream out(fanned);
+    constexpr int kSide = 40;
+    constexpr double kStep = 60.0 / kSide, kTop = 8;
+    struct Point {
+      double x, y, z;
+      Point operator+(const Point& o) const { return {x + o.x, y + o.y, z + o.z}; }
+    };
+    const auto facet = [&](const Point& a, const Point& b, const Point& c) {
+      out << "facet normal 0 0 0\nouter loop\n";
+      for (const Point* p : {&a, &b, &c}) out << "vertex " << p->x << " " << p->y << " " << p->z << "\n";
+      out << "endloop\nendfacet\n";
+    };
+    out << "solid fanned\n";
+    for (int j = 0; j < kSide; ++j)
+      for (int i = 0; i < kSide; ++i) {
+        const Point p00{i * kStep, j * kStep, kTop}, p10{(i + 1) * kStep, j * kStep, kTop};
+        const Point p11{(i + 1) * kStep, (j + 1) * kStep, kTop}, p01{i * kStep, (j + 1) * kStep, kTop};
+        facet(p00, p10, p11);
+        facet(p00, p11, p01);
+      }
+    std::vector<Point> rim;  // counter-clockwise from above
+    for (int i = 0; i < kSide; ++i) rim.push_back({i * kStep, 0, 0});
+    for (int i = 0; i < kSide; ++i) rim.push_back({60, i * kStep, 0});
+    for (int i = 0; i < kSide; ++i) rim.push_back({60 - i * kStep, 60, 0});
+    for (int i = 0; i < kSide; ++i) rim.push_back({0, 60 - i * kStep, 0});
+    const Point centre{30, 30, 0}, up{0, 0, kTop};
+    for (size_t k = 0; k < rim.size(); ++k) {
+      const Point &a = rim[k], &b = rim[(k + 1) % rim.size()];
+      facet(centre, b, a);  // the bottom, facing down
+      facet(a, b, b + up);  // the side, facing out
+      facet(a, b + up, a + up);
+    }
+    out << "endsolid fanned\n";
+  }
+  const fs::path board = kDatasets / "meshes/board_60x60x8.stl";
+  for (const std::string light : {"0 0 -1", "0.2 0.1 -1"}) {
+    const std::string setup = "--distance 100 --image 24 24 --index 1.5 --light " + light;
+    const auto gridded = caustic_check(board, uniform, setup);
+    const auto fan = caustic_check(fanned, uniform, setup);
+    EXPECT_EQ(fan["triangles"], 2 * 40 * 40 + 3 * 160);
+    for (const char* key : {"ssim", "relative_rmse", "light_off_receiver"})
+      EXPECT_NEAR(fan[key].get<double>(), gridded[key].get<double>(), 1e-9) << key << ", light " << light;
+  }
+}
+
 TEST_F(Cli, FacetCausticsRefuseADiscApertureInOneLine) {
   // Every facet takes an equal share of the light: a round stop would starve the corners.
   const std::string body =
