@@ -73,6 +73,7 @@ std::vector<Triangle> read_stl(const std::string& file) {
       std::memcpy(f, bytes.data() + 84 + 50ull * t, sizeof f);
       add({f[3], f[4], f[5]}, {f[6], f[7], f[8]}, {f[9], f[10], f[11]});
     }
+    if (triangles.empty()) throw std::runtime_error(file + ": no triangles");
     return triangles;
   }
   std::istringstream text(bytes);
@@ -149,6 +150,7 @@ class Bvh {
  public:
   explicit Bvh(std::vector<Triangle> triangles) : triangles_(std::move(triangles)) {
     std::vector<Ref> refs = make_references();
+    if (refs.size() >= std::numeric_limits<uint32_t>::max() / 2) throw std::runtime_error("too many triangles");
     nodes_.reserve(2 * refs.size() / kLeaf + 2);
     nodes_.emplace_back();
     fill(refs, 0, 0, static_cast<uint32_t>(refs.size()));
@@ -208,6 +210,22 @@ class Bvh {
     std::vector<double> sorted = widths;
     std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2), sorted.end());
     const double typical = std::max(sorted[sorted.size() / 2], 1e-9);
+    // Tiles of 4 typical widths, at most 256 along a side, and coarser where
+    // the wide triangles would otherwise make more than 4 references per
+    // triangle in all (a mesh of mixed sizes).
+    double base = 4 * typical;
+    const auto tile_of = [&](size_t t) { return std::max(base, widths[t] / 256); };
+    const auto tiles_of = [&](size_t t) {
+      const double tile = tile_of(t);
+      return std::ceil((boxes[t].high[0] - boxes[t].low[0]) / tile + 1) * std::ceil((boxes[t].high[1] - boxes[t].low[1]) / tile + 1);
+    };
+    const double budget = 4.0 * static_cast<double>(triangles_.size()) + 1e6;
+    for (int tries = 0; tries < 32; ++tries) {
+      double total = 0;
+      for (size_t t = 0; t < triangles_.size(); ++t) total += widths[t] > 16 * typical ? tiles_of(t) : 1;
+      if (total <= budget) break;
+      base *= std::sqrt(total / budget) * 1.1;
+    }
     std::vector<Ref> refs;
     refs.reserve(triangles_.size());
     for (size_t t = 0; t < triangles_.size(); ++t) {
@@ -216,8 +234,7 @@ class Bvh {
         refs.push_back({b, static_cast<uint32_t>(t)});
         continue;
       }
-      // Tiles of 4 typical widths, at most 256 along a side.
-      const double tile = std::max(4 * typical, widths[t] / 256);
+      const double tile = tile_of(t);
       const auto tiles = [&](int k) { return std::max(1, static_cast<int>(std::ceil((b.high[k] - b.low[k]) / tile))); };
       for (int i = 0, ni = tiles(0); i < ni; ++i) {
         for (int j = 0, nj = tiles(1); j < nj; ++j) {

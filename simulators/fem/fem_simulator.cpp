@@ -17,6 +17,7 @@
 
 #include "core/error.h"
 #include "core/file_write.h"
+#include "core/ranks.h"
 #include "fem/calculix_deck.h"
 #include "fem/elastic_solver.h"
 #include "fem/fem_picture.h"
@@ -354,9 +355,16 @@ class FemSimulator final : public SimulatorFor<DisplacementsObservation> {
     timings_.assemble_setup = seconds_since(rest);
     spdlog::debug("fem: {} nodes, {} tets ({} for the plain solid), {} free DOFs; mesh {:.2f} s", mesh_->nodes.size(),
                   mesh_->tets.size(), meshed_->plain_tets, solver_->free_dofs(), timings_.mesh);
-    if (solver_->solve_ranks() > 1)
+    if (solver_->solve_ranks() > 1) {
       spdlog::info("fem: {}: each solve spread over {} ranks, this one assembling {} of {} tets", where_,
                    solver_->solve_ranks(), solver_->assembled_tets(), mesh_->tets.size());
+    } else if (across_ranks_ && ranks::size() > 1) {
+      // PETSc's world is fixed by the process's first gamg solver.
+      spdlog::warn("fem: {}: spread_over_ranks, but each rank solves alone: an earlier gamg solver of this run "
+                   "(one not spread) started PETSc on each rank alone; give every gamg simulator of the run "
+                   "\"spread_over_ranks\": true, or none",
+                   where_);
+    }
   }
 
   // A stepped interface moved: the mesh made for where it is now, kept from

@@ -259,6 +259,16 @@ TEST_F(Cli, MpiRunSpreadsFemSolvesOverTheRanksWhereTold) {
     EXPECT_NEAR(got, expected, 1e-8 * expected) << "tuner run " << k;
   }
 
+  // A gamg tuner that does not spread, set up first, starts PETSc on each
+  // rank alone: the one after it cannot spread, and the log says why.
+  std::string mixed = two_fem_tuners_body("serial", "gamg", output);
+  const std::string far = R"("name": "far")";
+  mixed = mixed.substr(0, mixed.find(far)) + spread(mixed.substr(mixed.find(far)));
+  const Result alone_first = run_command(mpirun(2) + "timeout 300 " + SPEC2FAB_CLI_PATH + " run --threads 1 " +
+                                         experiment("mixed", mixed).string() + " --out " + (dir_ / "mixed").string());
+  ASSERT_EQ(alone_first.code, 0) << alone_first.out;
+  EXPECT_THAT(alone_first.out, HasSubstr("/goal/tuners/1/simulator: spread_over_ranks, but each rank solves alone"));
+
   const fs::path parallel = experiment("spread_parallel", spread(two_fem_tuners_body("parallel", "gamg", output)));
   const Result refused = run_spec2fab("-q validate " + parallel.string());
   EXPECT_EQ(refused.code, 2) << refused.out;

@@ -14,15 +14,18 @@
 /// so that the full matrix's rows are the lower triangle's columns merged
 /// with their transposes, sorted, without a permutation to store.
 ///
-/// Distributed: with `ranks` > 1 (an mpirun of `spec2fab simulate`) every
-/// rank passes the same matrix pattern and takes the rows of a contiguous
-/// run of the Morton order (a space-filling-curve partition of the mesh);
-/// PETSc's MPI matrices and GAMG solve across the ranks, and every rank gets
-/// the whole solution back. Each call is then collective. PETSc's world is
-/// fixed by the process's first solver: when that one is not distributed
-/// (a `spec2fab run` under mpirun, whose ranks tune different things), PETSc
-/// lives on this process alone, and a later distributed solver solves alone
-/// too (ranks() says 1) rather than wait for ranks that never come.
+/// Distributed: with `distributed` under mpirun (`spec2fab simulate`, or a
+/// run's FEM tuner told "spread_over_ranks") each rank takes the rows of a
+/// contiguous run of the Morton order (a space-filling-curve partition of
+/// the mesh, `partition()`) and passes a lower triangle whose entries in
+/// those rows and columns are complete (ElasticSolver assembles only
+/// them); PETSc's MPI matrices and GAMG solve across the ranks, and every
+/// rank gets the whole solution back. Each call is then collective. PETSc's
+/// world is fixed by the process's first solver: when that one is not
+/// distributed (a run's tuners without "spread_over_ranks"), PETSc lives on
+/// this process alone, and a later distributed solver solves alone too
+/// (ranks() says 1; the fem simulator warns) rather than wait for ranks
+/// that never come.
 ///
 /// PETSc lives in its own target (spec2fab_petsc, CMake option
 /// SPEC2FAB_WITH_PETSC, on by default). The first solver initialises PETSc
@@ -51,7 +54,8 @@ class GamgSolver {
   /// whose pattern every later matrix shares; `dof_of_free`: the node DOF
   /// (3·node + axis) of each free row, increasing along `node_order`;
   /// `nodes`: rest positions (the rigid modes). `distributed`: solve across
-  /// the MPI ranks of this run (every rank calls with the same arguments).
+  /// the MPI ranks of this run (every rank calls alike, `lower` complete in
+  /// the rows and columns of the nodes partition() gives it).
   /// Throws std::runtime_error when this build has no PETSc.
   GamgSolver(const Matrix& lower, const std::vector<int>& dof_of_free, std::span<const Vec3> nodes,
              std::span<const int> node_order, double tolerance, int max_iterations, bool distributed = false);
