@@ -2,11 +2,14 @@
 // properties the continuum theory fixes: rigid motions carry no force,
 // the tangent is the derivative of the forces, a linear field is exact.
 
+#include <algorithm>
+#include <numeric>
 #include <random>
 
 #include "fem_support.h"
 #include "geometry/mesh_check.h"
 #include "fem/corotated_tet.h"
+#include "fem/stiffness_pattern.h"
 
 namespace spec2fab::fem {
 namespace {
@@ -183,6 +186,91 @@ TEST(TetgenMesher, MeetsTheVolumeBoundAndRefinesInsideABox) {
   const Mesh surface = boundary_surface(refined, refined.boundary_faces(), {});
   EXPECT_TRUE(find_mesh_defects(surface).ok());
   EXPECT_NEAR(surface.signed_volume(), 2000.0, 1e-6);
+}
+
+// The stiffness's pattern and scatter (18 positions a tet, a node's free
+// DOFs consecutive) against a dense matrix summed entry by entry, on a grid
+// of cubes cut into six tets each, nodes numbered in a shuffled order, some
+// with one or two DOFs fixed and some with all three; then with only half
+// the nodes kept (a rank's rows under mpirun): every entry in a kept node's
+// row or column is the dense one, and only those are stored.
+TEST(StiffnessPattern, ScattersEveryElementEntryWhereTheDenseSumPutsIt) {
+  constexpr int kCells = 3, kSide = kCells + 1;
+  TetMesh mesh;
+  const auto node = [&](int i, int j, int k) { return (k * kSide + j) * kSide + i; };
+  for (int k = 0; k < kSide; ++k)
+    for (int j = 0; j < kSide; ++j)
+      for (int i = 0; i < kSide; ++i) mesh.nodes.emplace_back(i, j, k);
+  for (int k = 0; k < kCells; ++k)
+    for (int j = 0; j < kCells; ++j)
+      for (int i = 0; i < kCells; ++i) {
+        // Kuhn's six tets along the cube's diagonal from corner 0 to 7.
+        const int c[8] = {node(i, j, k),         node(i + 1, j, k),         node(i, j + 1, k),
+                          node(i + 1, j + 1, k), node(i, j, k + 1),         node(i + 1, j, k + 1),
+                          node(i, j + 1, k + 1), node(i + 1, j + 1, k + 1)};
+        const int paths[6][2] = {{1, 3}, {1, 5}, {2, 3}, {2, 6}, {4, 5}, {4, 6}};
+        for (const auto& p : paths) mesh.tets.push_back({c[0], c[p[0]], c[p[1]], c[7]});
+      }
+  std::mt19937 random(7);
+  std::vector<int> order(mesh.nodes.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::shuffle(order.begin(), order.end(), random);
+  std::vector<int> dof_index(3 * mesh.nodes.size(), -1);
+  int free_count = 0;
+  for (int v : order)
+    for (int d = 0; d < 3; ++d) {
+      const bool fixed = v % 7 == 0 || (v % 5 == 0 && d == 0) || (v % 11 == 0 && d != 1);
+      if (!fixed) dof_index[static_cast<size_t>(3 * v + d)] = free_count++;
+    }
+  std::uniform_real_distribution<double> value(-1, 1);
+  std::vector<Mat12> elements(mesh.tets.size());
+  for (Mat12& k : elements) {
+    for (int j = 0; j < 12; ++j)
+      for (int i = 0; i < 12; ++i) k(i, j) = value(random);
+  }
+  // The dense sum reads each element's upper triangle, as the scatter does.
+  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(free_count, free_count);
+  for (size_t t = 0; t < mesh.tets.size(); ++t)
+    for (int j = 0; j < 12; ++j)
+      for (int i = 0; i < 12; ++i) {
+        const int gi = dof_index[3 * static_cast<size_t>(mesh.tets[t][static_cast<size_t>(i / 3)]) + static_cast<size_t>(i % 3)];
+        const int gj = dof_index[3 * static_cast<size_t>(mesh.tets[t][static_cast<size_t>(j / 3)]) + static_cast<size_t>(j % 3)];
+        if (gi >= 0 && gj >= 0 && gi >= gj) dense(gi, gj) += elements[t](std::min(i, j), std::max(i, j));
+      }
+  std::vector<char> kept(mesh.nodes.size(), 0);
+  for (size_t place = 0; place < order.size() / 2; ++place) kept[static_cast<size_t>(order[place])] = 1;
+  std::vector<int> node_of(static_cast<size_t>(free_count));
+  for (size_t d = 0; d < dof_index.size(); ++d)
+    if (dof_index[d] >= 0) node_of[static_cast<size_t>(dof_index[d])] = static_cast<int>(d / 3);
+
+  for (const bool split : {false, true}) {
+    SCOPED_TRACE(split ? "half the nodes kept" : "every node");
+    StiffnessPattern pattern = stiffness_pattern(mesh, dof_index, free_count, split ? kept : std::vector<char>{});
+    double* values = pattern.lower.valuePtr();
+    for (size_t t = 0; t < mesh.tets.size(); ++t) {
+      const bool touches = std::any_of(mesh.tets[t].begin(), mesh.tets[t].end(),
+                                       [&](int v) { return kept[static_cast<size_t>(v)] != 0; });
+      if (!split || touches)
+        add_element_matrix(pattern.scatter, pattern.diagonal, dof_index, mesh.tets[t], t, elements[t], values);
+    }
+    const auto counts = [&](int row, int column) {
+      return !split || kept[static_cast<size_t>(node_of[static_cast<size_t>(row)])] ||
+             kept[static_cast<size_t>(node_of[static_cast<size_t>(column)])];
+    };
+    long stored = 0, expected = 0;
+    for (int c = 0; c < free_count; ++c)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(pattern.lower, c); it; ++it) {
+        ++stored;
+        ASSERT_TRUE(counts(static_cast<int>(it.row()), c)) << it.row() << ", " << c;
+        EXPECT_NEAR(it.value(), dense(it.row(), c), 1e-12) << it.row() << ", " << c;
+      }
+    for (int c = 0; c < free_count; ++c)
+      for (int r = c; r < free_count; ++r)
+        if (dense(r, c) != 0 && counts(r, c)) ++expected;
+    EXPECT_EQ(stored, expected);  // every nonzero the rows need, and no other
+    for (int i = 0; i < free_count; ++i)
+      EXPECT_EQ(pattern.diagonal[static_cast<size_t>(i)] >= 0, counts(i, i)) << i;
+  }
 }
 
 }  // namespace
