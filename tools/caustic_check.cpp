@@ -215,9 +215,16 @@ class Bvh {
     // triangle in all (a mesh of mixed sizes).
     double base = 4 * typical;
     const auto tile_of = [&](size_t t) { return std::max(base, widths[t] / 256); };
+    // The tiles a triangle crosses, about: its x-y area in tiles and a
+    // strip of tiles along its edges (not its box's, which a long thin
+    // triangle fills a hundredth of).
     const auto tiles_of = [&](size_t t) {
       const double tile = tile_of(t);
-      return std::ceil((boxes[t].high[0] - boxes[t].low[0]) / tile + 1) * std::ceil((boxes[t].high[1] - boxes[t].low[1]) / tile + 1);
+      const Triangle& f = triangles_[t];
+      const double area = 0.5 * std::abs((f.b.x - f.a.x) * (f.c.y - f.a.y) - (f.c.x - f.a.x) * (f.b.y - f.a.y));
+      const auto edge = [](const V3& p, const V3& q) { return std::hypot(q.x - p.x, q.y - p.y); };
+      const double perimeter = edge(f.a, f.b) + edge(f.b, f.c) + edge(f.c, f.a);
+      return area / (tile * tile) + 2 * perimeter / tile + 4;
     };
     const double budget = 4.0 * static_cast<double>(triangles_.size()) + 1e6;
     for (int tries = 0; tries < 32; ++tries) {
