@@ -41,7 +41,12 @@ inline Result run_command(const std::string& line) {
 }
 
 inline Result run_spec2fab(const std::string& arguments) {
-  return run_command(std::string(SPEC2FAB_CLI_PATH) + " " + arguments);
+  // Appended, not `path + " " + arguments`: GCC 12 warns falsely (-Warray-bounds)
+  // on that temporary once inlined.
+  std::string command = SPEC2FAB_CLI_PATH;
+  command += ' ';
+  command += arguments;
+  return run_command(command);
 }
 
 const fs::path kDatasets = SPEC2FAB_DATASETS_DIR;
