@@ -77,8 +77,14 @@ experiment["output"] = {"slices": False, "3mf": False, "render": False}
 run = spec2fab.run(experiment, out=out / "caustics_ring_small", origin=data / "experiments/smooth_caustics_ring.json")
 figures = run.result["caustics"]
 print({k: round(figures[k], 3) for k in ("initial_ssim", "ssim", "initial_psnr_db", "psnr_db", "relative_rmse")})""",
+        "## The print, traced independently\n\nThe headline is what the exported `print/surface.stl` casts, traced by `caustic_check`, a tracer that "
+        "shares no code with the simulator; it says whether it agrees with the simulated figure and, if not, why.",
         """\
-previews = ["goal_vs_simulated.png", "height_map.png", "surface_stl_traced.png"]
+headline = run.result["headline"]
+print({k: round(headline[k], 3) for k in ("ssim", "psnr_db", "relative_rmse", "simulated_ssim")})
+print(headline["agreement"])""",
+        """\
+previews = ["goal_vs_simulated.png", "height_map.png", "print_traced.png"]
 fig, axes = plt.subplots(1, 3, figsize=(18, 6))
 for ax, name in zip(axes, previews):
     picture = plt.imread(run.folder / "preview" / name)

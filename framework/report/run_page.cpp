@@ -41,6 +41,9 @@ std::string caption(const std::string& path) {
   static const std::vector<std::pair<std::string, std::string>> kCaptions = {
       {"texture_goal_vs_achieved", "the texture's goal beside achieved"},  // before its suffix
       {"goal_vs_achieved", "goal beside achieved"},
+      {"goal_vs_simulated", "goal beside simulated"},
+      {"print_traced", "goal beside print/surface.stl traced by caustic_check, which shares no code with the simulator"},
+      {"surface_stl_traced", "goal beside print/surface.stl traced by the simulator's own ray tracer"},
       {"convergence", "error against evaluations"},
       {"optimizer_comparison", "the optimizers compared on this goal"},
       {"search", "branch and bound: what it evaluated and pruned"},
@@ -49,7 +52,6 @@ std::string caption(const std::string& path) {
       {"goal", "the goal"},
       {"achieved", "what the tuned print gives"},
       {"simulated", "the simulated result"},
-      {"traced", "the exported surface traced independently"},
       {"profile", "scattering profiles: goal and achieved"},
       {"deformation", "the deformed shape"},
       {"look", "the predicted colours in the shape's surface coordinates (the 3D view's texture)"},
@@ -77,14 +79,16 @@ nlohmann::json images(const fs::path& folder, const nlohmann::json& result, size
   }
   std::sort(others.begin(), others.end());
   paths.insert(paths.end(), others.begin(), others.end());
-  // Goal beside achieved first, the print's render next, cross-sections last.
+  // The print traced independently (the headline's picture) first, goal
+  // beside achieved next, then the print's render, cross-sections last.
   const auto rank = [](const std::string& path) {
     const std::string stem = fs::path(path).stem().string();
+    if (stem == "print_traced") return 0;
     if (stem.find("goal_vs") != std::string::npos || stem.find("traced") != std::string::npos)
-      return 0;
-    if (stem == "render") return 1;
-    if (stem.rfind("section_", 0) == 0) return 3;
-    return 2;
+      return 1;
+    if (stem == "render") return 2;
+    if (stem.rfind("section_", 0) == 0) return 4;
+    return 3;
   };
   std::stable_sort(paths.begin(), paths.end(),
                    [&](const auto& a, const auto& b) { return rank(a) < rank(b); });

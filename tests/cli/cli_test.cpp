@@ -744,7 +744,8 @@ TEST_F(Cli, SmoothCausticsTunesTheSurfaceAndReportsImageErrors) {
   ASSERT_EQ(r.code, 0) << r.out;
   // The same files for one thread; the start's wall times are in timing.json.
   ASSERT_EQ(run_spec2fab("run -q " + file.string() + " --threads 1 --out " + (dir_ / "t1").string()).code, 0);
-  for (const char* name : {"result.json", "tree.json", "print/surface.stl", "preview/surface_stl_traced.png"})
+  for (const char* name :
+       {"result.json", "tree.json", "print/surface.stl", "preview/surface_stl_traced.png", "preview/print_traced.png"})
     EXPECT_EQ(read(dir_ / "run" / name), read(dir_ / "t1" / name)) << name;
   EXPECT_GT(nlohmann::json::parse(read(dir_ / "t1" / "timing.json"))["start_seconds"]["transport"].get<double>(), 0.0);
   const auto result = nlohmann::json::parse(read(dir_ / "run" / "result.json"));
@@ -793,6 +794,22 @@ TEST_F(Cli, SmoothCausticsTunesTheSurfaceAndReportsImageErrors) {
   EXPECT_GT(printed["ssim"].get<double>(), flat["ssim"].get<double>() + 0.1);
   EXPECT_LT(printed["relative_rmse"].get<double>(), 0.9 * flat["relative_rmse"].get<double>());
   EXPECT_EQ(flat["light_off_receiver"].get<double>(), 0.0);
+  // The run's headline is that tracer's figure for the file (the same rays,
+  // 16 per pixel along each axis), beside the estimator's, and says whether
+  // they agree.
+  const auto& headline = result["headline"];
+  EXPECT_NEAR(headline["ssim"].get<double>(), printed["ssim"].get<double>(), 1e-8) << headline;
+  EXPECT_NEAR(headline["relative_rmse"].get<double>(), printed["relative_rmse"].get<double>(), 1e-8);
+  EXPECT_EQ(headline["rays"], printed["rays"]);
+  EXPECT_EQ(headline["rays"], 48 * 16 * 48 * 16);
+  EXPECT_EQ(headline["simulated_ssim"], caustics["ssim"]);
+  EXPECT_NEAR(headline["ssim_difference"].get<double>(),
+              caustics["ssim"].get<double>() - headline["ssim"].get<double>(), 1e-12);
+  const bool agree = std::abs(headline["ssim_difference"].get<double>()) <= 0.02;
+  EXPECT_EQ(headline["agreement"].get<std::string>().starts_with("agree within 0.02"), agree) << headline;
+  // Why not, where they differ: the facet estimator on the file's facets.
+  EXPECT_EQ(headline.contains("printed_facets_ssim"), !agree) << headline;
+  EXPECT_EQ(png_size(dir_ / "run/preview/print_traced.png"), (std::array<int, 2>{2 * 48 + 8, 48}));
   EXPECT_EQ(fs::file_size(dir_ / "run/print/surface.stl"),
             binary_stl_size(caustics["surface_stl"]["triangles"].get<std::uintmax_t>()));
   // Goal | simulated, 48 px each with an 8 px gap; the 6 x 6 heights at 40 px each.
@@ -1043,7 +1060,8 @@ TEST_F(Cli, FacetCausticsAimsEveryFacetAtItsKernelAndLensesSpreadItLikeTheKernel
             "geometry": {"mesh": ")" + (kDatasets / "meshes/board_60x60x8.stl").string() + R"(", "uv": "planar"},
             "goal": {"image": ")" + goal.string() + R"(", "facet": ")" + facet + R"(", "lens_subdivisions": 8,
                      "facets": [12, 12], "image_size": [48, 48], "rays": [144, 144], "distance_mm": 200, "max_slope": 0.5,
-                     "min_height_mm": 2, "start_height_mm": 5, "assignment_sweeps": 20},
+                     "min_height_mm": 2, "start_height_mm": 5, "assignment_sweeps": 20,
+                     "print_check_rays": [576, 576]},
             "swap_optimizer": {"type": "annealing", "iterations": 5, "schedule_iterations": 100,
                                "swap_probability": 1, "initial_temperature": 1, "cooling": 0.95},
             "output": {"slices": false, "stl": true, "3mf": false, "render": false},
@@ -1092,6 +1110,17 @@ TEST_F(Cli, FacetCausticsAimsEveryFacetAtItsKernelAndLensesSpreadItLikeTheKernel
   ASSERT_TRUE(planes.contains("ssim") && lenses.contains("ssim"));
   EXPECT_GT(lenses["ssim"].get<double>(), planes["ssim"].get<double>() + 0.1) << planes << lenses;
   EXPECT_LT(lenses["rmse"].get<double>(), planes["rmse"].get<double>()) << planes << lenses;
+  // Each run's headline is that tracer's figure for its file, beside the
+  // simulated one, and the trace as the simulator's bilinear splat would
+  // blur it (which smooths the facets' speckle: it scores higher).
+  for (const auto& [run_result, checked] : {std::pair{&result, &planes}, std::pair{&lensed, &lenses}}) {
+    const auto& headline = (*run_result)["headline"];
+    EXPECT_NEAR(headline["ssim"].get<double>(), (*checked)["ssim"].get<double>(), 1e-8) << headline;
+    EXPECT_EQ(headline["rays"], 576 * 576);
+    EXPECT_EQ(headline["simulated_ssim"], (*run_result)["caustics"]["ssim"]);
+    EXPECT_GT(headline["splatted_ssim"].get<double>(), headline["ssim"].get<double>()) << headline;
+    EXPECT_FALSE(headline["agreement"].get<std::string>().empty());
+  }
 }
 
 TEST_F(Cli, CausticsTextureTunesTheTextureThenTheBottomFaceThroughItsShadow) {

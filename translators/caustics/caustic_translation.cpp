@@ -12,6 +12,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "caustic_check.h"  // tools/caustic_check: independent of the simulators
 #include "caustics/caustic_parts.h"
 #include "caustics/caustic_start.h"
 #include "core/colour.h"
@@ -280,6 +281,118 @@ SurfaceStlReport check_caustic_surface_stl(const CausticSlabConfig& slab, std::a
   report.traced_relative_rmse_vs_simulated = rms_difference(traced, simulated) / root_mean_square(simulated);
   report.traced = caustic_image_errors(traced, goal);
   return report;
+}
+
+PrintHeadline trace_print_independently(const CausticSlabConfig& slab, const std::filesystem::path& goal_image,
+                                        std::array<int, 2> rays, double simulated_ssim, bool simulated_by_rays,
+                                        RunFolder& folder) {
+  const CausticSetup& setup = slab.setup;
+  // caustic_check centres the receiver below the footprint and looks at it
+  // from the slab's side: a setup it cannot state is a bug of the caller.
+  if (setup.receiver_centre_mm.norm() > 0 || setup.image_from_behind)
+    throw std::logic_error("trace_print_independently: an off-centre receiver or an image from behind");
+  caustic_check::Options options;
+  options.stl = folder.path(kSurfaceStl).string();
+  options.goal = goal_image.string();
+  options.distance_mm = setup.receiver_distance_mm;
+  options.index = setup.refractive_index;
+  options.receiver_mm = {setup.receiver_width_mm, setup.receiver_depth_mm};
+  options.image = {setup.image_width, setup.image_height};
+  options.rays = rays;
+  options.disc = setup.disc_aperture;
+  const Eigen::Vector3d light = setup.light_direction.normalized();
+  options.light = {light.x(), light.y(), light.z()};
+  if (setup.point_light) {
+    // The file is in the subtree's frame: the tracer's, moved by the offset.
+    const Eigen::Vector3d at = setup.light_position_mm + slab_offset(setup, slab.origin_mm);
+    options.point = std::array<double, 3>{at.x(), at.y(), at.z()};
+  }
+  spdlog::info("print/surface.stl traced by caustic_check (independent of the simulator)");
+  caustic_check::Result traced;
+  try {
+    traced = caustic_check::check(options);
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error(std::string("caustic_check on print/surface.stl: ") + e.what());
+  }
+  PrintHeadline headline;
+  const auto pixels = [](const cv::Mat& image) {
+    return std::span<const double>(image.ptr<double>(), image.total());
+  };
+  write_caustic_panels({pixels(traced.goal), pixels(traced.traced)}, setup.image_width, setup.image_height,
+                       folder.path(headline.preview));
+  headline.traced.rmse = traced.rmse;
+  headline.traced.relative_rmse = traced.relative_rmse;
+  headline.traced.ssim = traced.ssim;
+  headline.traced.psnr_db = std::isfinite(traced.psnr_db) ? nlohmann::json(traced.psnr_db) : nlohmann::json("inf");
+  headline.traced.light_off_receiver = traced.light_off_receiver;
+  headline.rays = traced.rays;
+  if (simulated_by_rays) {
+    // A ray splatted bilinearly from a uniform place in its pixel gives that
+    // pixel 3/4 and each neighbour 1/8 along each axis, on average.
+    const cv::Mat kernel = (cv::Mat_<double>(3, 1) << 0.125, 0.75, 0.125);
+    cv::Mat splatted;
+    cv::sepFilter2D(traced.traced, splatted, CV_64F, kernel, kernel, cv::Point(-1, -1), 0, cv::BORDER_CONSTANT);
+    ImageObservation goal;
+    goal.width = setup.image_width;
+    goal.height = setup.image_height;
+    goal.pixels.assign(traced.goal.ptr<double>(), traced.goal.ptr<double>() + traced.goal.total());
+    headline.splatted_ssim = caustic_image_errors(pixels(splatted), goal).ssim;
+  }
+  headline.simulated_ssim = simulated_ssim;
+  headline.ssim_difference = simulated_ssim - traced.ssim;
+  spdlog::info("  SSIM {:.3f} traced ({} rays), {:.3f} simulated", traced.ssim, traced.rays, simulated_ssim);
+  return headline;
+}
+
+CausticImageErrors printed_facets_errors(const CausticSlabConfig& slab, std::array<int, 2> print_vertices,
+                                         const HeightSurface& surface, const ImageObservation& goal) {
+  CausticSetup setup = slab.setup;
+  setup.vertices_x = print_vertices[0];
+  setup.vertices_y = print_vertices[1];
+  setup.estimator = CausticSetup::Estimator::facets;
+  CausticTracer tracer(setup);
+  std::vector<double> heights(tracer.heights().size());
+  for_each_slab_vertex(setup, slab.origin_mm, [&](size_t k, double a, double b) {
+    heights[k] = surface.surface_height(a, b) - slab.origin_mm.z();
+  });
+  tracer.set_heights(heights);
+  std::vector<double> image(static_cast<size_t>(setup.image_width) * static_cast<size_t>(setup.image_height));
+  tracer.render(image);
+  return caustic_image_errors(image, goal);
+}
+
+void explain_headline(PrintHeadline& headline, std::array<int, 2> print_vertices, std::array<int, 2> control) {
+  const double traced = headline.traced.ssim;
+  if (std::abs(headline.ssim_difference) <= kHeadlineAgreement) {
+    headline.agreement = fmt::format("agree within {:g} SSIM", kHeadlineAgreement);
+    return;
+  }
+  const std::string differ = fmt::format("the print's traced SSIM {:.3f} differs from the simulated {:.3f} by {:+.3f}",
+                                         traced, headline.simulated_ssim, -headline.ssim_difference);
+  if (headline.printed_facets_ssim && std::abs(*headline.printed_facets_ssim - traced) <= kHeadlineAgreement) {
+    const int per_span = control[0] > 1 ? (print_vertices[0] - 1) / (control[0] - 1) : 0;
+    headline.agreement = fmt::format(
+        "{}: the file's flat facets ({} x {} vertices, {} per control span). Each facet casts a sharp copy of "
+        "itself, a moire at facet pitch, strongest where the goal is dark; the simulator's facet estimator on the file's own "
+        "facets gives {:.3f}, within {:g} of the trace, while the tuned smooth surface gives {:.3f}. More "
+        "vertices per span (print_vertices_per_span) narrow it",
+        differ, print_vertices[0], print_vertices[1], per_span, *headline.printed_facets_ssim, kHeadlineAgreement,
+        headline.simulated_ssim);
+    return;
+  }
+  if (headline.splatted_ssim && std::abs(*headline.splatted_ssim - headline.simulated_ssim) <= kHeadlineAgreement) {
+    headline.agreement = fmt::format(
+        "{}: the simulator's bilinear splat. Each ray it traces is spread over 2 x 2 pixels, a blur (1/8, 3/4, "
+        "1/8 along each axis) that smooths the speckle the facets' sharp spots leave; caustic_check bins each ray "
+        "into one pixel. Its trace blurred the same way gives {:.3f}, within {:g} of the simulated",
+        differ, *headline.splatted_ssim, kHeadlineAgreement);
+    return;
+  }
+  headline.agreement =
+      headline.printed_facets_ssim
+          ? fmt::format("{}, and the file's facets do not explain it (the facet estimator on them gives {:.3f})",
+                        differ, *headline.printed_facets_ssim)
+          : differ + "; not explained here";
 }
 
 TransportStartReport start_caustic_from_transport(Tuner& tuner, const CausticSlabConfig& slab,

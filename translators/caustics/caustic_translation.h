@@ -143,13 +143,47 @@ struct SurfaceStlReport {
   }
 };
 
+/// result.json "headline": what the exported print casts, traced by
+/// caustic_check (tools/caustic_check: its own STL reader, ray tracer and
+/// goal scaling, no code shared with the simulator), beside what the
+/// simulator's estimator gave for the tuned surface, and why the two
+/// differ where they do by more than kHeadlineAgreement.
+struct PrintHeadline {
+  std::string file = "print/surface.stl";
+  std::string traced_by = "caustic_check (tools/caustic_check), which shares no code with the simulator";
+  std::string preview = "preview/print_traced.png";
+  CausticImageErrors traced;
+  long long rays = 0;
+  double simulated_ssim = 0, ssim_difference = 0;
+  std::optional<double> printed_facets_ssim, splatted_ssim;
+  std::string agreement;
+  template <class Fields, class Self>
+  static void fields(Fields& f, Self& s) {
+    f(s.file, "file", "the file traced");
+    f(s.traced_by, "traced_by", "the tracer");
+    f(s.preview, "preview", "goal | traced");
+    f(s.traced, "", "the image the file casts, against the goal");
+    f(s.rays, "rays", "rays traced (stratified over the footprint, binned into pixels)");
+    f(s.simulated_ssim, "simulated_ssim", "SSIM the simulator's estimator gave the tuned surface");
+    f(s.ssim_difference, "ssim_difference", "simulated_ssim minus the traced ssim");
+    f(s.printed_facets_ssim, "printed_facets_ssim",
+      "SSIM the simulator's facet estimator (exact, noise-free) gives the file's own flat facets");
+    f(s.splatted_ssim, "splatted_ssim",
+      "SSIM of the trace blurred as the simulator's ray splat blurs (bilinear: 1/8, 3/4, 1/8 along each axis)");
+    f(s.agreement, "agreement", "whether the two agree, and if not, why");
+  }
+};
+
+/// How close the traced and simulated SSIM must be to be said to agree.
+inline constexpr double kHeadlineAgreement = 0.02;
+
 /// The goal keys both read: image, material, distance, receiver, image size,
 /// rays, refractive index (by default the material's, from the library). The slab is the solid's bounding box; the
 /// receiver is centred below it.
 struct CausticGoalSettings {
   std::filesystem::path image_file;
   std::string material = "VeroClear";
-  std::array<int, 2> image{240, 240}, rays{0, 0};
+  std::array<int, 2> image{240, 240}, rays{0, 0}, print_check_rays{0, 0};
   std::array<double, 2> receiver_mm{kUnset, kUnset};
   double distance_mm = 200, refractive_index = kUnset, light_distance_mm = kUnset;
   std::string aperture = "rectangle";
@@ -163,6 +197,9 @@ struct CausticGoalSettings {
     d.number(o.receiver_mm, "receiver_mm", Range::above(0), "receiver extent [x, y]", Default{"the footprint"});
     d.number(o.image, "image_size", Range::at_least(1), "simulated image [width, height]");
     d.number(o.rays, "rays", Range::at_least(1), "stratified rays [nx, ny]", Default{"2 × image_size"});
+    d.number(o.print_check_rays, "print_check_rays", Range::at_least(1),
+             "rays [nx, ny] caustic_check traces through print/surface.stl for the run's headline",
+             Default{"16 × image_size"});
     d.number(o.refractive_index, "refractive_index", Range::closed(1, 4), "of the slab's material",
              Default{"the material's, from the material library"});
     d.number(o.light_distance_mm, "light_distance_mm", Range::closed(1, 1e6),
@@ -265,6 +302,28 @@ SurfaceStlReport check_caustic_surface_stl(const CausticSlabConfig& slab, std::a
                                            std::span<const double> simulated, const ImageObservation& goal,
                                            const std::function<void(Mesh&)>& to_print,
                                            const GridField* exit_filter, RunFolder& folder);
+
+/// print/surface.stl traced by caustic_check with `rays` (0, 0: 16 per
+/// pixel along each axis) under the slab's light, receiver and image, against
+/// `goal_image` (the experiment's picture, which caustic_check reads and
+/// scales itself); goal | traced goes to preview/print_traced.png. Where
+/// the simulator's image came from its ray tracer (`simulated_by_rays`),
+/// the trace is also scored blurred as its bilinear splat blurs. The
+/// agreement is left to explain_headline.
+PrintHeadline trace_print_independently(const CausticSlabConfig& slab, const std::filesystem::path& goal_image,
+                                        std::array<int, 2> rays, double simulated_ssim, bool simulated_by_rays,
+                                        RunFolder& folder);
+
+/// The simulator's facet estimator (exact for a piecewise-flat top, no
+/// sampling noise) on the top the file holds: the surface sampled at
+/// `print_vertices`, each quad split as the file splits it.
+CausticImageErrors printed_facets_errors(const CausticSlabConfig& slab, std::array<int, 2> print_vertices,
+                                         const HeightSurface& surface, const ImageObservation& goal);
+
+/// Fills headline.agreement: agreeing within kHeadlineAgreement, or why not
+/// (the file's facets, when the facet estimator on them comes within it of
+/// the trace), or that the difference is not explained.
+void explain_headline(PrintHeadline& headline, std::array<int, 2> print_vertices, std::array<int, 2> control);
 
 /// Whether fabrication wrote print/surface.stl: the "stl" print writer lists
 /// it among the run's print files (on the rank that writes them).

@@ -209,6 +209,7 @@ class FacetCausticsTranslator final : public TuningTranslator {
     report.aim = aim_report();
     report.stitch = stitch;
     context.report.add("caustics", report);
+    simulated_ssim_ = report.image.achieved.ssim;
 
     write_caustic_panels({goal.pixels, kernel_image_, achieved}, goal.width, goal.height,
                          context.folder.path("preview/goal_vs_simulated.png"));
@@ -222,6 +223,20 @@ class FacetCausticsTranslator final : public TuningTranslator {
     if (outputs_.fabrication.writes("stl")) print_surfaces_ = {{"surface", std::move(slab)}};
   }
 
+  /// print/surface.stl traced by caustic_check for the headline.
+  void after_print(RunContext& context) override {
+    if (!surface_stl_written(context.report)) return;
+    CausticSlabConfig config;
+    config.setup = setup_;
+    config.origin_mm = slab().lower;
+    PrintHeadline headline =
+        trace_print_independently(config, settings_.image_file, settings_.print_check_rays, simulated_ssim_, true,
+                                  context.folder);
+    explain_headline(headline, {}, {});
+    context.report.files.previews.push_back(headline.preview);
+    context.report.add("headline", headline);
+  }
+
   static TypeDoc doc() {
     TypeDoc doc{
         "Facet caustics (paper Fig. 9 left, after Papas et al. 2011): a clear slab over the solid's "
@@ -233,7 +248,8 @@ class FacetCausticsTranslator final : public TuningTranslator {
         "simulator, squared_distance, phase \"aim\"); offsets are stitched by least squares. "
         "Writes the faceted slab, walls included, as "
         "print/surface.stl besides the voxel outputs; result.json reports RMSE and SSIM of the "
-        "traced surface, of the kernels themselves, and the roughness the swaps removed.",
+        "traced surface, of the kernels themselves, and the roughness the swaps removed, and its \"headline\" "
+        "the file traced by caustic_check, a tracer sharing no code with the simulator (docs/run-report.md).",
         prefixed(option_docs<Options>(), "goal."),
         R"({"translator": "facet_caustics", "goal": {"image": "ring.png", "facets": [45, 45]}})"};
     doc.properties.push_back({"swap_optimizer", "optimizer",
@@ -366,6 +382,7 @@ class FacetCausticsTranslator final : public TuningTranslator {
   }
 
   const Bounds& slab() const { return settings_.slab; }
+  double simulated_ssim_ = 0;  ///< the traced surface's, for the headline
   const ImageObservation& target() const { return image_goal_->typed_target(); }
   size_t facet_index(int i, int j) const { return grid().index(i, j); }
   Eigen::Vector2d facet_centre(int i, int j) const {

@@ -143,7 +143,9 @@ class SmoothCausticsTranslator final : public TuningTranslator {
         "above casts the goal image on a receiver below. One tuner: the caustics simulator, "
         "image_mse against the goal picture, L-BFGS on the tracer's derivative unless `optimizer` "
         "says otherwise (the paper's SPSA: {\"type\": \"spsa\", \"c\": 0.002, \"first_step\": 0.01}). "
-        "Writes the smooth slab as print/surface.stl besides the voxel outputs.",
+        "Writes the smooth slab as print/surface.stl besides the voxel outputs; result.json's \"headline\" is "
+        "that file traced by caustic_check, a tracer sharing no code with the simulator, beside the simulated SSIM "
+        "and why they differ where they do (docs/run-report.md).",
         prefixed(option_docs<Options>(), "goal."),
         R"({"translator": "smooth_caustics", "goal": {"image": "ring.png", "distance_mm": 200}})"};
     doc.properties.push_back({"optimizer", "optimizer", "nlopt LD_LBFGS, 1000 evaluations", "the surface's optimizer"});
@@ -203,13 +205,21 @@ class SmoothCausticsTranslator final : public TuningTranslator {
       print_surfaces_ = {caustic_print_surface(slab_, surface_.print_vertices(), surface(), {})};
   }
 
-  /// print/surface.stl as written, traced.
+  /// print/surface.stl as written, traced: by the simulator's tracer, and
+  /// by caustic_check for the headline.
   void after_print(RunContext& context) override {
     if (surface_stl_written(context.report)) {
       report_.surface_stl = check_caustic_surface_stl(slab_, surface_.print_vertices(), surface(),
                                                       print_surfaces_.front().mesh, achieved_, target_, {}, nullptr,
                                                       context.folder);
       context.report.files.previews.push_back(report_.surface_stl->preview);
+      PrintHeadline headline = trace_print_independently(slab_, settings_.image_file, settings_.print_check_rays,
+                                                         report_.image.achieved.ssim, false, context.folder);
+      if (std::abs(headline.ssim_difference) > kHeadlineAgreement)
+        headline.printed_facets_ssim = printed_facets_errors(slab_, surface_.print_vertices(), surface(), target_).ssim;
+      explain_headline(headline, surface_.print_vertices(), surface_.control);
+      context.report.files.previews.push_back(headline.preview);
+      context.report.add("headline", headline);
     }
     context.report.add("caustics", report_);
   }

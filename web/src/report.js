@@ -54,11 +54,16 @@ function headlineCards(result, meanings) {
   // pixels when every pixel is out of gamut) is shown once, named by the
   // shorter path: leaf=value -> [index in cards, path].
   const shown = new Map();
+  const label = (path) => path.replace(/^headline\./, 'print, traced independently.').split('.').slice(-3).map(words).join(' › ');
   const card = (path, v) => el('div', { class: 'card', title: meaningOf(path, meanings) },
-    el('div', { class: 'v', text: fmt(v) }), el('div', { class: 'k', text: path.split('.').slice(-3).map(words).join(' › ') }));
-  for (const [name, value] of Object.entries(result)) {
+    el('div', { class: 'v', text: fmt(v) }), el('div', { class: 'k', text: label(path) }));
+  // "headline" (what the exported print casts, traced independently) first;
+  // within a section, the figures in HEADLINE's order.
+  const sections = Object.entries(result).sort(([a], [b]) => (b === 'headline') - (a === 'headline'));
+  const order = (path) => HEADLINE.indexOf(path.split('.').pop());
+  for (const [name, value] of sections) {
     if (SHARED.has(name)) continue;
-    for (const [path, v] of flatten(value, name, [])) {
+    for (const [path, v] of flatten(value, name, []).sort(([a], [b]) => order(a) - order(b))) {
       const leaf = path.split('.').pop();
       if (!HEADLINE.includes(leaf) || typeof v !== 'number') continue;
       if (path.includes('initial') || path.includes('nearest_only')) continue;
@@ -197,6 +202,10 @@ function runPage(d, timing) {
   const sections = [];
   const lead = section('summary', 'What the run was for, and what it reached',
     el('p', { class: 'lead', text: d.purpose || '' }), el('div', { class: 'cards' }, headlineCards(result, d.meanings || {})));
+  const headline = result.headline;
+  if (headline?.agreement) {
+    lead.append(el('p', { class: 'headline-note', text: `${headline.file}, traced by ${headline.traced_by}: ${headline.agreement}.` }));
+  }
   if (d.notes?.length) lead.append(el('ul', { class: 'muted' }, d.notes.map((n) => el('li', { text: n }))));
   const warnings = timing?.warnings || [];
   if (warnings.length) {

@@ -1,22 +1,7 @@
-// caustic_check: an independent check of a caustic print. It reads the
-// printed slab (a binary or ASCII STL), traces collimated light through it
-// with its own ray tracer — its own STL reader, bounding-volume hierarchy,
-// ray–triangle test, Snell refraction and total internal reflection, and
-// pixel binning; nothing from Spec2Fab's simulators — and compares the image
-// on the receiver with the goal picture, read and scaled here as the
-// experiment format defines it (sRGB decoded, area-resized, carrying all the
-// light through the aperture). Prints one JSON object: SSIM (Wang et al.,
-// L from the goal), PSNR, RMSE, relative RMSE and the light off the receiver.
-//
-//   caustic_check --stl run/print/surface.stl --goal ring.png --distance 200
-//                 [--receiver 60 60] [--image 240 240] [--rays 3840 3840] [--index 1.5]
-//                 [--aperture disc] [--light 0 0 -1 | --point X Y Z] [--write traced.png]
-//
-// The receiver is centred below the slab's footprint (the mesh's x–y
-// bounds), at `distance` below its lowest point; light comes from above:
-// collimated along --light, or from a point light at --point (the STL's
-// coordinates) radiating evenly, the light through the footprint just
-// above the slab being what the goal is scaled to.
+// caustic_check's tracer and comparison (caustic_check.h). Nothing from
+// Spec2Fab: see the header.
+
+#include "caustic_check.h"
 
 #include <algorithm>
 #include <array>
@@ -33,11 +18,11 @@
 #include <string>
 #include <vector>
 
-#include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <tbb/parallel_for.h>
 
+namespace caustic_check {
 namespace {
 
 struct V3 {
@@ -339,54 +324,11 @@ double ssim(const cv::Mat& x, const cv::Mat& y) {
   return cv::mean(map)[0];
 }
 
-struct Options {
-  std::string stl, goal, write;
-  double distance = 0, index = 1.5;
-  double receiver[2] = {0, 0};
-  int image[2] = {240, 240}, rays[2] = {0, 0};
-  V3 light{0, 0, -1};
-  bool disc = false, point = false;
-  V3 point_at{0, 0, 0};
-};
-
-Options parse(int argc, char** argv) {
-  Options o;
-  const auto need = [&](int& i, int n) {
-    if (i + n >= argc) throw std::runtime_error(std::string(argv[i]) + " needs " + std::to_string(n) + " value(s)");
-  };
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--stl") { need(i, 1); o.stl = argv[++i]; }
-    else if (a == "--goal") { need(i, 1); o.goal = argv[++i]; }
-    else if (a == "--write") { need(i, 1); o.write = argv[++i]; }
-    else if (a == "--distance") { need(i, 1); o.distance = std::stod(argv[++i]); }
-    else if (a == "--index") { need(i, 1); o.index = std::stod(argv[++i]); }
-    else if (a == "--receiver") { need(i, 2); o.receiver[0] = std::stod(argv[++i]); o.receiver[1] = std::stod(argv[++i]); }
-    else if (a == "--image") { need(i, 2); o.image[0] = std::stoi(argv[++i]); o.image[1] = std::stoi(argv[++i]); }
-    else if (a == "--rays") { need(i, 2); o.rays[0] = std::stoi(argv[++i]); o.rays[1] = std::stoi(argv[++i]); }
-    else if (a == "--light") { need(i, 3); o.light = {std::stod(argv[i + 1]), std::stod(argv[i + 2]), std::stod(argv[i + 3])}; i += 3; }
-    else if (a == "--point") { need(i, 3); o.point = true; o.point_at = {std::stod(argv[i + 1]), std::stod(argv[i + 2]), std::stod(argv[i + 3])}; i += 3; }
-    else if (a == "--aperture") { need(i, 1); o.disc = std::string(argv[++i]) == "disc"; }
-    else if (a == "--help" || a == "-h") {
-      std::cout << "caustic_check --stl FILE --goal PNG --distance MM [--receiver W H] [--image W H] [--rays NX NY]\n"
-                   "              [--index N] [--aperture rectangle|disc] [--light X Y Z | --point X Y Z] [--write PNG]\n"
-                   "Traces collimated light through the STL slab with its own tracer and prints the image's\n"
-                   "SSIM, PSNR and RMSE against the goal as JSON (see the comment atop tools/caustic_check.cpp).\n";
-      std::exit(0);
-    } else {
-      throw std::runtime_error("unknown option " + a);
-    }
-  }
-  if (o.stl.empty() || o.goal.empty() || !(o.distance > 0)) throw std::runtime_error("--stl, --goal and --distance are required");
-  if (o.rays[0] == 0) { o.rays[0] = 16 * o.image[0]; o.rays[1] = 16 * o.image[1]; }
-  o.light = o.light.unit();
-  return o;
-}
-
 /// The slab's box and the receiver, from the mesh and the options.
 struct Setup {
   double low[3] = {1e300, 1e300, 1e300}, high[3] = {-1e300, -1e300, -1e300};
   double width = 0, depth = 0, cx = 0, cy = 0, rw = 0, rd = 0, receiver_z = 0, start_z = 0, cell = 0, intensity = 0;
+  V3 light, point_at;
   Setup(const Options& o, const std::vector<Triangle>& all) {
     for (const Triangle& t : all)
       for (const V3* p : {&t.a, &t.b, &t.c})
@@ -398,15 +340,21 @@ struct Setup {
     depth = high[1] - low[1];
     cx = 0.5 * (low[0] + high[0]);
     cy = 0.5 * (low[1] + high[1]);
-    rw = o.receiver[0] > 0 ? o.receiver[0] : width;
-    rd = o.receiver[1] > 0 ? o.receiver[1] : depth;
-    receiver_z = low[2] - o.distance;
+    rw = o.receiver_mm[0] > 0 ? o.receiver_mm[0] : width;
+    rd = o.receiver_mm[1] > 0 ? o.receiver_mm[1] : depth;
+    receiver_z = low[2] - o.distance_mm;
+    light = V3{o.light[0], o.light[1], o.light[2]};
+    if (!(light.norm() > 0) || !(light.z < 0)) throw std::runtime_error("the light must travel downwards (light z < 0)");
+    light = light.unit();
     // Each ray carries its stratum's share of a beam of unit irradiance, or
     // of the point light's: I cos(angle) / r² on the plane above the slab.
     cell = width / o.rays[0] * depth / o.rays[1];
     start_z = high[2] + 1;
-    if (o.point && !(o.point_at.z > start_z)) throw std::runtime_error("--point: the light must lie above the slab");
-    intensity = (o.point_at.z - low[2]) * (o.point_at.z - low[2]);
+    if (o.point) {
+      point_at = V3{(*o.point)[0], (*o.point)[1], (*o.point)[2]};
+      if (!(point_at.z > start_z)) throw std::runtime_error("the point light must lie above the slab");
+    }
+    intensity = (point_at.z - low[2]) * (point_at.z - low[2]);
   }
 };
 
@@ -418,14 +366,16 @@ struct Landing {
 
 /// Ray r: stratified, jittered by a hash of the ray index (reproducible),
 /// refracted through the slab to the receiver.
-Landing trace(const Options& o, const Setup& g, const Bvh& bvh, int r) {
-  const int nx = o.rays[0], ny = o.rays[1], w = o.image[0], h = o.image[1];
+Landing trace(const Options& o, const Setup& g, const Bvh& bvh, long long r) {
+  const long long nx = o.rays[0], ny = o.rays[1];
+  const int w = o.image[0], h = o.image[1];
   uint64_t key = static_cast<uint64_t>(r) * 0x9E3779B97F4A7C15ull + 12345;
   const auto next = [&key] {
     key ^= key >> 33; key *= 0xff51afd7ed558ccdull; key ^= key >> 33; key *= 0xc4ceb9fe1a85ec53ull; key ^= key >> 33;
     return static_cast<double>(key >> 11) * 0x1.0p-53;
   };
-  const double sx = g.low[0] + (r % nx + next()) * g.width / nx, sy = g.low[1] + (r / nx + next()) * g.depth / ny;
+  const double sx = g.low[0] + (static_cast<double>(r % nx) + next()) * g.width / static_cast<double>(nx);
+  const double sy = g.low[1] + (static_cast<double>(r / nx) + next()) * g.depth / static_cast<double>(ny);
   Landing landing;
   if (o.disc) {
     const double u = (sx - g.cx) / (0.5 * g.width), v = (sy - g.cy) / (0.5 * g.depth);
@@ -433,13 +383,13 @@ Landing trace(const Options& o, const Setup& g, const Bvh& bvh, int r) {
   }
   landing.emitted = true;
   V3 origin{sx, sy, g.start_z};  // the beam's cross-section above the slab is the footprint
-  V3 direction = o.light;
-  double power = g.cell * -o.light.z;
+  V3 direction = g.light;
+  double power = g.cell * -g.light.z;
   if (o.point) {
-    const V3 away = origin - o.point_at;
+    const V3 away = origin - g.point_at;
     const double distance = std::sqrt(away.dot(away));
     direction = away * (1 / distance);
-    power = g.cell * g.intensity * (o.point_at.z - g.start_z) / (distance * distance * distance);
+    power = g.cell * g.intensity * (g.point_at.z - g.start_z) / (distance * distance * distance);
   }
   landing.emitted_power = power;
   double t;
@@ -487,54 +437,80 @@ cv::Mat goal_image(const Options& o, double emitted, double pixel_area) {
   return goal;
 }
 
-/// The traced image on the goal's peak, sRGB grey.
+/// One chunk's share of the image and the light.
+struct Tally {
+  std::vector<double> image;
+  double emitted = 0, received = 0;
+};
+
+}  // namespace
+
 void write_traced(const std::string& file, const cv::Mat& traced, double peak) {
   cv::Mat grey;
   cv::Mat scaled = traced / peak;
   cv::min(scaled, 1.0, scaled);
   scaled.forEach<double>([](double& v, const int*) { v = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055; });
   scaled.convertTo(grey, CV_8U, 255);
-  cv::imwrite(file, grey);
+  if (!cv::imwrite(file, grey)) throw std::runtime_error("cannot write " + file);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) try {
-  const Options o = parse(argc, argv);
+Result check(const Options& options) {
+  Options o = options;
+  if (o.stl.empty() || o.goal.empty()) throw std::runtime_error("an STL and a goal picture are required");
+  if (!(o.distance_mm > 0)) throw std::runtime_error("the receiver's distance must be positive");
+  if (!(o.index >= 1)) throw std::runtime_error("the refractive index must be at least 1");
+  if (o.image[0] < 1 || o.image[1] < 1) throw std::runtime_error("the image needs at least one pixel");
+  if (o.rays[0] == 0 && o.rays[1] == 0) o.rays = {16 * o.image[0], 16 * o.image[1]};
+  if (o.rays[0] < 1 || o.rays[1] < 1) throw std::runtime_error("the rays must be at least 1 by 1");
   std::vector<Triangle> all = read_stl(o.stl);
   const Setup g(o, all);
-  const size_t triangle_count = all.size();
+  Result result;
+  result.triangles = all.size();
   const Bvh bvh(std::move(all));
-  const int nx = o.rays[0], ny = o.rays[1], w = o.image[0], h = o.image[1];
-  std::vector<Landing> landings(static_cast<size_t>(nx) * static_cast<size_t>(ny));
-  tbb::parallel_for(tbb::blocked_range<int>(0, nx * ny, 4096), [&](const tbb::blocked_range<int>& range) {
-    for (int r = range.begin(); r != range.end(); ++r) landings[static_cast<size_t>(r)] = trace(o, g, bvh, r);
+  const int w = o.image[0], h = o.image[1];
+  const long long total = static_cast<long long>(o.rays[0]) * o.rays[1];
+  result.rays = total;
+  // Fixed chunks of consecutive rays, each tallied on its own and summed in
+  // order: the same sums for any number of threads.
+  const long long chunk_count = std::min<long long>(32, total);
+  std::vector<Tally> tallies(static_cast<size_t>(chunk_count));
+  tbb::parallel_for(tbb::blocked_range<long long>(0, chunk_count, 1), [&](const tbb::blocked_range<long long>& chunks) {
+    for (long long c = chunks.begin(); c != chunks.end(); ++c) {
+      Tally& tally = tallies[static_cast<size_t>(c)];
+      tally.image.assign(static_cast<size_t>(w) * static_cast<size_t>(h), 0.0);
+      for (long long r = total * c / chunk_count, end = total * (c + 1) / chunk_count; r < end; ++r) {
+        const Landing l = trace(o, g, bvh, r);
+        if (!l.emitted) continue;
+        tally.emitted += l.emitted_power;
+        if (l.pixel >= 0) {
+          tally.image[static_cast<size_t>(l.pixel)] += l.power;
+          tally.received += l.power;
+        }
+      }
+    }
   });
-
+  const double pixel_area = g.rw / w * g.rd / h;
   cv::Mat traced(h, w, CV_64F, cv::Scalar(0));
   double emitted = 0, received = 0;
-  const double pixel_area = g.rw / w * g.rd / h;
-  for (const Landing& l : landings) {
-    if (!l.emitted) continue;
-    emitted += l.emitted_power;
-    if (l.pixel >= 0) {
-      traced.at<double>(l.pixel / w, l.pixel % w) += l.power / pixel_area;
-      received += l.power;
-    }
+  for (const Tally& tally : tallies) {
+    emitted += tally.emitted;
+    received += tally.received;
+    double* pixels = traced.ptr<double>();
+    for (size_t p = 0; p < tally.image.size(); ++p) pixels[p] += tally.image[p];
   }
-  const cv::Mat goal = goal_image(o, emitted, pixel_area);
-  const double rmse = std::sqrt(cv::norm(traced - goal, cv::NORM_L2SQR) / (w * h));
-  const double rms_goal = std::sqrt(cv::norm(goal, cv::NORM_L2SQR) / (w * h));
+  traced /= pixel_area;
+  if (!(emitted > 0)) throw std::runtime_error("no light enters the slab");
+  result.goal = goal_image(o, emitted, pixel_area);
+  result.traced = traced;
+  result.rmse = std::sqrt(cv::norm(traced - result.goal, cv::NORM_L2SQR) / (w * h));
+  const double rms_goal = std::sqrt(cv::norm(result.goal, cv::NORM_L2SQR) / (w * h));
   double peak;
-  cv::minMaxLoc(goal, nullptr, &peak);
-  if (!o.write.empty()) write_traced(o.write, traced, peak);
-  const double psnr = 20 * std::log10(peak / rmse);
-  std::printf("{\"ssim\": %.9g, \"psnr_db\": %s, \"rmse\": %.9g, \"relative_rmse\": %.9g, \"light_off_receiver\": %.9g, "
-              "\"rays\": %d, \"triangles\": %zu}\n",
-              ssim(traced, goal), std::isfinite(psnr) ? std::to_string(psnr).c_str() : "\"inf\"", rmse, rmse / rms_goal,
-              1 - received / emitted, nx * ny, triangle_count);
-  return 0;
-} catch (const std::exception& e) {
-  std::fprintf(stderr, "caustic_check: %s\n", e.what());
-  return 2;
+  cv::minMaxLoc(result.goal, nullptr, &peak);
+  result.psnr_db = 20 * std::log10(peak / result.rmse);
+  result.relative_rmse = result.rmse / rms_goal;
+  result.ssim = ssim(traced, result.goal);
+  result.light_off_receiver = 1 - received / emitted;
+  return result;
 }
+
+}  // namespace caustic_check
