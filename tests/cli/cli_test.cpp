@@ -1031,6 +1031,32 @@ TEST_F(Cli, CausticCheckTracesAFannedBottomLikeAGriddedOne) {
   }
 }
 
+// A print turned upside down with a filter on the face the light leaves by
+// (caustics_texture's window): a flat board, mirrored, its left half (x < 30)
+// black. Straight light passes straight through, so the right half is lit
+// and, seen from behind the receiver, lands on the image's left half: the
+// goal exactly, carrying the half of the light the filter lets through.
+TEST_F(Cli, CausticCheckTracesAMirroredBoardThroughItsExitFilter) {
+  const fs::path left_half = dir_ / "left_half.pgm";
+  {
+    std::ofstream out(left_half, std::ios::binary);
+    out << "P5 4 4 255\n";
+    for (int row = 0; row < 4; ++row) out << std::string(2, static_cast<char>(255)) << std::string(2, '\0');
+  }
+  const fs::path filter = dir_ / "filter.txt";
+  std::ofstream(filter) << "2 1\n0 1\n";
+  const fs::path board = kDatasets / "meshes/board_60x60x8.stl";
+  const std::string setup = "--distance 100 --image 4 4 --mirror-z --exit-filter " + filter.string();
+  const auto behind = caustic_check(board, left_half, setup + " --from-behind");
+  EXPECT_NEAR(behind["absorbed"].get<double>(), 0.5, 1e-12) << behind;
+  EXPECT_NEAR(behind["light_off_receiver"].get<double>(), 0.0, 1e-12) << behind;
+  EXPECT_LT(behind["relative_rmse"].get<double>(), 1e-9) << behind;
+  EXPECT_GT(behind["ssim"].get<double>(), 0.999) << behind;
+  // From the slab's side the lit half is on the right: far from the goal.
+  const auto in_front = caustic_check(board, left_half, setup);
+  EXPECT_GT(in_front["relative_rmse"].get<double>(), 1.0) << in_front;
+}
+
 TEST_F(Cli, FacetCausticsRefuseADiscApertureInOneLine) {
   // Every facet takes an equal share of the light: a round stop would starve the corners.
   const std::string body =
@@ -1185,6 +1211,15 @@ TEST_F(Cli, CausticsTextureTunesTheTextureThenTheBottomFaceThroughItsShadow) {
   EXPECT_LT(stl["traced_relative_rmse_vs_simulated"].get<double>(), 0.6);
   EXPECT_EQ(fs::file_size(dir_ / "window/print/surface.stl"), binary_stl_size(stl["triangles"].get<std::uintmax_t>()));
   expect_admesh_clean(dir_ / "window/print/surface.stl");
+  // The headline: caustic_check traces the file upside down, through the
+  // texture's transmittance, and the inks take about the light their mean
+  // transmittance says (the light leaves through the cells unevenly).
+  const auto& headline = result["headline"];
+  EXPECT_NEAR(headline["absorbed"].get<double>(), 1 - texture["transmittance"]["mean"].get<double>(), 0.05) << headline;
+  EXPECT_GT(headline["absorbed"].get<double>(), 0.05) << headline;
+  EXPECT_EQ(headline["simulated_ssim"], caustics["ssim"]);
+  EXPECT_TRUE(headline.contains("splatted_ssim")) << headline;  // the simulator traces rays here
+  EXPECT_EQ(png_size(dir_ / "window/preview/print_traced.png"), (std::array<int, 2>{2 * 48 + 8, 48}));
   // Texture: goal | printed | transmittance, 8 columns at 32 px each.
   EXPECT_EQ(png_size(dir_ / "window/preview/texture.png"), (std::array<int, 2>{3 * 256 + 2 * 8, 256}));
   EXPECT_EQ(png_size(dir_ / "window/preview/goal_vs_simulated.png"), (std::array<int, 2>{2 * 48 + 8, 48}));

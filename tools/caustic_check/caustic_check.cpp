@@ -13,6 +13,7 @@
 #include <iostream>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -327,7 +328,7 @@ double ssim(const cv::Mat& x, const cv::Mat& y) {
 /// The slab's box and the receiver, from the mesh and the options.
 struct Setup {
   double low[3] = {1e300, 1e300, 1e300}, high[3] = {-1e300, -1e300, -1e300};
-  double width = 0, depth = 0, cx = 0, cy = 0, rw = 0, rd = 0, receiver_z = 0, start_z = 0, cell = 0, intensity = 0;
+  double width = 0, depth = 0, cx = 0, cy = 0, rw = 0, rd = 0, receiver_z = 0, start_z = 0, intensity = 0;
   V3 light, point_at;
   Setup(const Options& o, const std::vector<Triangle>& all) {
     for (const Triangle& t : all)
@@ -346,28 +347,37 @@ struct Setup {
     light = V3{o.light[0], o.light[1], o.light[2]};
     if (!(light.norm() > 0) || !(light.z < 0)) throw std::runtime_error("the light must travel downwards (light z < 0)");
     light = light.unit();
-    // Each ray carries its stratum's share of a beam of unit irradiance, or
-    // of the point light's: I cos(angle) / r² on the plane above the slab.
-    cell = width / o.rays[0] * depth / o.rays[1];
     start_z = high[2] + 1;
     if (o.point) {
       point_at = V3{(*o.point)[0], (*o.point)[1], (*o.point)[2]};
       if (!(point_at.z > start_z)) throw std::runtime_error("the point light must lie above the slab");
     }
     intensity = (point_at.z - low[2]) * (point_at.z - low[2]);
+    const size_t cells = static_cast<size_t>(std::max(o.exit_cells[0], 0)) * static_cast<size_t>(std::max(o.exit_cells[1], 0));
+    if (!o.exit_transmittance.empty() && (cells == 0 || o.exit_transmittance.size() != cells))
+      throw std::runtime_error("the exit filter needs one transmittance per cell of its grid");
+    for (double t : o.exit_transmittance)
+      if (!(t >= 0 && t <= 1)) throw std::runtime_error("an exit filter's transmittance lies outside [0, 1]");
+  }
+  /// The filter's transmittance where a ray leaves the lowest face at (x, y).
+  double transmittance(const Options& o, double x, double y) const {
+    const int i = std::clamp(static_cast<int>(std::floor((x - low[0]) / width * o.exit_cells[0])), 0, o.exit_cells[0] - 1);
+    const int j = std::clamp(static_cast<int>(std::floor((y - low[1]) / depth * o.exit_cells[1])), 0, o.exit_cells[1] - 1);
+    return o.exit_transmittance[static_cast<size_t>(j) * static_cast<size_t>(o.exit_cells[0]) + static_cast<size_t>(i)];
   }
 };
 
 struct Landing {
   int pixel = -1;
-  double power = 0, emitted_power = 0;
+  double power = 0, emitted_power = 0, absorbed = 0;
   bool emitted = false;
 };
 
 /// Ray r: stratified, jittered by a hash of the ray index (reproducible),
 /// refracted through the slab to the receiver.
-Landing trace(const Options& o, const Setup& g, const Bvh& bvh, long long r) {
-  const long long nx = o.rays[0], ny = o.rays[1];
+Landing trace_ray(const Options& o, const Setup& g, const Bvh& bvh, std::array<int, 2> rays, long long r) {
+  const long long nx = rays[0], ny = rays[1];
+  const double cell = g.width / static_cast<double>(nx) * g.depth / static_cast<double>(ny);
   const int w = o.image[0], h = o.image[1];
   uint64_t key = static_cast<uint64_t>(r) * 0x9E3779B97F4A7C15ull + 12345;
   const auto next = [&key] {
@@ -384,12 +394,12 @@ Landing trace(const Options& o, const Setup& g, const Bvh& bvh, long long r) {
   landing.emitted = true;
   V3 origin{sx, sy, g.start_z};  // the beam's cross-section above the slab is the footprint
   V3 direction = g.light;
-  double power = g.cell * -g.light.z;
+  double power = cell * -g.light.z;
   if (o.point) {
     const V3 away = origin - g.point_at;
     const double distance = std::sqrt(away.dot(away));
     direction = away * (1 / distance);
-    power = g.cell * g.intensity * (g.point_at.z - g.start_z) / (distance * distance * distance);
+    power = cell * g.intensity * (g.point_at.z - g.start_z) / (distance * distance * distance);
   }
   landing.emitted_power = power;
   double t;
@@ -399,7 +409,8 @@ Landing trace(const Options& o, const Setup& g, const Bvh& bvh, long long r) {
       if (direction.z < 0) {
         const double s = (g.receiver_z - origin.z) / direction.z;
         const double px = origin.x + s * direction.x, py = origin.y + s * direction.y;
-        const int col = static_cast<int>(std::floor((px - (g.cx - 0.5 * g.rw)) / g.rw * w));
+        const double across = o.from_behind ? (g.cx + 0.5 * g.rw) - px : px - (g.cx - 0.5 * g.rw);
+        const int col = static_cast<int>(std::floor(across / g.rw * w));
         const int row = static_cast<int>(std::floor(((g.cy + 0.5 * g.rd) - py) / g.rd * h));
         if (col >= 0 && row >= 0 && col < w && row < h) landing.pixel = row * w + col;
         landing.power = power;
@@ -414,6 +425,13 @@ Landing trace(const Options& o, const Setup& g, const Bvh& bvh, long long r) {
     const double eta = entering ? 1 / o.index : o.index;
     const double cos_i = std::abs(cos_n);
     const double k = 1 - eta * eta * (1 - cos_i * cos_i);
+    if (!entering && k >= 0 && !o.exit_transmittance.empty() && n.z < -0.999999 &&
+        origin.z < g.low[2] + 1e-6 * (g.high[2] - g.low[2] + 1)) {
+      // Out through the lowest face, where the filter is.
+      const double kept = power * g.transmittance(o, origin.x, origin.y);
+      landing.absorbed += power - kept;
+      power = kept;
+    }
     direction = k < 0 ? direction + facing * (2 * cos_i)  // total internal reflection
                       : direction * eta + facing * (eta * cos_i - std::sqrt(k));
     direction = direction.unit();
@@ -440,7 +458,7 @@ cv::Mat goal_image(const Options& o, double emitted, double pixel_area) {
 /// One chunk's share of the image and the light.
 struct Tally {
   std::vector<double> image;
-  double emitted = 0, received = 0;
+  double emitted = 0, received = 0, absorbed = 0;
 };
 
 }  // namespace
@@ -454,21 +472,46 @@ void write_traced(const std::string& file, const cv::Mat& traced, double peak) {
   if (!cv::imwrite(file, grey)) throw std::runtime_error("cannot write " + file);
 }
 
-Result check(const Options& options) {
-  Options o = options;
+struct Print::Impl {
+  Options o;
+  std::optional<Setup> g;
+  std::optional<Bvh> bvh;
+  std::size_t triangles = 0;
+};
+
+Print::Print(const Options& options) : impl_(std::make_unique<Impl>()) {
+  Options& o = impl_->o;
+  o = options;
   if (o.stl.empty() || o.goal.empty()) throw std::runtime_error("an STL and a goal picture are required");
   if (!(o.distance_mm > 0)) throw std::runtime_error("the receiver's distance must be positive");
   if (!(o.index >= 1)) throw std::runtime_error("the refractive index must be at least 1");
   if (o.image[0] < 1 || o.image[1] < 1) throw std::runtime_error("the image needs at least one pixel");
-  if (o.rays[0] == 0 && o.rays[1] == 0) o.rays = {16 * o.image[0], 16 * o.image[1]};
-  if (o.rays[0] < 1 || o.rays[1] < 1) throw std::runtime_error("the rays must be at least 1 by 1");
   std::vector<Triangle> all = read_stl(o.stl);
-  const Setup g(o, all);
+  if (o.mirror_z) {
+    // Reflected, and each facet's corners swapped so that it stays outward.
+    for (Triangle& t : all) {
+      for (V3* p : {&t.a, &t.b, &t.c}) p->z = -p->z;
+      std::swap(t.b, t.c);
+      t.normal = (t.b - t.a).cross(t.c - t.a).unit();
+    }
+  }
+  impl_->g.emplace(o, all);
+  impl_->triangles = all.size();
+  impl_->bvh.emplace(std::move(all));
+}
+
+Print::~Print() = default;
+
+Result Print::trace(std::array<int, 2> rays) const {
+  const Options& o = impl_->o;
+  const Setup& g = *impl_->g;
+  const Bvh& bvh = *impl_->bvh;
+  if (rays[0] == 0 && rays[1] == 0) rays = {16 * o.image[0], 16 * o.image[1]};
+  if (rays[0] < 1 || rays[1] < 1) throw std::runtime_error("the rays must be at least 1 by 1");
   Result result;
-  result.triangles = all.size();
-  const Bvh bvh(std::move(all));
+  result.triangles = impl_->triangles;
   const int w = o.image[0], h = o.image[1];
-  const long long total = static_cast<long long>(o.rays[0]) * o.rays[1];
+  const long long total = static_cast<long long>(rays[0]) * rays[1];
   result.rays = total;
   // Fixed chunks of consecutive rays, each tallied on its own and summed in
   // order: the same sums for any number of threads.
@@ -479,9 +522,10 @@ Result check(const Options& options) {
       Tally& tally = tallies[static_cast<size_t>(c)];
       tally.image.assign(static_cast<size_t>(w) * static_cast<size_t>(h), 0.0);
       for (long long r = total * c / chunk_count, end = total * (c + 1) / chunk_count; r < end; ++r) {
-        const Landing l = trace(o, g, bvh, r);
+        const Landing l = trace_ray(o, g, bvh, rays, r);
         if (!l.emitted) continue;
         tally.emitted += l.emitted_power;
+        tally.absorbed += l.absorbed;
         if (l.pixel >= 0) {
           tally.image[static_cast<size_t>(l.pixel)] += l.power;
           tally.received += l.power;
@@ -491,16 +535,21 @@ Result check(const Options& options) {
   });
   const double pixel_area = g.rw / w * g.rd / h;
   cv::Mat traced(h, w, CV_64F, cv::Scalar(0));
-  double emitted = 0, received = 0;
+  double emitted = 0, received = 0, absorbed = 0;
   for (const Tally& tally : tallies) {
     emitted += tally.emitted;
     received += tally.received;
+    absorbed += tally.absorbed;
     double* pixels = traced.ptr<double>();
     for (size_t p = 0; p < tally.image.size(); ++p) pixels[p] += tally.image[p];
   }
   traced /= pixel_area;
   if (!(emitted > 0)) throw std::runtime_error("no light enters the slab");
-  result.goal = goal_image(o, emitted, pixel_area);
+  double let_through = 1;
+  if (!o.exit_transmittance.empty())
+    let_through = std::accumulate(o.exit_transmittance.begin(), o.exit_transmittance.end(), 0.0) /
+                  static_cast<double>(o.exit_transmittance.size());
+  result.goal = goal_image(o, emitted * let_through, pixel_area);
   result.traced = traced;
   result.rmse = std::sqrt(cv::norm(traced - result.goal, cv::NORM_L2SQR) / (w * h));
   const double rms_goal = std::sqrt(cv::norm(result.goal, cv::NORM_L2SQR) / (w * h));
@@ -509,8 +558,11 @@ Result check(const Options& options) {
   result.psnr_db = 20 * std::log10(peak / result.rmse);
   result.relative_rmse = result.rmse / rms_goal;
   result.ssim = ssim(traced, result.goal);
-  result.light_off_receiver = 1 - received / emitted;
+  result.light_off_receiver = emitted > absorbed ? 1 - received / (emitted - absorbed) : 0;
+  result.absorbed = absorbed / emitted;
   return result;
 }
+
+Result check(const Options& options) { return Print(options).trace(options.rays); }
 
 }  // namespace caustic_check

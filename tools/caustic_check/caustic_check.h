@@ -15,8 +15,10 @@
 
 #include <array>
 #include <cstddef>
+#include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -37,18 +39,52 @@ struct Options {
   /// slab) radiating evenly instead of collimated light.
   std::optional<std::array<double, 3>> point;
   bool disc = false;  ///< light only through the disc (ellipse) inscribed in the footprint
+  /// Trace the mesh reflected through a horizontal plane (z → −z, facets
+  /// kept outward): for a file printed upside down, whose light enters the
+  /// face the file has at the bottom.
+  bool mirror_z = false;
+  /// The image as seen from the receiver's far side: its columns run
+  /// towards −x (rows still from +y).
+  bool from_behind = false;
+  /// A filter on the slab's lowest face (after mirroring), the face the light
+  /// leaves by: a ray leaving there keeps this fraction of its power, per
+  /// cell of an exit_cells[0] × exit_cells[1] grid over the footprint (row by
+  /// row from the lowest y, x fastest). The goal then carries the light a
+  /// uniform face of the filter's mean transmittance would let through.
+  /// Empty: nothing absorbs.
+  std::vector<double> exit_transmittance;
+  std::array<int, 2> exit_cells{0, 0};
 };
 
 struct Result {
   double ssim = 0;  ///< Wang et al., 11 × 11 Gaussian window (σ 1.5), L the goal's peak
   double psnr_db = 0;  ///< infinite for identical images
   double rmse = 0, relative_rmse = 0;  ///< relative: over the goal's RMS
-  double light_off_receiver = 0;  ///< fraction of the emitted light not landing on the image
+  double light_off_receiver = 0;  ///< fraction of the light leaving the slab that misses the image
+  double absorbed = 0;            ///< fraction of the emitted light the exit filter took
   long long rays = 0;
   std::size_t triangles = 0;
   /// Irradiance (CV_64F, image[1] × image[0], row 0 at +y) traced and asked
   /// for, in units of the incident irradiance.
   cv::Mat traced, goal;
+};
+
+/// A print read and ready to trace: the file's triangles in a hierarchy,
+/// traced as often as asked (the reading and the hierarchy are most of a
+/// small trace's cost).
+class Print {
+ public:
+  /// Reads options.stl; throws std::runtime_error naming what is wrong.
+  explicit Print(const Options& options);
+  ~Print();
+  Print(const Print&) = delete;
+  Print& operator=(const Print&) = delete;
+  /// Traces `rays` (0, 0: 16 × image) and compares with the goal.
+  Result trace(std::array<int, 2> rays) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
 };
 
 /// Traces `options.stl` and compares with `options.goal`. Throws

@@ -5,6 +5,12 @@
 //   caustic_check --stl run/print/surface.stl --goal ring.png --distance 200
 //                 [--receiver 60 60] [--image 240 240] [--rays 3840 3840] [--index 1.5]
 //                 [--aperture disc] [--light 0 0 -1 | --point X Y Z] [--write traced.png]
+//                 [--mirror-z] [--from-behind] [--exit-filter filter.txt]
+//
+// --mirror-z traces the file upside down (light enters the face it has at
+// the bottom); --from-behind images the receiver from its far side (columns
+// towards -x); --exit-filter reads "nx ny" and nx × ny transmittances (row
+// by row from the lowest y) of a filter on the face the light leaves by.
 //
 // The receiver is centred below the slab's footprint (the mesh's x–y
 // bounds), at `distance` below its lowest point; light comes from above:
@@ -15,6 +21,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
 #include <iostream>
 #include <stdexcept>
 #include <string>
@@ -22,6 +29,18 @@
 #include "caustic_check.h"
 
 namespace {
+
+/// An exit filter from a text file: nx ny, then nx × ny transmittances row by
+/// row from the lowest y, x fastest.
+void read_exit_filter(const std::string& file, caustic_check::Options& o) {
+  std::ifstream in(file);
+  if (!in) throw std::runtime_error("cannot open " + file);
+  if (!(in >> o.exit_cells[0] >> o.exit_cells[1]) || o.exit_cells[0] < 1 || o.exit_cells[1] < 1)
+    throw std::runtime_error(file + ": expected the grid's nx ny first");
+  o.exit_transmittance.resize(static_cast<size_t>(o.exit_cells[0]) * static_cast<size_t>(o.exit_cells[1]));
+  for (double& t : o.exit_transmittance)
+    if (!(in >> t)) throw std::runtime_error(file + ": fewer transmittances than nx × ny");
+}
 
 struct CommandLine {
   caustic_check::Options options;
@@ -47,9 +66,13 @@ CommandLine parse(int argc, char** argv) {
     else if (a == "--light") { need(i, 3); o.light = {std::stod(argv[i + 1]), std::stod(argv[i + 2]), std::stod(argv[i + 3])}; i += 3; }
     else if (a == "--point") { need(i, 3); o.point = {std::stod(argv[i + 1]), std::stod(argv[i + 2]), std::stod(argv[i + 3])}; i += 3; }
     else if (a == "--aperture") { need(i, 1); o.disc = std::string(argv[++i]) == "disc"; }
+    else if (a == "--mirror-z") { o.mirror_z = true; }
+    else if (a == "--from-behind") { o.from_behind = true; }
+    else if (a == "--exit-filter") { need(i, 1); read_exit_filter(argv[++i], o); }
     else if (a == "--help" || a == "-h") {
       std::cout << "caustic_check --stl FILE --goal PNG --distance MM [--receiver W H] [--image W H] [--rays NX NY]\n"
                    "              [--index N] [--aperture rectangle|disc] [--light X Y Z | --point X Y Z] [--write PNG]\n"
+                   "              [--mirror-z] [--from-behind] [--exit-filter FILE]\n"
                    "Traces collimated light through the STL slab with its own tracer and prints the image's\n"
                    "SSIM, PSNR and RMSE against the goal as JSON (see tools/caustic_check/caustic_check.h).\n";
       std::exit(0);
@@ -72,9 +95,9 @@ int main(int argc, char** argv) try {
     caustic_check::write_traced(line.write, r.traced, peak);
   }
   std::printf("{\"ssim\": %.9g, \"psnr_db\": %s, \"rmse\": %.9g, \"relative_rmse\": %.9g, \"light_off_receiver\": %.9g, "
-              "\"rays\": %lld, \"triangles\": %zu}\n",
+              "\"absorbed\": %.9g, \"rays\": %lld, \"triangles\": %zu}\n",
               r.ssim, std::isfinite(r.psnr_db) ? std::to_string(r.psnr_db).c_str() : "\"inf\"", r.rmse, r.relative_rmse,
-              r.light_off_receiver, r.rays, r.triangles);
+              r.light_off_receiver, r.absorbed, r.rays, r.triangles);
   return 0;
 } catch (const std::exception& e) {
   std::fprintf(stderr, "caustic_check: %s\n", e.what());

@@ -155,7 +155,7 @@ struct PrintHeadline {
   CausticImageErrors traced;
   long long rays = 0;
   double simulated_ssim = 0, ssim_difference = 0;
-  std::optional<double> printed_facets_ssim, splatted_ssim;
+  std::optional<double> absorbed, printed_facets_ssim, splatted_ssim;
   std::string agreement;
   template <class Fields, class Self>
   static void fields(Fields& f, Self& s) {
@@ -164,14 +164,25 @@ struct PrintHeadline {
     f(s.preview, "preview", "goal | traced");
     f(s.traced, "", "the image the file casts, against the goal");
     f(s.rays, "rays", "rays traced (stratified over the footprint, binned into pixels)");
+    f(s.absorbed, "absorbed", "share of the light the texture's inks took (traced through their transmittance)");
     f(s.simulated_ssim, "simulated_ssim", "SSIM the simulator's estimator gave the tuned surface");
     f(s.ssim_difference, "ssim_difference", "simulated_ssim minus the traced ssim");
     f(s.printed_facets_ssim, "printed_facets_ssim",
       "SSIM the simulator's facet estimator (exact, noise-free) gives the file's own flat facets");
     f(s.splatted_ssim, "splatted_ssim",
-      "SSIM of the trace blurred as the simulator's ray splat blurs (bilinear: 1/8, 3/4, 1/8 along each axis)");
+      "rays estimator: SSIM of caustic_check at the simulator's ray count, blurred as its splat blurs "
+      "(bilinear: 1/8, 3/4, 1/8 along each axis)");
     f(s.agreement, "agreement", "whether the two agree, and if not, why");
   }
+};
+
+/// How the file sits against the simulator's slab, for caustic_check: the
+/// print's frame the subtree's mirrored about z = cut (z = cut − w: the
+/// caustics_texture print, whose light enters the face printed at the
+/// bottom), and a filter on the face the light leaves by (the texture).
+struct PrintFrame {
+  std::optional<double> mirrored_about_z;
+  const GridField* exit_filter = nullptr;
 };
 
 /// How close the traced and simulated SSIM must be to be said to agree.
@@ -307,12 +318,12 @@ SurfaceStlReport check_caustic_surface_stl(const CausticSlabConfig& slab, std::a
 /// pixel along each axis) under the slab's light, receiver and image, against
 /// `goal_image` (the experiment's picture, which caustic_check reads and
 /// scales itself); goal | traced goes to preview/print_traced.png. Where
-/// the simulator's image came from its ray tracer (`simulated_by_rays`),
+/// the simulator's image came from its ray tracer (the rays estimator),
 /// the trace is also scored blurred as its bilinear splat blurs. The
 /// agreement is left to explain_headline.
 PrintHeadline trace_print_independently(const CausticSlabConfig& slab, const std::filesystem::path& goal_image,
-                                        std::array<int, 2> rays, double simulated_ssim, bool simulated_by_rays,
-                                        RunFolder& folder);
+                                        std::array<int, 2> rays, double simulated_ssim, RunFolder& folder,
+                                        const PrintFrame& frame = {});
 
 /// The simulator's facet estimator (exact for a piecewise-flat top, no
 /// sampling noise) on the top the file holds: the surface sampled at

@@ -325,6 +325,15 @@ class CausticsTextureTranslator final : public TuningTranslator {
       const Bounds bounds = printed.bounds();
       stl.z_range_mm = std::array<double, 2>{bounds.lower.z(), bounds.upper.z()};
       context.report.files.previews.push_back(stl.preview);
+      // The file is printed upside down (z = cut - w), and the light leaves
+      // through the texture: caustic_check traces it mirrored, through the
+      // texture's transmittance.
+      PrintHeadline headline = trace_print_independently(slab_, settings_.image_file, settings_.print_check_rays,
+                                                         report_.image.achieved.ssim, context.folder,
+                                                         {cut_z_, &shadow_field_});
+      explain_headline(headline, surface_.print_vertices(), surface_.control);
+      context.report.files.previews.push_back(headline.preview);
+      context.report.add("headline", headline);
     }
     context.report.add("caustics", report_);
   }

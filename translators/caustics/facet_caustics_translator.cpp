@@ -229,9 +229,11 @@ class FacetCausticsTranslator final : public TuningTranslator {
     CausticSlabConfig config;
     config.setup = setup_;
     config.origin_mm = slab().lower;
+    // The rays trace_surface traced.
+    config.setup.rays_x = std::max(setup_.rays_x, 8 * setup_.image_width);
+    config.setup.rays_y = std::max(setup_.rays_y, 8 * setup_.image_height);
     PrintHeadline headline =
-        trace_print_independently(config, settings_.image_file, settings_.print_check_rays, simulated_ssim_, true,
-                                  context.folder);
+        trace_print_independently(config, settings_.image_file, settings_.print_check_rays, simulated_ssim_, context.folder);
     explain_headline(headline, {}, {});
     context.report.files.previews.push_back(headline.preview);
     context.report.add("headline", headline);
