@@ -2,6 +2,7 @@
 #include "core/image_write.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <numbers>
 #include <numeric>
@@ -317,6 +318,7 @@ PrintHeadline trace_print_independently(const CausticSlabConfig& slab, const std
     options.point = std::array<double, 3>{at.x(), at.y(), at.z()};
   }
   spdlog::info("print/surface.stl traced by caustic_check (independent of the simulator)");
+  const auto started = std::chrono::steady_clock::now();
   caustic_check::Result traced, as_simulated;
   const bool by_rays = setup.estimator == CausticSetup::Estimator::rays;
   try {
@@ -354,7 +356,10 @@ PrintHeadline trace_print_independently(const CausticSlabConfig& slab, const std
   }
   headline.simulated_ssim = simulated_ssim;
   headline.ssim_difference = simulated_ssim - traced.ssim;
-  spdlog::info("  SSIM {:.3f} traced ({} rays), {:.3f} simulated", traced.ssim, traced.rays, simulated_ssim);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  if (frame.timing) (*frame.timing)["print_check_seconds"] = seconds;
+  spdlog::info("  SSIM {:.3f} traced ({} rays, {:.1f} s), {:.3f} simulated", traced.ssim, traced.rays, seconds,
+               simulated_ssim);
   return headline;
 }
 

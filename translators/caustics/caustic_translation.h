@@ -179,8 +179,11 @@ struct PrintHeadline {
 /// How the file sits against the simulator's slab, for caustic_check: the
 /// print's frame the subtree's mirrored about z = cut (z = cut − w: the
 /// caustics_texture print, whose light enters the face printed at the
-/// bottom), and a filter on the face the light leaves by (the texture).
+/// bottom), a filter on the face the light leaves by (the texture), and
+/// where the check's wall time goes.
 struct PrintFrame {
+  explicit PrintFrame(nlohmann::json* timing_json = nullptr) : timing(timing_json) {}
+  nlohmann::json* timing = nullptr;  ///< timing.json: the check's wall time goes to "print_check_seconds"
   std::optional<double> mirrored_about_z;
   const GridField* exit_filter = nullptr;
 };
@@ -323,7 +326,7 @@ SurfaceStlReport check_caustic_surface_stl(const CausticSlabConfig& slab, std::a
 /// agreement is left to explain_headline.
 PrintHeadline trace_print_independently(const CausticSlabConfig& slab, const std::filesystem::path& goal_image,
                                         std::array<int, 2> rays, double simulated_ssim, RunFolder& folder,
-                                        const PrintFrame& frame = {});
+                                        const PrintFrame& frame = PrintFrame());
 
 /// The simulator's facet estimator (exact for a piecewise-flat top, no
 /// sampling noise) on the top the file holds: the surface sampled at

@@ -328,9 +328,11 @@ class CausticsTextureTranslator final : public TuningTranslator {
       // The file is printed upside down (z = cut - w), and the light leaves
       // through the texture: caustic_check traces it mirrored, through the
       // texture's transmittance.
+      PrintFrame frame(context.timing);
+      frame.mirrored_about_z = cut_z_;
+      frame.exit_filter = &shadow_field_;
       PrintHeadline headline = trace_print_independently(slab_, settings_.image_file, settings_.print_check_rays,
-                                                         report_.image.achieved.ssim, context.folder,
-                                                         {cut_z_, &shadow_field_});
+                                                         report_.image.achieved.ssim, context.folder, frame);
       explain_headline(headline, surface_.print_vertices(), surface_.control);
       context.report.files.previews.push_back(headline.preview);
       context.report.add("headline", headline);

@@ -232,8 +232,8 @@ class FacetCausticsTranslator final : public TuningTranslator {
     // The rays trace_surface traced.
     config.setup.rays_x = std::max(setup_.rays_x, 8 * setup_.image_width);
     config.setup.rays_y = std::max(setup_.rays_y, 8 * setup_.image_height);
-    PrintHeadline headline =
-        trace_print_independently(config, settings_.image_file, settings_.print_check_rays, simulated_ssim_, context.folder);
+    PrintHeadline headline = trace_print_independently(config, settings_.image_file, settings_.print_check_rays,
+                                                       simulated_ssim_, context.folder, PrintFrame{context.timing});
     explain_headline(headline, {}, {});
     context.report.files.previews.push_back(headline.preview);
     context.report.add("headline", headline);

@@ -214,7 +214,8 @@ class SmoothCausticsTranslator final : public TuningTranslator {
                                                       context.folder);
       context.report.files.previews.push_back(report_.surface_stl->preview);
       PrintHeadline headline = trace_print_independently(slab_, settings_.image_file, settings_.print_check_rays,
-                                                         report_.image.achieved.ssim, context.folder);
+                                                         report_.image.achieved.ssim, context.folder,
+                                                         PrintFrame{context.timing});
       if (std::abs(headline.ssim_difference) > kHeadlineAgreement)
         headline.printed_facets_ssim = printed_facets_errors(slab_, surface_.print_vertices(), surface(), target_).ssim;
       explain_headline(headline, surface_.print_vertices(), surface_.control);
