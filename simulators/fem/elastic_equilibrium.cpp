@@ -73,7 +73,7 @@ struct ElasticSolver::Impl::Equilibrium {
     // rank's rows are whole in its matrix, and their sums are added.
     m.saved_residual.noalias() = m.stiffness.selfadjointView<Eigen::Lower>() * m.step;
     double r = 0;
-    if (m.node_owned.empty()) {
+    if (m.share.whole()) {
       r = (m.residual - m.saved_residual).norm();
     } else {
       double mine = 0;

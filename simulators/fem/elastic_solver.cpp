@@ -19,7 +19,7 @@ ElasticSolver::ElasticSolver(const TetMesh& mesh, const std::vector<char>& fixed
   const std::vector<int> node_order = m.number_free_dofs(mesh, fixed);
   m.shape_rest(mesh);
   m.split_rows(mesh, node_order, distributed);
-  StiffnessPattern pattern = stiffness_pattern(mesh, m.dof_index, m.free_count, m.node_owned);
+  StiffnessPattern pattern = stiffness_pattern(mesh, m.dof_index, m.free_count, m.share);
   m.stiffness = std::move(pattern.lower);
   m.diagonal = std::move(pattern.diagonal);
   m.scatter = std::move(pattern.scatter);
@@ -46,8 +46,8 @@ int ElasticSolver::solve_ranks() const { return impl_->gamg ? impl_->gamg->ranks
 
 size_t ElasticSolver::assembled_tets() const {
   const Impl& m = *impl_;
-  if (m.tet_assembled.empty()) return mesh_.tets.size();
-  return static_cast<size_t>(std::count(m.tet_assembled.begin(), m.tet_assembled.end(), 1));
+  if (m.share.whole()) return mesh_.tets.size();
+  return static_cast<size_t>(std::count(m.share.tets.begin(), m.share.tets.end(), 1));
 }
 
 long long ElasticSolver::stiffness_entries() const { return impl_->stiffness.nonZeros(); }

@@ -57,14 +57,13 @@ struct ElasticSolver::Impl {
   std::vector<char> active;
   std::vector<char> node_active;
   // A solve spread over the ranks (gamg under mpirun) assembles only the
-  // rows this rank owns: those of `node_owned`, from the tets touching one
-  // (`tet_assembled`). Empty: every row. Forces and energy are still summed
-  // over every tet on every rank (one pass over the elements, replicated,
-  // and the same numbers as one process).
-  std::vector<char> node_owned, tet_assembled;
+  // rows this rank owns, from the tets touching one; one process, every row.
+  // Forces and energy are still summed over every tet on every rank (one
+  // pass over the elements, replicated, and the same numbers as one process).
+  AssemblyShare share;
 
-  bool assembles(size_t t) const { return tet_assembled.empty() || tet_assembled[t]; }
-  bool owns_dof(size_t dof) const { return node_owned.empty() || node_owned[dof / 3]; }
+  bool assembles(size_t t) const { return share.assembles(t); }
+  bool owns_dof(size_t dof) const { return share.owns_dof(dof); }
 
   // Work buffers, sized once.
   Eigen::VectorXd residual, step;
@@ -221,12 +220,10 @@ struct ElasticSolver::Impl {
     if (kind != LinearSolver::elastic_multigrid || !distributed) return;
     const GamgSolver::Partition part = GamgSolver::partition(node_order.size(), true);
     if (part.size < 2) return;
-    node_owned.assign(mesh.nodes.size(), 0);
+    std::vector<char> owned(mesh.nodes.size(), 0);
     for (size_t place = part.first_place; place < part.end_place; ++place)
-      node_owned[static_cast<size_t>(node_order[place])] = 1;
-    tet_assembled.assign(mesh.tets.size(), 0);
-    for (size_t t = 0; t < mesh.tets.size(); ++t)
-      for (int v : mesh.tets[t]) tet_assembled[t] |= node_owned[static_cast<size_t>(v)];
+      owned[static_cast<size_t>(node_order[place])] = 1;
+    share = AssemblyShare(mesh, std::move(owned));
   }
 
   /// Each tet's rest shape (its inverse edge matrix and volume).

@@ -13,25 +13,22 @@ struct NodeGraph {
   std::vector<int> start, neighbours;
 };
 
-/// `kept` (empty: every node): only the tets touching a kept node count.
-NodeGraph node_graph(const TetMesh& mesh, const std::vector<char>& kept) {
+/// Only the share's tets count.
+NodeGraph node_graph(const TetMesh& mesh, const AssemblyShare& share) {
   const size_t node_count = mesh.nodes.size();
-  auto counts = [&](const Tet& tet) {
-    return kept.empty() || std::any_of(tet.begin(), tet.end(), [&](int v) { return kept[static_cast<size_t>(v)] != 0; });
-  };
   NodeGraph graph{std::vector<int>(node_count + 1, 0), {}};
   std::vector<int>& start = graph.start;
   std::vector<int>& adjacency = graph.neighbours;
-  for (const Tet& tet : mesh.tets)
-    if (counts(tet))
-      for (int a : tet) start[static_cast<size_t>(a) + 1] += 4;
+  for (size_t t = 0; t < mesh.tets.size(); ++t)
+    if (share.assembles(t))
+      for (int a : mesh.tets[t]) start[static_cast<size_t>(a) + 1] += 4;
   for (size_t v = 0; v < node_count; ++v) start[v + 1] += start[v];
   adjacency.resize(static_cast<size_t>(start[node_count]));
   std::vector<int> cursor(start.begin(), start.end() - 1);
-  for (const Tet& tet : mesh.tets)
-    if (counts(tet))
-      for (int a : tet)
-        for (int b : tet) adjacency[static_cast<size_t>(cursor[static_cast<size_t>(a)]++)] = b;
+  for (size_t t = 0; t < mesh.tets.size(); ++t)
+    if (share.assembles(t))
+      for (int a : mesh.tets[t])
+        for (int b : mesh.tets[t]) adjacency[static_cast<size_t>(cursor[static_cast<size_t>(a)]++)] = b;
   int written = 0;
   for (size_t v = 0; v < node_count; ++v) {
     const auto begin = adjacency.begin() + start[v], end = adjacency.begin() + start[v + 1];
@@ -47,8 +44,8 @@ NodeGraph node_graph(const TetMesh& mesh, const std::vector<char>& kept) {
 }
 
 /// Column c of the lower triangle: the free DOFs of c's node's neighbours
-/// numbered c or above, in order (with `kept`, only where c's node or the
-/// neighbour is kept).
+/// numbered c or above, in order (only where c's node or the neighbour is
+/// the share's).
 void lower_pattern(const NodeGraph& graph, const std::vector<int>& dof_index, int free_count,
                    const std::vector<char>& kept, Eigen::SparseMatrix<double, Eigen::ColMajor, int>& lower) {
   const size_t node_count = graph.start.size() - 1;
@@ -88,10 +85,16 @@ void lower_pattern(const NodeGraph& graph, const std::vector<int>& dof_index, in
 
 }  // namespace
 
+AssemblyShare::AssemblyShare(const TetMesh& mesh, std::vector<char> owned_nodes) : nodes(std::move(owned_nodes)) {
+  tets.assign(mesh.tets.size(), 0);
+  for (size_t t = 0; t < mesh.tets.size(); ++t)
+    for (int v : mesh.tets[t]) tets[t] |= nodes[static_cast<size_t>(v)];
+}
+
 StiffnessPattern stiffness_pattern(const TetMesh& mesh, const std::vector<int>& dof_index, int free_count,
-                                   const std::vector<char>& kept) {
+                                   const AssemblyShare& share) {
   StiffnessPattern pattern;
-  lower_pattern(node_graph(mesh, kept), dof_index, free_count, kept, pattern.lower);
+  lower_pattern(node_graph(mesh, share), dof_index, free_count, share.nodes, pattern.lower);
   const int* outer = pattern.lower.outerIndexPtr();
   const int* inner = pattern.lower.innerIndexPtr();
   // The entry's position, or -1 where the pattern left it out (`kept`).
@@ -110,8 +113,9 @@ StiffnessPattern stiffness_pattern(const TetMesh& mesh, const std::vector<int>& 
     for (int edge = 0; edge < kTetEdges; ++edge, base += 3) {
       int low = tet[static_cast<size_t>(kTetEdgeNodes[edge][0])], high = tet[static_cast<size_t>(kTetEdgeNodes[edge][1])];
       // As add_element_matrix orders them: by the nodes' last free DOF.
-      if (last_free_dof(dof_index, low) > last_free_dof(dof_index, high)) std::swap(low, high);
-      const int high_first = first_free_dof(dof_index, high);
+      const int* dofs = dof_index.data();
+      if (last_free_dof(dofs + 3 * low) > last_free_dof(dofs + 3 * high)) std::swap(low, high);
+      const int high_first = first_free_dof(dofs + 3 * high);
       if (high_first < 0) continue;
       for (size_t d = 0; d < 3; ++d)
         if (const int column = dof_index[3 * static_cast<size_t>(low) + d]; column >= 0)

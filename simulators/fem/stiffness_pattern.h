@@ -39,25 +39,35 @@ struct StiffnessPattern {
   std::vector<int> scatter;
 };
 
-/// `dof_index`: for each of the 3 DOFs of each node, its free index or -1,
-/// a node's free DOFs consecutive; `free_count` free DOFs in all. `kept`
-/// (one flag per node; empty: all): only the entries of a kept node's rows
-/// and columns, from the tets that touch one — the rows one rank of a
-/// distributed solve owns.
-StiffnessPattern stiffness_pattern(const TetMesh& mesh, const std::vector<int>& dof_index, int free_count,
-                                   const std::vector<char>& kept = {});
+/// What one rank of a distributed solve assembles: the rows of the nodes it
+/// owns, from the tets that touch one. Default: everything (one process).
+struct AssemblyShare {
+  std::vector<char> nodes;  ///< per node: its rows are this rank's (empty: all)
+  std::vector<char> tets;   ///< per tet: it touches such a node (empty: all)
 
-/// A node's first free DOF, or -1 when all three are fixed.
-inline int first_free_dof(const std::vector<int>& dof_index, int node) {
-  for (size_t d = 0; d < 3; ++d)
-    if (const int i = dof_index[3 * static_cast<size_t>(node) + d]; i >= 0) return i;
+  AssemblyShare() = default;
+  /// The tets follow from the nodes.
+  AssemblyShare(const TetMesh& mesh, std::vector<char> owned_nodes);
+  bool whole() const { return nodes.empty(); }
+  bool assembles(size_t tet) const { return tets.empty() || tets[tet]; }
+  bool owns_dof(size_t dof) const { return nodes.empty() || nodes[dof / 3]; }
+};
+
+/// `dof_index`: for each of the 3 DOFs of each node, its free index or -1,
+/// a node's free DOFs consecutive; `free_count` free DOFs in all. `share`:
+/// only the entries of its nodes' rows and columns, from its tets.
+StiffnessPattern stiffness_pattern(const TetMesh& mesh, const std::vector<int>& dof_index, int free_count,
+                                   const AssemblyShare& share = {});
+
+/// A node's first free DOF, or -1 when all three are fixed: `dofs` its
+/// three entries of a dof_index.
+inline int first_free_dof(const int* dofs) {
+  for (int d = 0; d < 3; ++d)
+    if (dofs[d] >= 0) return dofs[d];
   return -1;
 }
 /// A node's last free DOF, or -1 when all three are fixed.
-inline int last_free_dof(const std::vector<int>& dof_index, int node) {
-  const size_t v = 3 * static_cast<size_t>(node);
-  return std::max({dof_index[v], dof_index[v + 1], dof_index[v + 2]});
-}
+inline int last_free_dof(const int* dofs) { return std::max({dofs[0], dofs[1], dofs[2]}); }
 
 /// Adds a symmetric 12 × 12 element matrix `k` (rows and columns node by
 /// node, x y z) of tet `t` into the lower triangle's `values`, with the
@@ -87,11 +97,8 @@ void add_element_matrix(const std::vector<int>& scatter, const std::vector<int>&
     int low = kTetEdgeNodes[edge][0], high = kTetEdgeNodes[edge][1];
     // The node whose free DOFs come first owns the columns (as
     // stiffness_pattern ordered them: by the last free DOF, -1 if none).
-    const int last_low = std::max({dof[3 * low], dof[3 * low + 1], dof[3 * low + 2]});
-    const int last_high = std::max({dof[3 * high], dof[3 * high + 1], dof[3 * high + 2]});
-    if (last_low > last_high) std::swap(low, high);
-    int high_first = -1;  // the high node's first free DOF
-    for (int e = 0; e < 3 && high_first < 0; ++e) high_first = dof[3 * high + e];
+    if (last_free_dof(dof + 3 * low) > last_free_dof(dof + 3 * high)) std::swap(low, high);
+    const int high_first = first_free_dof(dof + 3 * high);
     for (int d = 0; d < 3; ++d) {
       if (base[d] < 0) continue;
       for (int e = 0; e < 3; ++e) {

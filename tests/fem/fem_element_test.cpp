@@ -245,7 +245,7 @@ TEST(StiffnessPattern, ScattersEveryElementEntryWhereTheDenseSumPutsIt) {
 
   for (const bool split : {false, true}) {
     SCOPED_TRACE(split ? "half the nodes kept" : "every node");
-    StiffnessPattern pattern = stiffness_pattern(mesh, dof_index, free_count, split ? kept : std::vector<char>{});
+    StiffnessPattern pattern = stiffness_pattern(mesh, dof_index, free_count, split ? AssemblyShare(mesh, kept) : AssemblyShare());
     double* values = pattern.lower.valuePtr();
     for (size_t t = 0; t < mesh.tets.size(); ++t) {
       const bool touches = std::any_of(mesh.tets[t].begin(), mesh.tets[t].end(),
