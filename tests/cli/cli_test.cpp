@@ -1031,6 +1031,34 @@ TEST_F(Cli, CausticCheckTracesAFannedBottomLikeAGriddedOne) {
   }
 }
 
+// caustic_check is the run's independent path: it includes the standard
+// library, OpenCV, oneTBB and its own header, never one of Spec2Fab's (its
+// CMake target has no Spec2Fab include directory; this also catches a
+// relative path).
+TEST_F(Cli, CausticCheckIncludesNothingOfSpec2Fab) {
+  const fs::path folder = kDatasets.parent_path() / "tools" / "caustic_check";
+  int sources = 0;
+  for (const auto& entry : fs::directory_iterator(folder)) {
+    const std::string extension = entry.path().extension().string();
+    if (extension != ".h" && extension != ".cpp") continue;
+    ++sources;
+    std::ifstream in(entry.path());
+    for (std::string line; std::getline(in, line);) {
+      const size_t first = line.find_first_not_of(" \t");
+      if (first == std::string::npos || line.compare(first, 8, "#include") != 0) continue;
+      const size_t open = line.find_first_of("<\"", first);
+      const size_t close = open == std::string::npos ? open : line.find_first_of(">\"", open + 1);
+      ASSERT_NE(close, std::string::npos) << entry.path() << ": " << line;
+      const std::string name = line.substr(open + 1, close - open - 1);
+      const bool standard = line[open] == '<' && name.find('/') == std::string::npos;
+      const bool allowed = standard || name.starts_with("opencv2/") || name.starts_with("tbb/") ||
+                           (line[open] == '"' && name == "caustic_check.h");
+      EXPECT_TRUE(allowed) << entry.path().filename() << ": " << line;
+    }
+  }
+  EXPECT_EQ(sources, 3);  // the library, its header, its command line
+}
+
 // A print turned upside down with a filter on the face the light leaves by
 // (caustics_texture's window): a flat board, mirrored, its left half (x < 30)
 // black. Straight light passes straight through, so the right half is lit
