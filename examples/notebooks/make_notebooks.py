@@ -80,7 +80,7 @@ print({k: round(figures[k], 3) for k in ("initial_ssim", "ssim", "initial_psnr_d
         "## The print, traced independently\n\nThe headline is what the exported `print/surface.stl` casts, traced by `caustic_check`, a tracer that "
         "shares no code with the simulator; it says whether it agrees with the simulated figure and, if not, why.",
         """\
-headline = run.result["headline"]
+headline = run.headline  # result.json's "headline"
 print({k: round(headline[k], 3) for k in ("ssim", "psnr_db", "relative_rmse", "simulated_ssim")})
 print(headline["agreement"])""",
         """\

@@ -68,6 +68,15 @@ class Run:
         self.tree = json.loads((folder / "tree.json").read_text())
 
     @property
+    def headline(self) -> Optional[dict]:
+        """result.json's "headline", where the run has one: for the caustic
+        translators, the exported print/surface.stl traced by caustic_check
+        (a tracer sharing no code with the simulator) -- ssim, psnr_db,
+        relative_rmse -- beside ``simulated_ssim`` and ``agreement`` (within
+        0.02 SSIM, or why not). None for the other translators."""
+        return self.result.get("headline")
+
+    @property
     def timing(self) -> dict:
         """timing.json: wall times and threads (not part of the result, which
         is byte-identical whatever the machine)."""
@@ -94,7 +103,8 @@ class Run:
         return path
 
     def __repr__(self) -> str:
-        return f"Run({str(self.folder)!r}, translator={self.result.get('translator')!r})"
+        traced = f", print traced: SSIM {self.headline['ssim']:.3f}" if self.headline else ""
+        return f"Run({str(self.folder)!r}, translator={self.result.get('translator')!r}{traced})"
 
 
 def _origin(experiment: Experiment, origin: Optional[Union[str, os.PathLike]]) -> Optional[str]:
