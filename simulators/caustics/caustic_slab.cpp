@@ -141,6 +141,148 @@ Mesh caustic_slab_mesh(const CausticSetup& setup, const HeightSurface& surface,
   return mesh;
 }
 
+Mesh adaptive_caustic_slab_mesh(const CausticSetup& setup, const HeightSurface& surface,
+                                const Eigen::Vector3d& origin_mm, int max_level, std::vector<int>* levels) {
+  if (surface.height_axis() != 2) throw InputError("caustics: the slab's surface must give heights along w");
+  if (max_level < 0 || max_level > 6) throw std::logic_error("adaptive_caustic_slab_mesh: max_level 0 to 6");
+  const int cells_x = setup.vertices_x - 1, cells_y = setup.vertices_y - 1;
+  const double cell_w = setup.width_mm / cells_x, cell_d = setup.depth_mm / cells_y;
+  const Eigen::Vector3d offset = slab_offset(setup, origin_mm);
+  // Heights above the bottom in the tracer's frame (footprint centred on the origin).
+  const auto height = [&](double x, double y) { return surface.surface_height(x + offset.x(), y + offset.y()) - origin_mm.z(); };
+
+  // Where the smooth surface sends the light of each grid vertex (NaN: it
+  // does not get through).
+  const double eta = setup.refractive_index, step = 0.25 * std::min(cell_w, cell_d);
+  std::vector<Eigen::Vector2d> landing(static_cast<size_t>(setup.vertices_x) * static_cast<size_t>(setup.vertices_y));
+  for (int j = 0; j < setup.vertices_y; ++j)
+    for (int i = 0; i < setup.vertices_x; ++i) {
+      const Eigen::Vector2d xy = slab_vertex_xy(setup, i, j);
+      const double h = height(xy.x(), xy.y());
+      const double hx = (height(xy.x() + step, xy.y()) - height(xy.x() - step, xy.y())) / (2 * step);
+      const double hy = (height(xy.x(), xy.y() + step) - height(xy.x(), xy.y() - step)) / (2 * step);
+      const Eigen::Vector3d p(xy.x(), xy.y(), h), normal = Eigen::Vector3d(-hx, -hy, 1).normalized();
+      SlabPassage<double> pass;
+      Eigen::Vector2d& to = landing[static_cast<size_t>(j) * static_cast<size_t>(setup.vertices_x) + static_cast<size_t>(i)];
+      to = pass_through_slab(light_towards(setup, p), normal, eta, pass)
+               ? slab_landing(p, pass, -setup.receiver_distance_mm)
+               : Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
+    }
+  // Each cell's level: facets small enough that their copies on the
+  // receiver lie half a pixel apart or closer, the copies' spacing being a
+  // facet's width times the light's linear spread there (the root of the
+  // landing quad's area over the cell's). On the ring at 240² the dark
+  // ground spreads the light 2×, the ring gathers it to 0.45×; a quarter of
+  // a pixel gave 0.916 traced in 131 MB, a half 0.904 in 69 MB, a whole
+  // 0.785 in 31 MB (benchmarks/RESULTS.md).
+  const double pixel = std::min(setup.receiver_width_mm / setup.image_width, setup.receiver_depth_mm / setup.image_height);
+  std::vector<int> level(static_cast<size_t>(cells_x) * static_cast<size_t>(cells_y));
+  const auto cell = [&](int i, int j) -> int& { return level[static_cast<size_t>(j) * static_cast<size_t>(cells_x) + static_cast<size_t>(i)]; };
+  for (int j = 0; j < cells_y; ++j)
+    for (int i = 0; i < cells_x; ++i) {
+      const auto at = [&](int a, int b) {
+        return landing[static_cast<size_t>(j + b) * static_cast<size_t>(setup.vertices_x) + static_cast<size_t>(i + a)];
+      };
+      const Eigen::Vector2d q[4] = {at(0, 0), at(1, 0), at(1, 1), at(0, 1)};
+      double area = 0;
+      for (int k = 0; k < 4; ++k) area += q[k].x() * q[(k + 1) % 4].y() - q[(k + 1) % 4].x() * q[k].y();
+      const double spread = std::abs(0.5 * area) / (cell_w * cell_d);
+      const double need = std::sqrt(spread) * std::max(cell_w, cell_d) / (0.5 * pixel);
+      cell(i, j) = std::isfinite(need) ? std::clamp(static_cast<int>(std::ceil(std::log2(std::max(need, 1.0)))), 0, max_level)
+                                       : max_level;
+    }
+  // Neighbours at most one level apart: raise the coarser until they are.
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (int j = 0; j < cells_y; ++j)
+      for (int i = 0; i < cells_x; ++i)
+        for (const auto& [di, dj] : {std::pair{1, 0}, std::pair{-1, 0}, std::pair{0, 1}, std::pair{0, -1}}) {
+          if (i + di < 0 || j + dj < 0 || i + di >= cells_x || j + dj >= cells_y) continue;
+          if (const int wanted = cell(i + di, j + dj) - 1; cell(i, j) < wanted) {
+            cell(i, j) = wanted;
+            changed = true;
+          }
+        }
+  }
+
+  // Vertices on a lattice of half the finest quad (centres included), each
+  // made once.
+  const long long per_cell = 2LL << max_level;
+  const long long lattice_x = cells_x * per_cell, lattice_y = cells_y * per_cell;
+  Mesh mesh;
+  std::unordered_map<long long, int> index;
+  const auto vertex = [&](long long a, long long b) {
+    const auto [at, added] = index.try_emplace(a * (lattice_y + 1) + b, static_cast<int>(mesh.vertices.size()));
+    if (added) {
+      const double x = setup.width_mm * (static_cast<double>(a) / static_cast<double>(lattice_x) - 0.5);
+      const double y = setup.depth_mm * (static_cast<double>(b) / static_cast<double>(lattice_y) - 0.5);
+      mesh.vertices.emplace_back(x, y, height(x, y));
+    }
+    return at->second;
+  };
+  const auto level_at = [&](int i, int j) { return i < 0 || j < 0 || i >= cells_x || j >= cells_y ? -1 : cell(i, j); };
+  for (int j = 0; j < cells_y; ++j)
+    for (int i = 0; i < cells_x; ++i) {
+      const int l = cell(i, j);
+      const long long side = per_cell >> l;  // a quad's side in lattice steps
+      const int quads = 1 << l;
+      // A finer neighbour puts a vertex in the middle of each quad edge it shares.
+      const bool finer[4] = {level_at(i, j - 1) > l, level_at(i + 1, j) > l, level_at(i, j + 1) > l, level_at(i - 1, j) > l};
+      for (int b = 0; b < quads; ++b)
+        for (int a = 0; a < quads; ++a) {
+          const long long a0 = i * per_cell + a * side, b0 = j * per_cell + b * side;
+          const bool split[4] = {b == 0 && finer[0], a == quads - 1 && finer[1], b == quads - 1 && finer[2],
+                                 a == 0 && finer[3]};
+          const int c00 = vertex(a0, b0), c10 = vertex(a0 + side, b0), c11 = vertex(a0 + side, b0 + side),
+                    c01 = vertex(a0, b0 + side);
+          if (!split[0] && !split[1] && !split[2] && !split[3]) {
+            mesh.triangles.emplace_back(c00, c10, c11);  // as the grid splits a quad
+            mesh.triangles.emplace_back(c00, c11, c01);
+            continue;
+          }
+          // Counter-clockwise round the quad from (a0, b0), with the midpoints.
+          std::vector<int> loop{c00};
+          if (split[0]) loop.push_back(vertex(a0 + side / 2, b0));
+          loop.push_back(c10);
+          if (split[1]) loop.push_back(vertex(a0 + side, b0 + side / 2));
+          loop.push_back(c11);
+          if (split[2]) loop.push_back(vertex(a0 + side / 2, b0 + side));
+          loop.push_back(c01);
+          if (split[3]) loop.push_back(vertex(a0, b0 + side / 2));
+          const int centre = vertex(a0 + side / 2, b0 + side / 2);
+          for (size_t k = 0; k < loop.size(); ++k) mesh.triangles.emplace_back(centre, loop[k], loop[(k + 1) % loop.size()]);
+        }
+    }
+  for (const Vec3& v : mesh.vertices)
+    if (!(v.z() > 0)) throw InputError("caustics: the slab's top surface must stay above its bottom (heights > 0 mm)");
+
+  // The rim, counter-clockwise seen from above: the top's boundary vertices in order.
+  std::vector<int> rim;
+  const auto add_rim = [&](long long a, long long b) {
+    if (const auto at = index.find(a * (lattice_y + 1) + b); at != index.end()) rim.push_back(at->second);
+  };
+  for (long long a = 0; a < lattice_x; ++a) add_rim(a, 0);
+  for (long long b = 0; b < lattice_y; ++b) add_rim(lattice_x, b);
+  for (long long a = lattice_x; a > 0; --a) add_rim(a, lattice_y);
+  for (long long b = lattice_y; b > 0; --b) add_rim(0, b);
+  const int first_low = static_cast<int>(mesh.vertices.size());
+  for (int v : rim) mesh.vertices.emplace_back(mesh.vertices[static_cast<size_t>(v)].x(), mesh.vertices[static_cast<size_t>(v)].y(), 0);
+  const int centre = static_cast<int>(mesh.vertices.size());
+  mesh.vertices.emplace_back(0, 0, 0);
+  const int rim_count = static_cast<int>(rim.size());
+  for (int k = 0; k < rim_count; ++k) {
+    const int next = (k + 1) % rim_count;
+    const int a = rim[static_cast<size_t>(k)], b = rim[static_cast<size_t>(next)];
+    const int a_low = first_low + k, b_low = first_low + next;
+    mesh.triangles.emplace_back(a, a_low, b_low);
+    mesh.triangles.emplace_back(a, b_low, b);
+    mesh.triangles.emplace_back(centre, b_low, a_low);
+  }
+  for (Vec3& v : mesh.vertices) v += offset;
+  if (levels) *levels = std::move(level);
+  return mesh;
+}
+
 namespace {
 
 /// Collects unshared triangles, each turned to face `outward`.

@@ -130,6 +130,21 @@ std::vector<double> fit_slab_surface(const CausticSetup& setup, const Eigen::Vec
 /// the subtree's coordinates: what print/surface.stl holds.
 Mesh caustic_slab_mesh(const CausticSetup& setup, const HeightSurface& surface, const Eigen::Vector3d& origin_mm);
 
+/// The same slab with its top meshed finer where the light spreads: each
+/// cell of the setup's vertex grid is split into 2^L × 2^L quads, L from 0
+/// to `max_level`, growing with how much wider the cell's light lands on the
+/// receiver than the cell itself (the smooth surface's refraction at its
+/// corners) over the pixel: a flat facet casts a sharp copy of itself, and
+/// where the light spreads those copies leave a moiré unless they are small.
+/// Neighbouring cells differ by at most one level, and a quad next to a
+/// finer cell is fanned from its centre through the finer cell's vertices
+/// on their shared edge, so that the top stays watertight (no vertex on
+/// another triangle's edge). Walls and a fanned bottom close it as
+/// caustic_slab_mesh does. `levels`, if given, gets each cell's level (row
+/// by row from the lowest y).
+Mesh adaptive_caustic_slab_mesh(const CausticSetup& setup, const HeightSurface& surface,
+                                const Eigen::Vector3d& origin_mm, int max_level, std::vector<int>* levels = nullptr);
+
 /// A slab whose top is nx × ny planar facets over the setup's footprint
 /// (tracer frame: centred on the origin, flat bottom at z = 0), closed by
 /// vertical walls wherever neighbouring facets meet at different heights and

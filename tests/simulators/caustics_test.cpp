@@ -648,5 +648,51 @@ TEST_F(CausticSimulatorTest, ExportedSlabStlCastsTheSimulatedImage) {
   EXPECT_GT(*std::max_element(simulated.pixels.begin(), simulated.pixels.end()), 2.0);
 }
 
+// The adaptive print mesh: watertight (each edge once each way), every top
+// vertex on the surface, neighbouring cells at most one level apart, finer
+// in places; with no levels, the grid's triangles and volume.
+TEST_F(CausticSimulatorTest, AdaptiveSlabIsWatertightOnTheSurfaceAndFinerWhereTheLightSpreads) {
+  const auto spline = node(R"({"type": "bspline", "control": [5, 5], "domain": [10, 20, 40, 50],
+      "heights_mm": [3.0, 3.2, 3.1, 3.3, 3.0, 3.1, 3.6, 3.4, 3.5, 3.2, 3.2, 3.4, 4.0, 3.3, 3.1,
+                     3.0, 3.5, 3.3, 3.7, 3.2, 3.1, 3.2, 3.0, 3.3, 3.1],
+      "below": {"type": "layered", "material": "VeroClear"}, "above": {"type": "layered", "material": "void"}})");
+  const CausticSlabConfig config = CausticSlabConfig::read(
+      Properties::parse(R"({"size_mm": [30, 30], "origin_mm": [10, 20, 1], "thickness_mm": 6, "vertices": [21, 21],
+                            "distance_mm": 200, "receiver_mm": [36, 36], "image": [96, 96]})", "options.json"),
+      default_limits());
+  const HeightSurface& surface = *spline->height_surface();
+  const Mesh grid = caustic_slab_mesh(config.setup, surface, config.origin_mm);
+  std::vector<int> levels;
+  const Mesh flat = adaptive_caustic_slab_mesh(config.setup, surface, config.origin_mm, 0, &levels);
+  EXPECT_EQ(flat.triangles.size(), grid.triangles.size());
+  EXPECT_NEAR(flat.signed_volume(), grid.signed_volume(), 1e-9 * grid.signed_volume());
+
+  const Mesh mesh = adaptive_caustic_slab_mesh(config.setup, surface, config.origin_mm, 2, &levels);
+  std::map<std::pair<int, int>, int> edges;
+  for (const auto& t : mesh.triangles)
+    for (int k = 0; k < 3; ++k) ++edges[{t[k], t[(k + 1) % 3]}];
+  for (const auto& [edge, count] : edges) {
+    ASSERT_EQ(count, 1) << edge.first << " " << edge.second;
+    ASSERT_EQ(edges.count({edge.second, edge.first}), 1u) << "an open edge " << edge.first << " " << edge.second;
+  }
+  for (const Vec3& v : mesh.vertices) {
+    if (v.z() > 1 + 1e-9) {
+      EXPECT_NEAR(v.z(), surface.surface_height(v.x(), v.y()), 1e-12);
+    }
+  }
+  EXPECT_NEAR(mesh.signed_volume(), grid.signed_volume(), 2e-3 * grid.signed_volume());
+  ASSERT_EQ(levels.size(), 20u * 20u);
+  const auto level = [&](int i, int j) { return levels[static_cast<size_t>(j * 20 + i)]; };
+  for (int j = 0; j < 20; ++j)
+    for (int i = 0; i + 1 < 20; ++i) {
+      EXPECT_LE(std::abs(level(i, j) - level(i + 1, j)), 1);
+      EXPECT_LE(std::abs(level(j, i) - level(j, i + 1)), 1);
+    }
+  // Refined somewhere, not everywhere.
+  const auto [lowest, highest] = std::minmax_element(levels.begin(), levels.end());
+  EXPECT_LT(*lowest, *highest);
+  EXPECT_GT(mesh.triangles.size(), grid.triangles.size());
+}
+
 }  // namespace
 }  // namespace spec2fab

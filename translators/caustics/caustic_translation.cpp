@@ -240,8 +240,11 @@ const char* const kSurfaceStl = "print/surface.stl";
 }  // namespace
 
 PrintSurface caustic_print_surface(const CausticSlabConfig& slab, std::array<int, 2> print_vertices,
-                                   const HeightSurface& surface, const std::function<void(Mesh&)>& to_print) {
-  Mesh mesh = caustic_slab_mesh(print_setup(slab, print_vertices), surface, slab.origin_mm);
+                                   const HeightSurface& surface, const std::function<void(Mesh&)>& to_print,
+                                   int refinement_levels) {
+  Mesh mesh = refinement_levels > 0
+                  ? adaptive_caustic_slab_mesh(print_setup(slab, print_vertices), surface, slab.origin_mm, refinement_levels)
+                  : caustic_slab_mesh(print_setup(slab, print_vertices), surface, slab.origin_mm);
   if (to_print) to_print(mesh);
   return {"surface", std::move(mesh)};
 }

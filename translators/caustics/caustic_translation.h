@@ -251,6 +251,7 @@ struct CausticSurfaceSettings {
   std::array<int, 2> control{60, 60};
   int vertices_per_span = 3;
   int print_vertices_per_span = 0;  ///< 0: twice vertices_per_span
+  int print_refinement_levels = 0;
   double max_slope = 1;
 
   template <class Declare, class Self>
@@ -265,6 +266,10 @@ struct CausticSurfaceSettings {
              "print/surface.stl's vertices per control span: each flat facet casts a copy of itself, so the "
              "file's facets should be well below a pixel of the image",
              Default{"2 × vertices_per_span"});
+    d.number(o.print_refinement_levels, "print_refinement_levels", Range::closed(0, 3),
+             "print/surface.stl's cells split in halves up to this many times where the light spreads on the "
+             "receiver (adaptive_caustic_slab_mesh): fine facets where a coarse one's copy would show, coarse "
+             "ones where the light gathers; 0: the uniform grid");
   }
   bool check(std::string* why) const {
     if (static_cast<long long>(control[0]) * control[1] <= 1'000'000) return true;
@@ -298,10 +303,13 @@ struct CausticSurfaceSettings {
 /// surface meshed on `print_vertices` — for printers that take a surface (the
 /// per-material STLs come from print voxels, whose 27 µm terraces would
 /// scatter the light). `to_print` (an involution, or empty for none) maps
-/// the subtree's frame to the print's. The "stl" print writer writes it
-/// beside the materials' surfaces, under the same switch.
+/// the subtree's frame to the print's. With `refinement_levels`, its cells
+/// are split where the light spreads (adaptive_caustic_slab_mesh). The
+/// "stl" print writer writes it beside the materials' surfaces, under the
+/// same switch.
 PrintSurface caustic_print_surface(const CausticSlabConfig& slab, std::array<int, 2> print_vertices,
-                                   const HeightSurface& surface, const std::function<void(Mesh&)>& to_print);
+                                   const HeightSurface& surface, const std::function<void(Mesh&)>& to_print,
+                                   int refinement_levels = 0);
 
 /// After fabrication wrote `printed` (caustic_print_surface's) to
 /// print/surface.stl: the file read back and traced with rays (8 per pixel

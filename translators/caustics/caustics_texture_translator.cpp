@@ -304,7 +304,7 @@ class CausticsTextureTranslator final : public TuningTranslator {
     shadow_field_ = shadow;
     if (outputs_.fabrication.writes("stl"))
       print_surfaces_ = {caustic_print_surface(slab_, surface_.print_vertices(), *caustic_surface_->height_surface(),
-                                               mirror())};
+                                               mirror(), surface_.print_refinement_levels)};
   }
 
   /// The subtree's frame is the print's mirrored about the cut: z = cut − w.

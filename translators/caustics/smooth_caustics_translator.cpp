@@ -202,7 +202,8 @@ class SmoothCausticsTranslator final : public TuningTranslator {
       previews.push_back(file);
     if (!compared_runs_.empty()) previews.push_back("preview/optimizer_comparison.png");
     if (outputs_.fabrication.writes("stl"))
-      print_surfaces_ = {caustic_print_surface(slab_, surface_.print_vertices(), surface(), {})};
+      print_surfaces_ = {caustic_print_surface(slab_, surface_.print_vertices(), surface(), {},
+                                               surface_.print_refinement_levels)};
   }
 
   /// print/surface.stl as written, traced: by the simulator's tracer, and
@@ -216,7 +217,8 @@ class SmoothCausticsTranslator final : public TuningTranslator {
       PrintHeadline headline = trace_print_independently(slab_, settings_.image_file, settings_.print_check_rays,
                                                          report_.image.achieved.ssim, context.folder,
                                                          PrintFrame{context.timing});
-      if (std::abs(headline.ssim_difference) > kHeadlineAgreement)
+      // (The facet estimator needs the file's top to be the uniform grid.)
+      if (std::abs(headline.ssim_difference) > kHeadlineAgreement && surface_.print_refinement_levels == 0)
         headline.printed_facets_ssim = printed_facets_errors(slab_, surface_.print_vertices(), surface(), target_).ssim;
       explain_headline(headline, surface_.print_vertices(), surface_.control);
       context.report.files.previews.push_back(headline.preview);
