@@ -42,6 +42,7 @@ CausticSlabConfig CausticSlabConfig::from(const Options& o, const Limits& limits
   s.vertices_x = o.vertices[0];
   s.vertices_y = o.vertices[1];
   s.refractive_index = o.refractive_index;
+  s.mirror = o.mirror;
   s.light_direction = Eigen::Vector3d(o.light[0], o.light[1], o.light[2]);
   s.point_light = !std::isnan(o.light_position_mm[0]);
   if (s.point_light) s.light_position_mm = Eigen::Vector3d(o.light_position_mm[0], o.light_position_mm[1], o.light_position_mm[2]);
@@ -153,7 +154,7 @@ Mesh adaptive_caustic_slab_mesh(const CausticSetup& setup, const HeightSurface& 
 
   // Where the smooth surface sends the light of each grid vertex (NaN: it
   // does not get through).
-  const double eta = setup.refractive_index, step = 0.25 * std::min(cell_w, cell_d);
+  const double step = 0.25 * std::min(cell_w, cell_d);
   std::vector<Eigen::Vector2d> landing(static_cast<size_t>(setup.vertices_x) * static_cast<size_t>(setup.vertices_y));
   for (int j = 0; j < setup.vertices_y; ++j)
     for (int i = 0; i < setup.vertices_x; ++i) {
@@ -164,9 +165,8 @@ Mesh adaptive_caustic_slab_mesh(const CausticSetup& setup, const HeightSurface& 
       const Eigen::Vector3d p(xy.x(), xy.y(), h), normal = Eigen::Vector3d(-hx, -hy, 1).normalized();
       SlabPassage<double> pass;
       Eigen::Vector2d& to = landing[static_cast<size_t>(j) * static_cast<size_t>(setup.vertices_x) + static_cast<size_t>(i)];
-      to = pass_through_slab(light_towards(setup, p), normal, eta, pass)
-               ? slab_landing(p, pass, -setup.receiver_distance_mm)
-               : Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
+      if (!top_landing(setup, light_towards(setup, p), normal, p, pass, to))
+        to = Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
     }
   // Each cell's level: facets small enough that their copies on the
   // receiver lie half a pixel apart or closer, the copies' spacing being a

@@ -45,7 +45,7 @@ struct CausticSlabConfig {
     std::array<double, 2> receiver_centre_mm{0, 0};
     std::array<int, 2> image{240, 240};
     std::array<int, 2> rays{0, 0};  ///< 0: twice the image
-    bool jitter = true, fresnel = false, image_from_behind = false;
+    bool jitter = true, fresnel = false, image_from_behind = false, mirror = false;
     std::string aperture = "rectangle";
     std::string estimator = "rays";
     double seed = 1;
@@ -57,12 +57,16 @@ struct CausticSlabConfig {
       d.number(o.thickness_mm, "thickness_mm", Range::closed(1e-3, 1e4), "highest the top may be (search range along w)");
       d.number(o.vertices, "vertices", Range::at_least(2), "top-surface mesh vertices (nx, ny), corners included");
       d.number(o.refractive_index, "refractive_index", Range::closed(1, 4), "of the slab's material");
+      d.value(o.mirror, "mirror",
+              "the slab's faces reflect (a print coated as a mirror): the receiver lies distance_mm above the slab's "
+              "bottom, facing down; tilt `light` so that the beam misses it");
       d.number(o.light, "light", Range::any(), "direction (x, y, z) the light travels, z < 0");
       d.number(o.light_position_mm, "light_position_mm", Range::any(),
                "a point light instead, at (x, y) from the footprint's centre and z above the bottom, above the top; "
                "its intensity gives unit irradiance across the beam at distance z",
                Default{"none: collimated light along `light`"});
-      d.number(o.distance_mm, "distance_mm", Range::closed(1e-3, 1e6), "receiver plane below the slab's bottom");
+      d.number(o.distance_mm, "distance_mm", Range::closed(1e-3, 1e6),
+               "receiver plane below the slab's bottom (a mirror's: above it)");
       d.number(o.receiver_mm, "receiver_mm", Range::above(0), "receiver extent (x, y) imaged", Default{"size_mm"});
       d.number(o.receiver_centre_mm, "receiver_centre_mm", Range::any(), "receiver centre below the slab's centre");
       d.number(o.image, "image", Range::at_least(1), "pixels (width, height); row 0 at +y");
@@ -70,7 +74,8 @@ struct CausticSlabConfig {
       d.value(o.jitter, "jitter", "jitter samples within their strata (hashed, deterministic)");
       d.value(o.fresnel, "fresnel", "weight transmissions by unpolarised Fresnel");
       d.value(o.image_from_behind, "image_from_behind",
-              "the image as seen from the receiver's far side, looking back at the slab: columns run towards -x");
+              "the image as seen from the receiver's far side, looking back at the slab: columns run towards -x "
+              "(a mirror's receiver, above, is seen from below unless this is set: columns towards -x)");
       d.choice(o.aperture, "aperture", {"rectangle", "disc"},
                "where light comes through: the whole footprint, or the disc (ellipse) inscribed in it");
       d.choice(o.estimator, "estimator", {"rays", "facets", "smooth"},

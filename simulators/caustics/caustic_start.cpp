@@ -31,6 +31,13 @@ double seconds_since(Clock::time_point start) {
 constexpr double kTransportFloor = 0.02;  ///< least mass of a pixel, in units of the goal's mean
 
 Vec2 slope_towards(const CausticSetup& s, const Vec2& xy, double h, const Vec2& target) {
+  const Vec3 light = light_towards(s, Vec3(xy.x(), xy.y(), h));
+  if (s.mirror) {
+    // Reflected straight to the target above: the normal halves the turn (n ∝ d - l).
+    const Vec3 out = Vec3(target.x() - xy.x(), target.y() - xy.y(), s.receiver_distance_mm - h).normalized();
+    const Vec3 normal = out - light;
+    return -normal.head<2>() / normal.z();
+  }
   const double eta = s.refractive_index;
   Vec3 inside(0, 0, -1);
   for (int round = 0; round < 4; ++round) {
@@ -39,7 +46,7 @@ Vec2 slope_towards(const CausticSetup& s, const Vec2& xy, double h, const Vec2& 
     const Vec2 tangential = out.head<2>() / eta;
     inside = Vec3(tangential.x(), tangential.y(), -std::sqrt(std::max(0.0, 1 - tangential.squaredNorm())));
   }
-  const Vec3 normal = light_towards(s, Vec3(xy.x(), xy.y(), h)) - eta * inside;  // points up for η > 1
+  const Vec3 normal = light - eta * inside;  // points up for η > 1
   return -normal.head<2>() / normal.z();
 }
 
@@ -98,7 +105,8 @@ std::vector<Vec2> aperture_outline(const CausticSetup& s) {
 }
 
 /// The goal's pixels as masses to transport to, on the receiver as it lies
-/// (columns towards +x: an image seen from behind is mirrored back first).
+/// (columns towards +x: an image whose columns run towards −x is mirrored
+/// back first).
 /// Every pixel gets at least a trace of light: where black regions get
 /// none, the transport map jumps across them, which a smooth surface can
 /// only follow with streaks of light through the black; the refinement then
@@ -113,7 +121,7 @@ std::vector<double> transport_masses(const CausticSetup& s, std::span<const doub
   for (size_t k = 0; k < goal.size(); ++k) {
     if (!std::isfinite(goal[k]) || goal[k] < 0) throw InputError("caustics: the goal image has a negative or undefined pixel");
     const size_t row = k / static_cast<size_t>(width), col = k % static_cast<size_t>(width);
-    const size_t at = s.image_from_behind ? row * static_cast<size_t>(width) + static_cast<size_t>(width) - 1 - col : k;
+    const size_t at = columns_towards_minus_x(s) ? row * static_cast<size_t>(width) + static_cast<size_t>(width) - 1 - col : k;
     masses[at] = std::max(goal[k], floor);
   }
   return masses;

@@ -3,7 +3,8 @@
 /// et al. 2014): the uniform light through the aperture is transported to
 /// the goal's irradiance (optimal_transport.h), each square of the top's
 /// vertex grid is tilted by Snell's law so that its light heads for where
-/// the transport sends it (through the top, the slab and the flat bottom),
+/// the transport sends it (through the top, the slab and the flat bottom;
+/// for a mirror, by the law of reflection, straight up to the receiver),
 /// and the tilts are integrated into heights by least squares. A point
 /// light's rays are tilted from their own directions, but the transport
 /// takes the light through the aperture as even: its falloff towards the

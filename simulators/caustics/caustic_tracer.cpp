@@ -45,7 +45,9 @@ void CausticSetup::validate() const {
     fail("the light must travel downwards (light_direction z < 0), towards the receiver");
   if (point_light && (!light_position_mm.allFinite() || !(light_position_mm.z() > 0)))
     fail("the point light must lie above the slab's bottom (light position z > 0)");
-  if (!(receiver_distance_mm > 0)) fail("receiver distance must be positive (below the slab)");
+  if (!(receiver_distance_mm > 0))
+    fail(mirror ? "receiver distance must be positive (above the slab's bottom)"
+                : "receiver distance must be positive (below the slab)");
   if (!(receiver_width_mm > 0) || !(receiver_depth_mm > 0)) fail("receiver size must be positive");
   if (!receiver_centre_mm.allFinite()) fail("receiver centre must be finite");
   if (image_width < 1 || image_height < 1 ||
@@ -54,6 +56,9 @@ void CausticSetup::validate() const {
   if (rays_x < 1 || rays_y < 1 || static_cast<long long>(rays_x) * rays_y > 256'000'000)
     fail("rays must be 1 to 256 million");
   if (max_segments < 2 || max_segments > 1000) fail("max_segments must be in [2, 1000]");
+  if (mirror && fresnel) fail("a mirror reflects all the light: Fresnel weights are for a lens");
+  if (mirror && (!exit_transmittance.empty() || exit_cells[0] != 0 || exit_cells[1] != 0))
+    fail("a mirror has no exit face to filter");
   if (!exit_transmittance.empty() || exit_cells[0] != 0 || exit_cells[1] != 0) {
     if (exit_cells[0] < 1 || exit_cells[1] < 1 ||
         exit_transmittance.size() != static_cast<size_t>(exit_cells[0]) * static_cast<size_t>(exit_cells[1]))
@@ -123,12 +128,20 @@ CausticTracer::CausticTracer(const CausticSetup& setup, std::vector<Eigen::Vecto
                              std::vector<Eigen::Vector3i> triangles)
     : setup_(setup), vertices_(std::move(vertices)), triangles_(std::move(triangles)) {
   setup_.validate();
-  if (setup_.estimator != CausticSetup::Estimator::rays)
-    throw InputError("caustics: a given mesh is traced with rays only (the other estimators need the height field)");
+  if (setup_.estimator == CausticSetup::Estimator::smooth)
+    throw InputError("caustics: a given mesh is traced with rays or its facets (the smooth estimator needs the height field)");
   setup_.light_direction.normalize();
   for (const Eigen::Vector3i& t : triangles_)
     if ((t.array() < 0).any() || (t.array() >= static_cast<int>(vertices_.size())).any())
       throw InputError("caustics: a mesh triangle names a vertex that does not exist");
+  // The top's facets first, as the grid's are: those facing up, which the
+  // facet estimator sends to the receiver (walls face sideways, the bottom down).
+  const auto faces_up = [&](const Eigen::Vector3i& t) {
+    const Vec3& a = vertices_[static_cast<size_t>(t[0])];
+    return (vertices_[static_cast<size_t>(t[1])] - a).cross(vertices_[static_cast<size_t>(t[2])] - a).z() > 0;
+  };
+  if (setup_.estimator == CausticSetup::Estimator::facets)
+    top_triangles_ = static_cast<int>(std::stable_partition(triangles_.begin(), triangles_.end(), faces_up) - triangles_.begin());
   build_scene();
 }
 
@@ -218,6 +231,28 @@ bool CausticTracer::follow(bool hit, unsigned triangle, double t, int segment, V
   const CausticSetup& s = setup_;
   const double epsilon = 1e-5 * (s.width_mm + s.depth_mm + top_z_);
   const double eta = s.refractive_index;
+  if (s.mirror) {
+    if (!hit) {
+      // Upwards to the receiver above, having met the top once and nothing
+      // else: the path pull_back differentiates.
+      if (d.z() > 0 && segment > 0) {
+        const double to_receiver = (s.receiver_distance_mm - o.z()) / d.z();
+        result.x = o.x() + to_receiver * d.x();
+        result.y = o.y() + to_receiver * d.y();
+        result.fate = kReceived;
+        if (segment != 1) result.entry = -1;
+      } else {
+        result.fate = kReturned;  // down past the slab, or never met it
+      }
+      return false;
+    }
+    result.entry = segment == 0 && static_cast<int>(triangle) < top_triangles_ ? static_cast<int>(triangle) : -1;
+    o += t * d;
+    const Vec3& outward = normals_[triangle];
+    d -= 2 * d.dot(outward) * outward;  // every face reflects, whichever side it is met from
+    d.normalize();
+    return true;
+  }
   if (!hit) {
     // In air with nothing ahead (a miss from inside the slab is a crack at
     // float precision; it leaves the same way).
@@ -365,6 +400,9 @@ CausticFlux CausticTracer::render(std::span<double> irradiance) {
   if (setup_.point_light && !(setup_.light_position_mm.z() > start_z_))
     throw InputError("caustics: the point light must lie above the slab's top (light at " +
                      std::to_string(setup_.light_position_mm.z()) + " mm, top at " + std::to_string(top_z_) + " mm)");
+  if (setup_.mirror && !(setup_.receiver_distance_mm > start_z_))
+    throw InputError("caustics: a mirror's receiver must lie above its top (receiver at " +
+                     std::to_string(setup_.receiver_distance_mm) + " mm, top at " + std::to_string(top_z_) + " mm)");
   return setup_.estimator == CausticSetup::Estimator::rays ? render_rays(irradiance) : render_triangles(irradiance);
 }
 
@@ -416,8 +454,13 @@ Eigen::Vector3d CausticTracer::ray_origin(int ray) const {
   const CausticSetup& s = setup_;
   const auto key = 2ULL * static_cast<unsigned long long>(ray) + (static_cast<unsigned long long>(s.seed) << 40);
   const double jx = s.jitter ? hash_uniform(key) : 0.5, jy = s.jitter ? hash_uniform(key + 1) : 0.5;
-  return {-0.5 * s.width_mm + (ray % s.rays_x + jx) * s.width_mm / s.rays_x,
-          -0.5 * s.depth_mm + (ray / s.rays_x + jy) * s.depth_mm / s.rays_y, start_z_};
+  const Eigen::Vector3d above(-0.5 * s.width_mm + (ray % s.rays_x + jx) * s.width_mm / s.rays_x,
+                              -0.5 * s.depth_mm + (ray / s.rays_x + jy) * s.depth_mm / s.rays_y, start_z_);
+  const Eigen::Vector3d light = s.light_direction.normalized();
+  if (s.point_light || (light.x() == 0 && light.y() == 0)) return above;
+  // Tilted light starts back along its direction: its cross-section at the
+  // highest point is the footprint.
+  return Eigen::Vector3d(above.x(), above.y(), top_z_) + light * ((start_z_ - top_z_) / light.z());
 }
 
 Eigen::Vector2d CausticTracer::pixel_coordinates(const RayResult& ray) const {
@@ -453,8 +496,8 @@ void CausticTracer::pull_back_rays(std::span<const double> d_irradiance, std::sp
         h[k] = variable<3>(v.z(), k);
       }
       const Vec3 origin = ray_origin(static_cast<int>(i));
-      const Eigen::Matrix<HeightJet, 2, 1> uv = receiver_pixel(
-          s, slab_receiver_point(origin, light_towards(s, origin), xy, h, s.refractive_index, -s.receiver_distance_mm));
+      const Eigen::Matrix<HeightJet, 2, 1> uv =
+          receiver_pixel(s, top_receiver_point(s, origin, light_towards(s, origin), xy, h));
       ray_gradients_[i] = d_u * derivatives<3>(uv.x()) + d_v * derivatives<3>(uv.y());
     }
   });

@@ -4,6 +4,8 @@
 /// rectangle centred on the origin — refracting at every surface it crosses
 /// (vector Snell's law, total internal reflection followed, Fresnel losses
 /// optional), and lands on a receiver plane z = -distance below the slab.
+/// Or the slab is a mirror (CausticSetup::mirror): every face reflects, and
+/// the light lands on a receiver plane z = +distance above the bottom.
 /// The output is the irradiance image on the receiver, in units of the
 /// incident irradiance (a flat slab under normal light gives 1 everywhere it
 /// covers).
@@ -28,6 +30,12 @@ struct CausticSetup {
   double width_mm = 50, depth_mm = 50;  ///< slab footprint along x and y, centred on the origin
   int vertices_x = 61, vertices_y = 61; ///< top height-field grid (corners included)
   double refractive_index = 1.5;
+  /// The slab's faces reflect instead (a print coated as a mirror, the law
+  /// of reflection at every face met): the receiver is the plane z =
+  /// +receiver_distance_mm above the bottom, facing down. Light straight
+  /// down would pass through it first; tilt light_direction and centre the
+  /// receiver where the light goes (receiver_centre_mm).
+  bool mirror = false;
   Eigen::Vector3d light_direction{0, 0, -1};  ///< direction the light travels (normalised on use)
   /// A point light (a bare LED) at light_position_mm instead — x, y from the
   /// footprint's centre, z above the bottom, above the top — radiating
@@ -40,7 +48,10 @@ struct CausticSetup {
   Eigen::Vector2d receiver_centre_mm{0, 0};
   int image_width = 240, image_height = 240;
   /// The image as seen from the receiver's far side, looking back at the
-  /// slab: its columns run towards −x (rows still from +y). Where the
+  /// slab (columns_towards_minus_x: for a lens its columns run towards −x,
+  /// rows still from +y; seen from the slab's side, as by default, a
+  /// mirror's receiver above is looked up at, so its columns run towards −x
+  /// unless this is set). Where the
   /// tracer's frame is the print's mirrored (caustics + texture: z = cut − w),
   /// this is the caustic as a viewer facing the wall sees it.
   bool image_from_behind = false;
@@ -166,6 +177,58 @@ Eigen::Matrix<T, 2, 1> slab_landing(const Eigen::Matrix<T, 3, 1>& p, const SlabP
   return (bottom + ((T(receiver_z) - bottom.z()) / pass.out.z()) * pass.out).template head<2>();
 }
 
+/// Light along `light` (unit) reflected by a mirror face of outward unit
+/// normal `normal`: the direction out, and the cosine of incidence (in
+/// `pass.out` and `pass.cos_i`; the rest of `pass` is not used). False when
+/// the light meets the face from behind or is sent downwards.
+template <class T, class Light>
+bool reflect_off_top(const Light& light, const Eigen::Matrix<T, 3, 1>& normal, SlabPassage<T>& pass) {
+  pass.cos_i = -(light.x() * normal.x() + light.y() * normal.y() + light.z() * normal.z());
+  if (!(pass.cos_i > T(0.0))) return false;
+  pass.out = light.template cast<T>() + T(2.0) * pass.cos_i * normal;
+  return pass.out.z() > T(0.0);
+}
+
+/// Where light along `light` (unit) that meets the top at `at`, outward unit
+/// normal `normal` there, lands on the receiver (lateral mm): through the
+/// slab to z = −distance, or off the mirror to z = +distance. False when it
+/// cannot get there (pass_through_slab, reflect_off_top); `pass` gets the
+/// directions and the cosines.
+template <class T, class Light>
+bool top_landing(const CausticSetup& s, const Light& light, const Eigen::Matrix<T, 3, 1>& normal,
+                 const Eigen::Matrix<T, 3, 1>& at, SlabPassage<T>& pass, Eigen::Matrix<T, 2, 1>& landing) {
+  if (s.mirror) {
+    if (!reflect_off_top(light, normal, pass)) return false;
+    landing = (at + ((T(s.receiver_distance_mm) - at.z()) / pass.out.z()) * pass.out).template head<2>();
+    return true;
+  }
+  if (!pass_through_slab(light, normal, s.refractive_index, pass)) return false;
+  landing = slab_landing(at, pass, -s.receiver_distance_mm);
+  return true;
+}
+
+/// Where a ray from `origin` along `direction` (unit) meeting the top
+/// triangle with lateral corners `xy` (counter-clockwise seen from above) and
+/// heights `h` lands on the setup's receiver (top_landing). NaN when it
+/// cannot.
+template <class T>
+Eigen::Matrix<T, 2, 1> top_receiver_point(const CausticSetup& s, const Eigen::Vector3d& origin,
+                                          const Eigen::Vector3d& direction, const Eigen::Vector2d xy[3], const T h[3]) {
+  using std::sqrt;
+  using V = Eigen::Matrix<T, 3, 1>;
+  const V p0(T(xy[0].x()), T(xy[0].y()), h[0]), p1(T(xy[1].x()), T(xy[1].y()), h[1]),
+      p2(T(xy[2].x()), T(xy[2].y()), h[2]);
+  V n = (p1 - p0).cross(p2 - p0);
+  n /= sqrt(n.dot(n));
+  const V o = origin.cast<T>(), d = direction.cast<T>();
+  const V hit = o + (n.dot(p0 - o) / n.dot(d)) * d;
+  SlabPassage<T> pass;
+  Eigen::Matrix<T, 2, 1> landing;
+  if (!top_landing(s, direction, n, hit, pass, landing))
+    return Eigen::Matrix<T, 2, 1>::Constant(T(std::numeric_limits<double>::quiet_NaN()));
+  return landing;
+}
+
 /// Where a ray from `origin` along `direction` (unit) lands on the receiver
 /// plane z = receiver_z after entering the top triangle with lateral corners
 /// `xy` (counter-clockwise seen from above) and heights `h`, and leaving
@@ -188,12 +251,17 @@ Eigen::Matrix<T, 2, 1> slab_receiver_point(const Eigen::Vector3d& origin, const 
   return slab_landing(hit, pass, receiver_z);
 }
 
+/// Whether the image's columns run towards −x: seen from the side of the
+/// receiver the slab is not on (image_from_behind) for a lens, and from the
+/// slab's side, looking up, for a mirror, unless image_from_behind.
+inline bool columns_towards_minus_x(const CausticSetup& s) { return s.image_from_behind != s.mirror; }
+
 /// Pixel coordinates (u right, v down from the image's top edge; pixel
 /// (c, r) covers [c, c+1] × [r, r+1]) of receiver point `xy`.
 template <class T>
 Eigen::Matrix<T, 2, 1> receiver_pixel(const CausticSetup& s, const Eigen::Matrix<T, 2, 1>& xy) {
   const double half = 0.5 * s.receiver_width_mm, top = s.receiver_centre_mm.y() + 0.5 * s.receiver_depth_mm;
-  const T across = s.image_from_behind ? T(s.receiver_centre_mm.x() + half) - xy.x()
+  const T across = columns_towards_minus_x(s) ? T(s.receiver_centre_mm.x() + half) - xy.x()
                                        : xy.x() - T(s.receiver_centre_mm.x() - half);
   return {across * (s.image_width / s.receiver_width_mm), (top - xy.y()) * (s.image_height / s.receiver_depth_mm)};
 }
@@ -204,7 +272,8 @@ class CausticTracer {
   explicit CausticTracer(const CausticSetup& setup);
   /// Traces a given closed, outward-oriented mesh instead (an exported STL,
   /// moved so that the slab's footprint is centred on the origin): no height
-  /// field, so set_heights and pull_back do not apply.
+  /// field, so set_heights and pull_back do not apply, nor the smooth
+  /// estimator; the facet estimator takes the facets facing up as the top.
   CausticTracer(const CausticSetup& setup, std::vector<Eigen::Vector3d> vertices,
                 std::vector<Eigen::Vector3i> triangles);
   ~CausticTracer();
@@ -234,7 +303,8 @@ class CausticTracer {
   /// moves with the heights of the top triangle it entered (its plane and
   /// normal), bilinear splat weights move with the point. Rays that did more
   /// than enter the top and leave by the flat bottom (side walls, total
-  /// internal reflection) are held fixed, as is Fresnel transmittance.
+  /// internal reflection) are held fixed, as is Fresnel transmittance, and
+  /// so is the plane tilted light starts from (tied to the highest vertex).
   void pull_back(std::span<const double> d_irradiance, std::span<double> d_heights);
 
   /// The slab as a closed, outward-oriented triangle mesh (vertices in mm):

@@ -135,14 +135,16 @@ Fate triangle_image(const CausticSetup& s, const Eigen::Vector2d xy[3], const T 
   const double eta = s.refractive_index;
   const V normal = area / sqrt(area.dot(area));
   SlabPassage<T> pass;
-  if (!pass_through_slab(light_towards(s, centre), normal, eta, pass)) return Fate::returned;
+  Eigen::Matrix<T, 2, 1> landed;
+  if (!top_landing(s, light_towards(s, centre), normal, centre, pass, landed)) return Fate::returned;
   Point<T> landing[3];
   V light[3];
   for (int k = 0; k < 3; ++k) {
     light[k] = light_towards(s, p[k]);
     SlabPassage<T> corner;
-    if (s.point_light && !pass_through_slab(light[k], normal, eta, corner)) return Fate::returned;
-    landing[k] = receiver_pixel(s, slab_landing(p[k], s.point_light ? corner : pass, -s.receiver_distance_mm));
+    if (!top_landing(s, s.point_light ? light[k] : light_towards(s, centre), normal, p[k], corner, landed))
+      return Fate::returned;
+    landing[k] = receiver_pixel(s, landed);
   }
 
   bool clipped = false;
@@ -236,9 +238,9 @@ bool vertex_landing(const CausticSetup& s, const Eigen::Vector2d& xy, const T h[
   normal /= sqrt(normal.dot(normal));
   const V at(T(xy.x()), T(xy.y()), h[0]);
   SlabPassage<T> pass;
-  if (!pass_through_slab(light_towards(s, at), normal, s.refractive_index, pass) || !(value_of(pass.cos_i) > 0))
-    return false;
-  landing = receiver_pixel(s, slab_landing(at, pass, -s.receiver_distance_mm));
+  Eigen::Matrix<T, 2, 1> landed;
+  if (!top_landing(s, light_towards(s, at), normal, at, pass, landed) || !(value_of(pass.cos_i) > 0)) return false;
+  landing = receiver_pixel(s, landed);
   return true;
 }
 

@@ -1085,6 +1085,71 @@ TEST_F(Cli, CausticCheckTracesAMirroredBoardThroughItsExitFilter) {
   EXPECT_GT(in_front["relative_rmse"].get<double>(), 1.0) << in_front;
 }
 
+// caustic_check with --reflect: the flat board as a mirror under light 20
+// degrees off vertical casts the even goal exactly on a receiver 100 mm
+// above its bottom, moved by (100 - 8) tan 20 mm (every ray lands in the
+// pixel its stratum maps to); without --reflect the light goes through
+// the board to a receiver below, where the tilt moves it further (108 tan
+// 20 mm, less in the board) than the offset given: an unlit strip.
+TEST_F(Cli, CausticCheckReflectsOffAMirrorPrint) {
+  const fs::path even = dir_ / "even.pgm";
+  {
+    std::ofstream out(even, std::ios::binary);
+    out << "P5 4 4 255\n" << std::string(16, static_cast<char>(200));
+  }
+  const fs::path board = kDatasets / "meshes/board_60x60x8.stl";
+  const double a = 20 * M_PI / 180;
+  const std::string setup = fmt::format("--distance 100 --image 4 4 --light {:.17g} 0 {:.17g} --receiver-offset {:.17g} 0",
+                                        std::sin(a), -std::cos(a), 92 * std::tan(a));
+  const auto mirror = caustic_check(board, even, setup + " --reflect");
+  EXPECT_LT(mirror["relative_rmse"].get<double>(), 1e-6) << mirror;
+  EXPECT_NEAR(mirror["light_off_receiver"].get<double>(), 0.0, 1e-6) << mirror;
+  const auto lens = caustic_check(board, even, setup);
+  EXPECT_GT(lens["relative_rmse"].get<double>(), 0.05) << lens;
+}
+
+// A mirror (goal.surface "mirror"): light 20 degrees off vertical, the
+// receiver 100 mm above; the print casts the ring better than the flat
+// board under caustic_check --reflect, which is the run's headline. Light
+// that would pass through the receiver on its way down is refused.
+TEST_F(Cli, SmoothCausticsMirrorCastsTheGoalOnAReceiverAbove) {
+  SPEC2FAB_SKIP_UNLESS(SPEC2FAB_WITH_NLOPT);
+  const auto body = [&](double degrees) {
+    return R"({"name": "mirror", "translator": "smooth_caustics",
+          "geometry": {"mesh": ")" + (kDatasets / "meshes/board_60x60x8.stl").string() + R"(", "uv": "planar"},
+          "goal": {"image": ")" + (kDatasets / "images/caustic_ring_120.png").string() + R"(",
+                   "surface": "mirror", "light_angle_deg": )" + std::to_string(degrees) + R"(,
+                   "control": [12, 12], "image_size": [48, 48], "rays": [96, 96], "distance_mm": 100},
+          "optimizer": {"type": "nlopt", "algorithm": "LD_LBFGS", "max_evaluations": 15},
+          "output": {"slices": false, "stl": true, "3mf": false, "render": false},
+          "materials": ")" + (kDatasets / "materials/polyjet.json").string() + R"(",
+          "printer": ")" + (dir_ / "clear_printer.json").string() + R"("})";
+  };
+  write_clear_printer(dir_ / "clear_printer.json");
+  const Result refused = run_spec2fab("validate " + experiment("steep", body(10)).string());
+  EXPECT_EQ(refused.code, 2);
+  EXPECT_THAT(single_line(refused.out), HasSubstr("/goal/light_angle_deg: a mirror's receiver 100 mm above"));
+  EXPECT_THAT(single_line(refused.out), HasSubstr("at least 16.7 degrees"));
+  const Result r = run_spec2fab("run -q " + experiment("mirror", body(20)).string() + " --out " + (dir_ / "run").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto result = nlohmann::json::parse(read(dir_ / "run" / "result.json"));
+  const auto& caustics = result["caustics"];
+  EXPECT_EQ(caustics["surface"], "mirror");
+  EXPECT_GT(caustics["ssim"].get<double>(), caustics["initial_ssim"].get<double>() - 1e-9);
+  const double a = 20 * M_PI / 180;
+  const std::string setup =
+      fmt::format("--distance 100 --image 48 48 --reflect --from-behind --light {:.17g} 0 {:.17g} --receiver-offset {:.17g} 0",
+                  std::sin(a), -std::cos(a), 100 * std::tan(a));
+  const fs::path goal = kDatasets / "images/caustic_ring_120.png";
+  const auto printed = caustic_check(dir_ / "run/print/surface.stl", goal, setup);
+  const auto flat = caustic_check(kDatasets / "meshes/board_60x60x8.stl", goal, setup);
+  EXPECT_GT(printed["ssim"].get<double>(), flat["ssim"].get<double>() + 0.1) << printed << flat;
+  const auto& headline = result["headline"];
+  EXPECT_NEAR(headline["ssim"].get<double>(), printed["ssim"].get<double>(), 1e-8) << headline;
+  EXPECT_EQ(headline["simulated_ssim"], caustics["ssim"]);
+  expect_admesh_clean(dir_ / "run/print/surface.stl");
+}
+
 TEST_F(Cli, FacetCausticsRefuseADiscApertureInOneLine) {
   // Every facet takes an equal share of the light: a round stop would starve the corners.
   const std::string body =

@@ -2,8 +2,9 @@
 // known without a simulator — a flat slab passes a collimated beam
 // unchanged (cos θ on the receiver), a round stop passes π r², a
 // plano-convex lens concentrates the beam by 1/(1 - D/f)² before its
-// focus — against the ray estimator on a rippled surface, and their
-// derivatives against finite differences.
+// focus, a concave mirror likewise by the law of reflection — against the
+// ray estimator on a rippled surface, and their derivatives against finite
+// differences.
 
 #include <gtest/gtest.h>
 
@@ -191,12 +192,13 @@ double weighted_sum(const std::vector<double>& image, const std::vector<double>&
 
 TEST(CausticTriangles, DerivativeMatchesFiniteDifferences) {
   for (Estimator estimator : {Estimator::facets, Estimator::smooth})
-  for (int variant = 0; variant < 4; ++variant) {
+  for (int variant = 0; variant < 5; ++variant) {
     SCOPED_TRACE(testing::Message() << name(estimator) << ", "
                                     << (variant == 0   ? "vertical light"
                                         : variant == 1 ? "oblique light"
                                         : variant == 2 ? "disc aperture"
-                                                       : "point light"));
+                                        : variant == 3 ? "point light"
+                                                       : "mirror"));
     CausticSetup s = triangle_setup(estimator);
     s.vertices_x = s.vertices_y = 9;
     s.receiver_width_mm = s.receiver_depth_mm = 22;
@@ -206,6 +208,11 @@ TEST(CausticTriangles, DerivativeMatchesFiniteDifferences) {
     if (variant == 3) {
       s.point_light = true;
       s.light_position_mm = Eigen::Vector3d(3, -2, 25);
+    }
+    if (variant == 4) {
+      s.mirror = true;
+      s.light_direction = Eigen::Vector3d(0.2, -0.1, -1);
+      s.receiver_centre_mm = Eigen::Vector2d(5.4, -2.7);  // where a flat top 3 mm up sends the centre
     }
     CausticTracer tracer(s);
     // No symmetry: an edge landing exactly on a pixel line is a kink (light
@@ -356,7 +363,95 @@ TEST(CausticTriangles, RefusesWhatItDoesNotModel) {
   std::vector<Eigen::Vector3d> vertices;
   std::vector<Eigen::Vector3i> triangles;
   tracer.mesh(vertices, triangles);
-  EXPECT_THROW(CausticTracer(plain, vertices, triangles), InputError);
+  CausticSetup smooth = triangle_setup(Estimator::smooth);
+  EXPECT_THROW(CausticTracer(smooth, vertices, triangles), InputError);
+  CausticSetup mirror = triangle_setup();
+  mirror.mirror = true;
+  mirror.fresnel = true;
+  EXPECT_THROW(CausticTracer{mirror}, InputError);
+}
+
+// The facet estimator on a given mesh (an exported file) takes its facets
+// facing up as the top: the grid's own mesh, given, casts the grid's image
+// to the last bit.
+TEST(CausticTriangles, FacetsOfAGivenMeshAreTheGridsFacets) {
+  CausticSetup s = triangle_setup();
+  s.light_direction = Eigen::Vector3d(0.2, -0.1, -1);
+  CausticTracer grid(s);
+  grid.set_heights(heights_of(grid, [](double x, double y) { return 3 + 0.3 * std::sin(0.5 * x + 0.2) * std::cos(0.4 * y); }));
+  std::vector<Eigen::Vector3d> vertices;
+  std::vector<Eigen::Vector3i> triangles;
+  grid.mesh(vertices, triangles);
+  // Walls and bottom first: the estimator must find the top itself.
+  std::reverse(triangles.begin(), triangles.end());
+  for (Eigen::Vector3i& t : triangles) t = Eigen::Vector3i(t[1], t[2], t[0]);
+  CausticTracer given(s, vertices, triangles);
+  CausticFlux a, b;
+  const std::vector<double> from_grid = render(grid, &a), from_mesh = render(given, &b);
+  double worst = 0;
+  for (size_t k = 0; k < from_grid.size(); ++k) worst = std::max(worst, std::abs(from_grid[k] - from_mesh[k]));
+  EXPECT_LT(worst, 1e-12);  // the same facets, summed in reverse order
+  EXPECT_NEAR(a.received, b.received, 1e-9);
+  EXPECT_GT(a.received, 0.0);
+}
+
+// A mirror (CausticSetup::mirror) by the law of reflection: a flat one
+// passes a collimated beam unchanged (cos θ on the receiver above, moved by
+// (D - h) tan θ), and a concave paraboloid z = h0 + r²/(4f) turns the
+// vertical beam towards its focus f above its vertex, so at D above the
+// bottom the beam is (1 - (D - h0)/f) as wide and 1/(1 - (D - h0)/f)² as
+// bright. Every estimator; the rays to within their noise.
+TEST(CausticTriangles, MirrorReflectsAsTheLawOfReflectionSays) {
+  for (Estimator estimator : {Estimator::facets, Estimator::smooth, Estimator::rays})
+    for (double degrees : {0.0, 25.0, 50.0}) {
+      SCOPED_TRACE(testing::Message() << static_cast<int>(estimator) << ", " << degrees << " degrees");
+      CausticSetup s = triangle_setup(estimator);
+      s.mirror = true;
+      const double a = degrees * M_PI / 180, thickness = 3;
+      s.light_direction = Eigen::Vector3d(std::sin(a), 0, -std::cos(a));
+      s.receiver_centre_mm = Eigen::Vector2d((s.receiver_distance_mm - thickness) * std::tan(a), 0);
+      // Unjittered, 12 per pixel along each axis: the bilinear splats of a
+      // lattice of whole rays per pixel sum to the same in every pixel.
+      s.rays_x = s.rays_y = 960;
+      s.jitter = false;
+      CausticTracer tracer(s);
+      tracer.set_heights(std::vector<double>(tracer.heights().size(), thickness));
+      CausticFlux flux;
+      const std::vector<double> image = render(tracer, &flux);
+      const double tolerance = estimator == Estimator::rays ? 1e-4 : 1e-9;
+      for (int row = 1; row + 1 < s.image_height; ++row)
+        for (int col = 1; col + 1 < s.image_width; ++col)
+          EXPECT_NEAR(image[static_cast<size_t>(row * s.image_width + col)], std::cos(a), tolerance);
+      EXPECT_NEAR(flux.emitted, 400 * std::cos(a), 1e-9 * 400);
+      EXPECT_NEAR(flux.received + flux.missed, flux.emitted, tolerance * 400);
+      EXPECT_NEAR(flux.received, 144 * std::cos(a), estimator == Estimator::rays ? 0.1 : tolerance);
+      EXPECT_EQ(flux.returned, 0.0);
+    }
+  const double f = 400, h0 = 2;
+  for (Estimator estimator : {Estimator::smooth, Estimator::rays}) {
+    CausticSetup s;
+    s.width_mm = s.depth_mm = 6;
+    s.vertices_x = s.vertices_y = 61;
+    s.mirror = true;
+    s.receiver_width_mm = s.receiver_depth_mm = 6;
+    s.image_width = s.image_height = 60;
+    s.rays_x = s.rays_y = 1200;
+    s.estimator = estimator;
+    for (double distance : {102.0, 202.0, 302.0}) {
+      SCOPED_TRACE(testing::Message() << static_cast<int>(estimator) << ", " << distance << " mm");
+      s.receiver_distance_mm = distance;
+      CausticTracer tracer(s);
+      tracer.set_heights(heights_of(tracer, [&](double x, double y) { return h0 + (x * x + y * y) / (4 * f); }));
+      CausticFlux flux;
+      const std::vector<double> image = render(tracer, &flux);
+      const double expected = 1 / std::pow(1 - (distance - h0) / f, 2);
+      double sum = 0;
+      for (int row = 25; row < 35; ++row)
+        for (int col = 25; col < 35; ++col) sum += image[static_cast<size_t>(row * 60 + col)];
+      EXPECT_NEAR(sum / 100 / expected, 1.0, 0.01);
+      EXPECT_NEAR(flux.received, 36.0, estimator == Estimator::rays ? 1e-6 * 36 : 1e-9);
+    }
+  }
 }
 
 }  // namespace

@@ -339,11 +339,13 @@ struct Setup {
         }
     width = high[0] - low[0];
     depth = high[1] - low[1];
-    cx = 0.5 * (low[0] + high[0]);
-    cy = 0.5 * (low[1] + high[1]);
+    cx = 0.5 * (low[0] + high[0]) + o.receiver_offset_mm[0];
+    cy = 0.5 * (low[1] + high[1]) + o.receiver_offset_mm[1];
     rw = o.receiver_mm[0] > 0 ? o.receiver_mm[0] : width;
     rd = o.receiver_mm[1] > 0 ? o.receiver_mm[1] : depth;
-    receiver_z = low[2] - o.distance_mm;
+    receiver_z = o.reflect ? low[2] + o.distance_mm : low[2] - o.distance_mm;
+    if (o.reflect && !(receiver_z > high[2])) throw std::runtime_error("a mirror's receiver must lie above the print");
+    if (!std::isfinite(cx) || !std::isfinite(cy)) throw std::runtime_error("the receiver's offset must be finite");
     light = V3{o.light[0], o.light[1], o.light[2]};
     if (!(light.norm() > 0) || !(light.z < 0)) throw std::runtime_error("the light must travel downwards (light z < 0)");
     light = light.unit();
@@ -374,7 +376,7 @@ struct Landing {
 };
 
 /// Ray r: stratified, jittered by a hash of the ray index (reproducible),
-/// refracted through the slab to the receiver.
+/// refracted through the slab (or reflected off it) to the receiver.
 Landing trace_ray(const Options& o, const Setup& g, const Bvh& bvh, std::array<int, 2> rays, long long r) {
   const long long nx = rays[0], ny = rays[1];
   const double cell = g.width / static_cast<double>(nx) * g.depth / static_cast<double>(ny);
@@ -392,7 +394,12 @@ Landing trace_ray(const Options& o, const Setup& g, const Bvh& bvh, std::array<i
     if (u * u + v * v > 1) return landing;
   }
   landing.emitted = true;
-  V3 origin{sx, sy, g.start_z};  // the beam's cross-section above the slab is the footprint
+  // The beam's cross-section at the slab's highest point is the footprint
+  // (tilted light starts back along its direction, so that it meets the top
+  // where it would meet the footprint).
+  V3 origin{sx, sy, g.start_z};
+  if (!o.point && (g.light.x != 0 || g.light.y != 0))
+    origin = V3{sx, sy, g.high[2]} + g.light * ((g.start_z - g.high[2]) / g.light.z);
   V3 direction = g.light;
   double power = cell * -g.light.z;
   if (o.point) {
@@ -406,7 +413,8 @@ Landing trace_ray(const Options& o, const Setup& g, const Bvh& bvh, std::array<i
   uint32_t hit;
   for (int segment = 0; segment < 32; ++segment) {
     if (!bvh.intersect(origin, direction, segment == 0 ? 0 : 1e-7, t, hit)) {
-      if (direction.z < 0) {
+      // Towards the receiver: down through a lens, up off a mirror it met.
+      if (o.reflect ? direction.z > 0 && segment > 0 : direction.z < 0) {
         const double s = (g.receiver_z - origin.z) / direction.z;
         const double px = origin.x + s * direction.x, py = origin.y + s * direction.y;
         const double across = o.from_behind ? (g.cx + 0.5 * g.rw) - px : px - (g.cx - 0.5 * g.rw);
@@ -420,6 +428,10 @@ Landing trace_ray(const Options& o, const Setup& g, const Bvh& bvh, std::array<i
     origin = origin + direction * t;
     const V3 n = bvh.triangle(hit).normal;
     const double cos_n = direction.dot(n);
+    if (o.reflect) {
+      direction = (direction - n * (2 * cos_n)).unit();
+      continue;
+    }
     const bool entering = cos_n < 0;
     const V3 facing = entering ? n : n * -1;
     const double eta = entering ? 1 / o.index : o.index;
@@ -485,6 +497,7 @@ Print::Print(const Options& options) : impl_(std::make_unique<Impl>()) {
   if (o.stl.empty() || o.goal.empty()) throw std::runtime_error("an STL and a goal picture are required");
   if (!(o.distance_mm > 0)) throw std::runtime_error("the receiver's distance must be positive");
   if (!(o.index >= 1)) throw std::runtime_error("the refractive index must be at least 1");
+  if (o.reflect && !o.exit_transmittance.empty()) throw std::runtime_error("a mirror has no exit face to filter");
   if (o.image[0] < 1 || o.image[1] < 1) throw std::runtime_error("the image needs at least one pixel");
   std::vector<Triangle> all = read_stl(o.stl);
   if (o.mirror_z) {

@@ -2,7 +2,8 @@
 // `caustic_check` program is its command line). It reads the printed slab
 // (a binary or ASCII STL), traces light through it with a ray tracer of its
 // own (STL reader, bounding-volume hierarchy, ray–triangle test, Snell
-// refraction, total internal reflection, binning into pixels) and compares
+// refraction, total internal reflection, or reflection off a mirror print,
+// binning into pixels) and compares
 // the image on the receiver with the goal picture, which it reads and scales
 // itself as the experiment format defines it (sRGB decoded, area-resized,
 // carrying all the light through the aperture).
@@ -27,9 +28,16 @@ namespace caustic_check {
 struct Options {
   std::string stl;   ///< the printed slab
   std::string goal;  ///< the goal picture (8- or 16-bit grey, sRGB)
-  /// The receiver lies this far below the slab's lowest point, centred
-  /// below its x–y footprint (the mesh's bounds).
+  /// The receiver lies this far below the slab's lowest point (with
+  /// `reflect`, above it), centred on its x–y footprint (the mesh's bounds)
+  /// moved by receiver_offset_mm.
   double distance_mm = 0;
+  std::array<double, 2> receiver_offset_mm{0, 0};
+  /// The print is a mirror: every face reflects (law of reflection), and the
+  /// receiver faces down from above, in the plane `distance_mm` over the
+  /// slab's lowest point. The image's columns still run towards +x unless
+  /// `from_behind` (a receiver above, seen from below, wants it).
+  bool reflect = false;
   double index = 1.5;                   ///< refractive index of the slab
   std::array<double, 2> receiver_mm{0, 0};  ///< receiver's extent; 0: the footprint's
   std::array<int, 2> image{240, 240};   ///< receiver pixels [width, height]

@@ -6,11 +6,15 @@
 //                 [--receiver 60 60] [--image 240 240] [--rays 3840 3840] [--index 1.5]
 //                 [--aperture disc] [--light 0 0 -1 | --point X Y Z] [--write traced.png]
 //                 [--mirror-z] [--from-behind] [--exit-filter filter.txt]
+//                 [--reflect] [--receiver-offset DX DY]
 //
 // --mirror-z traces the file upside down (light enters the face it has at
 // the bottom); --from-behind images the receiver from its far side (columns
 // towards -x); --exit-filter reads "nx ny" and nx × ny transmittances (row
 // by row from the lowest y) of a filter on the face the light leaves by.
+// --reflect makes the print a mirror (every face reflects; the receiver
+// faces down from --distance above the print's lowest point);
+// --receiver-offset moves the receiver's centre off the footprint's.
 //
 // The receiver is centred below the slab's footprint (the mesh's x–y
 // bounds), at `distance` below its lowest point; light comes from above:
@@ -69,10 +73,12 @@ CommandLine parse(int argc, char** argv) {
     else if (a == "--mirror-z") { o.mirror_z = true; }
     else if (a == "--from-behind") { o.from_behind = true; }
     else if (a == "--exit-filter") { need(i, 1); read_exit_filter(argv[++i], o); }
+    else if (a == "--reflect") { o.reflect = true; }
+    else if (a == "--receiver-offset") { need(i, 2); o.receiver_offset_mm = {std::stod(argv[i + 1]), std::stod(argv[i + 2])}; i += 2; }
     else if (a == "--help" || a == "-h") {
       std::cout << "caustic_check --stl FILE --goal PNG --distance MM [--receiver W H] [--image W H] [--rays NX NY]\n"
                    "              [--index N] [--aperture rectangle|disc] [--light X Y Z | --point X Y Z] [--write PNG]\n"
-                   "              [--mirror-z] [--from-behind] [--exit-filter FILE]\n"
+                   "              [--mirror-z] [--from-behind] [--exit-filter FILE] [--reflect] [--receiver-offset DX DY]\n"
                    "Traces collimated light through the STL slab with its own tracer and prints the image's\n"
                    "SSIM, PSNR and RMSE against the goal as JSON (see tools/caustic_check/caustic_check.h).\n";
       std::exit(0);

@@ -38,7 +38,28 @@ CausticGoalSettings CausticGoalSettings::read(const Properties& goal, const Expe
   s.slab = experiment.solid().bounds();
   if (std::isnan(s.receiver_mm[0])) s.receiver_mm = {s.slab.size().x(), s.slab.size().y()};
   if (s.rays[0] == 0) s.rays = {2 * s.image[0], 2 * s.image[1]};
+  if (s.mirror()) {
+    if (s.point_light())
+      goal.fail("light_distance_mm", "a mirror is lit here by collimated light alone (light_angle_deg tilts it)");
+    // The beam on its way down, at the receiver's height, must pass beside
+    // the receiver: its far edge D tan θ short of the footprint's, the
+    // receiver's near edge D tan θ past its centre (Bounds: the slab's).
+    const double w = s.slab.size().x(), reach = s.distance_mm * std::tan(s.light_angle_deg * std::numbers::pi / 180);
+    const double least = std::atan((w + s.receiver_mm[0]) / (4 * s.distance_mm)) * 180 / std::numbers::pi;
+    if (2 * reach < 0.5 * (w + s.receiver_mm[0]))
+      goal.fail("light_angle_deg",
+                fmt::format("a mirror's receiver {:g} mm above would stand in the light coming down at {:g} degrees "
+                            "(the beam and the {:g} mm receiver overlap); tilt it at least {:.1f} degrees",
+                            s.distance_mm, s.light_angle_deg, s.receiver_mm[0], least));
+  }
   return s;
+}
+
+void CausticGoalSettings::require_lens_straight_down(const Properties& goal, const std::string& translator) const {
+  if (mirror())
+    goal.fail("surface", translator + " makes lenses; a mirror suits smooth_caustics (\"surface\": \"mirror\")");
+  if (light_angle_deg != 0)
+    goal.fail("light_angle_deg", translator + " takes the light straight down; tilted light suits smooth_caustics");
 }
 
 CausticSlabConfig::Options CausticGoalSettings::slab_options(std::array<int, 2> vertices) const {
@@ -54,7 +75,13 @@ CausticSlabConfig::Options CausticGoalSettings::slab_options(std::array<int, 2> 
   o.image = image;
   o.rays = rays;
   o.aperture = aperture;
+  o.mirror = mirror();
   if (point_light()) o.light_position_mm = {0.0, 0.0, size.z() + light_distance_mm};
+  if (light_angle_deg != 0) {
+    const double angle = light_angle_deg * std::numbers::pi / 180;
+    o.light = {std::sin(angle), 0.0, -std::cos(angle)};
+    o.receiver_centre_mm = {distance_mm * std::tan(angle), 0.0};
+  }
   return o;
 }
 
@@ -74,7 +101,9 @@ CausticSlabConfig CausticGoalSettings::slab_config(const Properties& goal, const
 double CausticGoalSettings::flux_mm2() const {
   const Vec3 size = slab.size();
   const double area = size.x() * size.y();
-  if (!point_light()) return aperture == "disc" ? std::numbers::pi / 4 * area : area;
+  // Collimated light crosses the footprint at cos θ of its irradiance across the beam.
+  const double across = std::cos(light_angle_deg * std::numbers::pi / 180);
+  if (!point_light()) return across * (aperture == "disc" ? std::numbers::pi / 4 * area : area);
   // What the point light sends through the aperture at the slab's top:
   // its intensity (unit irradiance across the beam at its height above the
   // bottom) times the solid angle, summed over a fine midpoint grid.
@@ -115,6 +144,7 @@ CausticImageReport CausticGoalSettings::image_report(std::span<const double> ach
           image,
           refractive_index,
           aperture,
+          surface,
           receiver_mm,
           distance_mm};
 }
@@ -209,6 +239,15 @@ std::array<int, 2> CausticSurfaceSettings::print_vertices() const {
   return {per_span * (control[0] - 1) + 1, per_span * (control[1] - 1) + 1};
 }
 
+std::string CausticSurfaceSettings::print_facets() const {
+  const std::array<int, 2> grid = print_vertices();
+  const int per_span = (grid[0] - 1) / std::max(1, control[0] - 1);
+  std::string words = fmt::format("{} x {} vertices, {} per control span", grid[0], grid[1], per_span);
+  if (print_refinement_levels > 0)
+    words += fmt::format(", cells split up to {} times where the light spreads", print_refinement_levels);
+  return words;
+}
+
 NodePtr CausticSurfaceSettings::node(const std::string& axis, const std::array<double, 3>& heights_mm,
                                      const Bounds& footprint, const Parameter& material,
                                      const MaterialPalette& palette) const {
@@ -292,10 +331,6 @@ PrintHeadline trace_print_independently(const CausticSlabConfig& slab, const std
                                         std::array<int, 2> rays, double simulated_ssim, RunFolder& folder,
                                         const PrintFrame& frame) {
   const CausticSetup& setup = slab.setup;
-  // caustic_check centres the receiver below the footprint: a setup it
-  // cannot state is a bug of the caller.
-  if (setup.receiver_centre_mm.norm() > 0)
-    throw std::logic_error("trace_print_independently: an off-centre receiver");
   caustic_check::Options options;
   options.stl = folder.path(kSurfaceStl).string();
   options.goal = goal_image.string();
@@ -305,7 +340,11 @@ PrintHeadline trace_print_independently(const CausticSlabConfig& slab, const std
   options.image = {setup.image_width, setup.image_height};
   options.rays = rays;
   options.disc = setup.disc_aperture;
-  options.from_behind = setup.image_from_behind;
+  // caustic_check's columns run towards +x unless from behind, whatever the print.
+  options.from_behind = columns_towards_minus_x(setup);
+  options.reflect = setup.mirror;
+  // Centred on the footprint, which the file's x–y bounds are.
+  options.receiver_offset_mm = {setup.receiver_centre_mm.x(), setup.receiver_centre_mm.y()};
   options.mirror_z = frame.mirrored_about_z.has_value();
   if (frame.exit_filter) {
     options.exit_cells = frame.exit_filter->cells;
@@ -366,24 +405,20 @@ PrintHeadline trace_print_independently(const CausticSlabConfig& slab, const std
   return headline;
 }
 
-CausticImageErrors printed_facets_errors(const CausticSlabConfig& slab, std::array<int, 2> print_vertices,
-                                         const HeightSurface& surface, const ImageObservation& goal) {
+CausticImageErrors printed_facets_errors(const CausticSlabConfig& slab, const Mesh& printed,
+                                         const ImageObservation& goal) {
   CausticSetup setup = slab.setup;
-  setup.vertices_x = print_vertices[0];
-  setup.vertices_y = print_vertices[1];
   setup.estimator = CausticSetup::Estimator::facets;
-  CausticTracer tracer(setup);
-  std::vector<double> heights(tracer.heights().size());
-  for_each_slab_vertex(setup, slab.origin_mm, [&](size_t k, double a, double b) {
-    heights[k] = surface.surface_height(a, b) - slab.origin_mm.z();
-  });
-  tracer.set_heights(heights);
+  std::vector<Eigen::Vector3d> vertices = printed.vertices;
+  const Eigen::Vector3d offset = slab_offset(slab.setup, slab.origin_mm);
+  for (Eigen::Vector3d& v : vertices) v -= offset;
+  CausticTracer tracer(setup, std::move(vertices), printed.triangles);
   std::vector<double> image(static_cast<size_t>(setup.image_width) * static_cast<size_t>(setup.image_height));
   tracer.render(image);
   return caustic_image_errors(image, goal);
 }
 
-void explain_headline(PrintHeadline& headline, std::array<int, 2> print_vertices, std::array<int, 2> control) {
+void explain_headline(PrintHeadline& headline, const std::string& facets) {
   const double traced = headline.traced.ssim;
   if (std::abs(headline.ssim_difference) <= kHeadlineAgreement) {
     headline.agreement = fmt::format("agree within {:g} SSIM", kHeadlineAgreement);
@@ -392,14 +427,12 @@ void explain_headline(PrintHeadline& headline, std::array<int, 2> print_vertices
   const std::string differ = fmt::format("the print's traced SSIM {:.3f} differs from the simulated {:.3f} by {:+.3f}",
                                          traced, headline.simulated_ssim, -headline.ssim_difference);
   if (headline.printed_facets_ssim && std::abs(*headline.printed_facets_ssim - traced) <= kHeadlineAgreement) {
-    const int per_span = control[0] > 1 ? (print_vertices[0] - 1) / (control[0] - 1) : 0;
     headline.agreement = fmt::format(
-        "{}: the file's flat facets ({} x {} vertices, {} per control span). Each facet casts a sharp copy of "
+        "{}: the file's flat facets ({}). Each facet casts a sharp copy of "
         "itself, a moire at facet pitch, strongest where the goal is dark; the simulator's facet estimator on the file's own "
         "facets gives {:.3f}, within {:g} of the trace, while the tuned smooth surface gives {:.3f}. More "
-        "vertices per span (print_vertices_per_span) narrow it",
-        differ, print_vertices[0], print_vertices[1], per_span, *headline.printed_facets_ssim, kHeadlineAgreement,
-        headline.simulated_ssim);
+        "vertices per span (print_vertices_per_span) or refinement (print_refinement_levels) narrow it",
+        differ, facets, *headline.printed_facets_ssim, kHeadlineAgreement, headline.simulated_ssim);
     return;
   }
   if (headline.splatted_ssim && std::abs(*headline.splatted_ssim - headline.simulated_ssim) <= kHeadlineAgreement) {

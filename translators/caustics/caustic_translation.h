@@ -60,7 +60,7 @@ struct CausticImageReport {
   nlohmann::json initial_psnr_db;
   std::array<int, 2> image_size{};
   double refractive_index = 0;
-  std::string aperture;
+  std::string aperture, surface;
   std::array<double, 2> receiver_mm{};
   double distance_mm = 0;
   template <class Fields, class Self>
@@ -72,8 +72,9 @@ struct CausticImageReport {
     f(s.image_size, "image_size", "simulated image, width and height");
     f(s.refractive_index, "refractive_index", "of the slab");
     f(s.aperture, "aperture", "where the light comes through");
+    f(s.surface, "surface", "lens (refracting) or mirror (reflecting)");
     f(s.receiver_mm, "receiver_mm", "receiver extent");
-    f(s.distance_mm, "distance_mm", "receiver below the slab's bottom");
+    f(s.distance_mm, "distance_mm", "receiver below the slab's bottom (a mirror's: above)");
   }
 };
 
@@ -199,15 +200,23 @@ struct CausticGoalSettings {
   std::string material = "VeroClear";
   std::array<int, 2> image{240, 240}, rays{0, 0}, print_check_rays{0, 0};
   std::array<double, 2> receiver_mm{kUnset, kUnset};
-  double distance_mm = 200, refractive_index = kUnset, light_distance_mm = kUnset;
-  std::string aperture = "rectangle";
+  double distance_mm = 200, refractive_index = kUnset, light_distance_mm = kUnset, light_angle_deg = 0;
+  std::string aperture = "rectangle", surface = "lens";
   Bounds slab;
 
   template <class Declare, class Self>
   static void declare(Declare& d, Self& o) {
     d.file(o.image_file, "image", "the picture to cast (grey levels)");
     d.value(o.material, "material", "the slab's material");
-    d.number(o.distance_mm, "distance_mm", Range::closed(1e-3, 1e6), "receiver below the slab's bottom");
+    d.choice(o.surface, "surface", {"lens", "mirror"},
+             "what the shaped face does: refracts the light through the clear slab to a receiver below (lens), or "
+             "reflects it, the print coated as a mirror, to a receiver above facing down (mirror; tilt the light "
+             "with light_angle_deg so that the beam misses the receiver)");
+    d.number(o.distance_mm, "distance_mm", Range::closed(1e-3, 1e6),
+             "receiver below the slab's bottom (a mirror's: above it)");
+    d.number(o.light_angle_deg, "light_angle_deg", Range::closed(0, 60),
+             "collimated light tilted this far from straight down, travelling towards +x; the receiver is centred "
+             "distance_mm × tan(angle) along +x, where a flat top sends the footprint's centre");
     d.number(o.receiver_mm, "receiver_mm", Range::above(0), "receiver extent [x, y]", Default{"the footprint"});
     d.number(o.image, "image_size", Range::at_least(1), "simulated image [width, height]");
     d.number(o.rays, "rays", Range::at_least(1), "stratified rays [nx, ny]", Default{"2 × image_size"});
@@ -236,6 +245,11 @@ struct CausticGoalSettings {
   /// The light the aperture lets through, in units of incident irradiance × mm².
   double flux_mm2() const;
   bool point_light() const { return !std::isnan(light_distance_mm); }
+  bool mirror() const { return surface == "mirror"; }
+  /// For a translator that handles a lens under light straight down alone:
+  /// fails at the goal's "surface" or "light_angle_deg" otherwise, naming
+  /// `suits`, the translator that does.
+  void require_lens_straight_down(const Properties& goal, const std::string& translator) const;
   /// The "caustic_image" goal: the picture carrying the light the slab's
   /// aperture lets through (a black one fails at `goal`'s "image").
   std::unique_ptr<GoalFor<ImageObservation>> image_goal(const Properties& goal, const Limits& limits) const;
@@ -293,6 +307,9 @@ struct CausticSurfaceSettings {
   std::array<int, 2> vertices() const;
   /// Mesh vertices of print/surface.stl along each axis.
   std::array<int, 2> print_vertices() const;
+  /// print/surface.stl's facets in words: its grid, per control span, and
+  /// any refinement.
+  std::string print_facets() const;
   /// The B-spline node: along `axis` ("z", or "w" under a cut), heights
   /// {value, min, max} in mm, `material` below and void above.
   NodePtr node(const std::string& axis, const std::array<double, 3>& heights_mm, const Bounds& footprint,
@@ -337,15 +354,16 @@ PrintHeadline trace_print_independently(const CausticSlabConfig& slab, const std
                                         const PrintFrame& frame = PrintFrame());
 
 /// The simulator's facet estimator (exact for a piecewise-flat top, no
-/// sampling noise) on the top the file holds: the surface sampled at
-/// `print_vertices`, each quad split as the file splits it.
-CausticImageErrors printed_facets_errors(const CausticSlabConfig& slab, std::array<int, 2> print_vertices,
-                                         const HeightSurface& surface, const ImageObservation& goal);
+/// sampling noise) on the facets facing up of `printed`, the file's mesh in
+/// the slab's subtree frame (uniform or adaptive).
+CausticImageErrors printed_facets_errors(const CausticSlabConfig& slab, const Mesh& printed,
+                                         const ImageObservation& goal);
 
 /// Fills headline.agreement: agreeing within kHeadlineAgreement, or why not
-/// (the file's facets, when the facet estimator on them comes within it of
-/// the trace), or that the difference is not explained.
-void explain_headline(PrintHeadline& headline, std::array<int, 2> print_vertices, std::array<int, 2> control);
+/// (the file's facets, described by `facets`, when the facet estimator on
+/// them comes within it of the trace), or that the difference is not
+/// explained.
+void explain_headline(PrintHeadline& headline, const std::string& facets);
 
 /// Whether fabrication wrote print/surface.stl: the "stl" print writer lists
 /// it among the run's print files (on the rank that writes them).

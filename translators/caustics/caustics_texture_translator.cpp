@@ -115,6 +115,7 @@ class CausticsTextureTranslator final : public TuningTranslator {
       : settings_(CausticGoalSettings::read(experiment.goal(), experiment)),
         texture_(experiment.goal(), experiment, texture_options(), settings_.material) {
     const Properties goal = experiment.goal();
+    settings_.require_lens_straight_down(goal, "caustics_texture");
     const Options options = read_options<Options>(goal);
     const Bounds bounds = experiment.solid().bounds();
     const Vec3 size = bounds.size();
@@ -333,7 +334,7 @@ class CausticsTextureTranslator final : public TuningTranslator {
       frame.exit_filter = &shadow_field_;
       PrintHeadline headline = trace_print_independently(slab_, settings_.image_file, settings_.print_check_rays,
                                                          report_.image.achieved.ssim, context.folder, frame);
-      explain_headline(headline, surface_.print_vertices(), surface_.control);
+      explain_headline(headline, surface_.print_facets());
       context.report.files.previews.push_back(headline.preview);
       context.report.add("headline", headline);
     }

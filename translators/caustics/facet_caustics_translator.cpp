@@ -234,7 +234,7 @@ class FacetCausticsTranslator final : public TuningTranslator {
     config.setup.rays_y = std::max(setup_.rays_y, 8 * setup_.image_height);
     PrintHeadline headline = trace_print_independently(config, settings_.image_file, settings_.print_check_rays,
                                                        simulated_ssim_, context.folder, PrintFrame{context.timing});
-    explain_headline(headline, {}, {});
+    explain_headline(headline, "");
     context.report.files.previews.push_back(headline.preview);
     context.report.add("headline", headline);
   }
@@ -266,6 +266,7 @@ class FacetCausticsTranslator final : public TuningTranslator {
  private:
   /// The translator's own goal keys (facets, their shape, heights, slope).
   void read_goal(const Properties& goal) {
+    settings_.require_lens_straight_down(goal, "facet_caustics");
     // Each facet takes one equal-flux kernel: that needs equal light on every facet.
     if (settings_.aperture != "rectangle")
       goal.fail("aperture", "facet caustics give every facet an equal share of the light, so the light must cover "

@@ -1,6 +1,8 @@
 // The smooth-caustics translator (paper §7.3, Fig. 9 right, after Finckh et
 // al. 2010): a clear slab whose top is a B-spline height surface, shaped so
-// that collimated light through it casts a goal image on a receiver below.
+// that collimated light through it casts a goal image on a receiver below
+// (or, goal.surface "mirror", a print coated as a mirror whose top reflects
+// the light to a receiver above).
 // The tree is one B-spline node over the solid's footprint (clear below,
 // void above); one tuner — the caustic simulator, image MSE against the
 // goal picture — tunes every control height. The surface starts where
@@ -127,11 +129,15 @@ class SmoothCausticsTranslator final : public TuningTranslator {
   std::string summary() const override {
     std::string compared;
     for (const auto& [label, optimizer] : compared_) compared += (compared.empty() ? "; compared with " : ", ") + label;
+    const std::string light = settings_.light_angle_deg == 0
+                                  ? std::string("collimated light")
+                                  : fmt::format("collimated light {:g} degrees off vertical", settings_.light_angle_deg);
     return fmt::format(
-        "smooth caustics: a {} slab, top a {} x {} B-spline; collimated light casts the goal "
-        "image {} mm below on a {:g} x {:g} mm receiver ({} x {} px); one tuner (caustics, "
+        "smooth caustics: a {} slab{}, top a {} x {} B-spline; {} casts the goal "
+        "image {} mm {} on a {:g} x {:g} mm receiver ({} x {} px); one tuner (caustics, "
         "image_mse, {}{})",
-        settings_.material, surface_.control[0], surface_.control[1], settings_.distance_mm, settings_.receiver_mm[0],
+        settings_.material, settings_.mirror() ? " coated as a mirror" : "", surface_.control[0], surface_.control[1],
+        light, settings_.distance_mm, settings_.mirror() ? "above" : "below", settings_.receiver_mm[0],
         settings_.receiver_mm[1], settings_.image[0], settings_.image[1],
         main_label_, compared);
   }
@@ -145,7 +151,9 @@ class SmoothCausticsTranslator final : public TuningTranslator {
         "says otherwise (the paper's SPSA: {\"type\": \"spsa\", \"c\": 0.002, \"first_step\": 0.01}). "
         "Writes the smooth slab as print/surface.stl besides the voxel outputs; result.json's \"headline\" is "
         "that file traced by caustic_check, a tracer sharing no code with the simulator, beside the simulated SSIM "
-        "and why they differ where they do (docs/run-report.md).",
+        "and why they differ where they do (docs/run-report.md). With goal.surface \"mirror\" the top reflects "
+        "instead (the print coated as a mirror; the same transport start, with the law of reflection) and the "
+        "receiver hangs distance_mm above, lit by light tilted light_angle_deg off vertical.",
         prefixed(option_docs<Options>(), "goal."),
         R"({"translator": "smooth_caustics", "goal": {"image": "ring.png", "distance_mm": 200}})"};
     doc.properties.push_back({"optimizer", "optimizer", "nlopt LD_LBFGS, 1000 evaluations", "the surface's optimizer"});
@@ -217,10 +225,9 @@ class SmoothCausticsTranslator final : public TuningTranslator {
       PrintHeadline headline = trace_print_independently(slab_, settings_.image_file, settings_.print_check_rays,
                                                          report_.image.achieved.ssim, context.folder,
                                                          PrintFrame{context.timing});
-      // (The facet estimator needs the file's top to be the uniform grid.)
-      if (std::abs(headline.ssim_difference) > kHeadlineAgreement && surface_.print_refinement_levels == 0)
-        headline.printed_facets_ssim = printed_facets_errors(slab_, surface_.print_vertices(), surface(), target_).ssim;
-      explain_headline(headline, surface_.print_vertices(), surface_.control);
+      if (std::abs(headline.ssim_difference) > kHeadlineAgreement)
+        headline.printed_facets_ssim = printed_facets_errors(slab_, print_surfaces_.front().mesh, target_).ssim;
+      explain_headline(headline, surface_.print_facets());
       context.report.files.previews.push_back(headline.preview);
       context.report.add("headline", headline);
     }
