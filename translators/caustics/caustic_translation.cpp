@@ -38,6 +38,11 @@ CausticGoalSettings CausticGoalSettings::read(const Properties& goal, const Expe
   s.slab = experiment.solid().bounds();
   if (std::isnan(s.receiver_mm[0])) s.receiver_mm = {s.slab.size().x(), s.slab.size().y()};
   if (s.rays[0] == 0) s.rays = {2 * s.image[0], 2 * s.image[1]};
+  return s;
+}
+
+void CausticGoalSettings::require_light_past_mirror_receiver(const Properties& goal) const {
+  const CausticGoalSettings& s = *this;
   if (s.mirror()) {
     if (s.point_light())
       goal.fail("light_distance_mm", "a mirror is lit here by collimated light alone (light_angle_deg tilts it)");
@@ -52,7 +57,6 @@ CausticGoalSettings CausticGoalSettings::read(const Properties& goal, const Expe
                             "(the beam and the {:g} mm receiver overlap); tilt it at least {:.1f} degrees",
                             s.distance_mm, s.light_angle_deg, s.receiver_mm[0], least));
   }
-  return s;
 }
 
 void CausticGoalSettings::require_lens_straight_down(const Properties& goal, const std::string& translator) const {

@@ -250,6 +250,10 @@ struct CausticGoalSettings {
   /// fails at the goal's "surface" or "light_angle_deg" otherwise, naming
   /// `suits`, the translator that does.
   void require_lens_straight_down(const Properties& goal, const std::string& translator) const;
+  /// For a translator that makes mirrors: fails at the goal's key unless the
+  /// light is collimated and its beam, coming down, passes beside the
+  /// receiver above.
+  void require_light_past_mirror_receiver(const Properties& goal) const;
   /// The "caustic_image" goal: the picture carrying the light the slab's
   /// aperture lets through (a black one fails at `goal`'s "image").
   std::unique_ptr<GoalFor<ImageObservation>> image_goal(const Properties& goal, const Limits& limits) const;

@@ -88,6 +88,7 @@ class SmoothCausticsTranslator final : public TuningTranslator {
     const Vec3 size = bounds.size();
     surface_ = CausticSurfaceSettings::read(goal);
     settings_ = CausticGoalSettings::read(goal, experiment);
+    settings_.require_light_past_mirror_receiver(goal);
     const Options options = read_options<Options>(goal);
     transport_start_ = options.start == "transport";
     const double low = std::isnan(options.min_height_mm) ? 0.25 * size.z() : options.min_height_mm;
