@@ -217,6 +217,26 @@ double largest_slope(const HeightGrid& g, const std::vector<double>& heights) {
 
 }  // namespace
 
+std::vector<TransportMoments> transport_square_targets(const CausticSetup& s, std::span<const double> goal, int nx,
+                                                       int ny) {
+  if (goal.size() != static_cast<size_t>(s.image_width) * static_cast<size_t>(s.image_height))
+    throw std::invalid_argument("transport_square_targets: the goal has the wrong size");
+  std::vector<Vec2> sites;
+  const SemiDiscreteTransport transport =
+      solve_multiscale(aperture_outline(s), transport_masses(s, goal), s.image_width, s.image_height, sites);
+  std::vector<TransportMoments> squares = transport_moments(transport, sites, nx, ny, Vec2(-1, -1), Vec2(1, 1));
+  // Half-size units to the receiver's millimetres, and each pixel's own box.
+  const Eigen::Matrix2d scale = Vec2(0.5 * s.receiver_width_mm, 0.5 * s.receiver_depth_mm).asDiagonal();
+  const Eigen::Matrix2d pixel =
+      Vec2(std::pow(s.receiver_width_mm / s.image_width, 2) / 12, std::pow(s.receiver_depth_mm / s.image_height, 2) / 12)
+          .asDiagonal();
+  for (TransportMoments& m : squares) {
+    m.mean = s.receiver_centre_mm + scale * m.mean;
+    m.covariance = scale * m.covariance * scale + pixel;
+  }
+  return squares;
+}
+
 TransportStart transport_start(const CausticSetup& s, std::span<const double> goal, double mean_height_mm) {
   const int width = s.image_width, height = s.image_height;
   if (goal.size() != static_cast<size_t>(width) * static_cast<size_t>(height))

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "caustics/caustic_tracer.h"
+#include "caustics/optimal_transport.h"
 
 namespace spec2fab {
 
@@ -27,6 +28,17 @@ struct TransportStart {
   double largest_slope = 0;     ///< |∇h| of the steepest grid square
   double integration_rms_slope_error = 0;  ///< the tilts the heights could not follow (rms over squares)
 };
+
+/// Where the same transport sends the light of each square of an nx × ny
+/// grid over the footprint (row by row from the lowest y, x fastest): its
+/// mean and covariance on the receiver, in the tracer's frame (mm, the
+/// footprint centred on the origin), each goal pixel's light spread evenly
+/// over the pixel (its box variance added), and `mass` the square's share
+/// of the aperture's area (in the footprint's half-size units: 4 in all
+/// for the rectangle). For facets that each take a square's light
+/// (facet_caustics "targets": "transport").
+std::vector<TransportMoments> transport_square_targets(const CausticSetup& setup, std::span<const double> goal, int nx,
+                                                       int ny);
 
 /// The start for `setup` (its vertex grid, light, index, aperture, receiver)
 /// and `goal` (the irradiance asked for, image_width × image_height, row 0

@@ -1,5 +1,7 @@
 #include "caustics/optimal_transport.h"
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -323,9 +325,17 @@ std::vector<double> transport_weights_guess(std::span<const Vec2> coarse_sites, 
 
 std::vector<Vec2> mean_transport_targets(const SemiDiscreteTransport& transport, std::span<const Vec2> sites, int nx,
                                          int ny, const Vec2& lower, const Vec2& upper) {
+  std::vector<Vec2> means;
+  for (const TransportMoments& m : transport_moments(transport, sites, nx, ny, lower, upper)) means.push_back(m.mean);
+  return means;
+}
+
+std::vector<TransportMoments> transport_moments(const SemiDiscreteTransport& transport, std::span<const Vec2> sites,
+                                                int nx, int ny, const Vec2& lower, const Vec2& upper) {
   const Vec2 size = upper - lower;
   const double dx = size.x() / nx, dy = size.y() / ny;
   std::vector<Vec2> weighted(static_cast<size_t>(nx) * static_cast<size_t>(ny), Vec2::Zero());
+  std::vector<Eigen::Matrix2d> second(weighted.size(), Eigen::Matrix2d::Zero());
   std::vector<double> covered(weighted.size(), 0.0);
   LabelledPolygon cell, work, strip, piece;
   for (size_t i = 0; i < transport.cells.size(); ++i) {
@@ -355,14 +365,27 @@ std::vector<Vec2> mean_transport_targets(const SemiDiscreteTransport& transport,
         const double area = polygon_area(piece.corners);
         const size_t square = static_cast<size_t>(r) * static_cast<size_t>(nx) + static_cast<size_t>(c);
         weighted[square] += area * sites[i];
+        second[square] += area * sites[i] * sites[i].transpose();
         covered[square] += area;
       }
     }
   }
-  for (size_t k = 0; k < weighted.size(); ++k)
-    weighted[k] = covered[k] > 1e-12 * dx * dy ? Vec2(weighted[k] / covered[k])
-                                               : Vec2::Constant(std::numeric_limits<double>::quiet_NaN());
-  return weighted;
+  std::vector<TransportMoments> moments(weighted.size());
+  for (size_t k = 0; k < weighted.size(); ++k) {
+    moments[k].mass = covered[k];
+    if (covered[k] > 1e-12 * dx * dy) {
+      moments[k].mean = weighted[k] / covered[k];
+      // About the mean; never below zero where rounding would put it.
+      const Eigen::Matrix2d about = second[k] / covered[k] - moments[k].mean * moments[k].mean.transpose();
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(about);
+      moments[k].covariance = eigen.eigenvectors() * eigen.eigenvalues().cwiseMax(0.0).asDiagonal() *
+                              eigen.eigenvectors().transpose();
+    } else {
+      moments[k].mean.setConstant(std::numeric_limits<double>::quiet_NaN());
+      moments[k].covariance.setConstant(std::numeric_limits<double>::quiet_NaN());
+    }
+  }
+  return moments;
 }
 
 }  // namespace spec2fab

@@ -56,6 +56,21 @@ std::vector<double> transport_weights_guess(std::span<const Eigen::Vector2d> coa
 /// [lower, upper]: the mean of the sites that the square's points go to,
 /// each weighted by the area of the square it sends there; NaN for a square
 /// outside the source. Squares row by row from the lowest y, x fastest.
+/// What one square of the source sends: the area it passes (`mass`), and
+/// the mean and covariance (about the mean) of the sites it sends it to,
+/// each site weighted by the area that goes there.
+struct TransportMoments {
+  double mass = 0;
+  Eigen::Vector2d mean;
+  Eigen::Matrix2d covariance;
+};
+
+/// The same per square as mean_transport_targets, with the spread: NaN mean
+/// and covariance for a square outside the source.
+std::vector<TransportMoments> transport_moments(const SemiDiscreteTransport& transport,
+                                                std::span<const Eigen::Vector2d> sites, int nx, int ny,
+                                                const Eigen::Vector2d& lower, const Eigen::Vector2d& upper);
+
 std::vector<Eigen::Vector2d> mean_transport_targets(const SemiDiscreteTransport& transport,
                                                     std::span<const Eigen::Vector2d> sites, int nx, int ny,
                                                     const Eigen::Vector2d& lower, const Eigen::Vector2d& upper);

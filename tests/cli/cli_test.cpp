@@ -1179,8 +1179,8 @@ TEST_F(Cli, FacetCausticsAimsEveryFacetAtItsKernelAndLensesSpreadItLikeTheKernel
             "geometry": {"mesh": ")" + (kDatasets / "meshes/board_60x60x8.stl").string() + R"(", "uv": "planar"},
             "goal": {"image": ")" + goal.string() + R"(", "facet": ")" + facet + R"(", "lens_subdivisions": 8,
                      "facets": [12, 12], "image_size": [48, 48], "rays": [144, 144], "distance_mm": 200, "max_slope": 0.5,
-                     "min_height_mm": 2, "start_height_mm": 5, "assignment_sweeps": 20,
-                     "print_check_rays": [576, 576]},
+                     "min_height_mm": 2, "start_height_mm": 5, "targets": "kernels",
+                     "assignment_sweeps": 20, "print_check_rays": [576, 576]},
             "swap_optimizer": {"type": "annealing", "iterations": 5, "schedule_iterations": 100,
                                "swap_probability": 1, "initial_temperature": 1, "cooling": 0.95},
             "output": {"slices": false, "stl": true, "3mf": false, "render": false},
@@ -1237,9 +1237,72 @@ TEST_F(Cli, FacetCausticsAimsEveryFacetAtItsKernelAndLensesSpreadItLikeTheKernel
     EXPECT_NEAR(headline["ssim"].get<double>(), (*checked)["ssim"].get<double>(), 1e-8) << headline;
     EXPECT_EQ(headline["rays"], 576 * 576);
     EXPECT_EQ(headline["simulated_ssim"], (*run_result)["caustics"]["ssim"]);
-    EXPECT_GT(headline["splatted_ssim"].get<double>(), headline["ssim"].get<double>()) << headline;
+    if (std::abs(headline["ssim_difference"].get<double>()) > 0.02)
+      EXPECT_GT(headline["splatted_ssim"].get<double>(), headline["ssim"].get<double>()) << headline;
+    else
+      EXPECT_FALSE(headline.contains("splatted_ssim")) << headline;
     EXPECT_FALSE(headline["agreement"].get<std::string>().empty());
   }
+}
+
+// Lenses aimed where optimal transport sends their squares' light
+// ("targets": "transport", the default): one aim phase, no kernels; they
+// meet within 0.01 mm, so they print as one height field refined where the
+// light spreads, a closed 2-manifold that casts the ring far better than
+// the flat board under caustic_check, the run's headline. Refinement asks
+// for those lenses.
+TEST_F(Cli, FacetCausticsAimAtTheTransportAndPrintOneHeightField) {
+  SPEC2FAB_SKIP_UNLESS(SPEC2FAB_WITH_NLOPT);
+  write_clear_printer(dir_ / "clear_printer.json");
+  const fs::path goal = kDatasets / "images/caustic_ring_120.png";
+  const auto body = [&](const std::string& targets, int facets, int subdivisions) {
+    return R"({"name": "facets", "translator": "facet_caustics",
+            "geometry": {"mesh": ")" + (kDatasets / "meshes/board_60x60x8.stl").string() + R"(", "uv": "planar"},
+            "goal": {"image": ")" + goal.string() + R"(", "targets": ")" + targets + R"(",
+                     "facets": [)" + std::to_string(facets) + ", " + std::to_string(facets) + R"(],
+                     "lens_subdivisions": )" + std::to_string(subdivisions) + R"(, "lens_refinement_levels": 1,
+                     "image_size": [48, 48], "rays": [144, 144], "distance_mm": 200,
+                     "min_height_mm": 2, "start_height_mm": 5, "print_check_rays": [576, 576]},
+            "output": {"slices": false, "stl": true, "3mf": false, "render": false},
+            "materials": ")" + (kDatasets / "materials/polyjet.json").string() + R"(",
+            "printer": ")" + (dir_ / "clear_printer.json").string() + R"("})";
+  };
+  const Result refused = run_spec2fab("validate " + experiment("kernels", body("kernels", 24, 2)).string());
+  EXPECT_EQ(refused.code, 2);
+  EXPECT_THAT(single_line(refused.out), HasSubstr("/goal/lens_refinement_levels: refines lenses aimed at the transport"));
+  const Result r = run_spec2fab("run -q " + experiment("transport", body("transport", 120, 1)).string() + " --out " +
+                                (dir_ / "run").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto result = nlohmann::json::parse(read(dir_ / "run" / "result.json"));
+  const auto& caustics = result["caustics"];
+  EXPECT_EQ(caustics["targets"], "transport");
+  EXPECT_FALSE(caustics.contains("kernels"));
+  ASSERT_EQ(result["tuning"]["phases"].size(), 1u);
+  EXPECT_EQ(result["tuning"]["phases"][0]["tuner_runs"], 120 * 120);
+  // Centroid and spread within a fraction of a pixel (1.25 mm) of the transport's.
+  EXPECT_LT(caustics["aim"]["max_miss_mm"].get<double>(), 0.3);
+  // 120 x 120 lenses meet within the 0.01 mm a print bridges and print as
+  // one height field.
+  EXPECT_LT(caustics["stitch"]["max_step_mm"].get<double>(), 0.01);
+  EXPECT_TRUE(caustics["print_mesh"].get<std::string>().starts_with("one height field")) << caustics["print_mesh"];
+  EXPECT_GT(caustics["ssim"].get<double>(), caustics["initial_ssim"].get<double>() + 0.1);
+  expect_admesh_clean(dir_ / "run/print/surface.stl");
+  const std::string setup = "--distance 200 --image 48 48 --rays 576 576";
+  const auto printed = caustic_check(dir_ / "run/print/surface.stl", goal, setup);
+  const auto flat = caustic_check(kDatasets / "meshes/board_60x60x8.stl", goal, setup);
+  EXPECT_GT(printed["ssim"].get<double>(), flat["ssim"].get<double>() + 0.1) << printed << flat;
+  EXPECT_NEAR(result["headline"]["ssim"].get<double>(), printed["ssim"].get<double>(), 1e-8);
+  // 24 x 24 lenses are farther from the transport's map (each one's map is
+  // affine): steps over 0.01 mm, so each lens is its own grid with walls,
+  // and the walls where lenses meet within a rounding leave no degenerate
+  // facet.
+  const Result walls = run_spec2fab("run -q " + experiment("walls", body("transport", 24, 2)).string() + " --out " +
+                                    (dir_ / "walls").string());
+  ASSERT_EQ(walls.code, 0) << walls.out;
+  const auto walled = nlohmann::json::parse(read(dir_ / "walls" / "result.json"))["caustics"];
+  EXPECT_GT(walled["stitch"]["max_step_mm"].get<double>(), 0.01);
+  EXPECT_EQ(walled["print_mesh"], "2 x 2 cells per facet, walls between facets");
+  expect_admesh_clean(dir_ / "walls/print/surface.stl");
 }
 
 TEST_F(Cli, CausticsTextureTunesTheTextureThenTheBottomFaceThroughItsShadow) {
@@ -1311,7 +1374,9 @@ TEST_F(Cli, CausticsTextureTunesTheTextureThenTheBottomFaceThroughItsShadow) {
   EXPECT_NEAR(headline["absorbed"].get<double>(), 1 - texture["transmittance"]["mean"].get<double>(), 0.05) << headline;
   EXPECT_GT(headline["absorbed"].get<double>(), 0.05) << headline;
   EXPECT_EQ(headline["simulated_ssim"], caustics["ssim"]);
-  EXPECT_TRUE(headline.contains("splatted_ssim")) << headline;  // the simulator traces rays here
+  // The simulator traces rays here: where the two differ, the file traced
+  // again at its ray count, splatted as it splats.
+  EXPECT_EQ(headline.contains("splatted_ssim"), std::abs(headline["ssim_difference"].get<double>()) > 0.02) << headline;
   EXPECT_EQ(png_size(dir_ / "window/preview/print_traced.png"), (std::array<int, 2>{2 * 48 + 8, 48}));
   // Texture: goal | printed | transmittance, 8 columns at 32 px each.
   EXPECT_EQ(png_size(dir_ / "window/preview/texture.png"), (std::array<int, 2>{3 * 256 + 2 * 8, 256}));

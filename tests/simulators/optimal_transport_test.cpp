@@ -109,6 +109,41 @@ TEST(OptimalTransport, RefusesUnusableMasses) {
   EXPECT_THROW(solve_semi_discrete_transport(kSquare, sites, std::vector<double>{1, 1}), InputError);
 }
 
+// What each square of the footprint sends (facet_caustics "targets":
+// "transport"): for a goal of density ∝ 1 + 0.8 u across and even along y,
+// the monotone map's mean and its local stretch. A square of side s sends
+// its light spread as s/√12 times the map's derivative across (1/(1 + 0.8
+// t) in the receiver's half-size units, the pixels' boxes included) and
+// s/√12 along y, where the map is the identity; in millimetres.
+TEST(CausticStart, SquareTargetsAreTheTransportsMeanAndLocalStretch) {
+  CausticSetup s;
+  s.width_mm = s.depth_mm = 20;
+  s.receiver_width_mm = s.receiver_depth_mm = 20;
+  s.receiver_centre_mm = Vec2(3, -1);
+  s.image_width = s.image_height = 48;
+  std::vector<double> goal;
+  for (int row = 0; row < 48; ++row)
+    for (int col = 0; col < 48; ++col) goal.push_back(1 + 0.8 * (2 * (col + 0.5) / 48 - 1));
+  const int m = 8;
+  const std::vector<TransportMoments> squares = transport_square_targets(s, goal, m, m);
+  ASSERT_EQ(squares.size(), 64u);
+  const double side = 20.0 / m;
+  for (int j = 0; j < m; ++j)
+    for (int i = 0; i < m; ++i) {
+      SCOPED_TRACE(testing::Message() << i << ", " << j);
+      const TransportMoments& q = squares[static_cast<size_t>(j * m + i)];
+      // The map across at the square's centre x: (t + 1 + 0.4 (t² − 1)) = (x + 1), half-size units.
+      const double x = -1 + 2.0 * (i + 0.5) / m, c = -(x + 1) - 0.4 + 1;
+      const double t = (-1 + std::sqrt(1 - 4 * 0.4 * c)) / (2 * 0.4), stretch = 1 / (1 + 0.8 * t);
+      EXPECT_NEAR(q.mean.x(), 3 + 10 * t, 0.3);
+      EXPECT_NEAR(q.mean.y(), -1 - 10 + (j + 0.5) * side, 0.05);
+      EXPECT_NEAR(std::sqrt(q.covariance(1, 1)), side / std::sqrt(12.0), 0.02 * side / std::sqrt(12.0));
+      EXPECT_NEAR(std::sqrt(q.covariance(0, 0)), stretch * side / std::sqrt(12.0), 0.1 * stretch * side / std::sqrt(12.0));
+      EXPECT_LT(std::abs(q.covariance(0, 1)), 0.05 * q.covariance(1, 1));
+      EXPECT_NEAR(q.mass, 4.0 / 64, 1e-9);
+    }
+}
+
 TEST(CausticStart, TransportStartCastsTheGoal) {
   // A ring and a dot on 120 × 120 pixels, 60 mm slab, receiver 200 mm
   // below: the smooth estimator's image of the start against the goal.

@@ -350,9 +350,10 @@ SurfaceStlReport check_caustic_surface_stl(const CausticSlabConfig& slab, std::a
 /// pixel along each axis) under the slab's light, receiver and image, against
 /// `goal_image` (the experiment's picture, which caustic_check reads and
 /// scales itself); goal | traced goes to preview/print_traced.png. Where
-/// the simulator's image came from its ray tracer (the rays estimator),
-/// the trace is also scored blurred as its bilinear splat blurs. The
-/// agreement is left to explain_headline.
+/// the simulator's image came from its ray tracer (the rays estimator) and
+/// the two differ by more than kHeadlineAgreement, the file is traced again
+/// at the simulator's ray count and scored blurred as its bilinear splat
+/// blurs. The agreement is left to explain_headline.
 PrintHeadline trace_print_independently(const CausticSlabConfig& slab, const std::filesystem::path& goal_image,
                                         std::array<int, 2> rays, double simulated_ssim, RunFolder& folder,
                                         const PrintFrame& frame = PrintFrame());

@@ -36,6 +36,7 @@
 #include <cmath>
 #include <numeric>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/SparseCholesky>
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -44,6 +45,7 @@
 #include "caustic_translation.h"
 #include "facet_stitching.h"
 #include "caustics/caustic_parts.h"
+#include "caustics/caustic_start.h"
 #include "caustics/facet_beam_simulator.h"
 #include "caustics/gaussian_kernels.h"
 #include "core/distance.h"
@@ -95,18 +97,22 @@ struct AimReport {
 /// result.json "caustics".
 struct FacetCausticsReport {
   CausticImageReport image;
-  KernelFit kernels;
+  std::string targets;
+  std::optional<KernelFit> kernels;
   std::array<int, 2> facets{};
   std::array<double, 2> facet_mm{};
+  std::string print_mesh;
   SwapRecord assignment;
   AimReport aim;
   StitchReport stitch;
   template <class Fields, class Self>
   static void fields(Fields& f, Self& s) {
     f(s.image, "", "the traced slab's image");
-    f(s.kernels, "kernels", "the kernels the facets aim for");
+    f(s.targets, "targets", "what the facets aim at: transport or kernels (goal.targets)");
+    f(s.kernels, "kernels", "the kernels the facets aim for (targets: kernels)");
     f(s.facets, "facets", "facets along x and y");
     f(s.facet_mm, "facet_mm", "a facet's size");
+    f(s.print_mesh, "print_mesh", "how the traced and printed slab is meshed");
     f(s.assignment, "assignment", "the swap phase");
     f(s.aim, "aim", "the aim phase");
     f(s.stitch, "stitch", "the facets' offsets stitched");
@@ -118,8 +124,8 @@ class FacetCausticsTranslator final : public TuningTranslator {
   /// Its own goal keys; the caustic piece declares the rest.
   struct Options {
     std::array<int, 2> facets{45, 45};
-    std::string facet = "lens";
-    int lens_subdivisions = 16, lens_rays = 4;
+    std::string facet = "lens", targets = "transport";
+    int lens_subdivisions = 16, lens_rays = 4, lens_refinement_levels = 0;
     double min_height_mm = kUnset, start_height_mm = kUnset, max_slope = 1;
     int kernel_iterations = 20, assignment_sweeps = 200;
     template <class Declare, class Self>
@@ -128,8 +134,17 @@ class FacetCausticsTranslator final : public TuningTranslator {
       d.choice(o.facet, "facet", {"lens", "plane"},
                "each facet's shape: a paraboloid that aims and spreads its light like its kernel, or a "
                "plane that only aims it (casting a sharp copy of itself)");
+      d.choice(o.targets, "targets", {"transport", "kernels"},
+               "what each facet aims at: where optimal transport sends its square's light (the mean, and for a lens "
+               "the spread: facets then tile the receiver as the transport does, no swap phase), or one of as many "
+               "equal-flux Gaussian kernels of the goal, assigned by annealing swaps (the paper's)");
       d.number(o.lens_subdivisions, "lens_subdivisions", Range::closed(1, 64),
                "cells along each side of a lens in the traced and printed mesh");
+      d.number(o.lens_refinement_levels, "lens_refinement_levels", Range::closed(0, 3),
+               "with targets \"transport\", whose lenses meet within a printer's resolution: the lenses are meshed "
+               "as one height field, each of their cells split in halves up to this many times where the light "
+               "spreads (adaptive_caustic_slab_mesh; the steps between lenses, at most 0.01 mm, bridged); 0: each "
+               "lens on its own grid with walls between");
       d.number(o.lens_rays, "lens_rays", Range::closed(2, 64), "rays along each side of a lens while tuning it");
       d.number(o.min_height_mm, "min_height_mm", Range::above(0), "lowest a facet may go",
                Default{"1/4 of the solid's height"});
@@ -138,7 +153,7 @@ class FacetCausticsTranslator final : public TuningTranslator {
       d.number(o.max_slope, "max_slope", Range::closed(1e-3, 10), "steepest facet (|dh/dx|, |dh/dy|)");
       d.number(o.kernel_iterations, "kernel_iterations", Range::closed(0, 1000), "EM iterations refining the kernels");
       d.number(o.assignment_sweeps, "assignment_sweeps", Range::closed(0, 1e6),
-               "serial sweeps of the swap phase (0: no swaps)");
+               "serial sweeps of the swap phase (0: no swaps; targets: kernels only)");
     }
     bool check(std::string* why) const {
       const long long cells = static_cast<long long>(facets[0]) * facets[1] *
@@ -175,20 +190,25 @@ class FacetCausticsTranslator final : public TuningTranslator {
   }
 
   std::string summary() const override {
+    const std::string targets =
+        transport_targets_
+            ? std::string("each facet's target where optimal transport sends its square's light")
+            : fmt::format("the goal as {} equal-flux Gaussian kernels; annealing swaps kernels between neighbouring "
+                          "facets for a smooth surface ({} sweeps)",
+                          kernels_.size(), sweeps_);
     return fmt::format(
-        "facet caustics: a {} slab, top {} x {} {} ({:.3g} x {:.3g} mm); the goal as {} "
-        "equal-flux Gaussian kernels; annealing swaps kernels between neighbouring facets for a "
-        "smooth surface ({} sweeps), then each facet's tuner (facet_beam, squared_distance, {}) "
-        "{}; light cast {} mm below on a {:g} x {:g} mm receiver ({} x {} px)",
+        "facet caustics: a {} slab, top {} x {} {} ({:.3g} x {:.3g} mm); {}, then each facet's tuner "
+        "(facet_beam, squared_distance, {}) {}; light cast {} mm below on a {:g} x {:g} mm receiver ({} x {} px)",
         settings_.material, facets_[0], facets_[1], lens_ ? "micro-lenses (paraboloids)" : "planar facets",
-        facet_mm_[0], facet_mm_[1], kernels_.size(), sweeps_, aim_label_,
-        lens_ ? "aims its lens and bends it to spread the light like its kernel" : "aims its plane", settings_.distance_mm, settings_.receiver_mm[0], settings_.receiver_mm[1], settings_.image[0],
+        facet_mm_[0], facet_mm_[1], targets, aim_label_,
+        lens_ ? "aims its lens and bends it to spread the light like its target" : "aims its plane",
+        settings_.distance_mm, settings_.receiver_mm[0], settings_.receiver_mm[1], settings_.image[0],
         settings_.image[1]);
   }
 
   /// What the report compares with: the kernels' image and the flat slab's.
   void prepare(RunContext& /*context*/) override {
-    kernel_image_ = render_kernels(kernels_, setup_.width_mm * setup_.depth_mm, raster_);
+    if (!transport_targets_) kernel_image_ = render_kernels(kernels_, setup_.width_mm * setup_.depth_mm, raster_);
     flat_ = trace_surface(nullptr);
   }
 
@@ -198,21 +218,39 @@ class FacetCausticsTranslator final : public TuningTranslator {
                                                      slab().lower.z() + low_mm_, slab().upper.z());
 
     Mesh slab;
-    const std::vector<double> achieved = trace_surface(&slab);
+    // Lenses that meet within the printer's resolution print as one height
+    // field, refined where the light spreads.
+    const bool continuous = lens_ && transport_targets_ && options_.lens_refinement_levels > 0 &&
+                            stitch.max_step_mm <= kBridgedStepMm;
+    const std::vector<double> achieved = trace_surface(&slab, continuous);
     const double energy_start = swaps_->energies().empty() ? roughness(network_) : swaps_->energies().front();
     FacetCausticsReport report;
     report.image = settings_.image_report(achieved, flat_, goal);
-    report.kernels = {caustic_image_errors(kernel_image_, goal), kernels_.size()};
+    report.targets = transport_targets_ ? "transport" : "kernels";
+    if (!transport_targets_) report.kernels = KernelFit{caustic_image_errors(kernel_image_, goal), kernels_.size()};
     report.facets = facets_;
     report.facet_mm = facet_mm_;
+    report.print_mesh =
+        continuous ? fmt::format("one height field, {} x {} cells per lens split in halves up to {} times where "
+                                 "the light spreads; steps of up to {:.2g} mm between lenses bridged",
+                                 subdivisions_, subdivisions_, options_.lens_refinement_levels, stitch.max_step_mm)
+                   : fmt::format("{} x {} cells per facet, walls between facets", subdivisions_, subdivisions_);
+    if (options_.lens_refinement_levels > 0 && !continuous)
+      spdlog::warn("lens_refinement_levels not used: steps between lenses reach {:.3g} mm, over the {:g} mm a print "
+                   "bridges; each lens is meshed on its own grid with walls",
+                   stitch.max_step_mm, kBridgedStepMm);
     report.assignment = {sweeps_, energy_start, roughness(network_), swaps_->energies()};
     report.aim = aim_report();
     report.stitch = stitch;
     context.report.add("caustics", report);
     simulated_ssim_ = report.image.achieved.ssim;
 
-    write_caustic_panels({goal.pixels, kernel_image_, achieved}, goal.width, goal.height,
-                         context.folder.path("preview/goal_vs_simulated.png"));
+    if (transport_targets_)
+      write_caustic_panels({goal.pixels, achieved}, goal.width, goal.height,
+                           context.folder.path("preview/goal_vs_simulated.png"));
+    else
+      write_caustic_panels({goal.pixels, kernel_image_, achieved}, goal.width, goal.height,
+                           context.folder.path("preview/goal_vs_simulated.png"));
     std::vector<double> centre_heights;
     for (size_t k = 0; k < network_.size(); ++k)
       centre_heights.push_back(plane(k).surface_height(0.5 * facet_mm_[0], 0.5 * facet_mm_[1]));
@@ -290,6 +328,16 @@ class FacetCausticsTranslator final : public TuningTranslator {
                                          "between min_height_mm and the top",
                                          facet_mm_[0], facet_mm_[1], max_slope_, size.z() - low_mm_));
     sweeps_ = options_.assignment_sweeps;
+    transport_targets_ = options_.targets == "transport";
+    if (transport_targets_) {
+      if (goal.has("assignment_sweeps"))
+        goal.fail("assignment_sweeps", "the transport's targets are already the best assignment: no swap phase "
+                                       "(\"targets\": \"kernels\" has one)");
+      sweeps_ = 0;
+    }
+    if (options_.lens_refinement_levels > 0 && !(transport_targets_ && lens_))
+      goal.fail("lens_refinement_levels", "refines lenses aimed at the transport's targets (\"targets\": "
+                                          "\"transport\", \"facet\": \"lens\"), whose lenses meet without walls");
   }
 
   /// The goal image as irradiance, then as one equal-flux kernel per facet.
@@ -299,7 +347,13 @@ class FacetCausticsTranslator final : public TuningTranslator {
     raster_.height = settings_.image[1];
     raster_.size_mm = {settings_.receiver_mm[0], settings_.receiver_mm[1]};
     raster_.centre_mm = slab().center().head<2>();
-    kernels_ = fit_equal_mass_kernels(target().pixels, raster_, facets_[0], facets_[1], options_.kernel_iterations);
+    if (transport_targets_) {
+      // The tracer's frame (footprint centred on the origin) to the subtree's.
+      square_targets_ = transport_square_targets(setup_, target().pixels, facets_[0], facets_[1]);
+      for (TransportMoments& m : square_targets_) m.mean += slab().center().head<2>();
+    } else {
+      kernels_ = fit_equal_mass_kernels(target().pixels, raster_, facets_[0], facets_[1], options_.kernel_iterations);
+    }
   }
 
   /// Column (facets) → per column a Plane or Paraboloid, clear below, void above.
@@ -351,9 +405,20 @@ class FacetCausticsTranslator final : public TuningTranslator {
         beam.distance_mm = settings_.distance_mm;
         beam.spread = lens_;
         beam.rays = options_.lens_rays;
-        const double sigma = kernels_[k].sigma_mm;
-        const Eigen::Vector2d centre = kernels_[k].centre_mm;
-        std::vector<double> target = lens_ ? std::vector<double>{centre.x(), centre.y(), sigma, 0.0, 0.0, sigma}
+        // The spot's centroid, and for a lens the square root of its covariance.
+        Eigen::Vector2d centre;
+        Eigen::Matrix2d spread;
+        if (transport_targets_) {
+          const TransportMoments& m = square_targets_[k];
+          centre = m.mean;
+          Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(m.covariance);
+          spread = eigen.operatorSqrt();
+        } else {
+          centre = kernels_[k].centre_mm;
+          spread = kernels_[k].sigma_mm * Eigen::Matrix2d::Identity();
+        }
+        std::vector<double> target = lens_ ? std::vector<double>{centre.x(), centre.y(), spread(0, 0), spread(0, 1),
+                                                                 spread(1, 0), spread(1, 1)}
                                            : std::vector<double>{centre.x(), centre.y()};
         auto tuner = make_tuner(fmt::format("facet_{}_{}", i, j), make_facet_beam_simulator(beam),
                                 std::make_unique<SquaredDistance>(), std::make_unique<FixedValuesGoal>(std::move(target)),
@@ -428,9 +493,37 @@ class FacetCausticsTranslator final : public TuningTranslator {
 
   FacetGrid grid() const { return {facets_, facet_mm_}; }
 
+  /// The steps between lenses a print may bridge: under a third of the
+  /// J750's 0.027 mm layer.
+  static constexpr double kBridgedStepMm = 0.01;
+
+  /// The lenses' height at (a, b) in the subtree's frame: the facet under
+  /// the point (the higher-index one on a shared edge).
+  double lens_height(double a, double b) const {
+    const int i = std::clamp(static_cast<int>(std::floor((a - slab().lower.x()) / facet_mm_[0])), 0, facets_[0] - 1);
+    const int j = std::clamp(static_cast<int>(std::floor((b - slab().lower.y()) / facet_mm_[1])), 0, facets_[1] - 1);
+    return plane(facet_index(i, j))
+        .surface_height(a - slab().lower.x() - i * facet_mm_[0], b - slab().lower.y() - j * facet_mm_[1]);
+  }
+
+  /// A height field given by a function (w over (a, b)), for the mesher.
+  class LensField final : public HeightSurface {
+   public:
+    explicit LensField(std::function<double(double, double)> height) : height_(std::move(height)) {}
+    int height_axis() const override { return 2; }
+    double surface_height(double a, double b) const override { return height_(a, b); }
+    void visit_height_derivatives(double, double, const HeightDerivativeVisitor&) const override {
+      throw std::logic_error("LensField: no parameters");
+    }
+
+   private:
+    std::function<double(double, double)> height_;
+  };
+
   /// The faceted slab as it stands, traced; `mesh` (when given) receives it
-  /// in world coordinates.
-  std::vector<double> trace_surface(Mesh* mesh) const {
+  /// in world coordinates. `continuous`: the lenses as one height field,
+  /// refined where the light spreads (lens_refinement_levels).
+  std::vector<double> trace_surface(Mesh* mesh, bool continuous = false) const {
     // Each facet as m × m cells (m = 1 for planes: exact), their corners on
     // the facet's surface: neighbouring cells of one lens meet without a step.
     const int m = subdivisions_, nx = facets_[0] * m, ny = facets_[1] * m;
@@ -445,7 +538,17 @@ class FacetCausticsTranslator final : public TuningTranslator {
              p.surface_height(a0, b0 + b)};
         for (double& z : h) z -= slab().lower.z();
       }
-    Mesh faceted = faceted_slab_mesh(setup_, nx, ny, heights);
+    Mesh faceted;
+    if (continuous) {
+      CausticSetup grid_setup = setup_;
+      grid_setup.vertices_x = nx + 1;
+      grid_setup.vertices_y = ny + 1;
+      const LensField field([this](double a, double b) { return lens_height(a, b); });
+      faceted = adaptive_caustic_slab_mesh(grid_setup, field, slab().lower, options_.lens_refinement_levels);
+      for (Vec3& v : faceted.vertices) v -= slab_offset(setup_, slab().lower);  // to the tracer's frame
+    } else {
+      faceted = faceted_slab_mesh(setup_, nx, ny, heights);
+    }
     std::vector<double> image(static_cast<size_t>(setup_.image_width) * static_cast<size_t>(setup_.image_height));
     // As many rays as the print's own check uses (8 per pixel pitch): each
     // facet's spot is a sharp shape that fewer rays would speckle.
@@ -487,6 +590,8 @@ class FacetCausticsTranslator final : public TuningTranslator {
   Options options_;
   std::unique_ptr<GoalFor<ImageObservation>> image_goal_;
   std::vector<GaussianKernel> kernels_;
+  bool transport_targets_ = true;
+  std::vector<TransportMoments> square_targets_;  ///< targets: transport (subtree frame)
   std::vector<Eigen::Vector2d> centres_;
   std::shared_ptr<NeighbourSwaps> swaps_;
   std::vector<double> kernel_image_, flat_;  ///< the kernels' image; the flat slab's
