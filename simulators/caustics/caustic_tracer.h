@@ -229,28 +229,6 @@ Eigen::Matrix<T, 2, 1> top_receiver_point(const CausticSetup& s, const Eigen::Ve
   return landing;
 }
 
-/// Where a ray from `origin` along `direction` (unit) lands on the receiver
-/// plane z = receiver_z after entering the top triangle with lateral corners
-/// `xy` (counter-clockwise seen from above) and heights `h`, and leaving
-/// through the flat bottom z = 0. NaN when it cannot (pass_through_slab).
-template <class T>
-Eigen::Matrix<T, 2, 1> slab_receiver_point(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
-                                           const Eigen::Vector2d xy[3], const T h[3], double eta,
-                                           double receiver_z) {
-  using std::sqrt;
-  using V = Eigen::Matrix<T, 3, 1>;
-  const V p0(T(xy[0].x()), T(xy[0].y()), h[0]), p1(T(xy[1].x()), T(xy[1].y()), h[1]),
-      p2(T(xy[2].x()), T(xy[2].y()), h[2]);
-  V n = (p1 - p0).cross(p2 - p0);
-  n /= sqrt(n.dot(n));
-  const V o = origin.cast<T>(), d = direction.cast<T>();
-  const V hit = o + (n.dot(p0 - o) / n.dot(d)) * d;
-  SlabPassage<T> pass;
-  if (!pass_through_slab(direction, n, eta, pass))
-    return Eigen::Matrix<T, 2, 1>::Constant(T(std::numeric_limits<double>::quiet_NaN()));
-  return slab_landing(hit, pass, receiver_z);
-}
-
 /// Whether the image's columns run towards −x: seen from the side of the
 /// receiver the slab is not on (image_from_behind) for a lens, and from the
 /// slab's side, looking up, for a mirror, unless image_from_behind.

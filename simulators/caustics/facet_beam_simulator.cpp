@@ -6,7 +6,7 @@
 // of rays over the facet, each refracted at the surface's tangent plane,
 // gives the spot's centroid and spread (the symmetric square root of its
 // covariance), which a tuner matches to its Gaussian kernel's. Rays use the
-// caustic tracer's own refraction (slab_receiver_point: into the facet, out
+// caustic tracer's own refraction (top_receiver_point: into the facet, out
 // through the flat bottom, onto the receiver). Walls between facets and
 // neighbours' shadows are left to the full tracer, which the facet
 // translator runs on the finished surface.
@@ -38,8 +38,9 @@ class FacetBeamSimulator final : public SimulatorFor<VectorObservation> {
     size_ = {options.facet_mm[0], options.facet_mm[1]};
     origin_ = {options.facet_origin_mm[0], options.facet_origin_mm[1]};
     bottom_ = options.bottom_mm;
-    eta_ = options.refractive_index;
-    distance_ = options.distance_mm;
+    // The slab's refraction, as the caustic tracer sends light from its top.
+    slab_.refractive_index = options.refractive_index;
+    slab_.receiver_distance_mm = options.distance_mm;
     light_ = Eigen::Vector3d(options.light[0], options.light[1], options.light[2]).normalized();
     spread_ = options.spread;
     rays_ = options.rays;
@@ -113,7 +114,7 @@ class FacetBeamSimulator final : public SimulatorFor<VectorObservation> {
     const double heights[3] = {centre, centre + step * slope_a, centre + step * slope_b};
     // A point one unit up the beam from the surface point.
     const Eigen::Vector3d start = Eigen::Vector3d(at.x(), at.y(), centre) + light_ / light_.z();
-    return slab_receiver_point(start, light_, xy, heights, eta_, -distance_);
+    return top_receiver_point(slab_, start, light_, xy, heights);
   }
 
   // The subtree as a height surface, remembered: the swap phase simulates
@@ -132,7 +133,8 @@ class FacetBeamSimulator final : public SimulatorFor<VectorObservation> {
   const ReducerNode* node_ = nullptr;
   const HeightSurface* surface_ = nullptr;
   Eigen::Vector2d size_, origin_;
-  double bottom_ = 0, eta_ = 1.5, distance_ = 100;
+  double bottom_ = 0;
+  CausticSetup slab_;  ///< index and receiver distance: what top_receiver_point reads
   Eigen::Vector3d light_{0, 0, -1};
   bool spread_ = false;
   int rays_ = 8;
