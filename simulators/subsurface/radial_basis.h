@@ -14,6 +14,7 @@
 /// frequency domain (layered diffusion) therefore never need a transform at
 /// run time; samples at radii are produced only for output.
 
+#include <cstddef>
 #include <memory>
 #include <span>
 #include <vector>
@@ -31,6 +32,11 @@ class RadialBasis {
 
   int size() const { return static_cast<int>(frequencies_.size()); }
   double radius_mm() const { return radius_mm_; }
+  /// Its tables' bytes (size² + 5·size doubles), for a RunCache's budget.
+  std::size_t cached_bytes() const {
+    return sizeof(*this) + sizeof(double) * (basis_at_radii_.size() + frequencies_.size() + scale_.size() +
+                                             radii_.size() + basis_integrals_.size());
+  }
   /// k_m (rad/mm), ascending.
   std::span<const double> frequencies() const { return frequencies_; }
   /// a_m / F(k_m).

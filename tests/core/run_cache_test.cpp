@@ -2,6 +2,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "core/run_cache.h"
 
@@ -38,6 +39,52 @@ TEST(RunCache, BoundedDropsWhatWasAskedForLeastRecently) {
   ask(cache, "table 0", made);
   EXPECT_EQ(made, 12) << "an early table was dropped and is made again";
   EXPECT_EQ(*library, 1) << "a dropped value lives on in whoever holds it";
+}
+
+// A table that says what it weighs, as a radial basis does.
+struct Table {
+  std::vector<double> values;
+  std::size_t cached_bytes() const { return values.size() * sizeof(double); }
+};
+
+std::shared_ptr<const Table> ask_table(RunCache& cache, const std::string& key, size_t doubles, int& made) {
+  return cache.get<const Table>(key, [&] {
+    ++made;
+    return std::make_shared<const Table>(Table{std::vector<double>(doubles)});
+  });
+}
+
+TEST(RunCache, ByteBudgetDropsHeavyValuesAndKeepsTheOneJustMade) {
+  RunCache cache(100, 1000 * sizeof(double));
+  int made = 0;
+  ask_table(cache, "library", 10, made);
+  ask_table(cache, "a", 400, made);
+  ask_table(cache, "b", 400, made);
+  EXPECT_EQ(cache.size(), 3u);
+  EXPECT_EQ(cache.bytes(), 810 * sizeof(double));
+  ask_table(cache, "library", 10, made);  // asked again: the most recent but one
+  ask_table(cache, "c", 400, made);       // 1,210 doubles: "a", the least recent, goes
+  EXPECT_EQ(cache.size(), 3u);
+  EXPECT_EQ(cache.bytes(), 810 * sizeof(double));
+  EXPECT_EQ(made, 4);
+  ask_table(cache, "b", 400, made);
+  EXPECT_EQ(made, 4) << "b is still held";
+  ask_table(cache, "a", 400, made);
+  EXPECT_EQ(made, 5) << "a was dropped and is made again";
+
+  // Heavier than the whole budget: it stays alone, as whoever asked holds it.
+  const auto huge = ask_table(cache, "huge", 5000, made);
+  EXPECT_EQ(cache.size(), 1u);
+  EXPECT_EQ(cache.bytes(), 5000 * sizeof(double));
+  EXPECT_EQ(ask_table(cache, "huge", 5000, made), huge);
+  ask_table(cache, "library", 10, made);
+  EXPECT_EQ(cache.size(), 1u) << "the huge table goes as soon as anything else comes";
+  EXPECT_EQ(cache.bytes(), 10 * sizeof(double));
+}
+
+TEST(RunCache, ValuesWithoutAWeightCountTheirSize) {
+  EXPECT_EQ(cached_bytes_of(42), sizeof(int));
+  EXPECT_EQ(cached_bytes_of(Table{std::vector<double>(7)}), 7 * sizeof(double));
 }
 
 }  // namespace

@@ -71,5 +71,12 @@ TEST(RadialBasis, SharedBasesAreBuiltOnce) {
   EXPECT_NE(RadialBasis::shared(64, 5.0, nullptr), RadialBasis::shared(64, 5.0, nullptr));
 }
 
+TEST(RadialBasis, WeighsItsTableInARunCache) {
+  RunCache run;
+  RadialBasis::shared(512, 5.0, &run);
+  EXPECT_GE(run.bytes(), 512u * 512u * sizeof(double)) << "the size² table counts";
+  EXPECT_LT(run.bytes(), 512u * 512u * sizeof(double) + 65536u);
+}
+
 }  // namespace
 }  // namespace spec2fab
