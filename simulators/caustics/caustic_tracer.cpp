@@ -147,6 +147,14 @@ CausticTracer::CausticTracer(const CausticSetup& setup, std::vector<Eigen::Vecto
 
 void CausticTracer::build_scene() {
   normals_.resize(triangles_.size());
+  // Only rays meet the slab through Embree; the facet and smooth estimators
+  // follow the top's facets or vertices themselves. Without a scene they
+  // neither build a hierarchy (the headline's check of an exported file)
+  // nor refit one at every set_heights (each evaluation while tuning).
+  if (setup_.estimator != CausticSetup::Estimator::rays) {
+    update_vertex_buffer();
+    return;
+  }
   results_.resize(static_cast<size_t>(setup_.rays_x) * static_cast<size_t>(setup_.rays_y));
   scene_ = std::make_unique<Scene>();
   Scene& s = *scene_;
@@ -186,6 +194,7 @@ void CausticTracer::set_heights(std::span<const double> heights_mm) {
   }
   std::copy(heights_mm.begin(), heights_mm.end(), heights_.begin());
   update_vertex_buffer();
+  if (!scene_) return;
   rtcUpdateGeometryBuffer(scene_->geometry, RTC_BUFFER_TYPE_VERTEX, 0);
   rtcCommitGeometry(scene_->geometry);
   rtcCommitScene(scene_->scene);
@@ -196,7 +205,8 @@ void CausticTracer::update_vertex_buffer() {
   top_z_ = 0;
   for (size_t v = 0; v < vertices_.size(); ++v) {
     top_z_ = std::max(top_z_, vertices_[v].z());
-    for (int k = 0; k < 3; ++k) scene_->vertex_buffer[3 * v + static_cast<size_t>(k)] = static_cast<float>(vertices_[v][k]);
+    if (scene_)
+      for (int k = 0; k < 3; ++k) scene_->vertex_buffer[3 * v + static_cast<size_t>(k)] = static_cast<float>(vertices_[v][k]);
   }
   // Rays start just above the highest point: the beam's cross-section at the
   // slab is the footprint.

@@ -245,12 +245,11 @@ class FacetCausticsTranslator final : public TuningTranslator {
     context.report.add("caustics", report);
     simulated_ssim_ = report.image.achieved.ssim;
 
-    if (transport_targets_)
-      write_caustic_panels({goal.pixels, achieved}, goal.width, goal.height,
-                           context.folder.path("preview/goal_vs_simulated.png"));
-    else
-      write_caustic_panels({goal.pixels, kernel_image_, achieved}, goal.width, goal.height,
-                           context.folder.path("preview/goal_vs_simulated.png"));
+    // The goal, the kernels' own image where the paper's targets were used, and what the lenses cast.
+    std::vector<std::span<const double>> panels{goal.pixels};
+    if (!transport_targets_) panels.emplace_back(kernel_image_);
+    panels.emplace_back(achieved);
+    write_caustic_panels(panels, goal.width, goal.height, context.folder.path("preview/goal_vs_simulated.png"));
     std::vector<double> centre_heights;
     for (size_t k = 0; k < network_.size(); ++k)
       centre_heights.push_back(plane(k).surface_height(0.5 * facet_mm_[0], 0.5 * facet_mm_[1]));
@@ -524,20 +523,8 @@ class FacetCausticsTranslator final : public TuningTranslator {
   /// in world coordinates. `continuous`: the lenses as one height field,
   /// refined where the light spreads (lens_refinement_levels).
   std::vector<double> trace_surface(Mesh* mesh, bool continuous = false) const {
-    // Each facet as m × m cells (m = 1 for planes: exact), their corners on
-    // the facet's surface: neighbouring cells of one lens meet without a step.
+    // Each facet as m × m cells (m = 1 for planes: exact).
     const int m = subdivisions_, nx = facets_[0] * m, ny = facets_[1] * m;
-    std::vector<std::array<double, 4>> heights(static_cast<size_t>(nx) * static_cast<size_t>(ny));
-    const double a = facet_mm_[0] / m, b = facet_mm_[1] / m;
-    for (int j = 0; j < ny; ++j)
-      for (int i = 0; i < nx; ++i) {
-        const HeightSurface& p = plane(facet_index(i / m, j / m));
-        const double a0 = (i % m) * a, b0 = (j % m) * b;
-        auto& h = heights[static_cast<size_t>(i) + static_cast<size_t>(nx) * static_cast<size_t>(j)];
-        h = {p.surface_height(a0, b0), p.surface_height(a0 + a, b0), p.surface_height(a0 + a, b0 + b),
-             p.surface_height(a0, b0 + b)};
-        for (double& z : h) z -= slab().lower.z();
-      }
     Mesh faceted;
     if (continuous) {
       CausticSetup grid_setup = setup_;
@@ -547,6 +534,19 @@ class FacetCausticsTranslator final : public TuningTranslator {
       faceted = adaptive_caustic_slab_mesh(grid_setup, field, slab().lower, options_.lens_refinement_levels);
       for (Vec3& v : faceted.vertices) v -= slab_offset(setup_, slab().lower);  // to the tracer's frame
     } else {
+      // Each cell's corners on its facet's surface: neighbouring cells of
+      // one lens meet without a step, lenses with a wall.
+      std::vector<std::array<double, 4>> heights(static_cast<size_t>(nx) * static_cast<size_t>(ny));
+      const double a = facet_mm_[0] / m, b = facet_mm_[1] / m;
+      for (int j = 0; j < ny; ++j)
+        for (int i = 0; i < nx; ++i) {
+          const HeightSurface& p = plane(facet_index(i / m, j / m));
+          const double a0 = (i % m) * a, b0 = (j % m) * b;
+          auto& h = heights[static_cast<size_t>(i) + static_cast<size_t>(nx) * static_cast<size_t>(j)];
+          h = {p.surface_height(a0, b0), p.surface_height(a0 + a, b0), p.surface_height(a0 + a, b0 + b),
+               p.surface_height(a0, b0 + b)};
+          for (double& z : h) z -= slab().lower.z();
+        }
       faceted = faceted_slab_mesh(setup_, nx, ny, heights);
     }
     std::vector<double> image(static_cast<size_t>(setup_.image_width) * static_cast<size_t>(setup_.image_height));
