@@ -252,6 +252,11 @@ std::string CausticSurfaceSettings::print_facets() const {
   return words;
 }
 
+std::string CausticSurfaceSettings::simulated_facets() const {
+  const std::array<int, 2> grid = vertices();
+  return fmt::format("{} x {} vertices, {} per control span", grid[0], grid[1], vertices_per_span);
+}
+
 NodePtr CausticSurfaceSettings::node(const std::string& axis, const std::array<double, 3>& heights_mm,
                                      const Bounds& footprint, const Parameter& material,
                                      const MaterialPalette& palette) const {
@@ -424,7 +429,24 @@ CausticImageErrors printed_facets_errors(const CausticSlabConfig& slab, const Me
   return caustic_image_errors(image, goal);
 }
 
-void explain_headline(PrintHeadline& headline, const std::string& facets) {
+CausticImageErrors printed_rays_errors(const CausticSlabConfig& slab, const Mesh& printed, const ImageObservation& goal,
+                                       const GridField* exit_filter) {
+  CausticSetup setup = slab.setup;
+  setup.estimator = CausticSetup::Estimator::rays;
+  if (exit_filter) {
+    setup.exit_cells = exit_filter->cells;
+    setup.exit_transmittance = exit_filter->values;
+  }
+  std::vector<Eigen::Vector3d> vertices = printed.vertices;
+  const Eigen::Vector3d offset = slab_offset(slab.setup, slab.origin_mm);
+  for (Eigen::Vector3d& v : vertices) v -= offset;
+  CausticTracer tracer(setup, std::move(vertices), printed.triangles);
+  std::vector<double> image(static_cast<size_t>(setup.image_width) * static_cast<size_t>(setup.image_height));
+  tracer.render(image);
+  return caustic_image_errors(image, goal);
+}
+
+void explain_headline(PrintHeadline& headline, const HeadlineMeshes& meshes) {
   const double traced = headline.traced.ssim;
   if (std::abs(headline.ssim_difference) <= kHeadlineAgreement) {
     headline.agreement = fmt::format("agree within {:g} SSIM", kHeadlineAgreement);
@@ -438,7 +460,17 @@ void explain_headline(PrintHeadline& headline, const std::string& facets) {
         "itself, a moire at facet pitch, strongest where the goal is dark; the simulator's facet estimator on the file's own "
         "facets gives {:.3f}, within {:g} of the trace, while the tuned smooth surface gives {:.3f}. More "
         "vertices per span (print_vertices_per_span) or refinement (print_refinement_levels) narrow it",
-        differ, facets, *headline.printed_facets_ssim, kHeadlineAgreement, headline.simulated_ssim);
+        differ, meshes.printed, *headline.printed_facets_ssim, kHeadlineAgreement, headline.simulated_ssim);
+    return;
+  }
+  if (headline.printed_rays_ssim && std::abs(*headline.printed_rays_ssim - traced) <= kHeadlineAgreement) {
+    headline.agreement = fmt::format(
+        "{}: the tuner simulated a coarser mesh ({}) than the file holds ({}). The simulator's own rays "
+        "estimator, at its ray count, on the file's mesh gives {:.3f}, within {:g} of the trace: the finer file "
+        "casts {} image than the tuner saw. More vertices per span (vertices_per_span) make the tuner see the "
+        "file's image, at more time per evaluation",
+        differ, meshes.simulated, meshes.printed, *headline.printed_rays_ssim, kHeadlineAgreement,
+        *headline.printed_rays_ssim > headline.simulated_ssim ? "a better" : "a worse");
     return;
   }
   if (headline.splatted_ssim && std::abs(*headline.splatted_ssim - headline.simulated_ssim) <= kHeadlineAgreement) {
@@ -454,6 +486,9 @@ void explain_headline(PrintHeadline& headline, const std::string& facets) {
   if (headline.printed_facets_ssim)
     tried.push_back(fmt::format("the simulator's facet estimator on the file's facets gives {:.3f}",
                                 *headline.printed_facets_ssim));
+  if (headline.printed_rays_ssim)
+    tried.push_back(fmt::format("the simulator's rays estimator on the file's mesh gives {:.3f}",
+                                *headline.printed_rays_ssim));
   if (headline.splatted_ssim)
     tried.push_back(fmt::format("caustic_check at the simulator's ray count, splatted as it splats, {:.3f}",
                                 *headline.splatted_ssim));

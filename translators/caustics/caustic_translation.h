@@ -156,7 +156,7 @@ struct PrintHeadline {
   CausticImageErrors traced;
   long long rays = 0;
   double simulated_ssim = 0, ssim_difference = 0;
-  std::optional<double> absorbed, printed_facets_ssim, splatted_ssim;
+  std::optional<double> absorbed, printed_facets_ssim, printed_rays_ssim, splatted_ssim;
   std::string agreement;
   template <class Fields, class Self>
   static void fields(Fields& f, Self& s) {
@@ -170,6 +170,9 @@ struct PrintHeadline {
     f(s.ssim_difference, "ssim_difference", "simulated_ssim minus the traced ssim");
     f(s.printed_facets_ssim, "printed_facets_ssim",
       "SSIM the simulator's facet estimator (exact, noise-free) gives the file's own flat facets");
+    f(s.printed_rays_ssim, "printed_rays_ssim",
+      "rays estimator: SSIM the simulator's own rays estimator (its ray count, its splat, the texture's filter) "
+      "gives the file's own mesh");
     f(s.splatted_ssim, "splatted_ssim",
       "rays estimator: SSIM of caustic_check at the simulator's ray count, blurred as its splat blurs "
       "(bilinear: 1/8, 3/4, 1/8 along each axis)");
@@ -314,6 +317,8 @@ struct CausticSurfaceSettings {
   /// print/surface.stl's facets in words: its grid, per control span, and
   /// any refinement.
   std::string print_facets() const;
+  /// The simulated surface's mesh in words: its grid and per control span.
+  std::string simulated_facets() const;
   /// The B-spline node: along `axis` ("z", or "w" under a cut), heights
   /// {value, min, max} in mm, `material` below and void above.
   NodePtr node(const std::string& axis, const std::array<double, 3>& heights_mm, const Bounds& footprint,
@@ -364,11 +369,26 @@ PrintHeadline trace_print_independently(const CausticSlabConfig& slab, const std
 CausticImageErrors printed_facets_errors(const CausticSlabConfig& slab, const Mesh& printed,
                                          const ImageObservation& goal);
 
-/// Fills headline.agreement: agreeing within kHeadlineAgreement, or why not
-/// (the file's facets, described by `facets`, when the facet estimator on
-/// them comes within it of the trace), or that the difference is not
-/// explained.
-void explain_headline(PrintHeadline& headline, const std::string& facets);
+/// The simulator's rays estimator as the tuner ran it (the slab's ray
+/// count and splat, through `exit_filter` when given) on `printed`, the
+/// file's mesh in the slab's subtree frame: the simulated figure of the
+/// surface the printer gets rather than of the tuner's own mesh.
+CausticImageErrors printed_rays_errors(const CausticSlabConfig& slab, const Mesh& printed, const ImageObservation& goal,
+                                       const GridField* exit_filter = nullptr);
+
+/// What the print's mesh and the tuner's were, in words, for the explanation.
+struct HeadlineMeshes {
+  std::string printed;    ///< print/surface.stl's facets (print_facets)
+  std::string simulated;  ///< the mesh the tuner simulated (simulated_facets), where it is another
+};
+
+/// Fills headline.agreement: agreeing within kHeadlineAgreement, or why not:
+/// the file's flat facets, when the facet estimator on them comes within it
+/// of the trace; the file's finer mesh, when the simulator's own rays
+/// estimator on the file does; the rays estimator's splat, when
+/// caustic_check at its ray count, blurred alike, comes within it of the
+/// simulated; else that the difference is not explained.
+void explain_headline(PrintHeadline& headline, const HeadlineMeshes& meshes);
 
 /// Whether fabrication wrote print/surface.stl: the "stl" print writer lists
 /// it among the run's print files (on the rank that writes them).

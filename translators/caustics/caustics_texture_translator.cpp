@@ -334,7 +334,13 @@ class CausticsTextureTranslator final : public TuningTranslator {
       frame.exit_filter = &shadow_field_;
       PrintHeadline headline = trace_print_independently(slab_, settings_.image_file, settings_.print_check_rays,
                                                          report_.image.achieved.ssim, context.folder, frame);
-      explain_headline(headline, surface_.print_facets());
+      if (std::abs(headline.ssim_difference) > kHeadlineAgreement) {
+        // The file in the subtree's frame again (the mirror is its own inverse).
+        Mesh unmirrored = printed;
+        mirror()(unmirrored);
+        headline.printed_rays_ssim = printed_rays_errors(slab_, unmirrored, target_, &shadow_field_).ssim;
+      }
+      explain_headline(headline, {surface_.print_facets(), surface_.simulated_facets()});
       context.report.files.previews.push_back(headline.preview);
       context.report.add("headline", headline);
     }

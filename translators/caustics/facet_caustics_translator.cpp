@@ -271,7 +271,7 @@ class FacetCausticsTranslator final : public TuningTranslator {
     config.setup.rays_y = std::max(setup_.rays_y, 8 * setup_.image_height);
     PrintHeadline headline = trace_print_independently(config, settings_.image_file, settings_.print_check_rays,
                                                        simulated_ssim_, context.folder, PrintFrame{context.timing});
-    explain_headline(headline, "");
+    explain_headline(headline, {});
     context.report.files.previews.push_back(headline.preview);
     context.report.add("headline", headline);
   }

@@ -228,7 +228,7 @@ class SmoothCausticsTranslator final : public TuningTranslator {
                                                          PrintFrame{context.timing});
       if (std::abs(headline.ssim_difference) > kHeadlineAgreement)
         headline.printed_facets_ssim = printed_facets_errors(slab_, print_surfaces_.front().mesh, target_).ssim;
-      explain_headline(headline, surface_.print_facets());
+      explain_headline(headline, {surface_.print_facets(), surface_.simulated_facets()});
       context.report.files.previews.push_back(headline.preview);
       context.report.add("headline", headline);
     }
