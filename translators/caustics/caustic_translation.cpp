@@ -467,8 +467,8 @@ void explain_headline(PrintHeadline& headline, const HeadlineMeshes& meshes) {
     headline.agreement = fmt::format(
         "{}: the tuner simulated a coarser mesh ({}) than the file holds ({}). The simulator's own rays "
         "estimator, at its ray count, on the file's mesh gives {:.3f}, within {:g} of the trace: the finer file "
-        "casts {} image than the tuner saw. More vertices per span (vertices_per_span) make the tuner see the "
-        "file's image, at more time per evaluation",
+        "casts {} image than the tuner saw. Tuning on the file's mesh (vertices_per_span equal to "
+        "print_vertices_per_span) makes the tuner see the file's image, at more time per evaluation",
         differ, meshes.simulated, meshes.printed, *headline.printed_rays_ssim, kHeadlineAgreement,
         *headline.printed_rays_ssim > headline.simulated_ssim ? "a better" : "a worse");
     return;
