@@ -12,12 +12,19 @@
 namespace spec2fab {
 namespace {
 
+// J0 and J1 from the C library (POSIX j0, j1), not std::cyl_bessel_j:
+// libstdc++'s general-order routine took 3.7 µs a call against glibc's
+// 41 ns (within 5e-13 of each other for x in [0, 1300]), and a basis of
+// `samples` n holds n² values: 4096 samples took ~25 s to tabulate.
+double bessel_j0(double x) { return ::j0(x); }
+double bessel_j1(double x) { return ::j1(x); }
+
 /// The m-th positive zero of J0 (m ≥ 1): McMahon's expansion refined by Newton (J0' = −J1).
 double bessel_j0_zero(int m) {
   const double beta = (m - 0.25) * std::numbers::pi;
   double x = beta + 1 / (8 * beta) - 31 / (384 * beta * beta * beta);
   for (int iteration = 0; iteration < 8; ++iteration) {
-    const double step = std::cyl_bessel_j(0.0, x) / std::cyl_bessel_j(1.0, x);
+    const double step = bessel_j0(x) / bessel_j1(x);
     x += step;
     if (std::abs(step) < 1e-15 * x) break;
   }
@@ -35,7 +42,7 @@ RadialBasis::RadialBasis(int size, double radius_mm) : radius_mm_(radius_mm) {
   for (size_t m = 0; m < n; ++m) {
     const double zero = bessel_j0_zero(static_cast<int>(m) + 1);
     frequencies_[m] = zero / radius_mm;
-    const double j1 = std::cyl_bessel_j(1.0, zero);
+    const double j1 = bessel_j1(zero);
     scale_[m] = 1 / (std::sqrt(std::numbers::pi) * radius_mm * std::abs(j1));
     // 2π ∫₀^R J0(k r) r dr = 2π R J1(j_m) / k_m.
     basis_integrals_.push_back(2 * std::numbers::pi * radius_mm * j1 / frequencies_[m] * scale_[m]);
@@ -44,7 +51,7 @@ RadialBasis::RadialBasis(int size, double radius_mm) : radius_mm_(radius_mm) {
   basis_at_radii_.resize(n * n);
   for (size_t i = 0; i < n; ++i) {
     for (size_t m = 0; m < n; ++m) {
-      basis_at_radii_[i * n + m] = std::cyl_bessel_j(0.0, frequencies_[m] * radii_[i]) * scale_[m];
+      basis_at_radii_[i * n + m] = bessel_j0(frequencies_[m] * radii_[i]) * scale_[m];
     }
   }
 }
@@ -95,7 +102,7 @@ double RadialBasis::evaluate(std::span<const double> coefficients, int channels,
   const auto c = static_cast<size_t>(channels);
   double sum = 0;
   for (size_t m = 0; m < frequencies_.size(); ++m) {
-    sum += std::cyl_bessel_j(0.0, frequencies_[m] * r_mm) * scale_[m] *
+    sum += bessel_j0(frequencies_[m] * r_mm) * scale_[m] *
            coefficients[m * c + static_cast<size_t>(channel)];
   }
   return sum;
