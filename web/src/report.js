@@ -67,6 +67,10 @@ function headlineCards(result, meanings) {
       const leaf = path.split('.').pop();
       if (!HEADLINE.includes(leaf) || typeof v !== 'number') continue;
       if (path.includes('initial') || path.includes('nearest_only')) continue;
+      // The simulator's own trace of the written surface (a check of the
+      // file) would sit beside the headline's independent trace as a third,
+      // differently made SSIM; it stays under Figures.
+      if (path.includes('surface_stl')) continue;
       const twin = shown.get(`${leaf}=${v}`);
       if (twin) {
         if (path.split('.').length < twin[1].split('.').length) cards[twin[0]] = card(path, v), twin[1] = path;
