@@ -416,10 +416,12 @@ PrintHeadline trace_print_independently(const CausticSlabConfig& slab, const std
   return headline;
 }
 
-CausticImageErrors printed_facets_errors(const CausticSlabConfig& slab, const Mesh& printed,
-                                         const ImageObservation& goal) {
-  CausticSetup setup = slab.setup;
-  setup.estimator = CausticSetup::Estimator::facets;
+namespace {
+
+// `setup` (the slab's, its estimator chosen) run on the file's mesh, moved
+// from the subtree's frame to the tracer's, against the goal.
+CausticImageErrors printed_mesh_errors(const CausticSetup& setup, const CausticSlabConfig& slab, const Mesh& printed,
+                                       const ImageObservation& goal) {
   std::vector<Eigen::Vector3d> vertices = printed.vertices;
   const Eigen::Vector3d offset = slab_offset(slab.setup, slab.origin_mm);
   for (Eigen::Vector3d& v : vertices) v -= offset;
@@ -427,6 +429,15 @@ CausticImageErrors printed_facets_errors(const CausticSlabConfig& slab, const Me
   std::vector<double> image(static_cast<size_t>(setup.image_width) * static_cast<size_t>(setup.image_height));
   tracer.render(image);
   return caustic_image_errors(image, goal);
+}
+
+}  // namespace
+
+CausticImageErrors printed_facets_errors(const CausticSlabConfig& slab, const Mesh& printed,
+                                         const ImageObservation& goal) {
+  CausticSetup setup = slab.setup;
+  setup.estimator = CausticSetup::Estimator::facets;
+  return printed_mesh_errors(setup, slab, printed, goal);
 }
 
 CausticImageErrors printed_rays_errors(const CausticSlabConfig& slab, const Mesh& printed, const ImageObservation& goal,
@@ -437,13 +448,7 @@ CausticImageErrors printed_rays_errors(const CausticSlabConfig& slab, const Mesh
     setup.exit_cells = exit_filter->cells;
     setup.exit_transmittance = exit_filter->values;
   }
-  std::vector<Eigen::Vector3d> vertices = printed.vertices;
-  const Eigen::Vector3d offset = slab_offset(slab.setup, slab.origin_mm);
-  for (Eigen::Vector3d& v : vertices) v -= offset;
-  CausticTracer tracer(setup, std::move(vertices), printed.triangles);
-  std::vector<double> image(static_cast<size_t>(setup.image_width) * static_cast<size_t>(setup.image_height));
-  tracer.render(image);
-  return caustic_image_errors(image, goal);
+  return printed_mesh_errors(setup, slab, printed, goal);
 }
 
 void explain_headline(PrintHeadline& headline, const HeadlineMeshes& meshes) {
