@@ -23,12 +23,15 @@ namespace spec2fab {
 
 /// What a cached value weighs against a RunCache's byte budget: a type that
 /// holds a large table says so with a member `std::size_t cached_bytes()
-/// const`; any other counts as its sizeof. A value that fills itself in
-/// later (LayerStackModel) is weighed as it was made.
+/// const`; a vector of plain values (an albedo table) weighs its storage;
+/// any other counts as its sizeof. A value that fills itself in later
+/// (LayerStackModel) is weighed as it was made.
 template <class T>
 std::size_t cached_bytes_of(const T& value) {
   if constexpr (requires { { value.cached_bytes() } -> std::convertible_to<std::size_t>; })
     return value.cached_bytes();
+  else if constexpr (requires { typename T::value_type; { value.capacity() } -> std::convertible_to<std::size_t>; })
+    return sizeof(T) + value.capacity() * sizeof(typename T::value_type);
   else
     return sizeof(T);
 }

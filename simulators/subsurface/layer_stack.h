@@ -52,6 +52,13 @@ class LayerStackModel {
                   double step_mm);
 
   const std::shared_ptr<const RadialBasis>& basis() const { return basis_; }
+  /// For a RunCache's budget: the basis it keeps alive (which the cache may
+  /// have dropped on its own) and its tables as made; the layer spectra it
+  /// adds later are not counted.
+  std::size_t cached_bytes() const {
+    return sizeof(*this) + basis_->cached_bytes() + sizeof(double) * (frequencies_.size() + refractive_index_.size()) +
+           sizeof(media_[0]) * media_.size();
+  }
   double step_mm() const { return step_mm_; }
   /// Basis frequencies plus k = 0.
   size_t frequency_count() const { return frequencies_.size(); }

@@ -85,6 +85,8 @@ TEST(RunCache, ByteBudgetDropsHeavyValuesAndKeepsTheOneJustMade) {
 TEST(RunCache, ValuesWithoutAWeightCountTheirSize) {
   EXPECT_EQ(cached_bytes_of(42), sizeof(int));
   EXPECT_EQ(cached_bytes_of(Table{std::vector<double>(7)}), 7 * sizeof(double));
+  const std::vector<float> table(1000);
+  EXPECT_EQ(cached_bytes_of(table), sizeof(table) + table.capacity() * sizeof(float)) << "a table weighs its storage";
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include <random>
 
 #include "albedo/kubelka_munk.h"
+#include "core/run_cache.h"
 #include "materials/material_library.h"
 #include "materials/palette.h"
 #include "materials/printer_profile.h"
@@ -245,6 +246,16 @@ std::string stack_json(const std::vector<std::string>& materials, const std::vec
             R"(, "choices": [)" + thicknesses + "]}}, ";
   }
   return json + R"({"material": "VeroWhitePlus"}]})";
+}
+
+TEST_F(SubsurfaceTest, ALayerStackModelWeighsTheBasisItKeepsAlive) {
+  // A RunCache with a byte budget drops a basis only to find it still held
+  // by the model made from it: the model's weight carries the basis.
+  RunCache run;
+  const auto basis = RadialBasis::shared(256, 8.0, nullptr);
+  LayerStackModel::shared(palette_, basis, 0.027, &run);
+  EXPECT_GE(run.bytes(), basis->cached_bytes());
+  EXPECT_GE(basis->cached_bytes(), 256u * 256u * sizeof(double));
 }
 
 TEST_F(SubsurfaceTest, TheBoundNeverExceedsTheBestCompletion) {
