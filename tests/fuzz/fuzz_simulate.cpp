@@ -18,8 +18,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const auto file = fuzz::input_file(data, size, "experiments/simulate.json");
   // Bounded: mutated options key new tables (a radial basis per size and
   // radius), which an unbounded cache would gather by the million, and by
-  // weight (256 MiB), as a fuzzed basis of 4096 samples is 134 MB (256 such
-  // values took a 61-minute run from 421 MB to 3.2 GB); the dataset files'
+  // weight (256 MiB), as a fuzzed basis of 4096 samples is 134 MB (with 256
+  // values like it cached, a 61-minute run grew from 421 MB to 3.2 GB); the dataset files'
   // values are asked for by every input and stay.
   static const auto session = std::make_shared<RunCache>(256, std::size_t{256} << 20);
   for (const std::string& simulator : SimulatorRegistry::instance().names())
