@@ -250,23 +250,6 @@ int validate_command(const fs::path& experiment, const Limits& limits) {
 
 namespace {
 
-// A file's identity for the session cache: where it is, how long, when it
-// last changed, so that an edited file is read again. A file that cannot be
-// examined keys as size 0 and no time (its reader then says what is wrong
-// with it).
-std::string file_key(const fs::path& file) {
-  std::error_code error;
-  const auto path = fs::absolute(file, error).lexically_normal();
-  std::string key = path.string();
-  const fs::file_status status = fs::status(file, error);
-  if (error || !fs::is_regular_file(status)) return key + "|0|0";
-  const auto size = fs::file_size(file, error);
-  if (error) return key + "|0|0";
-  const auto modified = fs::last_write_time(file, error);
-  if (error) return key + "|" + std::to_string(size) + "|0";
-  return key + "|" + std::to_string(size) + "|" + std::to_string(modified.time_since_epoch().count());
-}
-
 /// simulation.json's own fields; the simulator adds its sections beside them.
 struct SimulationHeader {
   std::string simulator, produces, config, printer;
@@ -304,11 +287,11 @@ PreparedSimulation prepare_simulation(const Properties& config, const std::strin
   RunCache& cache = *prepared.cache;
   const fs::path materials_file = config.existing_file("materials"), printer_file = config.existing_file("printer");
   prepared.library = cache.get<const MaterialLibrary>(
-      file_key(materials_file), [&] { return std::make_shared<const MaterialLibrary>(MaterialLibrary::load(materials_file)); });
+      file_identity(materials_file), [&] { return std::make_shared<const MaterialLibrary>(MaterialLibrary::load(materials_file)); });
   prepared.printer = cache.get<const PrinterProfile>(
-      file_key(printer_file), [&] { return std::make_shared<const PrinterProfile>(PrinterProfile::load(printer_file)); });
+      file_identity(printer_file), [&] { return std::make_shared<const PrinterProfile>(PrinterProfile::load(printer_file)); });
   // The palette refers to both; the cache keeps them alive beside it.
-  prepared.palette = cache.get<const MaterialPalette>(file_key(materials_file) + "|" + file_key(printer_file), [&] {
+  prepared.palette = cache.get<const MaterialPalette>(file_identity(materials_file) + "|" + file_identity(printer_file), [&] {
     return std::make_shared<const MaterialPalette>(*prepared.library, *prepared.printer);
   });
   // Under mpirun every rank prepares and runs the same simulation.
@@ -323,7 +306,7 @@ PreparedSimulation prepare_simulation(const Properties& config, const std::strin
   if (config.has("mesh")) {
     const fs::path mesh_file = config.existing_file("mesh");
     prepared.solid = cache.get<const Solid>(
-        file_key(mesh_file), [&] { return std::make_shared<const Solid>(load_mesh(mesh_file, 1.0, limits), UvSource::planar); });
+        file_identity(mesh_file), [&] { return std::make_shared<const Solid>(load_mesh(mesh_file, 1.0, limits), UvSource::planar); });
   }
   prepared.tree = std::make_unique<ReducerTree>(config.object("subtree"), *prepared.palette, limits);
   prepared.subtree_location = config.where("subtree");

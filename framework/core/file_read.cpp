@@ -15,4 +15,18 @@ std::string unreadable_file_reason(const std::filesystem::path& file) {
   }
 }
 
+std::string file_identity(const std::filesystem::path& file) {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  const fs::path path = fs::absolute(file, error).lexically_normal();
+  const std::string key = path.string();
+  const fs::file_status status = fs::status(file, error);
+  if (error || !fs::is_regular_file(status)) return key + "|0|0";
+  const auto size = fs::file_size(file, error);
+  if (error) return key + "|0|0";
+  const auto modified = fs::last_write_time(file, error);
+  if (error) return key + "|" + std::to_string(size) + "|0";
+  return key + "|" + std::to_string(size) + "|" + std::to_string(modified.time_since_epoch().count());
+}
+
 }  // namespace spec2fab

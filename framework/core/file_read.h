@@ -13,4 +13,10 @@ namespace spec2fab {
 /// and what the system makes of it is a refusal, not an internal error.
 std::string unreadable_file_reason(const std::filesystem::path& file);
 
+/// A file's identity for a cache kept across runs (RunCache): its absolute
+/// path, size and last change, so that an edited file is read again. A file
+/// that cannot be examined keys as size 0 and no time (its reader then says
+/// what is wrong with it). Never throws.
+std::string file_identity(const std::filesystem::path& file);
+
 }  // namespace spec2fab

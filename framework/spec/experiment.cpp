@@ -1,5 +1,6 @@
 #include "spec/experiment.h"
 
+#include "core/file_read.h"
 #include "core/limits.h"
 #include "core/ranks.h"
 
@@ -52,11 +53,13 @@ Experiment Experiment::load(const std::filesystem::path& file, const Limits& com
   return load(ExperimentSource::read(file), command_line);
 }
 
-Experiment Experiment::load(ExperimentSource source, const Limits& command_line) {
+Experiment Experiment::load(ExperimentSource source, const Limits& command_line, std::shared_ptr<RunCache> session) {
   const std::filesystem::path file = source.file;
   Experiment experiment(std::move(source.root));
   const Properties& root = experiment.root_;
   experiment.file_ = file;
+  experiment.cache_ = session ? std::move(session) : std::make_shared<RunCache>();
+  RunCache& cache = *experiment.cache_;
   // Before anything they bound is read: the mesh, images, trees.
   experiment.limits_ = command_line;
   if (const auto limits = root.optional_object("limits")) experiment.limits_.set_from_experiment(*limits);
@@ -69,17 +72,27 @@ Experiment Experiment::load(ExperimentSource source, const Limits& command_line)
   }
   experiment.translator_ = keys.translator;
   experiment.seed_ = keys.seed;
-  experiment.library_ = std::make_shared<MaterialLibrary>(MaterialLibrary::load(keys.materials));
-  experiment.printer_ = std::make_shared<PrinterProfile>(PrinterProfile::load(keys.printer));
-  experiment.palette_ = std::make_shared<MaterialPalette>(*experiment.library_, *experiment.printer_);
+  const std::string materials_key = file_identity(keys.materials), printer_key = file_identity(keys.printer);
+  experiment.library_ = cache.get<const MaterialLibrary>(
+      materials_key, [&] { return std::make_shared<const MaterialLibrary>(MaterialLibrary::load(keys.materials)); });
+  experiment.printer_ = cache.get<const PrinterProfile>(
+      printer_key, [&] { return std::make_shared<const PrinterProfile>(PrinterProfile::load(keys.printer)); });
+  // The palette refers to both; the cache keeps them alive beside it.
+  experiment.palette_ = cache.get<const MaterialPalette>(materials_key + "|" + printer_key, [&] {
+    return std::make_shared<const MaterialPalette>(*experiment.library_, *experiment.printer_);
+  });
 
   const Properties geometry = root.object("geometry");
   experiment.geometry_spec_ = read_geometry(geometry);
   const GeometrySpec& g = experiment.geometry_spec_;
-  Mesh mesh = load_mesh(g.mesh, g.scale_to_mm, experiment.limits_);
-  spdlog::debug("loaded {}: {} vertices, {} triangles", g.mesh.string(), mesh.vertices.size(),
-                mesh.triangles.size());
-  experiment.solid_ = std::make_shared<Solid>(std::move(mesh), g.uv, g.uv_axis);
+  const std::string solid_key =
+      fmt::format("{}|{:.17g}|{}|{}", file_identity(g.mesh), g.scale_to_mm, static_cast<int>(g.uv), g.uv_axis);
+  experiment.solid_ = cache.get<const Solid>(solid_key, [&] {
+    Mesh mesh = load_mesh(g.mesh, g.scale_to_mm, experiment.limits_);
+    spdlog::debug("loaded {}: {} vertices, {} triangles", g.mesh.string(), mesh.vertices.size(),
+                  mesh.triangles.size());
+    return std::make_shared<const Solid>(std::move(mesh), g.uv, g.uv_axis);
+  });
   if (g.field_voxel_mm > 0) {
     // The field's band is at least a few of its voxels thick, before any tree
     // asks for a deeper one (ReducerTree::bind checks that band).

@@ -101,8 +101,13 @@ class Experiment {
   /// Reads the file and loads the shared inputs, under `command_line`'s
   /// limits (which win over the experiment's "limits"). Throws InputError.
   static Experiment load(const std::filesystem::path& file, const Limits& command_line);
-  /// The same for an experiment already parsed.
-  static Experiment load(ExperimentSource source, const Limits& command_line);
+  /// The same for an experiment already parsed. With a `session`, a cache
+  /// kept by a process that prepares many experiments (the fuzz harness),
+  /// the materials, printer, palette and solid an unchanged file made are
+  /// taken from it (keyed by file_identity: the mesh is read once, under the
+  /// first experiment's limits), and it is the experiment's cache().
+  static Experiment load(ExperimentSource source, const Limits& command_line,
+                         std::shared_ptr<RunCache> session = nullptr);
 
   const std::filesystem::path& file() const { return file_; }
   const std::string& name() const { return name_; }
@@ -128,7 +133,9 @@ class Experiment {
   const PrinterProfile& printer() const { return *printer_; }
   const MaterialPalette& palette() const { return *palette_; }
   /// What this run's parts share (PartContext::cache): it lives as long as
-  /// the experiment, so nothing carries over to another run.
+  /// the experiment, so nothing carries over to another run, unless the
+  /// experiment was loaded into a session's cache (load), whose values are
+  /// keyed by what they are made from.
   RunCache& cache() const { return *cache_; }
 
  private:
@@ -140,11 +147,11 @@ class Experiment {
   std::uint64_t seed_ = 1;
   Limits limits_;
   GeometrySpec geometry_spec_;
-  std::shared_ptr<Solid> solid_;
-  std::shared_ptr<MaterialLibrary> library_;
-  std::shared_ptr<PrinterProfile> printer_;
-  std::shared_ptr<MaterialPalette> palette_;
-  std::unique_ptr<RunCache> cache_ = std::make_unique<RunCache>();
+  std::shared_ptr<const Solid> solid_;
+  std::shared_ptr<const MaterialLibrary> library_;
+  std::shared_ptr<const PrinterProfile> printer_;
+  std::shared_ptr<const MaterialPalette> palette_;
+  std::shared_ptr<RunCache> cache_;
 };
 
 }  // namespace spec2fab

@@ -19,13 +19,15 @@
 
 namespace spec2fab {
 
-PreparedExperiment prepare_experiment(const std::filesystem::path& file, const Limits& limits) {
-  return prepare_experiment(ExperimentSource::read(file), limits);
+PreparedExperiment prepare_experiment(const std::filesystem::path& file, const Limits& limits,
+                                      std::shared_ptr<RunCache> session) {
+  return prepare_experiment(ExperimentSource::read(file), limits, std::move(session));
 }
 
-PreparedExperiment prepare_experiment(ExperimentSource source, const Limits& limits) {
+PreparedExperiment prepare_experiment(ExperimentSource source, const Limits& limits, std::shared_ptr<RunCache> session) {
   PreparedExperiment prepared;
-  prepared.experiment = std::make_unique<Experiment>(Experiment::load(std::move(source), limits));
+  prepared.experiment =
+      std::make_unique<Experiment>(Experiment::load(std::move(source), limits, std::move(session)));
   const Experiment& experiment = *prepared.experiment;
   prepared.translator = TranslatorRegistry::instance().create(experiment.root(), "translator",
                                                               experiment, "translator");

@@ -6,6 +6,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -14,6 +15,7 @@
 
 #include "core/error.h"
 #include "core/limits.h"
+#include "core/run_cache.h"
 #include "spec/translator.h"
 
 namespace spec2fab {
@@ -30,11 +32,12 @@ class RunLimits : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(dir_); }
 
-  // A tree experiment on the 40 x 30 x 20 mm box; `limits` is its "limits" object, or "".
-  fs::path experiment(const std::string& name, const std::string& limits) const {
+  // A tree experiment on the 40 x 30 x 20 mm box (or `mesh`); `limits` is its "limits" object, or "".
+  fs::path experiment(const std::string& name, const std::string& limits, fs::path mesh = {}) const {
     const fs::path datasets = fs::absolute(SPEC2FAB_DATASETS_DIR);
+    if (mesh.empty()) mesh = datasets / "meshes/box_40x30x20.stl";
     const fs::path file = dir_ / (name + ".json");
-    std::ofstream(file) << R"({"translator": "tree", "geometry": {"mesh": ")" << (datasets / "meshes/box_40x30x20.stl").string()
+    std::ofstream(file) << R"({"translator": "tree", "geometry": {"mesh": ")" << mesh.string()
                         << R"(", "uv": "planar"}, "goal": {"tree": {"type": "layered", "material": "VeroWhitePlus"}}, "materials": ")"
                         << (datasets / "materials/polyjet.json").string() << R"(", "printer": ")"
                         << (datasets / "printers/j750.json").string() << R"(")"
@@ -81,6 +84,31 @@ TEST_F(RunLimits, TheCommandLineWinsOverTheExperiment) {
   Limits strict;
   strict.set_from_command_line("census_voxels=10");
   EXPECT_THAT(refusal(experiment("plain", ""), strict), HasSubstr("limit census_voxels = 10"));
+}
+
+// A process that prepares many experiments (the fuzz harness) hands them one
+// session cache: an unchanged mesh is read and its solid built once, an
+// edited one again, and experiments without a session share nothing.
+TEST_F(RunLimits, ASessionCacheKeepsTheSolidOfAnUnchangedMeshOnly) {
+  const fs::path mesh = dir_ / "box.stl";
+  fs::copy_file(fs::path(SPEC2FAB_DATASETS_DIR) / "meshes/box_40x30x20.stl", mesh);
+  const fs::path file = experiment("box", "", mesh);
+  const auto session = std::make_shared<RunCache>();
+  const PreparedExperiment a = prepare_experiment(file, Limits(), session);
+  const PreparedExperiment b = prepare_experiment(file, Limits(), session);
+  EXPECT_EQ(&a.experiment->cache(), session.get());
+  EXPECT_EQ(&a.experiment->solid(), &b.experiment->solid());
+  EXPECT_EQ(&a.experiment->palette(), &b.experiment->palette());
+
+  fs::last_write_time(mesh, fs::last_write_time(mesh) + std::chrono::seconds(5));  // edited
+  const PreparedExperiment edited = prepare_experiment(file, Limits(), session);
+  EXPECT_NE(&edited.experiment->solid(), &a.experiment->solid());
+  EXPECT_EQ(&edited.experiment->palette(), &a.experiment->palette()) << "the materials and printer did not change";
+
+  const PreparedExperiment alone = prepare_experiment(file, Limits());
+  const PreparedExperiment alone_again = prepare_experiment(file, Limits());
+  EXPECT_NE(&alone.experiment->solid(), &alone_again.experiment->solid());
+  EXPECT_NE(&alone.experiment->cache(), &alone_again.experiment->cache());
 }
 
 }  // namespace
