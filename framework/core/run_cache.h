@@ -14,7 +14,9 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <span>
 #include <string>
+#include <string_view>
 #include <type_traits>
 #include <typeindex>
 #include <utility>
@@ -103,6 +105,15 @@ class RunCache {
   unsigned long long asked_ = 0;
   std::map<std::pair<std::type_index, std::string>, Entry> entries_;
 };
+
+/// A key's part for a value made from a table (a goal image's pixels): the
+/// table's length and a 64-bit hash of its bytes.
+template <class T>
+  requires std::is_trivially_copyable_v<T>
+std::string content_key(std::span<const T> values) {
+  const std::string_view bytes(reinterpret_cast<const char*>(values.data()), values.size_bytes());
+  return std::to_string(values.size()) + "#" + std::to_string(std::hash<std::string_view>{}(bytes));
+}
 
 /// `cache->get<T>(key, make)`, or make() alone when there is no cache (a
 /// part built outside any run, e.g. in a unit test).

@@ -8,10 +8,13 @@
 
 #include <Eigen/Geometry>
 #include <embree3/rtcore.h>
+#include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <tbb/parallel_for.h>
 
 #include "core/build_options.h"
 #include "core/error.h"
+#include "core/run_cache.h"
 
 #include "caustics/height_jet.h"
 
@@ -34,6 +37,17 @@ inline double hash_uniform(unsigned long long key) {
 }
 
 }  // namespace
+
+std::string CausticSetup::cache_key() const {
+  const auto vector = [](const auto& v) { return fmt::format("{:.17g}", fmt::join(v, ",")); };
+  return fmt::format(
+      "{:.17g}x{:.17g}|{}x{}|n{:.17g}|m{}|l{}|p{}:{}|r{:.17g}:{:.17g}x{:.17g}@{}|i{}x{}b{}|s{}x{}j{}#{}|f{}d{}|g{}|e{}|{}x{}:{}",
+      width_mm, depth_mm, vertices_x, vertices_y, refractive_index, mirror, vector(light_direction), point_light,
+      vector(light_position_mm), receiver_distance_mm, receiver_width_mm, receiver_depth_mm,
+      vector(receiver_centre_mm), image_width, image_height, image_from_behind, rays_x, rays_y, jitter, seed,
+      fresnel, disc_aperture, max_segments, static_cast<int>(estimator), exit_cells[0], exit_cells[1],
+      content_key(std::span<const double>(exit_transmittance)));
+}
 
 void CausticSetup::validate() const {
   auto fail = [](const std::string& what) { throw InputError("caustics: " + what); };

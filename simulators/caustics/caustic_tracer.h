@@ -20,6 +20,7 @@
 #include <limits>
 #include <memory>
 #include <span>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -86,6 +87,8 @@ struct CausticSetup {
 
   /// Throws InputError naming the first inconsistent field.
   void validate() const;
+  /// Every field, as a RunCache key's part (a field added here goes there too).
+  std::string cache_key() const;
 };
 
 /// Lateral position of top vertex (i, j) of the setup's grid (i along x),

@@ -173,7 +173,7 @@ class FacetCausticsTranslator final : public TuningTranslator {
     // the faceted slab is meshed exactly).
     setup_ = CausticGoalSettings::slab_config(goal, settings_.slab_options({2, 2}), experiment.limits()).setup;
     setup_.validate();
-    fit_kernels(goal, experiment.limits());
+    fit_kernels(goal, experiment);
     set_tree(facet_tree(goal, experiment.palette(), experiment.limits()), goal, experiment);
     const OptimizerChoice aim(root, "optimizer",
                               {{"type", "nlopt"}, {"algorithm", "LN_BOBYQA"}, {"max_evaluations", 200}, {"xtol_rel", 1e-10}});
@@ -340,15 +340,24 @@ class FacetCausticsTranslator final : public TuningTranslator {
   }
 
   /// The goal image as irradiance, then as one equal-flux kernel per facet.
-  void fit_kernels(const Properties& goal, const Limits& limits) {
-    image_goal_ = settings_.image_goal(goal, limits);
+  void fit_kernels(const Properties& goal, const Experiment& experiment) {
+    image_goal_ = settings_.image_goal(goal, experiment.limits());
     raster_.width = settings_.image[0];
     raster_.height = settings_.image[1];
     raster_.size_mm = {settings_.receiver_mm[0], settings_.receiver_mm[1]};
     raster_.centre_mm = slab().center().head<2>();
     if (transport_targets_) {
       // The tracer's frame (footprint centred on the origin) to the subtree's.
-      square_targets_ = transport_square_targets(setup_, target().pixels, facets_[0], facets_[1]);
+      // The run's cache: a process preparing many experiments from the same
+      // image (the fuzz harness's session) solves each transport once.
+      const std::span<const double> pixels = target().pixels;
+      square_targets_ = *cached<const std::vector<TransportMoments>>(
+          &experiment.cache(),
+          fmt::format("square_targets|{}|{}|{}x{}", setup_.cache_key(), content_key(pixels), facets_[0], facets_[1]),
+          [&] {
+            return std::make_shared<const std::vector<TransportMoments>>(
+                transport_square_targets(setup_, pixels, facets_[0], facets_[1]));
+          });
       for (TransportMoments& m : square_targets_) m.mean += slab().center().head<2>();
     } else {
       kernels_ = fit_equal_mass_kernels(target().pixels, raster_, facets_[0], facets_[1], options_.kernel_iterations);
