@@ -2,6 +2,7 @@
 /// A triangle mesh in millimetres, with shared vertices (welded by position)
 /// and optional per-corner texture coordinates.
 
+#include <cstddef>
 #include <limits>
 #include <optional>
 #include <string>
@@ -40,6 +41,11 @@ struct Mesh {
   double surface_area() const;
   /// Reverses every triangle's orientation (and its corner uvs).
   void flip();
+  /// What a RunCache weighs it at: its tables.
+  std::size_t cached_bytes() const {
+    return sizeof(Mesh) + vertices.capacity() * sizeof(Vec3) + triangles.capacity() * sizeof(Eigen::Vector3i) +
+           corner_uv.capacity() * sizeof(Vec2) + name.capacity();
+  }
 };
 
 }  // namespace spec2fab

@@ -85,14 +85,16 @@ Experiment Experiment::load(ExperimentSource source, const Limits& command_line,
   const Properties geometry = root.object("geometry");
   experiment.geometry_spec_ = read_geometry(geometry);
   const GeometrySpec& g = experiment.geometry_spec_;
-  const std::string solid_key =
-      fmt::format("{}|{:.17g}|{}|{}", file_identity(g.mesh), g.scale_to_mm, static_cast<int>(g.uv), g.uv_axis);
-  experiment.solid_ = cache.get<const Solid>(solid_key, [&] {
-    Mesh mesh = load_mesh(g.mesh, g.scale_to_mm, experiment.limits_);
-    spdlog::debug("loaded {}: {} vertices, {} triangles", g.mesh.string(), mesh.vertices.size(),
-                  mesh.triangles.size());
-    return std::make_shared<const Solid>(std::move(mesh), g.uv, g.uv_axis);
+  // The mesh as read, not the solid: a solid builds its distance field
+  // lazily, and one shared by experiments would carry one's field into the
+  // next (and race where two build it at once).
+  const auto mesh = cache.get<const Mesh>(fmt::format("{}|{:.17g}", file_identity(g.mesh), g.scale_to_mm), [&] {
+    auto read = std::make_shared<const Mesh>(load_mesh(g.mesh, g.scale_to_mm, experiment.limits_));
+    spdlog::debug("loaded {}: {} vertices, {} triangles", g.mesh.string(), read->vertices.size(),
+                  read->triangles.size());
+    return read;
   });
+  experiment.solid_ = std::make_shared<const Solid>(*mesh, g.uv, g.uv_axis);
   if (g.field_voxel_mm > 0) {
     // The field's band is at least a few of its voxels thick, before any tree
     // asks for a deeper one (ReducerTree::bind checks that band).

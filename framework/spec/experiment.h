@@ -103,9 +103,10 @@ class Experiment {
   static Experiment load(const std::filesystem::path& file, const Limits& command_line);
   /// The same for an experiment already parsed. With a `session`, a cache
   /// kept by a process that prepares many experiments (the fuzz harness),
-  /// the materials, printer, palette and solid an unchanged file made are
-  /// taken from it (keyed by file_identity: the mesh is read once, under the
-  /// first experiment's limits), and it is the experiment's cache().
+  /// the materials, printer, palette and mesh an unchanged file made are
+  /// taken from it (keyed by file_identity: a mesh is read once, under the
+  /// first experiment's limits), and it is the experiment's cache(). Each
+  /// experiment builds its own solid from the mesh.
   static Experiment load(ExperimentSource source, const Limits& command_line,
                          std::shared_ptr<RunCache> session = nullptr);
 
