@@ -7,6 +7,11 @@
 /// it to its parts through PartContext, so what is cached lives exactly as
 /// long as the run: nothing leaks from one run into the next in the same
 /// process (tests, a batch of experiments), and nothing is process-wide.
+/// A process that prepares many runs on purpose (the fuzz harnesses) hands
+/// them one session cache instead (`session` of prepare_experiment and
+/// prepare_simulation), bounded by count and weight: its keys are the
+/// content each value is made from, so one run's value serves the next only
+/// where it would be made the same.
 
 #include <concepts>
 #include <cstddef>
