@@ -25,6 +25,7 @@
 #include "core/ranks.h"
 #include "geometry/mesh_io.h"
 #include "materials/material_library.h"
+#include "materials/palette_files.h"
 #include "materials/printer_profile.h"
 #include "reducer/node.h"
 #include "reducer/reducer_tree.h"
@@ -286,14 +287,10 @@ PreparedSimulation prepare_simulation(const Properties& config, const std::strin
   prepared.cache = session ? session : std::make_shared<RunCache>();
   RunCache& cache = *prepared.cache;
   const fs::path materials_file = config.existing_file("materials"), printer_file = config.existing_file("printer");
-  prepared.library = cache.get<const MaterialLibrary>(
-      file_identity(materials_file), [&] { return std::make_shared<const MaterialLibrary>(MaterialLibrary::load(materials_file)); });
-  prepared.printer = cache.get<const PrinterProfile>(
-      file_identity(printer_file), [&] { return std::make_shared<const PrinterProfile>(PrinterProfile::load(printer_file)); });
-  // The palette refers to both; the cache keeps them alive beside it.
-  prepared.palette = cache.get<const MaterialPalette>(file_identity(materials_file) + "|" + file_identity(printer_file), [&] {
-    return std::make_shared<const MaterialPalette>(*prepared.library, *prepared.printer);
-  });
+  PaletteFiles palette_files = load_palette_files(materials_file, printer_file, cache);
+  prepared.library = std::move(palette_files.library);
+  prepared.printer = std::move(palette_files.printer);
+  prepared.palette = std::move(palette_files.palette);
   // Under mpirun every rank prepares and runs the same simulation.
   const PartContext context{*prepared.palette, prepared.cache.get(), ranks::size() > 1, &limits, prepared.printer.get()};
   const auto& simulators = SimulatorRegistry::instance();

@@ -11,6 +11,7 @@
 #include <spdlog/spdlog.h>
 
 #include "geometry/mesh_io.h"
+#include "materials/palette_files.h"
 #include "tuning/parts.h"
 
 namespace spec2fab {
@@ -72,15 +73,10 @@ Experiment Experiment::load(ExperimentSource source, const Limits& command_line,
   }
   experiment.translator_ = keys.translator;
   experiment.seed_ = keys.seed;
-  const std::string materials_key = file_identity(keys.materials), printer_key = file_identity(keys.printer);
-  experiment.library_ = cache.get<const MaterialLibrary>(
-      materials_key, [&] { return std::make_shared<const MaterialLibrary>(MaterialLibrary::load(keys.materials)); });
-  experiment.printer_ = cache.get<const PrinterProfile>(
-      printer_key, [&] { return std::make_shared<const PrinterProfile>(PrinterProfile::load(keys.printer)); });
-  // The palette refers to both; the cache keeps them alive beside it.
-  experiment.palette_ = cache.get<const MaterialPalette>(materials_key + "|" + printer_key, [&] {
-    return std::make_shared<const MaterialPalette>(*experiment.library_, *experiment.printer_);
-  });
+  PaletteFiles palette_files = load_palette_files(keys.materials, keys.printer, cache);
+  experiment.library_ = std::move(palette_files.library);
+  experiment.printer_ = std::move(palette_files.printer);
+  experiment.palette_ = std::move(palette_files.palette);
 
   const Properties geometry = root.object("geometry");
   experiment.geometry_spec_ = read_geometry(geometry);
