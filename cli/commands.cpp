@@ -302,12 +302,14 @@ PreparedSimulation prepare_simulation(const Properties& config, const std::strin
   // (volumetric simulators need one); without, it is simulated on its own.
   if (config.has("mesh")) {
     const fs::path mesh_file = config.existing_file("mesh");
-    // A session keeps the mesh as read, not the solid: a solid builds its
-    // distance field lazily, and one shared by simulations would carry one's
-    // field into the next (as in Experiment::load).
-    const auto mesh = cache.get<const Mesh>(file_identity(mesh_file) + "|1",
-                                            [&] { return std::make_shared<const Mesh>(load_mesh(mesh_file, 1.0, limits)); });
-    prepared.solid = std::make_shared<const Solid>(*mesh, UvSource::planar);
+    // A session shares the solid, field and all (Experiment::load keeps only
+    // the mesh): the fuzz harness prepares each input once per simulator, and
+    // building a box's field each time ran its corpus at under 1 input a
+    // second. A field another input asked for first may be finer or deeper
+    // than this one's request; preparing only checks the band, so nothing
+    // it answers depends on that.
+    prepared.solid = cache.get<const Solid>(
+        file_identity(mesh_file), [&] { return std::make_shared<const Solid>(load_mesh(mesh_file, 1.0, limits), UvSource::planar); });
   }
   prepared.tree = std::make_unique<ReducerTree>(config.object("subtree"), *prepared.palette, limits);
   prepared.subtree_location = config.where("subtree");

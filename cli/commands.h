@@ -75,9 +75,8 @@ struct PreparedSimulation {
 };
 /// `session`: a cache kept across preparations by a process that prepares
 /// many (the fuzz harness; later the Python module). It keeps the library,
-/// printer, palette and the mesh as read from each file as the file is now
-/// (its path, size and modification time; each simulation builds its own
-/// solid from the mesh) and the parts' shared tables; without
+/// printer, palette and solid made from each file as the file is now (its
+/// path, size and modification time) and the parts' shared tables; without
 /// one, everything is made afresh and lives as long as the simulation.
 PreparedSimulation prepare_simulation(const std::filesystem::path& config, const std::string& simulator,
                                       const Limits& limits, const std::shared_ptr<RunCache>& session = nullptr);

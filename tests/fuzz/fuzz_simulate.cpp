@@ -2,7 +2,7 @@
 // subtree and the simulator's options, every part built and every key
 // checked (prepare_simulation), for every registered simulator in turn.
 // Nothing is simulated. One session cache keeps what the unchanged dataset
-// files make (library, printer, palette, the mesh as read, the parts' tables): read
+// files make (library, printer, palette, solid, the parts' tables): read
 // once, not once per input and simulator.
 #include "commands.h"
 #include "fuzz_support.h"
