@@ -260,6 +260,15 @@ TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
     body.replace(body.find("\"goal\": {"), 9, "\"goal\": {\"census_voxel_mm\": 0.0245, ");
     experiment_case("the finest census", body, "/goal/census_voxel_mm: 0.0245 mm makes a census of 8.5e+09 voxels");
   }
+  // Found by fuzz_experiment: a stand's shell deeper than a stratum may be
+  // reached the stratum as an internal error.
+  experiment_case("a stand's shell beyond a stratum's depth",
+                  R"({"translator": "stand", "geometry": {"mesh": ")" +
+                      (kDatasets / "meshes/crane_56x16x60.stl").string() +
+                      R"(", "uv": "planar"}, "goal": {"gravity": [0, 0, -1], "shell_mm": 2444, "cells": [1, 3, 2],
+                      "material": "VeroWhitePlus", "voxel_mm": 9}, "materials": ")" +
+                      library() + R"(", "printer": ")" + (kDatasets / "printers/j750.json").string() + R"("})",
+                  "/goal/shell_mm: 2444 is not in (0, 1000]");
   // Experiments: files they name.
   experiment_case("mesh not found", with_mesh("/nonexistent/mesh.obj"), "file not found");
   experiment_case("mesh is a folder", with_mesh(dir_.string()), "is a folder");

@@ -112,7 +112,10 @@ class StandTranslator final : public TuningTranslator {
       StabilityOptions::declare(d, o.stability);
       d.number(o.margin_mm, "margin_mm", Range::at_least(0),
                "least distance from the centre of mass's projection to the support polygon's edge");
-      d.number(o.shell_mm, "shell_mm", Range::above(0), "the shell kept solid under the surface (printable)");
+      // A stratum's depth bounds it: a deeper shell reached make_shell_cells's
+      // fixed_number as an internal error (fuzz_experiment, 2026-11-30).
+      d.number(o.shell_mm, "shell_mm", Range::open_closed(0, StratumOptions{}.depth_mm.upper()),
+               "the shell kept solid under the surface (printable)");
       d.number(o.cells, "cells", Range::closed(1, 64), "the core's voxel cells along x, y, z, tiling the shape's bounds");
       d.value(o.material, "material", "the shell's material, and the cells' when solid",
               Default{"the printer's first model material"});
