@@ -269,6 +269,14 @@ TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
                       "material": "VeroWhitePlus", "voxel_mm": 9}, "materials": ")" +
                       library() + R"(", "printer": ")" + (kDatasets / "printers/j750.json").string() + R"("})",
                   "/goal/shell_mm: 2444 is not in (0, 1000]");
+  // The same stratum under subsurface columns (found reading the other callers).
+  experiment_case("subsurface columns beyond a stratum's depth",
+                  R"({"translator": "subsurface", "geometry": {"mesh": ")" +
+                      (kDatasets / "meshes/box_40x30x20.stl").string() +
+                      R"(", "uv": "planar"}, "goal": {"media": ["marble", "skimmilk"], "columns": [2, 2], "layers": 2,
+                      "samples": 32, "thickness_steps": [1000], "layer_step_mm": 10}, "materials": ")" +
+                      library() + R"(", "printer": ")" + (kDatasets / "printers/j750.json").string() + R"("})",
+                  "/goal/thickness_steps: 2 layers of up to 10000 mm and a step of backing make a shell 20010 mm deep");
   // Experiments: files they name.
   experiment_case("mesh not found", with_mesh("/nonexistent/mesh.obj"), "file not found");
   experiment_case("mesh is a folder", with_mesh(dir_.string()), "is a folder");

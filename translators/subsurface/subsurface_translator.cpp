@@ -21,6 +21,7 @@
 #include "core/colour.h"
 #include "core/image_write.h"
 #include "core/distance.h"
+#include "reducer/nodes/nodes.h"
 #include "reducer/reducer_tree.h"
 #include "spec/surface_columns.h"
 #include "spec/tuning_translator.h"
@@ -168,6 +169,13 @@ class SubsurfaceTranslator final : public TuningTranslator {
     std::sort(thickness_steps_.begin(), thickness_steps_.end());
     const double thickest = thickness_steps_.back() * step_mm_;
     const double shell = layer_count_ * thickest + step_mm_;
+    // The columns hang in a stratum, whose depth holds at most 1000 mm; a
+    // deeper shell reached fixed_number as an internal error.
+    if (const double deepest = StratumOptions{}.depth_mm.upper(); shell > deepest)
+      goal.fail("thickness_steps",
+                fmt::format("{} layers of up to {:g} mm and a step of backing make a shell {:g} mm deep; a stratum "
+                            "holds at most {:g} mm",
+                            layer_count_, thickest, shell, deepest));
 
     // The tree: the albedo translator's, with material and thickness free in every layer.
     std::vector<double> thicknesses;
