@@ -260,7 +260,7 @@ TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
     body.replace(body.find("\"goal\": {"), 9, "\"goal\": {\"census_voxel_mm\": 0.0245, ");
     experiment_case("the finest census", body, "/goal/census_voxel_mm: 0.0245 mm makes a census of 8.5e+09 voxels");
   }
-  // Found by fuzz_experiment: a stand's shell deeper than a stratum may be
+  // Found by fuzz_experiment: a stand's shell deeper than a stratum holds
   // reached the stratum as an internal error.
   experiment_case("a stand's shell beyond a stratum's depth",
                   R"({"translator": "stand", "geometry": {"mesh": ")" +
