@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "core/error.h"
 #include "core/limits.h"
 
 #include "core/strings.h"
@@ -61,6 +62,16 @@ Parameter fixed_number(double value, const Parameter& declared) {
     throw std::logic_error(
         fmt::format("fixed_number: {} lies outside [{}, {}]", value, declared.lower(), declared.upper()));
   return Parameter::continuous(value, declared.lower(), declared.upper());
+}
+
+Parameter stratum_depth(double depth_mm, const std::string& where, const std::string& made_of) {
+  const Parameter declared = StratumOptions{}.depth_mm;
+  if (!(depth_mm > declared.lower() && depth_mm <= declared.upper())) {
+    throw InputError(fmt::format("{}: {} make a shell {:g} mm deep; a stratum holds {}", where, made_of, depth_mm,
+                                 depth_mm > declared.upper() ? fmt::format("at most {:g} mm", declared.upper())
+                                                             : fmt::format("more than {:g} mm", declared.lower())));
+  }
+  return fixed_number(depth_mm, declared);
 }
 
 Parameter free_number(double value, double min, double max) {

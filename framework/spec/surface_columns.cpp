@@ -2,7 +2,7 @@
 
 namespace spec2fab {
 
-SurfaceColumnTree surface_column_tree(double shell_mm, std::array<int, 2> columns,
+SurfaceColumnTree surface_column_tree(const Parameter& shell_depth, std::array<int, 2> columns,
                                       std::vector<LayeredOptions::Layer> layers, const Parameter& backing,
                                       const Limits& limits, NodePtr core) {
   LayeredOptions stack;
@@ -12,7 +12,7 @@ SurfaceColumnTree surface_column_tree(double shell_mm, std::array<int, 2> column
   grid.count = columns;
   grid.cells.child.node = make_layered(std::move(stack));
   StratumOptions stratum;
-  stratum.depth_mm = fixed_number(shell_mm, stratum.depth_mm);
+  stratum.depth_mm = shell_depth;
   stratum.shell.node = make_column(std::move(grid), limits);
   ReducerNode* column_node = stratum.shell.node.get();
   stratum.core.node = core ? std::move(core) : make_solid_material(backing);

@@ -21,10 +21,12 @@ struct SurfaceColumnTree {
   ReducerNode& column(size_t k) const { return columns->child(k); }
 };
 
+/// `shell_depth`: the stratum's depth, from stratum_depth (which refuses, naming
+/// the goal's key, a depth a stratum cannot hold).
 /// `layers`: the Layered node's layers without the backing (added last).
 /// `core`: what fills the core instead of the backing (the deformable
 /// texture's cells).
-SurfaceColumnTree surface_column_tree(double shell_mm, std::array<int, 2> columns,
+SurfaceColumnTree surface_column_tree(const Parameter& shell_depth, std::array<int, 2> columns,
                                       std::vector<LayeredOptions::Layer> layers, const Parameter& backing,
                                       const Limits& limits, NodePtr core = nullptr);
 

@@ -475,6 +475,18 @@ TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
                    {{"e.json", albedo_experiment((kDatasets / "images/earth_96x48.png").string(),
                                                  R"(, "columns": [40000, 40000])")}},
                    run_of("e.json"), "max_columns"});
+  {
+    // 101 inks of 10 mm: deeper than a stratum holds (a shared check where a
+    // texture's inks become its stratum; it reached fixed_number before).
+    std::string inks = R"("VeroCyan")";
+    for (int i = 1; i < 101; ++i) inks += R"(, "VeroCyan")";
+    cases.push_back({"albedo: inks deeper than a stratum",
+                     {{"e.json", albedo_experiment((kDatasets / "images/earth_96x48.png").string(),
+                                                   R"(, "inks": [)" + inks + R"(], "max_ink_mm": 10)")}},
+                     run_of("e.json"),
+                     "/goal/inks: 101 inks of up to 10 mm and a step of backing make a shell 1010.4 mm deep; a stratum "
+                     "holds at most 1000 mm"});
+  }
 
   // Printers.
   const auto printer_case = [&](const std::string& name, const std::string& text, const std::string& expected) {

@@ -67,12 +67,12 @@ class AlbedoTranslator final : public TuningTranslator {
         solid_(experiment.solid()) {
     const Properties goal = experiment.goal();
     // The shell holds the thickest stack and one step of backing under it.
-    const double shell = texture_.ink_mm() + texture_.step_mm();
+    const Parameter& shell = texture_.shell_depth();
     const MaterialPalette& palette = experiment.palette();
     const Parameter backing = fixed_material(palette, backing_, goal.where("backing"));
     if (texture_.lookup()) {
       StratumOptions stratum;
-      stratum.depth_mm = fixed_number(shell, stratum.depth_mm);
+      stratum.depth_mm = shell;
       auto grid = texture_.stack_grid(palette, backing_);
       stack_grid_ = grid.get();  // the lookup sets its cells
       stratum.shell.node = std::move(grid);

@@ -115,7 +115,7 @@ class DeformationTextureTranslator final : public TuningTranslator {
     // The shell holds the thickest stack and one step of backing under it.
     const MaterialPalette& palette = experiment.palette();
     SurfaceColumnTree columns = surface_column_tree(
-        texture_.ink_mm() + texture_.step_mm(), texture_.columns(), texture_.ink_layers(palette),
+        texture_.shell_depth(), texture_.columns(), texture_.ink_layers(palette),
         fixed_material(palette, options_.backing, goal.where("backing")), experiment.limits(),
         elastic_.cell_node(bounds_, palette));
     set_tree(std::move(columns.root), goal, experiment);
@@ -138,7 +138,7 @@ class DeformationTextureTranslator final : public TuningTranslator {
         "tuner per column (phase 1); a core of {} x {} x {} cells, each one of {}, tuned by one fem tuner (small "
         "strain, shape_mse, branch and bound with the elastic bound; phase 2) for a squeeze of {} N between plates "
         "reaching {} mm in; the FEM includes the shell{}",
-        texture_.ink_mm() + texture_.step_mm(), texture_.columns()[0], texture_.columns()[1], texture_.inks().size(),
+        texture_.shell_depth().value(), texture_.columns()[0], texture_.columns()[1], texture_.inks().size(),
         fmt::join(texture_.inks(), ", "), options_.backing, options_.cells[0], options_.cells[1], options_.cells[2],
         fmt::join(o.materials, ", "), options_.force_n, options_.plate_contact_mm,
         options_.compare_without_shell ? "; the paper's model (no shell) is tuned too, for comparison" : "");

@@ -180,6 +180,9 @@ void TexturePiece::read_inks(const Properties& goal, const Experiment& experimen
     max_ink_mm_.assign(inks_.size(), each);
     ink_mm_ = static_cast<double>(inks_.size()) * each;
   }
+  const double thickest = *std::max_element(max_ink_mm_.begin(), max_ink_mm_.end());
+  shell_depth_ = stratum_depth(ink_mm_ + step_mm_, goal.where(o.inks ? "inks" : "max_ink_mm"),
+                               fmt::format("{} inks of up to {:g} mm and a step of backing", inks_.size(), thickest));
 }
 
 void TexturePiece::map_into_printable_gamut(const Properties& goal, const Experiment& experiment,

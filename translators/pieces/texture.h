@@ -291,6 +291,9 @@ class TexturePiece {
   double step_mm() const { return step_mm_; }
   /// The thickest stack: every ink at its thickest.
   double ink_mm() const { return ink_mm_; }
+  /// The stratum that holds the thickest stack and one step of ground under
+  /// it (ink_mm() + step_mm(), checked when the inks are read).
+  const Parameter& shell_depth() const { return shell_depth_; }
   /// The Layered node's layers: one per ink, from the surface down, each
   /// 0 to its thickest on the layer step.
   std::vector<LayeredOptions::Layer> ink_layers(const MaterialPalette& palette) const;
@@ -349,6 +352,7 @@ class TexturePiece {
   std::vector<std::string> inks_;
   std::vector<double> max_ink_mm_;
   double step_mm_ = 0.027, ink_mm_ = 0, low_pass_sigma_ = 1.5;
+  Parameter shell_depth_ = StratumOptions{}.depth_mm;
   std::string metric_;
   bool diffusion_ = true, gamut_map_ = true, lookup_ = false, diffuse_in_lab_ = false;
   std::optional<OptimizerChoice> optimizer_;

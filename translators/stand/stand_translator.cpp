@@ -268,7 +268,7 @@ class StandTranslator final : public TuningTranslator {
       texture_goal.fail("method", "stand prints its texture by lookup (tuners per column would come before the "
                                   "cells' tuner, which is not built)");
     texture_.emplace(texture_goal, experiment, texture_options(), options_.material);
-    const double inks_mm = texture_->ink_mm() + texture_->step_mm();
+    const double inks_mm = texture_->shell_depth().value();
     if (inks_mm > options_.shell_mm)
       goal.fail("shell_mm", fmt::format("{:g} mm is thinner than the texture's {:g} mm (its thickest stack and a step "
                                         "of {} under it); give at least that",
@@ -278,7 +278,7 @@ class StandTranslator final : public TuningTranslator {
                  texture_->columns()[1], estimate.printable_stacks, estimate.seconds, estimate.megabytes);
     const MaterialPalette& palette = experiment.palette();
     StratumOptions inks;
-    inks.depth_mm = fixed_number(inks_mm, inks.depth_mm);
+    inks.depth_mm = texture_->shell_depth();
     auto grid = texture_->stack_grid(palette, options_.material);
     stack_grid_ = grid.get();  // the lookup sets its cells
     inks.shell.node = std::move(grid);

@@ -169,13 +169,10 @@ class SubsurfaceTranslator final : public TuningTranslator {
     std::sort(thickness_steps_.begin(), thickness_steps_.end());
     const double thickest = thickness_steps_.back() * step_mm_;
     const double shell = layer_count_ * thickest + step_mm_;
-    // The columns hang in a stratum, whose depth holds at most 1000 mm; a
-    // deeper shell reached fixed_number as an internal error.
-    if (const double deepest = StratumOptions{}.depth_mm.upper(); shell > deepest)
-      goal.fail("thickness_steps",
-                fmt::format("{} layers of up to {:g} mm and a step of backing make a shell {:g} mm deep; a stratum "
-                            "holds at most {:g} mm",
-                            layer_count_, thickest, shell, deepest));
+    // The columns hang in a stratum (at most 1000 mm deep).
+    const Parameter shell_depth = stratum_depth(
+        shell, goal.where("thickness_steps"),
+        fmt::format("{} layers of up to {:g} mm and a step of backing", layer_count_, thickest));
 
     // The tree: the albedo translator's, with material and thickness free in every layer.
     std::vector<double> thicknesses;
@@ -186,7 +183,7 @@ class SubsurfaceTranslator final : public TuningTranslator {
       layer.thickness_mm = number_choice(thicknesses.front(), thicknesses);
     }
     SurfaceColumnTree surface_tree =
-        surface_column_tree(shell, columns_, std::move(layers), fixed_material(palette, backing_, goal.where("backing")),
+        surface_column_tree(shell_depth, columns_, std::move(layers), fixed_material(palette, backing_, goal.where("backing")),
                             experiment.limits());
     set_tree(std::move(surface_tree.root), goal, experiment);
 

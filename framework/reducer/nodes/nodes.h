@@ -26,6 +26,12 @@ namespace spec2fab {
 /// A number fixed at `value` ("offset_mm": 5) within the limits of the
 /// option's declared default (`declared`).
 Parameter fixed_number(double value, const Parameter& declared);
+/// A stratum's depth, fixed at `depth_mm`. Where a translator adds a depth up
+/// from its goal (layers, inks, a step of backing), this is its check: a depth
+/// a stratum cannot hold ((0, 1000] mm) is an InputError, "<where>: <made_of>
+/// make a shell D mm deep; a stratum holds at most 1000 mm", where
+/// fixed_number would throw a logic_error (an internal error to the user).
+Parameter stratum_depth(double depth_mm, const std::string& where, const std::string& made_of);
 /// A number the tuners may move in [min, max] ({"value": v, "min": …, "max": …}).
 Parameter free_number(double value, double min, double max);
 /// A number the tuners may move in [min, max] in steps of `step` from min
