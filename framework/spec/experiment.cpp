@@ -59,6 +59,7 @@ Experiment Experiment::load(ExperimentSource source, const Limits& command_line,
   Experiment experiment(std::move(source.root));
   const Properties& root = experiment.root_;
   experiment.file_ = file;
+  const bool session_shares_solids = session != nullptr;
   experiment.cache_ = session ? std::move(session) : std::make_shared<RunCache>();
   RunCache& cache = *experiment.cache_;
   // Before anything they bound is read: the mesh, images, trees.
@@ -81,16 +82,31 @@ Experiment Experiment::load(ExperimentSource source, const Limits& command_line,
   const Properties geometry = root.object("geometry");
   experiment.geometry_spec_ = read_geometry(geometry);
   const GeometrySpec& g = experiment.geometry_spec_;
-  // The mesh as read, not the solid: a solid builds its distance field
-  // lazily, and one shared by experiments would carry one's field into the
-  // next (and race where two build it at once).
-  const auto mesh = cache.get<const Mesh>(fmt::format("{}|{:.17g}", file_identity(g.mesh), g.scale_to_mm), [&] {
+  const std::string mesh_key = fmt::format("{}|{:.17g}", file_identity(g.mesh), g.scale_to_mm);
+  const auto read_mesh = [&] {
     auto read = std::make_shared<const Mesh>(load_mesh(g.mesh, g.scale_to_mm, experiment.limits_));
     spdlog::debug("loaded {}: {} vertices, {} triangles", g.mesh.string(), read->vertices.size(),
                   read->triangles.size());
     return read;
-  });
-  experiment.solid_ = std::make_shared<const Solid>(*mesh, g.uv, g.uv_axis);
+  };
+  if (session_shares_solids) {
+    // The solid, field and all: building the field was about half of what
+    // the experiment harness spent an input (perf, 2026-11-30). A field
+    // another experiment asked for first may be deeper or finer than this
+    // one's request, and what a translator measures through it while
+    // preparing (a stand's solid mass, which cells hold volume) may differ
+    // in its last digits, which a run's outputs must not; so only a session
+    // whose experiments are prepared and not run shares solids.
+    // (The mesh first: `get` holds the cache's lock while it makes a value.)
+    const auto mesh = cache.get<const Mesh>(mesh_key, read_mesh);
+    experiment.solid_ = cache.get<const Solid>(fmt::format("{}|{}|{}", mesh_key, static_cast<int>(g.uv), g.uv_axis),
+                                               [&] { return std::make_shared<const Solid>(*mesh, g.uv, g.uv_axis); });
+  } else {
+    // The mesh as read, not the solid: a solid builds its distance field
+    // lazily, and one shared by experiments would carry one's field into
+    // the next run (and race where two build it at once).
+    experiment.solid_ = std::make_shared<const Solid>(*cache.get<const Mesh>(mesh_key, read_mesh), g.uv, g.uv_axis);
+  }
   if (g.field_voxel_mm > 0) {
     // The field's band is at least a few of its voxels thick, before any tree
     // asks for a deeper one (ReducerTree::bind checks that band).

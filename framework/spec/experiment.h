@@ -102,11 +102,13 @@ class Experiment {
   /// limits (which win over the experiment's "limits"). Throws InputError.
   static Experiment load(const std::filesystem::path& file, const Limits& command_line);
   /// The same for an experiment already parsed. With a `session`, a cache
-  /// kept by a process that prepares many experiments (the fuzz harness),
-  /// the materials, printer, palette and mesh an unchanged file made are
-  /// taken from it (keyed by file_identity: a mesh is read once, under the
-  /// first experiment's limits), and it is the experiment's cache(). Each
-  /// experiment builds its own solid from the mesh.
+  /// kept by a process that prepares many experiments and runs none (the
+  /// fuzz harness), the materials, printer, palette, mesh and solid an
+  /// unchanged file made are taken from it (keyed by file_identity: a mesh
+  /// is read once, under the first experiment's limits), and it is the
+  /// experiment's cache(). The solid keeps the deepest and finest field any
+  /// of them asked for, so an experiment loaded so is prepared, not run.
+  /// Without a session each experiment builds its own solid.
   static Experiment load(ExperimentSource source, const Limits& command_line,
                          std::shared_ptr<RunCache> session = nullptr);
 

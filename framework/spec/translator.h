@@ -74,7 +74,7 @@ struct PreparedExperiment {
 /// Throws InputError for any problem in the file or the inputs it names.
 /// `limits`: the command line's (which win over the experiment's "limits").
 /// `session`: a cache kept across preparations by a process that prepares
-/// many (Experiment::load); none: the experiment's own.
+/// many and runs none (Experiment::load); none: the experiment's own.
 PreparedExperiment prepare_experiment(const std::filesystem::path& file, const Limits& limits,
                                       std::shared_ptr<RunCache> session = nullptr);
 PreparedExperiment prepare_experiment(ExperimentSource source, const Limits& limits,

@@ -87,9 +87,9 @@ TEST_F(RunLimits, TheCommandLineWinsOverTheExperiment) {
 }
 
 // A process that prepares many experiments (the fuzz harness) hands them one
-// session cache: an unchanged mesh is read once, an edited one again; each
-// experiment still builds its own solid (whose field it builds lazily), and
-// experiments without a session share nothing.
+// session cache: an unchanged mesh is read once, an edited one again; its
+// experiments share the solid (field and all: they are prepared, not run),
+// and experiments without a session share nothing.
 TEST_F(RunLimits, ASessionCacheReadsAnUnchangedMeshOnce) {
   const fs::path mesh = dir_ / "box.stl";
   fs::copy_file(fs::path(SPEC2FAB_DATASETS_DIR) / "meshes/box_40x30x20.stl", mesh);
@@ -101,11 +101,12 @@ TEST_F(RunLimits, ASessionCacheReadsAnUnchangedMeshOnce) {
   EXPECT_EQ(&a.experiment->cache(), session.get());
   EXPECT_EQ(session->size(), values) << "the second preparation made something again";
   EXPECT_EQ(&a.experiment->palette(), &b.experiment->palette());
-  EXPECT_NE(&a.experiment->solid(), &b.experiment->solid());
+  EXPECT_EQ(&a.experiment->solid(), &b.experiment->solid());
 
   fs::last_write_time(mesh, fs::last_write_time(mesh) + std::chrono::seconds(5));  // edited
   const PreparedExperiment edited = prepare_experiment(file, Limits(), session);
-  EXPECT_EQ(session->size(), values + 1) << "the edited mesh is read again, and nothing else";
+  EXPECT_EQ(session->size(), values + 2) << "the edited mesh is read again, its solid made again, and nothing else";
+  EXPECT_NE(&edited.experiment->solid(), &a.experiment->solid());
   EXPECT_EQ(&edited.experiment->palette(), &a.experiment->palette()) << "the materials and printer did not change";
 
   const PreparedExperiment alone = prepare_experiment(file, Limits());
