@@ -89,24 +89,24 @@ Experiment Experiment::load(ExperimentSource source, const Limits& command_line,
                   read->triangles.size());
     return read;
   };
-  if (session_shares_solids) {
-    // The solid, field and all: building the field was about half of what
-    // the experiment harness spent an input (perf, 2026-11-30). A field
-    // another experiment asked for first may be deeper or finer than this
-    // one's request, and what a translator measures through it while
-    // preparing (a stand's solid mass, which cells hold volume) may differ
-    // in its last digits, which a run's outputs must not; so only a session
-    // whose experiments are prepared and not run shares solids.
-    // (The mesh first: `get` holds the cache's lock while it makes a value.)
-    const auto mesh = cache.get<const Mesh>(mesh_key, read_mesh);
-    experiment.solid_ = cache.get<const Solid>(fmt::format("{}|{}|{}", mesh_key, static_cast<int>(g.uv), g.uv_axis),
-                                               [&] { return std::make_shared<const Solid>(*mesh, g.uv, g.uv_axis); });
-  } else {
-    // The mesh as read, not the solid: a solid builds its distance field
-    // lazily, and one shared by experiments would carry one's field into
-    // the next run (and race where two build it at once).
-    experiment.solid_ = std::make_shared<const Solid>(*cache.get<const Mesh>(mesh_key, read_mesh), g.uv, g.uv_axis);
-  }
+  // The mesh first and outside the solid's maker: `get` holds the cache's
+  // lock while it makes a value.
+  const auto mesh = cache.get<const Mesh>(mesh_key, read_mesh);
+  const auto make_solid = [&] { return std::make_shared<const Solid>(*mesh, g.uv, g.uv_axis); };
+  // A session shares the solid, field and all: building the field was about
+  // half of what the experiment harness spent an input (perf, 2026-11-30).
+  // A field another experiment asked for first may be deeper or finer than
+  // this one's request, and what a translator measures through it while
+  // preparing (a stand's solid mass, which cells hold volume) may differ in
+  // its last digits, which a run's outputs must not; so only a session whose
+  // experiments are prepared and not run shares solids. Otherwise the mesh as
+  // read is shared, not the solid: a solid builds its field lazily, and one
+  // shared would carry one run's field into the next (and race where two
+  // build it at once).
+  experiment.solid_ = session_shares_solids
+                          ? cache.get<const Solid>(fmt::format("{}|{}|{}", mesh_key, static_cast<int>(g.uv), g.uv_axis),
+                                                   make_solid)
+                          : make_solid();
   if (g.field_voxel_mm > 0) {
     // The field's band is at least a few of its voxels thick, before any tree
     // asks for a deeper one (ReducerTree::bind checks that band).

@@ -276,7 +276,7 @@ TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
                       R"(", "uv": "planar"}, "goal": {"media": ["marble", "skimmilk"], "columns": [2, 2], "layers": 2,
                       "samples": 32, "thickness_steps": [1000], "layer_step_mm": 10}, "materials": ")" +
                       library() + R"(", "printer": ")" + (kDatasets / "printers/j750.json").string() + R"("})",
-                  "/goal/thickness_steps: 2 layers of up to 10000 mm and a step of backing make a shell 20010 mm deep");
+                  "/goal/thickness_steps: 2 layers of up to 10000 mm and a step of VeroWhitePlus make a shell 20010 mm deep");
   // Experiments: files they name.
   experiment_case("mesh not found", with_mesh("/nonexistent/mesh.obj"), "file not found");
   experiment_case("mesh is a folder", with_mesh(dir_.string()), "is a folder");
@@ -484,7 +484,7 @@ TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
                      {{"e.json", albedo_experiment((kDatasets / "images/earth_96x48.png").string(),
                                                    R"(, "inks": [)" + inks + R"(], "max_ink_mm": 10)")}},
                      run_of("e.json"),
-                     "/goal/inks: 101 inks of up to 10 mm and a step of backing make a shell 1010.4 mm deep; a stratum "
+                     "/goal/inks: 101 inks of up to 10 mm and a step of VeroWhitePlus make a shell 1010.4 mm deep; a stratum "
                      "holds at most 1000 mm"});
   }
 

@@ -182,7 +182,7 @@ void TexturePiece::read_inks(const Properties& goal, const Experiment& experimen
   }
   const double thickest = *std::max_element(max_ink_mm_.begin(), max_ink_mm_.end());
   shell_depth_ = stratum_depth(ink_mm_ + step_mm_, goal.where(o.inks ? "inks" : "max_ink_mm"),
-                               fmt::format("{} inks of up to {:g} mm and a step of backing", inks_.size(), thickest));
+                               fmt::format("{} inks of up to {:g} mm and a step of {}", inks_.size(), thickest, ground));
 }
 
 void TexturePiece::map_into_printable_gamut(const Properties& goal, const Experiment& experiment,

@@ -172,7 +172,7 @@ class SubsurfaceTranslator final : public TuningTranslator {
     // The columns hang in a stratum (at most 1000 mm deep).
     const Parameter shell_depth = stratum_depth(
         shell, goal.where("thickness_steps"),
-        fmt::format("{} layers of up to {:g} mm and a step of backing", layer_count_, thickest));
+        fmt::format("{} layers of up to {:g} mm and a step of {}", layer_count_, thickest, backing_));
 
     // The tree: the albedo translator's, with material and thickness free in every layer.
     std::vector<double> thicknesses;
