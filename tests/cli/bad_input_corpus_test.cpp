@@ -277,6 +277,15 @@ TEST_F(BadInputCorpus, EveryCaseIsRefusedWithOneLineAndExitCodeTwo) {
                       "samples": 32, "thickness_steps": [1000], "layer_step_mm": 10}, "materials": ")" +
                       library() + R"(", "printer": ")" + (kDatasets / "printers/j750.json").string() + R"("})",
                   "/goal/thickness_steps: 2 layers of up to 10000 mm and a step of VeroWhitePlus make a shell 20010 mm deep");
+  // Found by fuzz_experiment (2026-12-01): subsurface "columns" reached the
+  // Column node unchecked, which refused 70 million as an internal error.
+  experiment_case("subsurface columns past a million",
+                  R"({"translator": "subsurface", "geometry": {"mesh": ")" +
+                      (kDatasets / "meshes/box_40x30x20.stl").string() +
+                      R"(", "uv": "planar"}, "goal": {"media": ["marble", "skimmilk"], "columns": [1e7, 70], "layers": 1,
+                      "samples": 29}, "materials": ")" +
+                      library() + R"(", "printer": ")" + (kDatasets / "printers/j750.json").string() + R"("})",
+                  "/goal/columns: 10000000 x 70 is more than a million columns, each a tuner of its own");
   // Experiments: files they name.
   experiment_case("mesh not found", with_mesh("/nonexistent/mesh.obj"), "file not found");
   experiment_case("mesh is a folder", with_mesh(dir_.string()), "is a folder");

@@ -143,7 +143,12 @@ class SubsurfaceTranslator final : public TuningTranslator {
       ProfileGrid::declare(d, o.grid);
     }
     bool check(std::string* why) const {
-      if (thickness_steps.empty()) *why = "thickness_steps: no thickness to choose from";
+      // Each column is a node and a tuner of its own (a branch and bound over
+      // stacks): the texture's bound for tuned columns. Past 16 million the
+      // Column node itself refuses, as a bug of the translator's.
+      if (static_cast<long long>(columns[0]) * columns[1] > 1'000'000)
+        *why = fmt::format("columns: {} x {} is more than a million columns, each a tuner of its own", columns[0], columns[1]);
+      else if (thickness_steps.empty()) *why = "thickness_steps: no thickness to choose from";
       else if (materials && materials->empty()) *why = "materials: no material to stack";
       else return true;
       return false;
@@ -286,7 +291,9 @@ class SubsurfaceTranslator final : public TuningTranslator {
 
  private:
   size_t square_medium(int i, int j) const {
-    const int si = i * squares_[0] / columns_[0], sj = j * squares_[1] / columns_[1];
+    // In 64 bits: "squares" may be any count, and i · squares overflow an int.
+    const long long si = static_cast<long long>(i) * squares_[0] / columns_[0];
+    const long long sj = static_cast<long long>(j) * squares_[1] / columns_[1];
     return static_cast<size_t>((si + sj) % 2);
   }
 
