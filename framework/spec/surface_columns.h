@@ -13,6 +13,11 @@
 
 namespace spec2fab {
 
+/// The most columns a goal may tune: each is a node and a tuner of its own,
+/// kilobytes apiece, so a million of them is gigabytes. (A Column node
+/// holds up to 16 million cells; a lookup over more fills a stack_grid.)
+constexpr long long kMostTunedColumns = 1'000'000;
+
 /// The tree: its root (TuningTranslator::set_tree binds it), and the Column
 /// node, whose child i + nu·j (node "shell/<i + nu·j>") is a column's stack.
 struct SurfaceColumnTree {

@@ -140,7 +140,7 @@ void TexturePiece::read_columns(const Properties& goal, const Experiment& experi
                           columns_[0], columns_[1], static_cast<double>(column_count()),
                           lookup_seconds(column_count()), lookup_megabytes(column_count()), o.max_columns));
   image_ = load_goal_image(goal, o.keys.image, columns_, experiment.limits());
-  if (!lookup_ && column_count() > 1'000'000)  // the image's own size, known only now
+  if (!lookup_ && column_count() > kMostTunedColumns)  // the image's own size, known only now
     goal.fail(o.keys.image, fmt::format("{} x {} pixels, so as many columns: more than a million for tuners "
                                         "(give fewer {})", columns_[0], columns_[1], o.keys.columns));
   top_row_at_highest_v_ = o.top_row_at_highest_v;

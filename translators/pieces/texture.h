@@ -24,6 +24,7 @@
 #include "materials/material.h"
 #include "reducer/nodes/nodes.h"
 #include "reducer/nodes/stack_grid.h"
+#include "spec/surface_columns.h"
 #include "tuning/optimizer.h"
 #include "tuning/schedule.h"
 
@@ -254,8 +255,7 @@ struct TextureOptions {
   }
   bool lookup() const { return offers_lookup && method == "lookup"; }
   bool check(std::string* why) const {
-    // A tuner per column costs kilobytes: a million of them is gigabytes.
-    if (lookup() || static_cast<long long>(columns[0]) * columns[1] <= 1'000'000) return true;
+    if (lookup() || static_cast<long long>(columns[0]) * columns[1] <= kMostTunedColumns) return true;
     *why = keys.columns + ": more than a million columns" + (offers_lookup ? " for tuners (method lookup takes more)" : "");
     return false;
   }

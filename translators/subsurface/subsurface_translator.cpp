@@ -143,10 +143,9 @@ class SubsurfaceTranslator final : public TuningTranslator {
       ProfileGrid::declare(d, o.grid);
     }
     bool check(std::string* why) const {
-      // Each column is a node and a tuner of its own (a branch and bound over
-      // stacks): the texture's bound for tuned columns. Past 16 million the
-      // Column node itself refuses, as a bug of the translator's.
-      if (static_cast<long long>(columns[0]) * columns[1] > 1'000'000)
+      // Unchecked, a count past 16 million reached the Column node, which
+      // refuses it as the translator's bug (an internal error).
+      if (static_cast<long long>(columns[0]) * columns[1] > kMostTunedColumns)
         *why = fmt::format("columns: {} x {} is more than a million columns, each a tuner of its own", columns[0], columns[1]);
       else if (thickness_steps.empty()) *why = "thickness_steps: no thickness to choose from";
       else if (materials && materials->empty()) *why = "materials: no material to stack";
