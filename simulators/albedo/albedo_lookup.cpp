@@ -148,21 +148,40 @@ bool PrintableGamut::contains(const Rgb& colour, double tolerance) const {
 }
 
 Rgb PrintableGamut::project(const Rgb& colour) const {
-  if (contains(colour)) return colour;
   const Vec3 target(colour[0], colour[1], colour[2]);
   Vec3 best = Vec3(vertices_.front().data());
   double lowest = (best - target).squaredNorm();
-  for (const TriangleRecord& facet : facets_) {
-    const TriangleProjection hit = project_onto_triangle(facet, target);
+  if (planes_.empty()) {  // no solid hull: every triangle of the fan
+    for (const TriangleRecord& facet : facets_) {
+      const TriangleProjection hit = project_onto_triangle(facet, target);
+      const double d = (hit.position - target).squaredNorm();
+      if (d < lowest) lowest = d, best = hit.position;
+    }
+    return {best.x(), best.y(), best.z()};
+  }
+  // The point of a convex hull nearest to one outside it lies on a facet
+  // whose plane has the point above it (p - q is in the normal cone at q,
+  // so some facet through q has n.(p - q) > 0): only those facets are
+  // projected onto, a few of the hull's hundreds. None above by more than
+  // contains()'s tolerance: the colour is inside, itself.
+  bool outside = false;
+  for (size_t f = 0; f < planes_.size(); ++f) {
+    const auto& p = planes_[f];
+    const double above = p[0] * colour[0] + p[1] * colour[1] + p[2] * colour[2] - p[3];
+    if (!(above > 0)) continue;
+    outside = outside || above > kInsideTolerance;
+    const TriangleProjection hit = project_onto_triangle(facets_[f], target);
     const double d = (hit.position - target).squaredNorm();
     if (d < lowest) lowest = d, best = hit.position;
   }
+  if (!outside) return colour;
   return {best.x(), best.y(), best.z()};
 }
 
 GamutMapped map_into_gamut(const PrintableGamut& gamut, const AlbedoLookup& lookup, const Rgb& goal) {
-  const Lab lab = linear_rgb_to_lab(goal);
   const Rgb projected = gamut.project(goal);
+  if (projected == goal) return {goal, false, 0.0};  // inside: ΔE00 0, no conversion needed
+  const Lab lab = linear_rgb_to_lab(goal);
   const double projected_delta = ciede2000(lab, linear_rgb_to_lab(projected));
   // Inside, or outside by no more than 8-bit rounding of the goal image.
   if (projected_delta < 1.0) return {projected, false, projected_delta};

@@ -64,8 +64,10 @@ class AlbedoLookup {
 class PrintableGamut {
  public:
   explicit PrintableGamut(const std::vector<Rgb>& colours);
+  /// What contains() and project() allow outside the hull (linear RGB units).
+  static constexpr double kInsideTolerance = 1e-9;
   /// Whether `colour` lies in the hull, up to `tolerance` (linear RGB units).
-  bool contains(const Rgb& colour, double tolerance = 1e-9) const;
+  bool contains(const Rgb& colour, double tolerance = kInsideTolerance) const;
   /// The hull's point closest to `colour` in linear RGB (itself inside).
   Rgb project(const Rgb& colour) const;
   size_t vertex_count() const { return vertices_.size(); }

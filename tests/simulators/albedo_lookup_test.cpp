@@ -3,7 +3,11 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <random>
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/squared_distance_3.h>
 
 #include "albedo/albedo_lookup.h"
 
@@ -68,6 +72,42 @@ TEST(PrintableGamut, ContainsTheBoxAndProjectsOntoItsFacesEdgesAndCorners) {
   expect_projection({0.7, 0.6, 0.5}, {0.6, 0.5, 0.5});  // an edge
   expect_projection({0.9, 0.9, 0.9}, {0.6, 0.5, 0.7});  // a corner
   expect_projection({0.3, 0.2, 0.4}, {0.3, 0.2, 0.4});  // inside: itself
+}
+
+// Random colours' hull against every triangle of three of its colours, by
+// CGAL's point-triangle distance: the hull's point nearest a colour outside
+// lies on one of them (its facets are such triangles), and every one lies
+// in the hull, so the least distance to them is the distance to the hull.
+// project() looks only at the facets a colour is above: this checks it
+// misses none.
+TEST(PrintableGamut, ProjectsOntoTheHullsNearestPoint) {
+  using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+  const std::vector<Rgb> colours = random_colours(24, 5);
+  const PrintableGamut gamut(colours);
+  std::vector<Kernel::Point_3> points;
+  for (const Rgb& c : colours) points.emplace_back(c[0], c[1], c[2]);
+  std::mt19937 rng(6);
+  std::uniform_real_distribution<double> around(-0.3, 1.3);
+  int outside = 0;
+  for (int q = 0; q < 400; ++q) {
+    const Rgb colour{around(rng), around(rng), around(rng)};
+    const Rgb p = gamut.project(colour);
+    if (gamut.contains(colour)) {
+      EXPECT_EQ(p, colour);
+      continue;
+    }
+    ++outside;
+    EXPECT_TRUE(gamut.contains(p, 1e-12));
+    const Kernel::Point_3 from(colour[0], colour[1], colour[2]);
+    double least = std::numeric_limits<double>::infinity();
+    for (size_t i = 0; i < points.size(); ++i)
+      for (size_t j = i + 1; j < points.size(); ++j)
+        for (size_t k = j + 1; k < points.size(); ++k)
+          least = std::min(least, CGAL::squared_distance(from, Kernel::Triangle_3(points[i], points[j], points[k])));
+    const double found = std::hypot(p[0] - colour[0], p[1] - colour[1], p[2] - colour[2]);
+    ASSERT_NEAR(found, std::sqrt(least), 1e-12) << "query " << q;
+  }
+  EXPECT_GT(outside, 300);
 }
 
 // One ink: its colours lie on a curve, the hull has no inside; a goal off
