@@ -151,12 +151,13 @@ Rgb PrintableGamut::project(const Rgb& colour) const {
   const Vec3 target(colour[0], colour[1], colour[2]);
   Vec3 best = Vec3(vertices_.front().data());
   double lowest = (best - target).squaredNorm();
+  auto consider = [&](const TriangleRecord& facet) {
+    const TriangleProjection hit = project_onto_triangle(facet, target);
+    const double d = (hit.position - target).squaredNorm();
+    if (d < lowest) lowest = d, best = hit.position;
+  };
   if (planes_.empty()) {  // no solid hull: every triangle of the fan
-    for (const TriangleRecord& facet : facets_) {
-      const TriangleProjection hit = project_onto_triangle(facet, target);
-      const double d = (hit.position - target).squaredNorm();
-      if (d < lowest) lowest = d, best = hit.position;
-    }
+    for (const TriangleRecord& facet : facets_) consider(facet);
     return {best.x(), best.y(), best.z()};
   }
   // The point of a convex hull nearest to one outside it lies on a facet
@@ -170,9 +171,7 @@ Rgb PrintableGamut::project(const Rgb& colour) const {
     const double above = p[0] * colour[0] + p[1] * colour[1] + p[2] * colour[2] - p[3];
     if (!(above > 0)) continue;
     outside = outside || above > kInsideTolerance;
-    const TriangleProjection hit = project_onto_triangle(facets_[f], target);
-    const double d = (hit.position - target).squaredNorm();
-    if (d < lowest) lowest = d, best = hit.position;
+    consider(facets_[f]);
   }
   if (!outside) return colour;
   return {best.x(), best.y(), best.z()};
