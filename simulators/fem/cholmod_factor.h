@@ -4,6 +4,8 @@
 /// reusing CHOLMOD's factor and solve workspaces (cholmod_solve2), so that a
 /// repeated factorise-and-solve allocates nothing after the first.
 /// Eigen's CholmodSupport wrapper allocates a result vector per solve.
+/// The FEM's direct solver and elastic bound use it, and the optimal
+/// transport's Newton steps (caustics), which analyse a new pattern each time.
 
 #include <Eigen/Dense>
 #include <Eigen/SparseCore>
