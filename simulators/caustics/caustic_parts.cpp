@@ -11,7 +11,6 @@
 #include <unordered_map>
 #include <stdexcept>
 
-#include <Eigen/SparseCholesky>
 #include <fmt/format.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>

@@ -13,13 +13,13 @@
 #include <unordered_map>
 
 #include <Eigen/Geometry>
-#include <Eigen/SparseCholesky>
 #include <fmt/format.h>
 
 #include "core/error.h"
 #include "core/limits.h"
 #include "core/parameter.h"
 #include "core/properties.h"
+#include "fem/cholmod_factor.h"
 
 namespace spec2fab {
 
@@ -112,9 +112,10 @@ std::vector<double> fit_slab_surface(const CausticSetup& setup, const Eigen::Vec
   const double ridge = 1e-9 * jacobian.squaredNorm() / static_cast<double>(std::max<Eigen::Index>(1, jacobian.cols()));
   Eigen::SparseMatrix<double> normal = jacobian.transpose() * jacobian;
   for (Eigen::Index k = 0; k < normal.cols(); ++k) normal.coeffRef(k, k) += ridge;
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(normal);
-  if (solver.info() != Eigen::Success) throw std::runtime_error("fit_slab_surface: the fit is singular");
-  const Eigen::VectorXd fitted = solver.solve(jacobian.transpose() * target + ridge * current);
+  fem::CholmodFactor solver;
+  if (!solver.analyze_and_factorize(normal)) throw std::runtime_error("fit_slab_surface: the fit is singular");
+  Eigen::VectorXd fitted;
+  solver.solve(jacobian.transpose() * target + ridge * current, fitted);
   std::vector<double> values(fitted.begin(), fitted.end());
   int at_bound = 0;
   for (size_t k = 0; k < values.size(); ++k) {

@@ -118,6 +118,13 @@ bool CholmodFactor::factorize(const Matrix& lower) {
   return impl_->common.status == CHOLMOD_OK && impl_->factor->minor == impl_->factor->n;
 }
 
+bool CholmodFactor::analyze_and_factorize(const Eigen::SparseMatrix<double>& symmetric) {
+  Matrix lower = symmetric.triangularView<Eigen::Lower>();
+  lower.makeCompressed();
+  analyze(lower);
+  return factorize(lower);
+}
+
 const double* CholmodFactor::solve_columns(int system, const double* b, size_t rows, size_t columns) {
   cholmod_dense rhs{};
   rhs.nrow = rows;

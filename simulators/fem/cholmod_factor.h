@@ -29,6 +29,9 @@ class CholmodFactor {
   void analyze(const Matrix& lower);
   /// Numeric factorisation; false when the matrix is not positive definite.
   bool factorize(const Matrix& lower);
+  /// Both of the above for a symmetric matrix given whole (both triangles,
+  /// as products like AᵀA come out): its lower triangle is taken.
+  bool analyze_and_factorize(const Eigen::SparseMatrix<double>& symmetric);
   /// x = A⁻¹ b (sizes n).
   void solve(const Eigen::VectorXd& b, Eigen::VectorXd& x);
   /// X = A⁻¹ B for many right-hand sides at once (n × k, column-major):
