@@ -17,6 +17,7 @@
 #include <CGAL/Regular_triangulation_vertex_base_2.h>
 #include <CGAL/Triangulation_vertex_base_with_info_2.h>
 #include <Eigen/SparseCore>
+#include <spdlog/spdlog.h>
 #include <tbb/parallel_for.h>
 
 #include "core/error.h"
@@ -207,10 +208,20 @@ struct CentredProblem {
   }
 };
 
+size_t empty_cells(const PowerDiagram& diagram) {
+  return static_cast<size_t>(std::count_if(diagram.areas.begin(), diagram.areas.end(), [](double a) { return !(a > 0); }));
+}
+
 /// The first diagram: from the guessed weights where they leave no cell
-/// empty (blended towards the start where they do), else from the start.
-/// The weights do not change with the shift of origin: |x - y|² - ψ
-/// compares the same way for x and y moved together. Sets `psi` to its.
+/// empty; else blended towards the start as little as leaves none (1/4,
+/// 1/2); else from the start. The blend costs the guess much of its worth:
+/// a 512 x 512 photograph's guess leaves 1,588 cells empty (dark pixels
+/// beside bright ones), blended by 1/4 none, but its worst cell starts 338
+/// mean masses off and Newton takes 21 steps. (Blends of 1/16 and 1/8 left
+/// 127 and 22 empty; giving each empty cell a small one where its nearest
+/// site's lies emptied more cells than it filled.) The weights do not
+/// change with the shift of origin: |x - y|² - ψ compares the same way for
+/// x and y moved together. Sets `psi` to its.
 std::unique_ptr<PowerDiagram> first_diagram(const CentredProblem& problem, std::span<const double> initial_weights,
                                             std::vector<double>& psi) {
   const size_t n = problem.sites.size();
@@ -220,7 +231,10 @@ std::unique_ptr<PowerDiagram> first_diagram(const CentredProblem& problem, std::
       std::vector<double> guess(n);
       for (size_t i = 0; i < n; ++i) guess[i] = (1 - blend) * initial_weights[i] + blend * psi[i];
       std::unique_ptr<PowerDiagram> diagram = problem.diagram(guess);
-      if (*std::min_element(diagram->areas.begin(), diagram->areas.end()) > 0) {
+      const size_t empty = empty_cells(*diagram);
+      spdlog::debug("optimal transport, {} sites: the guess blended {:g} towards the start leaves {} cell(s) empty", n,
+                    blend, empty);
+      if (empty == 0) {
         psi = std::move(guess);
         return diagram;
       }
@@ -302,7 +316,9 @@ SemiDiscreteTransport solve_semi_discrete_transport(std::span<const Vec2> source
     // Damping: halve the step until no cell shrinks below the floor and the
     // error falls (Kitagawa, Mérigot, Thibert, Algorithm 1).
     const double error = g.norm();
+    int trials = 0;
     for (double t = 1;; t *= 0.5) {
+      ++trials;
       if (t < 1e-10) throw std::runtime_error("optimal transport: the Newton step cannot be damped enough");
       std::vector<double> trial = psi;
       for (size_t i = 1; i < n; ++i) trial[i] += t * direction[static_cast<Eigen::Index>(i - 1)];
@@ -313,6 +329,9 @@ SemiDiscreteTransport solve_semi_discrete_transport(std::span<const Vec2> source
         psi = std::move(trial);
         diagram = std::move(next);
         g = trial_g;
+        // A large transport's steps take seconds each: what each did, with -v.
+        spdlog::debug("optimal transport, {} sites: Newton step {}, step length {:g} ({} diagram(s)); worst cell {:.3g} of the mean mass off",
+                      n, step + 1, t, trials, g.cwiseAbs().maxCoeff() / mean_mass);
         break;
       }
     }
