@@ -13,7 +13,9 @@
 #include <unordered_map>
 
 #include <Eigen/Geometry>
+#include <Eigen/LU>
 #include <fmt/format.h>
+#include <tbb/parallel_for.h>
 
 #include "core/error.h"
 #include "core/limits.h"
@@ -143,56 +145,12 @@ Mesh caustic_slab_mesh(const CausticSetup& setup, const HeightSurface& surface,
   return mesh;
 }
 
-Mesh adaptive_caustic_slab_mesh(const CausticSetup& setup, const HeightSurface& surface,
-                                const Eigen::Vector3d& origin_mm, int max_level, std::vector<int>* levels) {
-  if (surface.height_axis() != 2) throw InputError("caustics: the slab's surface must give heights along w");
-  if (max_level < 0 || max_level > 6) throw std::logic_error("adaptive_caustic_slab_mesh: max_level 0 to 6");
-  const int cells_x = setup.vertices_x - 1, cells_y = setup.vertices_y - 1;
-  const double cell_w = setup.width_mm / cells_x, cell_d = setup.depth_mm / cells_y;
-  const Eigen::Vector3d offset = slab_offset(setup, origin_mm);
-  // Heights above the bottom in the tracer's frame (footprint centred on the origin).
-  const auto height = [&](double x, double y) { return surface.surface_height(x + offset.x(), y + offset.y()) - origin_mm.z(); };
+namespace {
 
-  // Where the smooth surface sends the light of each grid vertex (NaN: it
-  // does not get through).
-  const double step = 0.25 * std::min(cell_w, cell_d);
-  std::vector<Eigen::Vector2d> landing(static_cast<size_t>(setup.vertices_x) * static_cast<size_t>(setup.vertices_y));
-  for (int j = 0; j < setup.vertices_y; ++j)
-    for (int i = 0; i < setup.vertices_x; ++i) {
-      const Eigen::Vector2d xy = slab_vertex_xy(setup, i, j);
-      const double h = height(xy.x(), xy.y());
-      const double hx = (height(xy.x() + step, xy.y()) - height(xy.x() - step, xy.y())) / (2 * step);
-      const double hy = (height(xy.x(), xy.y() + step) - height(xy.x(), xy.y() - step)) / (2 * step);
-      const Eigen::Vector3d p(xy.x(), xy.y(), h), normal = Eigen::Vector3d(-hx, -hy, 1).normalized();
-      SlabPassage<double> pass;
-      Eigen::Vector2d& to = landing[static_cast<size_t>(j) * static_cast<size_t>(setup.vertices_x) + static_cast<size_t>(i)];
-      if (!top_landing(setup, light_towards(setup, p), normal, p, pass, to))
-        to = Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
-    }
-  // Each cell's level: facets small enough that their copies on the
-  // receiver lie half a pixel apart or closer, the copies' spacing being a
-  // facet's width times the light's linear spread there (the root of the
-  // landing quad's area over the cell's). On the ring at 240² the dark
-  // ground spreads the light 2×, the ring gathers it to 0.45×; a quarter of
-  // a pixel gave 0.916 traced in 131 MB, a half 0.904 in 69 MB, a whole
-  // 0.785 in 31 MB (benchmarks/RESULTS.md).
-  const double pixel = std::min(setup.receiver_width_mm / setup.image_width, setup.receiver_depth_mm / setup.image_height);
-  std::vector<int> level(static_cast<size_t>(cells_x) * static_cast<size_t>(cells_y));
+/// Raises the coarser of neighbouring cells until no two differ by more
+/// than one level.
+void balance_levels(int cells_x, int cells_y, std::vector<int>& level) {
   const auto cell = [&](int i, int j) -> int& { return level[static_cast<size_t>(j) * static_cast<size_t>(cells_x) + static_cast<size_t>(i)]; };
-  for (int j = 0; j < cells_y; ++j)
-    for (int i = 0; i < cells_x; ++i) {
-      const auto at = [&](int a, int b) {
-        return landing[static_cast<size_t>(j + b) * static_cast<size_t>(setup.vertices_x) + static_cast<size_t>(i + a)];
-      };
-      const Eigen::Vector2d q[4] = {at(0, 0), at(1, 0), at(1, 1), at(0, 1)};
-      double area = 0;
-      for (int k = 0; k < 4; ++k) area += q[k].x() * q[(k + 1) % 4].y() - q[(k + 1) % 4].x() * q[k].y();
-      const double spread = std::abs(0.5 * area) / (cell_w * cell_d);
-      const double need = std::sqrt(spread) * std::max(cell_w, cell_d) / (0.5 * pixel);
-      cell(i, j) = std::isfinite(need) ? std::clamp(static_cast<int>(std::ceil(std::log2(std::max(need, 1.0)))), 0, max_level)
-                                       : max_level;
-    }
-  // Neighbours at most one level apart: raise the coarser until they are.
   for (bool changed = true; changed;) {
     changed = false;
     for (int j = 0; j < cells_y; ++j)
@@ -205,9 +163,51 @@ Mesh adaptive_caustic_slab_mesh(const CausticSetup& setup, const HeightSurface& 
           }
         }
   }
+}
 
-  // Vertices on a lattice of half the finest quad (centres included), each
-  // made once.
+/// Each cell split 2^levels_x[k] times along x and 2^levels_y[k] along y
+/// (row by row from the lowest y).
+struct CellLevels {
+  std::vector<int> x, y;
+};
+
+/// The same for splits along each axis: cells side by side along x share
+/// an edge along y, whose points come from their y levels, so those may
+/// differ by one at most; cells above one another likewise in x.
+void balance_levels(int cells_x, int cells_y, CellLevels& levels) {
+  const auto at = [&](std::vector<int>& l, int i, int j) -> int& { return l[static_cast<size_t>(j) * static_cast<size_t>(cells_x) + static_cast<size_t>(i)]; };
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (int j = 0; j < cells_y; ++j)
+      for (int i = 0; i < cells_x; ++i) {
+        for (const int di : {1, -1})
+          if (i + di >= 0 && i + di < cells_x)
+            if (const int wanted = at(levels.y, i + di, j) - 1; at(levels.y, i, j) < wanted) at(levels.y, i, j) = wanted, changed = true;
+        for (const int dj : {1, -1})
+          if (j + dj >= 0 && j + dj < cells_y)
+            if (const int wanted = at(levels.x, i, j + dj) - 1; at(levels.x, i, j) < wanted) at(levels.x, i, j) = wanted, changed = true;
+      }
+  }
+}
+
+/// The closed slab whose top is a quadtree over cells_x × cells_y cells:
+/// cell (i, j) (row by row from the lowest y) split into 2^level × 2^level
+/// quads, neighbours at most one level apart (balance_levels). Its vertices
+/// sit on a lattice of 2^(max_level + 1) steps per cell (quad centres
+/// included), lattice point (a, b) at lateral position place(a, b) (tracer
+/// frame) with a growing towards +x and b towards +y — so that the rim
+/// walked counter-clockwise in (a, b) is counter-clockwise seen from above —
+/// and the lattice's boundary on the footprint's rim. A quad beside a finer
+/// cell is fanned from its centre through the finer cell's vertices on their
+/// shared edge, so that the top stays watertight (no vertex on another
+/// triangle's edge). Vertical walls down the rim and a bottom fanned from the
+/// footprint's centre close it.
+template <class Place, class Height>
+Mesh quadtree_slab(int cells_x, int cells_y, const CellLevels& levels, int max_level, Place&& place,
+                   Height&& height, bool shorter_diagonal, size_t* top_triangles = nullptr) {
+  const auto cell = [&](const std::vector<int>& l, int i, int j) {
+    return l[static_cast<size_t>(j) * static_cast<size_t>(cells_x) + static_cast<size_t>(i)];
+  };
   const long long per_cell = 2LL << max_level;
   const long long lattice_x = cells_x * per_cell, lattice_y = cells_y * per_cell;
   Mesh mesh;
@@ -215,47 +215,57 @@ Mesh adaptive_caustic_slab_mesh(const CausticSetup& setup, const HeightSurface& 
   const auto vertex = [&](long long a, long long b) {
     const auto [at, added] = index.try_emplace(a * (lattice_y + 1) + b, static_cast<int>(mesh.vertices.size()));
     if (added) {
-      const double x = setup.width_mm * (static_cast<double>(a) / static_cast<double>(lattice_x) - 0.5);
-      const double y = setup.depth_mm * (static_cast<double>(b) / static_cast<double>(lattice_y) - 0.5);
-      mesh.vertices.emplace_back(x, y, height(x, y));
+      const Eigen::Vector2d xy = place(a, b);
+      mesh.vertices.emplace_back(xy.x(), xy.y(), height(xy.x(), xy.y()));
     }
     return at->second;
   };
-  const auto level_at = [&](int i, int j) { return i < 0 || j < 0 || i >= cells_x || j >= cells_y ? -1 : cell(i, j); };
+  const auto level_at = [&](const std::vector<int>& l, int i, int j) {
+    return i < 0 || j < 0 || i >= cells_x || j >= cells_y ? -1 : cell(l, i, j);
+  };
   for (int j = 0; j < cells_y; ++j)
     for (int i = 0; i < cells_x; ++i) {
-      const int l = cell(i, j);
-      const long long side = per_cell >> l;  // a quad's side in lattice steps
-      const int quads = 1 << l;
-      // A finer neighbour puts a vertex in the middle of each quad edge it shares.
-      const bool finer[4] = {level_at(i, j - 1) > l, level_at(i + 1, j) > l, level_at(i, j + 1) > l, level_at(i - 1, j) > l};
-      for (int b = 0; b < quads; ++b)
-        for (int a = 0; a < quads; ++a) {
-          const long long a0 = i * per_cell + a * side, b0 = j * per_cell + b * side;
-          const bool split[4] = {b == 0 && finer[0], a == quads - 1 && finer[1], b == quads - 1 && finer[2],
+      const int lx = cell(levels.x, i, j), ly = cell(levels.y, i, j);
+      const long long side_x = per_cell >> lx, side_y = per_cell >> ly;  // a quad's sides in lattice steps
+      const int quads_x = 1 << lx, quads_y = 1 << ly;
+      // A finer neighbour puts a vertex in the middle of each quad edge it
+      // shares: below and above along x, left and right along y.
+      const bool finer[4] = {level_at(levels.x, i, j - 1) > lx, level_at(levels.y, i + 1, j) > ly,
+                             level_at(levels.x, i, j + 1) > lx, level_at(levels.y, i - 1, j) > ly};
+      for (int b = 0; b < quads_y; ++b)
+        for (int a = 0; a < quads_x; ++a) {
+          const long long a0 = i * per_cell + a * side_x, b0 = j * per_cell + b * side_y;
+          const bool split[4] = {b == 0 && finer[0], a == quads_x - 1 && finer[1], b == quads_y - 1 && finer[2],
                                  a == 0 && finer[3]};
-          const int c00 = vertex(a0, b0), c10 = vertex(a0 + side, b0), c11 = vertex(a0 + side, b0 + side),
-                    c01 = vertex(a0, b0 + side);
+          const int c00 = vertex(a0, b0), c10 = vertex(a0 + side_x, b0), c11 = vertex(a0 + side_x, b0 + side_y),
+                    c01 = vertex(a0, b0 + side_y);
           if (!split[0] && !split[1] && !split[2] && !split[3]) {
-            mesh.triangles.emplace_back(c00, c10, c11);  // as the grid splits a quad
-            mesh.triangles.emplace_back(c00, c11, c01);
+            const auto xy = [&](int v) { return mesh.vertices[static_cast<size_t>(v)].template head<2>(); };
+            if (shorter_diagonal && (xy(c10) - xy(c01)).squaredNorm() < (xy(c11) - xy(c00)).squaredNorm()) {
+              mesh.triangles.emplace_back(c00, c10, c01);
+              mesh.triangles.emplace_back(c10, c11, c01);
+            } else {
+              mesh.triangles.emplace_back(c00, c10, c11);  // as the grid splits a quad
+              mesh.triangles.emplace_back(c00, c11, c01);
+            }
             continue;
           }
           // Counter-clockwise round the quad from (a0, b0), with the midpoints.
           std::vector<int> loop{c00};
-          if (split[0]) loop.push_back(vertex(a0 + side / 2, b0));
+          if (split[0]) loop.push_back(vertex(a0 + side_x / 2, b0));
           loop.push_back(c10);
-          if (split[1]) loop.push_back(vertex(a0 + side, b0 + side / 2));
+          if (split[1]) loop.push_back(vertex(a0 + side_x, b0 + side_y / 2));
           loop.push_back(c11);
-          if (split[2]) loop.push_back(vertex(a0 + side / 2, b0 + side));
+          if (split[2]) loop.push_back(vertex(a0 + side_x / 2, b0 + side_y));
           loop.push_back(c01);
-          if (split[3]) loop.push_back(vertex(a0, b0 + side / 2));
-          const int centre = vertex(a0 + side / 2, b0 + side / 2);
+          if (split[3]) loop.push_back(vertex(a0, b0 + side_y / 2));
+          const int centre = vertex(a0 + side_x / 2, b0 + side_y / 2);
           for (size_t k = 0; k < loop.size(); ++k) mesh.triangles.emplace_back(centre, loop[k], loop[(k + 1) % loop.size()]);
         }
     }
   for (const Vec3& v : mesh.vertices)
     if (!(v.z() > 0)) throw InputError("caustics: the slab's top surface must stay above its bottom (heights > 0 mm)");
+  if (top_triangles) *top_triangles = mesh.triangles.size();
 
   // The rim, counter-clockwise seen from above: the top's boundary vertices in order.
   std::vector<int> rim;
@@ -279,8 +289,369 @@ Mesh adaptive_caustic_slab_mesh(const CausticSetup& setup, const HeightSurface& 
     mesh.triangles.emplace_back(a, b_low, b);
     mesh.triangles.emplace_back(centre, b_low, a_low);
   }
+  return mesh;
+}
+
+/// Where the smooth surface sends the light that meets its top at lateral
+/// point xy (tracer frame), on the receiver; the normal from central
+/// differences `step` apart. False when the light cannot get there.
+template <class Height>
+bool smooth_landing(const CausticSetup& setup, const Height& height, double step, const Eigen::Vector2d& xy,
+                    Eigen::Vector2d& landing) {
+  const double h = height(xy.x(), xy.y());
+  const double hx = (height(xy.x() + step, xy.y()) - height(xy.x() - step, xy.y())) / (2 * step);
+  const double hy = (height(xy.x(), xy.y() + step) - height(xy.x(), xy.y() - step)) / (2 * step);
+  const Eigen::Vector3d p(xy.x(), xy.y(), h), normal = Eigen::Vector3d(-hx, -hy, 1).normalized();
+  SlabPassage<double> pass;
+  return top_landing(setup, light_towards(setup, p), normal, p, pass, landing);
+}
+
+}  // namespace
+
+Mesh adaptive_caustic_slab_mesh(const CausticSetup& setup, const HeightSurface& surface,
+                                const Eigen::Vector3d& origin_mm, int max_level, std::vector<int>* levels) {
+  if (surface.height_axis() != 2) throw InputError("caustics: the slab's surface must give heights along w");
+  if (max_level < 0 || max_level > 6) throw std::logic_error("adaptive_caustic_slab_mesh: max_level 0 to 6");
+  const int cells_x = setup.vertices_x - 1, cells_y = setup.vertices_y - 1;
+  const double cell_w = setup.width_mm / cells_x, cell_d = setup.depth_mm / cells_y;
+  const Eigen::Vector3d offset = slab_offset(setup, origin_mm);
+  // Heights above the bottom in the tracer's frame (footprint centred on the origin).
+  const auto height = [&](double x, double y) { return surface.surface_height(x + offset.x(), y + offset.y()) - origin_mm.z(); };
+
+  // Where the smooth surface sends the light of each grid vertex (NaN: it
+  // does not get through).
+  const double step = 0.25 * std::min(cell_w, cell_d);
+  std::vector<Eigen::Vector2d> landing(static_cast<size_t>(setup.vertices_x) * static_cast<size_t>(setup.vertices_y));
+  for (int j = 0; j < setup.vertices_y; ++j)
+    for (int i = 0; i < setup.vertices_x; ++i) {
+      Eigen::Vector2d& to = landing[static_cast<size_t>(j) * static_cast<size_t>(setup.vertices_x) + static_cast<size_t>(i)];
+      if (!smooth_landing(setup, height, step, slab_vertex_xy(setup, i, j), to))
+        to = Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
+    }
+  // Each cell's level: facets small enough that their copies on the
+  // receiver lie half a pixel apart or closer, the copies' spacing being a
+  // facet's width times the light's linear spread there (the root of the
+  // landing quad's area over the cell's). On the ring at 240² the dark
+  // ground spreads the light 2×, the ring gathers it to 0.45×; a quarter of
+  // a pixel gave 0.916 traced in 131 MB, a half 0.904 in 69 MB, a whole
+  // 0.785 in 31 MB (benchmarks/RESULTS.md).
+  const double pixel = std::min(setup.receiver_width_mm / setup.image_width, setup.receiver_depth_mm / setup.image_height);
+  std::vector<int> level(static_cast<size_t>(cells_x) * static_cast<size_t>(cells_y));
+  for (int j = 0; j < cells_y; ++j)
+    for (int i = 0; i < cells_x; ++i) {
+      const auto at = [&](int a, int b) {
+        return landing[static_cast<size_t>(j + b) * static_cast<size_t>(setup.vertices_x) + static_cast<size_t>(i + a)];
+      };
+      const Eigen::Vector2d q[4] = {at(0, 0), at(1, 0), at(1, 1), at(0, 1)};
+      double area = 0;
+      for (int k = 0; k < 4; ++k) area += q[k].x() * q[(k + 1) % 4].y() - q[(k + 1) % 4].x() * q[k].y();
+      const double spread = std::abs(0.5 * area) / (cell_w * cell_d);
+      const double need = std::sqrt(spread) * std::max(cell_w, cell_d) / (0.5 * pixel);
+      level[static_cast<size_t>(j) * static_cast<size_t>(cells_x) + static_cast<size_t>(i)] =
+          std::isfinite(need) ? std::clamp(static_cast<int>(std::ceil(std::log2(std::max(need, 1.0)))), 0, max_level)
+                              : max_level;
+    }
+  balance_levels(cells_x, cells_y, level);
+  const long long per_cell = 2LL << max_level;
+  const double lattice_x = static_cast<double>(cells_x * per_cell), lattice_y = static_cast<double>(cells_y * per_cell);
+  Mesh mesh = quadtree_slab(
+      cells_x, cells_y, CellLevels{level, level}, max_level,
+      [&](long long a, long long b) {
+        return Eigen::Vector2d(setup.width_mm * (static_cast<double>(a) / lattice_x - 0.5),
+                               setup.depth_mm * (static_cast<double>(b) / lattice_y - 0.5));
+      },
+      height, false);
   for (Vec3& v : mesh.vertices) v += offset;
   if (levels) *levels = std::move(level);
+  return mesh;
+}
+
+std::optional<Mesh> pixel_caustic_slab_mesh(const CausticSetup& setup, const HeightSurface& surface,
+                                            const Eigen::Vector3d& origin_mm, int max_level, double copy_pixels,
+                                            PixelMeshReport* report) {
+  if (surface.height_axis() != 2) throw InputError("caustics: the slab's surface must give heights along w");
+  if (max_level < 0 || max_level > 6) throw std::logic_error("pixel_caustic_slab_mesh: max_level 0 to 6");
+  if (!(copy_pixels > 0)) throw std::logic_error("pixel_caustic_slab_mesh: copy_pixels > 0");
+  PixelMeshReport local;
+  PixelMeshReport& out = report ? *report : local;
+  out = {};
+  const auto refuse = [&](std::string why) -> std::optional<Mesh> {
+    out.why_not = std::move(why);
+    return std::nullopt;
+  };
+  if (setup.disc_aperture) return refuse("the aperture is a disc, whose rim no pixel row follows");
+  const Eigen::Vector3d offset = slab_offset(setup, origin_mm);
+  const auto height = [&](double x, double y) { return surface.surface_height(x + offset.x(), y + offset.y()) - origin_mm.z(); };
+  const int columns = setup.image_width, rows = setup.image_height;
+  const double pixel_x = setup.receiver_width_mm / columns, pixel_y = setup.receiver_depth_mm / rows;
+  const double pixel = std::min(pixel_x, pixel_y);
+  const Eigen::Vector2d receiver_low = setup.receiver_centre_mm - 0.5 * Eigen::Vector2d(setup.receiver_width_mm, setup.receiver_depth_mm);
+  const Eigen::Vector2d half(0.5 * setup.width_mm, 0.5 * setup.depth_mm);
+  // Normals from central differences a fiftieth of a pixel apart; the
+  // landing's derivatives from differences a twentieth apart.
+  const double normal_step = 0.02 * pixel, jacobian_step = 0.05 * pixel;
+  const auto land = [&](const Eigen::Vector2d& xy, Eigen::Vector2d& to) { return smooth_landing(setup, height, normal_step, xy, to); };
+
+  // Corner (a, b) of the pixel grid (a towards +x, b towards +y on the
+  // receiver) pulled back to the lens: the point whose light the smooth
+  // surface sends there, by damped Newton from `guess`. On the grid's rim
+  // the point stays on the footprint's rim (only its coordinate along the
+  // rim is solved for); the corners are the footprint's.
+  const auto pull_back = [&](int a, int b, Eigen::Vector2d x, double& miss) {
+    const Eigen::Vector2d target = receiver_low + Eigen::Vector2d(a * pixel_x, b * pixel_y);
+    const bool fix_x = a == 0 || a == columns, fix_y = b == 0 || b == rows;
+    if (fix_x) x.x() = a == 0 ? -half.x() : half.x();
+    if (fix_y) x.y() = b == 0 ? -half.y() : half.y();
+    miss = 0;
+    if (fix_x && fix_y) return x;
+    // What is solved for: both coordinates, or the one along the rim.
+    const auto residual = [&](const Eigen::Vector2d& at, double& norm) {
+      Eigen::Vector2d to;
+      if (!land(at, to)) return false;
+      Eigen::Vector2d r = to - target;
+      if (fix_x) r.x() = 0;
+      if (fix_y) r.y() = 0;
+      norm = r.norm();
+      return true;
+    };
+    // Inside points keep off the rim by a hundredth of a pixel per corner
+    // between them and it: where the pixels along the image's edge get no
+    // light (a black border), their quads are slivers, not lines.
+    const double keep_x = 0.01 * pixel * std::min(a, columns - a), keep_y = 0.01 * pixel * std::min(b, rows - b);
+    const Eigen::Vector2d inner = half - Eigen::Vector2d(fix_x ? 0 : keep_x, fix_y ? 0 : keep_y);
+    const auto clamp = [&](Eigen::Vector2d p) { return p.cwiseMax(-inner).cwiseMin(inner); };
+    x = clamp(x);
+    double norm = 0;
+    if (!residual(x, norm)) {
+      miss = std::numeric_limits<double>::infinity();
+      return x;
+    }
+    for (int iteration = 0; iteration < 50 && norm > 1e-5 * pixel; ++iteration) {
+      Eigen::Vector2d to, plus, minus;
+      Eigen::Matrix2d jacobian;
+      bool ok = land(x, to);
+      for (int d = 0; d < 2 && ok; ++d) {
+        Eigen::Vector2d e = Eigen::Vector2d::Zero();
+        e[d] = jacobian_step;
+        ok = land(x + e, plus) && land(x - e, minus);
+        jacobian.col(d) = (plus - minus) / (2 * jacobian_step);
+      }
+      if (!ok) break;
+      Eigen::Vector2d r = to - target;
+      // Only the coordinate along the rim moves on the rim.
+      if (fix_x) jacobian.col(0).setZero(), r.x() = 0;
+      if (fix_y) jacobian.col(1).setZero(), r.y() = 0;
+      // Levenberg–Marquardt: Newton's step first, then damped ones (where
+      // the light gathers hard the Jacobian is nearly singular).
+      const Eigen::Matrix2d normal = jacobian.transpose() * jacobian;
+      const Eigen::Vector2d gradient = jacobian.transpose() * r;
+      const double scale = normal.trace();
+      bool moved = false;
+      for (int damping = 0; damping < 12 && !moved; ++damping) {
+        Eigen::Matrix2d damped = normal + (damping == 0 ? 0.0 : scale * std::pow(10.0, damping - 10)) * Eigen::Matrix2d::Identity();
+        if (fix_x) damped(0, 0) = 1;
+        if (fix_y) damped(1, 1) = 1;
+        if (!(std::abs(damped.determinant()) > 1e-300)) continue;
+        const Eigen::Vector2d step = -damped.inverse() * gradient;
+        if (!step.allFinite()) continue;
+        const Eigen::Vector2d next = clamp(x + step);
+        double next_norm = 0;
+        if (residual(next, next_norm) && next_norm < norm) {
+          x = next;
+          norm = next_norm;
+          moved = true;
+        }
+      }
+      if (!moved) break;
+    }
+    miss = norm / pixel;
+    return x;
+  };
+
+  // The pixel corners' preimages: the first column serially, then each row
+  // from its first corner, every corner starting from its left neighbour's
+  // (rows in parallel; each row's chain is fixed, so any thread count gives
+  // the same mesh).
+  const size_t stride = static_cast<size_t>(columns) + 1;
+  std::vector<Eigen::Vector2d> corner(stride * (static_cast<size_t>(rows) + 1));
+  std::vector<double> miss(corner.size(), 0);
+  const auto at = [&](int a, int b) { return static_cast<size_t>(b) * stride + static_cast<size_t>(a); };
+  // The lens's corners must light the image's (the map keeps the rectangle's orientation).
+  for (const auto& [sx, sy] : {std::pair{-1, -1}, std::pair{1, -1}, std::pair{1, 1}, std::pair{-1, 1}}) {
+    Eigen::Vector2d to;
+    const Eigen::Vector2d lens(sx * half.x(), sy * half.y());
+    const Eigen::Vector2d image = setup.receiver_centre_mm + 0.5 * Eigen::Vector2d(sx * setup.receiver_width_mm, sy * setup.receiver_depth_mm);
+    if (!land(lens, to) || (to - image).norm() > 0.25 * std::min(setup.receiver_width_mm, setup.receiver_depth_mm))
+      return refuse(fmt::format("the footprint's corner ({:g}, {:g}) does not light the image's corner next to it", lens.x(), lens.y()));
+  }
+  // Where continuation from a neighbour falls short (the light folds over
+  // near a hard focus, and Newton stops on the wrong side), the corner is
+  // solved again from the top's points whose light lands nearest it: a
+  // sample of the top every half pixel, bucketed by the pixel it lights.
+  const int samples_x = std::max(2, static_cast<int>(std::ceil(setup.width_mm / (0.5 * pixel)))) + 1;
+  const int samples_y = std::max(2, static_cast<int>(std::ceil(setup.depth_mm / (0.5 * pixel)))) + 1;
+  std::vector<Eigen::Vector2d> sample(static_cast<size_t>(samples_x) * static_cast<size_t>(samples_y));
+  std::vector<long long> sample_pixel(sample.size(), -1);
+  tbb::parallel_for(0, samples_y, [&](int j) {
+    for (int i = 0; i < samples_x; ++i) {
+      const size_t k = static_cast<size_t>(j) * static_cast<size_t>(samples_x) + static_cast<size_t>(i);
+      sample[k] = Eigen::Vector2d(setup.width_mm * (static_cast<double>(i) / (samples_x - 1) - 0.5),
+                                  setup.depth_mm * (static_cast<double>(j) / (samples_y - 1) - 0.5));
+      Eigen::Vector2d to;
+      if (!land(sample[k], to)) continue;
+      const Eigen::Vector2d uv((to.x() - receiver_low.x()) / pixel_x, (to.y() - receiver_low.y()) / pixel_y);
+      if (uv.x() >= 0 && uv.y() >= 0 && uv.x() < columns && uv.y() < rows)
+        sample_pixel[k] = static_cast<long long>(uv.y()) * columns + static_cast<long long>(uv.x());
+    }
+  });
+  std::vector<int> bucket_start(static_cast<size_t>(columns) * static_cast<size_t>(rows) + 1, 0);
+  for (long long p : sample_pixel)
+    if (p >= 0) ++bucket_start[static_cast<size_t>(p) + 1];
+  std::partial_sum(bucket_start.begin(), bucket_start.end(), bucket_start.begin());
+  std::vector<int> bucket(static_cast<size_t>(bucket_start.back()));
+  {
+    std::vector<int> fill(bucket_start.begin(), bucket_start.end() - 1);
+    for (size_t k = 0; k < sample.size(); ++k)
+      if (sample_pixel[k] >= 0) bucket[static_cast<size_t>(fill[static_cast<size_t>(sample_pixel[k])]++)] = static_cast<int>(k);
+  }
+  constexpr double kRetryPx = 0.05;
+  const auto solve = [&](int a, int b, const Eigen::Vector2d& guess) {
+    double& off = miss[at(a, b)];
+    Eigen::Vector2d best = pull_back(a, b, guess, off);
+    for (int reach = 1; reach <= 3 && off > kRetryPx; ++reach)
+      for (int j = std::max(0, b - reach); j < std::min(rows, b + reach); ++j)
+        for (int i = std::max(0, a - reach); i < std::min(columns, a + reach); ++i) {
+          const size_t p = static_cast<size_t>(j) * static_cast<size_t>(columns) + static_cast<size_t>(i);
+          for (int k = bucket_start[p]; k < bucket_start[p + 1] && off > kRetryPx; ++k) {
+            double again = 0;
+            const Eigen::Vector2d tried = pull_back(a, b, sample[static_cast<size_t>(bucket[static_cast<size_t>(k)])], again);
+            if (again < off) best = tried, off = again;
+          }
+        }
+    corner[at(a, b)] = best;
+  };
+  corner[at(0, 0)] = -half;
+  for (int b = 1; b <= rows; ++b) solve(0, b, corner[at(0, b - 1)]);
+  tbb::parallel_for(0, rows + 1, [&](int b) {
+    for (int a = 1; a <= columns; ++a) solve(a, b, corner[at(a - 1, b)]);
+  });
+  // Along the image's edge the surface may leave a band unlit (the lens's
+  // rim lands inside it): the corners there end on the rim's side of the
+  // top, their quads slivers, as dark as the smooth surface's pixels there.
+  for (int b = 0; b <= rows; ++b)
+    for (int a = 0; a <= columns; ++a) {
+      if (!(miss[at(a, b)] > kRetryPx)) continue;
+      // On the margin pull_back keeps from the rim, along a free coordinate.
+      const Eigen::Vector2d inner = half - 0.01 * pixel * Eigen::Vector2d(std::min(a, columns - a), std::min(b, rows - b));
+      const Eigen::Vector2d& x = corner[at(a, b)];
+      const bool free_x = a > 0 && a < columns, free_y = b > 0 && b < rows;
+      if ((free_x && std::abs(x.x()) >= inner.x() - 1e-9 * half.x()) ||
+          (free_y && std::abs(x.y()) >= inner.y() - 1e-9 * half.y())) {
+        miss[at(a, b)] = 0;
+        ++out.unlit_corners;
+      }
+    }
+  const size_t worst = static_cast<size_t>(std::max_element(miss.begin(), miss.end()) - miss.begin());
+  out.worst_miss_px = miss[worst];
+  out.corners_off = static_cast<int>(std::count_if(miss.begin(), miss.end(), [&](double m) { return m > kRetryPx; }));
+  // Corners that still miss (the surface folds the light over near them)
+  // are kept where the search ended: their pixels' dots land off by that
+  // much, which the run's traced headline shows; the mesh stays valid
+  // unless a facet folds (below).
+
+  // Where the surface nearly folds the light over (hard gathering), a
+  // pixel's preimage can come out not convex, which its split quads would
+  // turn over: such pixels' corners are moved to their neighbours' mean
+  // (along the rim on it) until every preimage is convex. Those pixels' dots
+  // then land a little off; report->untangled_corners counts the moves.
+  const auto convex = [&](int i, int j) {
+    const Eigen::Vector2d q[4] = {corner[at(i, j)], corner[at(i + 1, j)], corner[at(i + 1, j + 1)], corner[at(i, j + 1)]};
+    for (int k = 0; k < 4; ++k) {
+      const Eigen::Vector2d e1 = q[(k + 1) % 4] - q[k], e2 = q[(k + 2) % 4] - q[(k + 1) % 4];
+      if (!(e1.x() * e2.y() - e1.y() * e2.x() > 0)) return false;
+    }
+    return true;
+  };
+  for (int round = 0; round < 100; ++round) {
+    std::vector<char> move(corner.size(), 0);
+    bool any = false;
+    for (int j = 0; j < rows; ++j)
+      for (int i = 0; i < columns; ++i)
+        if (!convex(i, j)) {
+          any = true;
+          for (const auto& [di, dj] : {std::pair{0, 0}, std::pair{1, 0}, std::pair{1, 1}, std::pair{0, 1}}) move[at(i + di, j + dj)] = 1;
+        }
+    if (!any) break;
+    const std::vector<Eigen::Vector2d> before = corner;
+    for (int b = 0; b <= rows; ++b)
+      for (int a = 0; a <= columns; ++a) {
+        if (!move[at(a, b)] || ((a == 0 || a == columns) && (b == 0 || b == rows))) continue;
+        Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+        int count = 0;
+        const bool rim_x = a == 0 || a == columns, rim_y = b == 0 || b == rows;
+        for (const auto& [da, db] : {std::pair{1, 0}, std::pair{-1, 0}, std::pair{0, 1}, std::pair{0, -1}}) {
+          const int na = a + da, nb = b + db;
+          if (na < 0 || nb < 0 || na > columns || nb > rows) continue;
+          if ((rim_x && da != 0) || (rim_y && db != 0)) continue;  // along the rim only
+          sum += before[at(na, nb)];
+          ++count;
+        }
+        corner[at(a, b)] = sum / count;
+        ++out.untangled_corners;
+      }
+  }
+
+  // Each pixel's splits, along x and y apart: its preimage's quads narrow
+  // enough that their copies on the receiver are at most copy_pixels wide
+  // along each (a flat facet casts a copy of itself: where the light
+  // gathers, a pixel's preimage is wider than the pixel, often along one
+  // direction only — the ring's is long across the ring). On the 512² ring:
+  // 1 pixel 89 MB, 1.5 61 MB (0.917 traced), 2 37 MB (0.907);
+  // benchmarks/RESULTS.md.
+  CellLevels levels{std::vector<int>(static_cast<size_t>(columns) * static_cast<size_t>(rows)), {}};
+  levels.y = levels.x;
+  for (int j = 0; j < rows; ++j)
+    for (int i = 0; i < columns; ++i) {
+      const Eigen::Vector2d &q00 = corner[at(i, j)], &q10 = corner[at(i + 1, j)], &q11 = corner[at(i + 1, j + 1)],
+                            &q01 = corner[at(i, j + 1)];
+      const auto level_for = [&](double extent) {
+        int l = 0;
+        while (l < max_level && extent / (1 << l) > copy_pixels * pixel) ++l;
+        return l;
+      };
+      const size_t k = static_cast<size_t>(j) * static_cast<size_t>(columns) + static_cast<size_t>(i);
+      levels.x[k] = level_for(std::max((q10 - q00).norm(), (q11 - q01).norm()));
+      levels.y[k] = level_for(std::max((q01 - q00).norm(), (q11 - q10).norm()));
+    }
+  balance_levels(columns, rows, levels);
+  for (size_t k = 0; k < levels.x.size(); ++k) out.refined_pixels += levels.x[k] > 0 || levels.y[k] > 0;
+
+  // Points inside a pixel: bilinear in its corners' preimages (which two
+  // neighbours share along their edge), the lattice of quadtree_slab.
+  const long long per_pixel = 2LL << max_level;
+  const auto place = [&](long long a, long long b) {
+    const int i = static_cast<int>(std::min<long long>(a / per_pixel, columns - 1));
+    const int j = static_cast<int>(std::min<long long>(b / per_pixel, rows - 1));
+    const double u = static_cast<double>(a - i * per_pixel) / static_cast<double>(per_pixel);
+    const double v = static_cast<double>(b - j * per_pixel) / static_cast<double>(per_pixel);
+    return Eigen::Vector2d((1 - v) * ((1 - u) * corner[at(i, j)] + u * corner[at(i + 1, j)]) +
+                           v * ((1 - u) * corner[at(i, j + 1)] + u * corner[at(i + 1, j + 1)]));
+  };
+  size_t top = 0;
+  Mesh mesh = quadtree_slab(columns, rows, levels, max_level, place, height, true, &top);
+  for (size_t t = 0; t < top; ++t) {
+    const Eigen::Vector3i& tri = mesh.triangles[t];
+    const Eigen::Vector2d p = mesh.vertices[static_cast<size_t>(tri[0])].head<2>(),
+                          q = mesh.vertices[static_cast<size_t>(tri[1])].head<2>(),
+                          r = mesh.vertices[static_cast<size_t>(tri[2])].head<2>();
+    const Eigen::Vector2d e1 = q - p, e2 = r - p;
+    if (!(e1.x() * e2.y() - e1.y() * e2.x() > 0)) ++out.folded_facets;
+  }
+  if (out.folded_facets > 0)
+    return refuse(fmt::format("{} facets would fold over (the surface sends light across itself there)", out.folded_facets));
+  for (Vec3& v : mesh.vertices) v += offset;
+  out.levels = std::move(levels.x);
+  out.levels_y = std::move(levels.y);
   return mesh;
 }
 

@@ -6,6 +6,7 @@
 /// faceted slab.
 
 #include <array>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -149,6 +150,46 @@ Mesh caustic_slab_mesh(const CausticSetup& setup, const HeightSurface& surface, 
 /// by row from the lowest y).
 Mesh adaptive_caustic_slab_mesh(const CausticSetup& setup, const HeightSurface& surface,
                                 const Eigen::Vector3d& origin_mm, int max_level, std::vector<int>* levels = nullptr);
+
+/// What pixel_caustic_slab_mesh made, or why it could not.
+struct PixelMeshReport {
+  std::string why_not;         ///< empty when it made the mesh
+  double worst_miss_px = 0;    ///< farthest a pulled-back corner's light lands from its pixel corner
+  int corners_off = 0;         ///< corners whose light lands over 0.05 pixels off (where it folds over)
+  int unlit_corners = 0;       ///< corners in a band along the image's edge that the lens's rim does not reach
+  int refined_pixels = 0;      ///< pixels whose preimage was split (level > 0)
+  int untangled_corners = 0;   ///< corner moves that made folded pixels' preimages convex
+  int folded_facets = 0;       ///< top facets that would turn over still (then no mesh)
+  std::vector<int> levels;     ///< each pixel's splits along x (2^level), row by row from the receiver's lowest y
+  std::vector<int> levels_y;   ///< and along y
+};
+
+/// The slab with its top meshed on the receiver's pixel grid pulled back
+/// to the lens: each corner of the image's pixels is moved to the point of
+/// the top whose light the smooth surface sends to it (Levenberg–Marquardt
+/// from its neighbour's, or from the top's points lighting the pixels
+/// around it), so that each pixel's light comes from one quad of the file,
+/// two flat facets split along the quad's shorter diagonal. A flat facet
+/// casts a copy of itself; here the copy lands on its own pixel — inside
+/// it where the light spreads (the quad is smaller than the pixel), over
+/// its neighbours by a little where the light gathers once such quads are
+/// split (up to 2^max_level times along x and along y apart, until a
+/// quad's copy is at most `copy_pixels` pixels wide along each;
+/// neighbours one level apart at most, fanned as adaptive_caustic_slab_mesh
+/// fans them). So each pixel gets the light the smooth surface gives it, as
+/// a halftone dot, with about two triangles a pixel where light spreads,
+/// instead of the many facets a grid over the top needs to keep its
+/// copies' gaps below a pixel. The receiver must be lit corner to corner by
+/// the footprint (a rectangle aperture, the map keeping its orientation);
+/// corners the lens's rim does not reach, in a band along the image's edge,
+/// stay on the rim's side (slivers, dark as the smooth surface leaves them);
+/// where the surface folds the light over, a corner may stay off its
+/// pixel's corner (`report` counts them and gives the worst). Where a facet
+/// would fold over after the folded pixels' corners were evened out, no
+/// mesh is made and `report->why_not` says why.
+std::optional<Mesh> pixel_caustic_slab_mesh(const CausticSetup& setup, const HeightSurface& surface,
+                                            const Eigen::Vector3d& origin_mm, int max_level, double copy_pixels = 1,
+                                            PixelMeshReport* report = nullptr);
 
 /// A slab whose top is nx × ny planar facets over the setup's footprint
 /// (tracer frame: centred on the origin, flat bottom at z = 0), closed by

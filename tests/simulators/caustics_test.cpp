@@ -19,6 +19,7 @@
 #include <tbb/global_control.h>
 
 #include "build_gates.h"
+#include "caustic_check.h"  // tools/caustic_check: independent of the simulators
 #include "caustics/caustic_parts.h"
 #include "caustic_support.h"
 #include "caustics/caustic_tracer.h"
@@ -698,6 +699,73 @@ TEST_F(CausticSimulatorTest, AdaptiveSlabIsWatertightOnTheSurfaceAndFinerWhereTh
   const auto [lowest, highest] = std::minmax_element(levels.begin(), levels.end());
   EXPECT_LT(*lowest, *highest);
   EXPECT_GT(mesh.triangles.size(), grid.triangles.size());
+}
+
+// The print mesh on the pixels pulled back (pixel_caustic_slab_mesh):
+// watertight, every top vertex on the surface, and — traced by caustic_check,
+// whose STL reader and tracer share nothing with the simulator — it casts
+// what a grid eight times finer each way than the pixels casts (the smooth
+// surface's image), far closer than a grid of as many triangles does.
+TEST_F(CausticSimulatorTest, PixelMeshCastsTheSmoothSurfacesImageWithFewFacets) {
+  const auto spline = node(R"({"type": "bspline", "control": [5, 5], "domain": [10, 20, 40, 50],
+      "heights_mm": [3.0, 3.2, 3.1, 3.3, 3.0, 3.1, 3.6, 3.4, 3.5, 3.2, 3.2, 3.4, 4.0, 3.3, 3.1,
+                     3.0, 3.5, 3.3, 3.7, 3.2, 3.1, 3.2, 3.0, 3.3, 3.1],
+      "below": {"type": "layered", "material": "VeroClear"}, "above": {"type": "layered", "material": "void"}})");
+  constexpr int kPixels = 48;
+  const CausticSlabConfig config = CausticSlabConfig::read(
+      Properties::parse(R"({"size_mm": [30, 30], "origin_mm": [10, 20, 1], "thickness_mm": 6, "vertices": [21, 21],
+                            "distance_mm": 60, "image": [48, 48]})", "options.json"),
+      default_limits());
+  const HeightSurface& surface = *spline->height_surface();
+  PixelMeshReport report;
+  const std::optional<Mesh> pixels = pixel_caustic_slab_mesh(config.setup, surface, config.origin_mm, 2, 1.0, &report);
+  ASSERT_TRUE(pixels.has_value()) << report.why_not;
+  EXPECT_LT(report.worst_miss_px, 0.05);
+  std::map<std::pair<int, int>, int> edges;
+  for (const auto& t : pixels->triangles)
+    for (int k = 0; k < 3; ++k) ++edges[{t[k], t[(k + 1) % 3]}];
+  for (const auto& [edge, count] : edges) {
+    ASSERT_EQ(count, 1) << edge.first << " " << edge.second;
+    ASSERT_EQ(edges.count({edge.second, edge.first}), 1u) << "an open edge " << edge.first << " " << edge.second;
+  }
+  for (const Vec3& v : pixels->vertices) {
+    if (v.z() > 1 + 1e-9) {
+      EXPECT_NEAR(v.z(), surface.surface_height(v.x(), v.y()), 1e-12);
+    }
+  }
+  const Mesh grid = caustic_slab_mesh(config.setup, surface, config.origin_mm);
+  EXPECT_NEAR(pixels->signed_volume(), grid.signed_volume(), 1e-3 * grid.signed_volume());
+
+  // The same slab on grids: one 8 times finer each way than the pixels, and
+  // one with as many top triangles as the pixel mesh.
+  const auto on_grid = [&](int vertices) {
+    CausticSetup setup = config.setup;
+    setup.vertices_x = setup.vertices_y = vertices;
+    return caustic_slab_mesh(setup, surface, config.origin_mm);
+  };
+  const size_t top_triangles = pixels->triangles.size() - grid.triangles.size() + 2 * 20 * 20;
+  const Mesh fine = on_grid(8 * kPixels + 1);
+  const Mesh coarse = on_grid(static_cast<int>(std::lround(std::sqrt(0.5 * static_cast<double>(top_triangles)))) + 1);
+  const auto trace = [&](const Mesh& mesh, const char* name) {
+    const std::filesystem::path file = std::filesystem::path(::testing::TempDir()) / name;
+    write_stl(mesh, file);
+    caustic_check::Options options;
+    options.stl = file.string();
+    options.goal = std::string(SPEC2FAB_DATASETS_DIR) + "/images/caustic_ring_120.png";
+    options.distance_mm = 60;
+    options.image = {kPixels, kPixels};
+    const cv::Mat traced = caustic_check::Print(options).trace({32 * kPixels, 32 * kPixels}).traced.clone();
+    std::filesystem::remove(file);
+    return traced;
+  };
+  const cv::Mat smooth = trace(fine, "pixel_mesh_fine.stl");
+  const double scale = cv::norm(smooth) / kPixels;  // the image's RMS
+  const double pixel_error = cv::norm(trace(*pixels, "pixel_mesh.stl") - smooth) / kPixels / scale;
+  const double grid_error = cv::norm(trace(coarse, "pixel_mesh_grid.stl") - smooth) / kPixels / scale;
+  RecordProperty("pixel_mesh_relative_rms", std::to_string(pixel_error));
+  RecordProperty("same_size_grid_relative_rms", std::to_string(grid_error));
+  EXPECT_LT(pixel_error, 0.02);
+  EXPECT_LT(pixel_error, 0.5 * grid_error);
 }
 
 }  // namespace

@@ -273,6 +273,8 @@ struct CausticSurfaceSettings {
   int vertices_per_span = 3;
   int print_vertices_per_span = 0;  ///< 0: twice vertices_per_span
   int print_refinement_levels = 0;
+  std::string print_mesh = "grid";
+  double print_copy_pixels = 1;
   double max_slope = 1;
 
   template <class Declare, class Self>
@@ -290,7 +292,18 @@ struct CausticSurfaceSettings {
     d.number(o.print_refinement_levels, "print_refinement_levels", Range::closed(0, 3),
              "print/surface.stl's cells split in halves up to this many times where the light spreads on the "
              "receiver (adaptive_caustic_slab_mesh): fine facets where a coarse one's copy would show, coarse "
-             "ones where the light gathers; 0: the uniform grid");
+             "ones where the light gathers; 0: the uniform grid. With print_mesh \"pixels\": how many times a "
+             "pixel's quad may be split where the light gathers");
+    d.choice(o.print_mesh, "print_mesh", {"grid", "pixels"},
+             "how print/surface.stl's top is meshed: grid, a grid over the top (print_vertices_per_span, "
+             "print_refinement_levels); pixels, the image's pixel grid pulled back to the top through the smooth "
+             "surface (pixel_caustic_slab_mesh), so that each pixel's light comes from its own quad of two flat "
+             "facets and lands inside the pixel as a halftone dot: about two triangles a pixel where the light "
+             "spreads (the grid is used, with a warning, where the map cannot be pulled back)");
+    d.number(o.print_copy_pixels, "print_copy_pixels", Range::closed(0.25, 16),
+             "with print_mesh \"pixels\": where the light gathers, a pixel's quad is split (up to "
+             "print_refinement_levels times along each direction) until its facets' copies on the receiver are at "
+             "most this many pixels wide: smaller is closer to the smooth surface's image, larger a smaller file");
   }
   bool check(std::string* why) const {
     if (static_cast<long long>(control[0]) * control[1] <= 1'000'000) return true;
@@ -336,6 +349,13 @@ struct CausticSurfaceSettings {
 PrintSurface caustic_print_surface(const CausticSlabConfig& slab, std::array<int, 2> print_vertices,
                                    const HeightSurface& surface, const std::function<void(Mesh&)>& to_print,
                                    int refinement_levels = 0);
+/// The same as the settings ask (print_mesh, print_vertices,
+/// print_refinement_levels, print_copy_pixels); `in_words` gets how the top
+/// was meshed, `on_pixels` whether on the pixels pulled back (the grid
+/// stands in, with a warning, where they cannot be).
+PrintSurface caustic_print_surface(const CausticSlabConfig& slab, const CausticSurfaceSettings& settings,
+                                   const HeightSurface& surface, const std::function<void(Mesh&)>& to_print,
+                                   std::string& in_words, bool& on_pixels);
 
 /// After fabrication wrote `printed` (caustic_print_surface's) to
 /// print/surface.stl: the file read back and traced with rays (8 per pixel
@@ -380,6 +400,7 @@ CausticImageErrors printed_rays_errors(const CausticSlabConfig& slab, const Mesh
 struct HeadlineMeshes {
   std::string printed;    ///< print/surface.stl's facets (print_facets)
   std::string simulated;  ///< the mesh the tuner simulated (simulated_facets), where it is another
+  bool on_pixels = false; ///< print/surface.stl's top is the pixels pulled back (print_mesh "pixels")
 };
 
 /// Fills headline.agreement: agreeing within kHeadlineAgreement, or why not:

@@ -304,8 +304,8 @@ class CausticsTextureTranslator final : public TuningTranslator {
       context.report.files.previews.push_back(file);
     shadow_field_ = shadow;
     if (outputs_.fabrication.writes("stl"))
-      print_surfaces_ = {caustic_print_surface(slab_, surface_.print_vertices(), *caustic_surface_->height_surface(),
-                                               mirror(), surface_.print_refinement_levels)};
+      print_surfaces_ = {caustic_print_surface(slab_, surface_, *caustic_surface_->height_surface(), mirror(),
+                                               print_facets_, print_on_pixels_)};
   }
 
   /// The subtree's frame is the print's mirrored about the cut: z = cut − w.
@@ -340,7 +340,7 @@ class CausticsTextureTranslator final : public TuningTranslator {
         mirror()(unmirrored);
         headline.printed_rays_ssim = printed_rays_errors(slab_, unmirrored, target_, &shadow_field_).ssim;
       }
-      explain_headline(headline, {surface_.print_facets(), surface_.simulated_facets()});
+      explain_headline(headline, {print_facets_, surface_.simulated_facets(), print_on_pixels_});
       context.report.files.previews.push_back(headline.preview);
       context.report.add("headline", headline);
     }
@@ -350,6 +350,8 @@ class CausticsTextureTranslator final : public TuningTranslator {
   CausticGoalSettings settings_;
   TexturePiece texture_;
   CausticSurfaceSettings surface_;
+  std::string print_facets_;  ///< how print/surface.stl's top was meshed, in words
+  bool print_on_pixels_ = false;  ///< on the pixels pulled back (else a grid)
   std::shared_ptr<TextureShadow> shadow_;
   std::string optimizer_label_;
   double texture_mm_ = 0, cut_z_ = 0;

@@ -211,8 +211,7 @@ class SmoothCausticsTranslator final : public TuningTranslator {
       previews.push_back(file);
     if (!compared_runs_.empty()) previews.push_back("preview/optimizer_comparison.png");
     if (outputs_.fabrication.writes("stl"))
-      print_surfaces_ = {caustic_print_surface(slab_, surface_.print_vertices(), surface(), {},
-                                               surface_.print_refinement_levels)};
+      print_surfaces_ = {caustic_print_surface(slab_, surface_, surface(), {}, print_facets_, print_on_pixels_)};
   }
 
   /// print/surface.stl as written, traced: by the simulator's tracer, and
@@ -228,7 +227,7 @@ class SmoothCausticsTranslator final : public TuningTranslator {
                                                          PrintFrame{context.timing});
       if (std::abs(headline.ssim_difference) > kHeadlineAgreement)
         headline.printed_facets_ssim = printed_facets_errors(slab_, print_surfaces_.front().mesh, target_).ssim;
-      explain_headline(headline, {surface_.print_facets(), surface_.simulated_facets()});
+      explain_headline(headline, {print_facets_, surface_.simulated_facets(), print_on_pixels_});
       context.report.files.previews.push_back(headline.preview);
       context.report.add("headline", headline);
     }
@@ -265,6 +264,8 @@ class SmoothCausticsTranslator final : public TuningTranslator {
   }
 
   CausticSurfaceSettings surface_;
+  std::string print_facets_;  ///< how print/surface.stl's top was meshed, in words
+  bool print_on_pixels_ = false;  ///< on the pixels pulled back (else a grid)
   CausticGoalSettings settings_;
   std::string main_label_;
   CausticSlabConfig slab_;
