@@ -488,23 +488,20 @@ void explain_headline(PrintHeadline& headline, const HeadlineMeshes& meshes) {
   const std::string differ = fmt::format("the print's traced SSIM {:.3f} differs from the simulated {:.3f} by {:+.3f}",
                                          traced, headline.simulated_ssim, -headline.ssim_difference);
   if (headline.printed_facets_ssim && std::abs(*headline.printed_facets_ssim - traced) <= kHeadlineAgreement) {
-    if (meshes.on_pixels) {
-      headline.agreement = fmt::format(
-          "{}: the file's flat facets ({}). Each facet casts a sharp copy of itself onto its own pixel, wider "
-          "than the pixel where the light gathers; the simulator's facet estimator on the file's own facets gives "
-          "{:.3f}, within {:g} of the trace, while the tuned smooth surface gives {:.3f} (its estimator meshes the "
-          "surface at vertices_per_span). A smaller print_copy_pixels, with print_refinement_levels to allow it, "
-          "narrows what the copies' width costs",
-          differ, meshes.printed, *headline.printed_facets_ssim, kHeadlineAgreement, headline.simulated_ssim);
-      return;
-    }
+    // A grid's copies leave a moire; the pixels' land on their own pixels.
+    const char* copies = meshes.on_pixels ? " onto its own pixel, wider than the pixel where the light gathers"
+                                          : ", a moire at facet pitch, strongest where the goal is dark";
+    const char* narrows = meshes.on_pixels
+                              ? " (its estimator meshes the surface at vertices_per_span). A smaller print_copy_pixels, "
+                                "with print_refinement_levels to allow it, narrows what the copies' width costs"
+                              : ". More vertices per span (print_vertices_per_span) or refinement "
+                                "(print_refinement_levels) narrow it, or print_mesh \"pixels\"";
     headline.agreement = fmt::format(
-        "{}: the file's flat facets ({}). Each facet casts a sharp copy of "
-        "itself, a moire at facet pitch, strongest where the goal is dark; the simulator's facet estimator on the file's own "
-        "facets gives {:.3f}, within {:g} of the trace, while the tuned smooth surface gives {:.3f}. More "
-        "vertices per span (print_vertices_per_span) or refinement (print_refinement_levels) narrow it, or "
-        "print_mesh \"pixels\"",
-        differ, meshes.printed, *headline.printed_facets_ssim, kHeadlineAgreement, headline.simulated_ssim);
+        "{}: the file's flat facets ({}). Each facet casts a sharp copy of itself{}; the simulator's facet "
+        "estimator on the file's own facets gives {:.3f}, within {:g} of the trace, while the tuned smooth surface "
+        "gives {:.3f}{}",
+        differ, meshes.printed, copies, *headline.printed_facets_ssim, kHeadlineAgreement, headline.simulated_ssim,
+        narrows);
     return;
   }
   if (headline.printed_rays_ssim && std::abs(*headline.printed_rays_ssim - traced) <= kHeadlineAgreement) {
