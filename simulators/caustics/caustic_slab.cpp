@@ -392,9 +392,15 @@ std::optional<Mesh> pixel_caustic_slab_mesh(const CausticSetup& setup, const Hei
   const double normal_step = 0.02 * pixel, jacobian_step = 0.05 * pixel;
   const auto land = [&](const Eigen::Vector2d& xy, Eigen::Vector2d& to) { return smooth_landing(setup, height, normal_step, xy, to); };
 
+  // Inside points keep off the rim by a hundredth of a pixel per corner
+  // between them and it: where the pixels along the image's edge get no
+  // light (a black border), their quads are slivers, not lines.
+  const auto inner_at = [&](int a, int b) {
+    return Eigen::Vector2d(half - 0.01 * pixel * Eigen::Vector2d(std::min(a, columns - a), std::min(b, rows - b)));
+  };
   // Corner (a, b) of the pixel grid (a towards +x, b towards +y on the
   // receiver) pulled back to the lens: the point whose light the smooth
-  // surface sends there, by damped Newton from `guess`. On the grid's rim
+  // surface sends there, by Levenberg–Marquardt from `guess`. On the grid's rim
   // the point stays on the footprint's rim (only its coordinate along the
   // rim is solved for); the corners are the footprint's.
   const auto pull_back = [&](int a, int b, Eigen::Vector2d x, double& miss) {
@@ -414,11 +420,9 @@ std::optional<Mesh> pixel_caustic_slab_mesh(const CausticSetup& setup, const Hei
       norm = r.norm();
       return true;
     };
-    // Inside points keep off the rim by a hundredth of a pixel per corner
-    // between them and it: where the pixels along the image's edge get no
-    // light (a black border), their quads are slivers, not lines.
-    const double keep_x = 0.01 * pixel * std::min(a, columns - a), keep_y = 0.01 * pixel * std::min(b, rows - b);
-    const Eigen::Vector2d inner = half - Eigen::Vector2d(fix_x ? 0 : keep_x, fix_y ? 0 : keep_y);
+    Eigen::Vector2d inner = inner_at(a, b);
+    if (fix_x) inner.x() = half.x();
+    if (fix_y) inner.y() = half.y();
     const auto clamp = [&](Eigen::Vector2d p) { return p.cwiseMax(-inner).cwiseMin(inner); };
     x = clamp(x);
     double norm = 0;
@@ -542,7 +546,7 @@ std::optional<Mesh> pixel_caustic_slab_mesh(const CausticSetup& setup, const Hei
     for (int a = 0; a <= columns; ++a) {
       if (!(miss[at(a, b)] > kRetryPx)) continue;
       // On the margin pull_back keeps from the rim, along a free coordinate.
-      const Eigen::Vector2d inner = half - 0.01 * pixel * Eigen::Vector2d(std::min(a, columns - a), std::min(b, rows - b));
+      const Eigen::Vector2d inner = inner_at(a, b);
       const Eigen::Vector2d& x = corner[at(a, b)];
       const bool free_x = a > 0 && a < columns, free_y = b > 0 && b < rows;
       if ((free_x && std::abs(x.x()) >= inner.x() - 1e-9 * half.x()) ||
@@ -650,8 +654,6 @@ std::optional<Mesh> pixel_caustic_slab_mesh(const CausticSetup& setup, const Hei
   if (out.folded_facets > 0)
     return refuse(fmt::format("{} facets would fold over (the surface sends light across itself there)", out.folded_facets));
   for (Vec3& v : mesh.vertices) v += offset;
-  out.levels = std::move(levels.x);
-  out.levels_y = std::move(levels.y);
   return mesh;
 }
 

@@ -160,8 +160,6 @@ struct PixelMeshReport {
   int refined_pixels = 0;      ///< pixels whose preimage was split (level > 0)
   int untangled_corners = 0;   ///< corner moves that made folded pixels' preimages convex
   int folded_facets = 0;       ///< top facets that would turn over still (then no mesh)
-  std::vector<int> levels;     ///< each pixel's splits along x (2^level), row by row from the receiver's lowest y
-  std::vector<int> levels_y;   ///< and along y
 };
 
 /// The slab with its top meshed on the receiver's pixel grid pulled back
