@@ -16,14 +16,36 @@ set(SPEC2FAB_PCH_HEADERS
   <string> <string_view> <vector>
   <Eigen/Core> <Eigen/Geometry> <fmt/format.h> <nlohmann/json.hpp> <spdlog/spdlog.h>)
 
-# spec2fab_precompile(TARGET [HEADER...]): precompiles the common headers and
-# the given ones for TARGET, which must see spec2fab_core's dependencies. A
-# target of one or two objects is left alone: it would spend as long on the
-# header as it saves.
+# spec2fab_precompile(TARGET [REUSE_FROM OTHER] [HEADER...]): precompiles the
+# common headers and the given ones for TARGET, which must see spec2fab_core's
+# dependencies. A target of one or two objects is left alone: it would spend
+# as long on the header as it saves. REUSE_FROM takes OTHER's precompiled
+# header instead of making one (the test programs share one: same flags and
+# definitions, which GCC checks and, under -Winvalid-pch, says it refuses);
+# OTHER must have one (spec2fab_has_precompiled_header).
 function(spec2fab_precompile target)
+  cmake_parse_arguments(PARSE_ARGV 1 pch "" "REUSE_FROM" "")
+  if(NOT SPEC2FAB_PRECOMPILED_HEADERS)
+    return()
+  endif()
+  if(pch_REUSE_FROM)
+    target_precompile_headers(${target} REUSE_FROM ${pch_REUSE_FROM})
+    return()
+  endif()
   get_target_property(sources ${target} SOURCES)
   list(LENGTH sources source_count)
-  if(SPEC2FAB_PRECOMPILED_HEADERS AND source_count GREATER 2)
-    target_precompile_headers(${target} PRIVATE ${ARGN} ${SPEC2FAB_PCH_HEADERS})
+  if(source_count GREATER 2)
+    target_precompile_headers(${target} PRIVATE ${pch_UNPARSED_ARGUMENTS} ${SPEC2FAB_PCH_HEADERS})
+  endif()
+endfunction()
+
+# spec2fab_has_precompiled_header(TARGET RESULT): whether spec2fab_precompile
+# gave TARGET a header of its own (one that others may reuse).
+function(spec2fab_has_precompiled_header target result)
+  get_target_property(headers ${target} PRECOMPILE_HEADERS)
+  if(headers)
+    set(${result} TRUE PARENT_SCOPE)
+  else()
+    set(${result} FALSE PARENT_SCOPE)
   endif()
 endfunction()
