@@ -77,6 +77,6 @@ bool declare(std::string name, double default_value, std::string meaning, double
 ///     SPEC2FAB_LIMIT("tets", 1e7, "tetrahedra TetGen would make for the FEM");
 #define SPEC2FAB_LIMIT(...)                                                          \
   namespace {                                                                        \
-  [[maybe_unused]] const bool SPEC2FAB_LIMIT_CONCAT(limit_declared_, __LINE__) =    \
+  [[maybe_unused]] const bool SPEC2FAB_LIMIT_CONCAT(limit_declared_, __COUNTER__) =  \
       ::spec2fab::limits::declare(__VA_ARGS__);                                        \
   }

@@ -128,12 +128,14 @@ inline std::vector<ListedRegistry>& listed_registries() {
 
 #define SPEC2FAB_CONCAT_INNER(a, b) a##b
 #define SPEC2FAB_CONCAT(a, b) SPEC2FAB_CONCAT_INNER(a, b)
+// Names made with __COUNTER__, not __LINE__: a unity build (scripts/build)
+// compiles several .cpp files as one, where two lines may have one number.
 
 /// Registers `Type` in `RegistryType` under `name`. Use once, at namespace scope
 /// in the type's .cpp file.
 #define SPEC2FAB_REGISTER(RegistryType, Type, name)                                       \
   namespace {                                                                             \
-  [[maybe_unused]] const bool SPEC2FAB_CONCAT(registered_, __LINE__) =                    \
+  [[maybe_unused]] const bool SPEC2FAB_CONCAT(registered_, __COUNTER__) =                  \
       RegistryType::instance().add(                                                       \
           name,                                                                           \
           [](const ::spec2fab::Properties& properties, auto&&... args) {                  \
@@ -146,7 +148,7 @@ inline std::vector<ListedRegistry>& listed_registries() {
 /// once, at namespace scope, in the file that owns the registry's base.
 #define SPEC2FAB_LIST_REGISTRY(RegistryType, rank, kind, heading)                          \
   namespace {                                                                             \
-  [[maybe_unused]] const bool SPEC2FAB_CONCAT(listed_, __LINE__) = [] {                   \
+  [[maybe_unused]] const bool SPEC2FAB_CONCAT(listed_, __COUNTER__) = [] {                 \
     ::spec2fab::listed_registries().push_back({rank, kind, heading, [] {                  \
       std::vector<std::pair<std::string, ::spec2fab::TypeDoc>> out;                       \
       const auto& registry = RegistryType::instance();                                    \

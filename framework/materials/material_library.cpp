@@ -22,7 +22,7 @@ const std::vector<std::string>& known_kinds() {
 
 // The physically possible values of one quantity; plausibility (e.g. a
 // density near that of plastics) is the data tests' business, not the loader's.
-struct Range {
+struct QuantityRange {
   double lower;
   double upper;
   bool lower_open = false;
@@ -42,9 +42,9 @@ struct Range {
   }
 };
 
-const Range kNonNegative{0, kInf, false, true};
-const Range kPositive{0, kInf, true, true};
-const Range kUnit{0, 1};
+const QuantityRange kNonNegative{0, kInf, false, true};
+const QuantityRange kPositive{0, kInf, true, true};
+const QuantityRange kUnit{0, 1};
 
 std::string number(double v) {
   std::ostringstream out;
@@ -52,7 +52,7 @@ std::string number(double v) {
   return out.str();
 }
 
-void check_value(const Properties& entry, std::string_view key, double v, const Range& range,
+void check_value(const Properties& entry, std::string_view key, double v, const QuantityRange& range,
                  std::string_view component = {}) {
   if (range.contains(v)) return;
   std::string problem = std::string(component.empty() ? "value " : component) + number(v) +
@@ -60,7 +60,7 @@ void check_value(const Properties& entry, std::string_view key, double v, const 
   entry.fail(key, problem);
 }
 
-Rgb read_rgb(const Properties& entry, std::string_view key, const Range& range) {
+Rgb read_rgb(const Properties& entry, std::string_view key, const QuantityRange& range) {
   // A single number is a grey value, the same in R, G and B.
   Rgb rgb{};
   if (entry.peek(key).is_number()) {
@@ -83,7 +83,7 @@ std::string read_source(const Properties& entry) {
   return source;
 }
 
-Sourced<double> read_scalar(const Properties& section, std::string_view key, const Range& range) {
+Sourced<double> read_scalar(const Properties& section, std::string_view key, const QuantityRange& range) {
   const Properties entry = section.object(key);
   Sourced<double> out;
   out.value = entry.get<double>("value");
@@ -93,7 +93,7 @@ Sourced<double> read_scalar(const Properties& section, std::string_view key, con
   return out;
 }
 
-Sourced<Rgb> read_color(const Properties& section, std::string_view key, const Range& range) {
+Sourced<Rgb> read_color(const Properties& section, std::string_view key, const QuantityRange& range) {
   const Properties entry = section.object(key);
   Sourced<Rgb> out;
   out.value = read_rgb(entry, "value", range);
@@ -122,13 +122,13 @@ Material read_material(const Properties& entry) {
   m.absorption_per_mm = read_color(optical, "absorption_per_mm", kNonNegative);
   m.reduced_scattering_per_mm = read_color(optical, "reduced_scattering_per_mm", kNonNegative);
   // Every solid and liquid index lies well inside [1, 3] at visible wavelengths.
-  m.refractive_index = read_scalar(optical, "refractive_index", Range{1, 3});
+  m.refractive_index = read_scalar(optical, "refractive_index", QuantityRange{1, 3});
   m.albedo = read_color(optical, "albedo", kUnit);
 
   const Properties mechanical = entry.object("mechanical");
   m.youngs_modulus_pa = read_scalar(mechanical, "youngs_modulus_pa", kPositive);
   // Isotropic stability bounds of linear elasticity.
-  m.poisson_ratio = read_scalar(mechanical, "poisson_ratio", Range{-1, 0.5, true, true});
+  m.poisson_ratio = read_scalar(mechanical, "poisson_ratio", QuantityRange{-1, 0.5, true, true});
   m.density_kg_m3 = read_scalar(mechanical, "density_kg_m3", kPositive);
   if (mechanical.has("tensile_strength_pa"))
     m.tensile_strength_pa = read_scalar(mechanical, "tensile_strength_pa", kPositive);

@@ -111,14 +111,14 @@ bool clip_to_disc(const Point<T> origin[3], const Point<T> landing[3], Scratch<T
   return true;
 }
 
-enum class Fate { received, returned, blocked };
+enum class TriangleFate { received, returned, blocked };
 
 /// Where top triangle (xy, h) sends its light: `image`, its outline on the
 /// receiver in pixel coordinates, carrying `flux` (incident irradiance ×
 /// mm², after the aperture and Fresnel); `entering` is the flux through
 /// the aperture before Fresnel. T is double or a jet in the three heights.
 template <class T>
-Fate triangle_image(const CausticSetup& s, const Eigen::Vector2d xy[3], const T h[3], double start_z,
+TriangleFate triangle_image(const CausticSetup& s, const Eigen::Vector2d xy[3], const T h[3], double start_z,
                     Scratch<T>& scratch, T& flux, double& entering) {
   using std::sqrt;
   using V = Eigen::Matrix<T, 3, 1>;
@@ -128,7 +128,7 @@ Fate triangle_image(const CausticSetup& s, const Eigen::Vector2d xy[3], const T 
   const V centre = (p[0] + p[1] + p[2]) / T(3.0);
   flux = light_through(s, centre, area);
   entering = 0;
-  if (!(value_of(flux) > 0)) return Fate::blocked;  // the beam grazes or meets the back
+  if (!(value_of(flux) > 0)) return TriangleFate::blocked;  // the beam grazes or meets the back
 
   // Collimated light crosses the facet as one pencil; a point light's rays
   // through the corners each refract by their own direction.
@@ -136,14 +136,14 @@ Fate triangle_image(const CausticSetup& s, const Eigen::Vector2d xy[3], const T 
   const V normal = area / sqrt(area.dot(area));
   SlabPassage<T> pass;
   Eigen::Matrix<T, 2, 1> landed;
-  if (!top_landing(s, light_towards(s, centre), normal, centre, pass, landed)) return Fate::returned;
+  if (!top_landing(s, light_towards(s, centre), normal, centre, pass, landed)) return TriangleFate::returned;
   Point<T> landing[3];
   V light[3];
   for (int k = 0; k < 3; ++k) {
     light[k] = light_towards(s, p[k]);
     SlabPassage<T> corner;
     if (!top_landing(s, s.point_light ? light[k] : light_towards(s, centre), normal, p[k], corner, landed))
-      return Fate::returned;
+      return TriangleFate::returned;
     landing[k] = receiver_pixel(s, landed);
   }
 
@@ -157,7 +157,7 @@ Fate triangle_image(const CausticSetup& s, const Eigen::Vector2d xy[3], const T 
     }
     T passing(1.0);  // set by clip_to_disc when it clips
     clipped = clip_to_disc(origin, landing, scratch, passing);
-    if (clipped && scratch.image.empty()) return Fate::blocked;
+    if (clipped && scratch.image.empty()) return TriangleFate::blocked;
     if (clipped) flux *= passing;
   }
   if (!clipped) scratch.image.assign(landing, landing + 3);
@@ -167,7 +167,7 @@ Fate triangle_image(const CausticSetup& s, const Eigen::Vector2d xy[3], const T 
                         (1 - fresnel_reflectance(eta, 1, value_of(pass.cos_b), value_of(pass.cos_out)));
     flux *= kept;  // held fixed in the derivative, as the ray estimator holds it
   }
-  return Fate::received;
+  return TriangleFate::received;
 }
 
 /// Calls deposit(pixel, share) for every pixel `polygon` (pixel coordinates,
@@ -264,7 +264,7 @@ T smooth_triangle_light(const CausticSetup& s, const Eigen::Vector2d xy[3], cons
 /// The smooth estimator's triangle: its light (smooth_triangle_light, less
 /// what the disc stops) spread over the triangle its corners land on.
 template <class T>
-Fate smooth_triangle_image(const CausticSetup& s, const Eigen::Vector2d xy[3], const double h[3],
+TriangleFate smooth_triangle_image(const CausticSetup& s, const Eigen::Vector2d xy[3], const double h[3],
                            const Point<T> landing[3], Scratch<T>& scratch, T& flux, double& entering) {
   flux = T(smooth_triangle_light(s, xy, h));
   bool clipped = false;
@@ -276,15 +276,15 @@ Fate smooth_triangle_image(const CausticSetup& s, const Eigen::Vector2d xy[3], c
     clipped = clip_to_disc(origin, landing, scratch, passing);
     if (clipped && scratch.image.empty()) {
       entering = 0;
-      return Fate::blocked;
+      return TriangleFate::blocked;
     }
     if (clipped) flux *= passing;
   }
   entering = value_of(flux);
   for (int k = 0; k < 3; ++k)
-    if (!std::isfinite(value_of(landing[k].x()))) return Fate::returned;
+    if (!std::isfinite(value_of(landing[k].x()))) return TriangleFate::returned;
   if (!clipped) scratch.image.assign(landing, landing + 3);
-  return Fate::received;
+  return TriangleFate::received;
 }
 
 }  // namespace
@@ -343,7 +343,7 @@ void CausticTracer::pull_back_smooth(std::span<const double> d_irradiance, std::
       double entering = 0;
       corner_gradients_[t].setZero();
       light_gradients_[t].setZero();
-      if (smooth_triangle_image(s, xy, h, landing, scratch, carried, entering) != Fate::received) continue;
+      if (smooth_triangle_image(s, xy, h, landing, scratch, carried, entering) != TriangleFate::received) continue;
       CornerJet sum(0.0);
       rasterize(scratch.image, s.image_width, s.image_height, scratch,
                 [&](size_t pixel, const CornerJet& share) { sum += d_irradiance[pixel] * share; });
@@ -417,7 +417,7 @@ CausticFlux CausticTracer::render_triangles(std::span<double> irradiance) {
           h[k] = vertices_[static_cast<size_t>(f[k])].z();
         }
         double carried = 0, entering = 0;
-        Fate fate;
+        TriangleFate fate;
         if (smooth) {
           const Point<double> landing[3] = {landing_[static_cast<size_t>(f[0])], landing_[static_cast<size_t>(f[1])],
                                             landing_[static_cast<size_t>(f[2])]};
@@ -426,8 +426,8 @@ CausticFlux CausticTracer::render_triangles(std::span<double> irradiance) {
           fate = triangle_image(s, xy, h, start_z_, scratch, carried, entering);
         }
         flux.emitted += entering;
-        if (fate == Fate::returned) flux.returned += entering;
-        if (fate != Fate::received) continue;
+        if (fate == TriangleFate::returned) flux.returned += entering;
+        if (fate != TriangleFate::received) continue;
         flux.reflected += entering - carried;
         double landed = 0;
         rasterize(scratch.image, s.image_width, s.image_height, scratch, [&](size_t pixel, double share) {
@@ -475,7 +475,7 @@ void CausticTracer::pull_back_triangles(std::span<const double> d_irradiance, st
       HeightJet carried;
       double entering = 0;
       Eigen::Vector3d gradient = Eigen::Vector3d::Zero();
-      if (triangle_image(s, xy, h, start_z_, scratch, carried, entering) == Fate::received) {
+      if (triangle_image(s, xy, h, start_z_, scratch, carried, entering) == TriangleFate::received) {
         HeightJet sum(0.0);
         rasterize(scratch.image, s.image_width, s.image_height, scratch,
                   [&](size_t pixel, const HeightJet& share) { sum += d_irradiance[pixel] * share; });

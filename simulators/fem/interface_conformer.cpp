@@ -27,11 +27,6 @@ void collect(const ReducerNode& node, std::vector<size_t>& path, std::vector<Reg
   }
 }
 
-unsigned long long edge_key(int a, int b) {
-  if (a > b) std::swap(a, b);
-  return (static_cast<unsigned long long>(a) << 32) | static_cast<unsigned int>(b);
-}
-
 // Whether every material the subtree may assign, whatever its tuners
 // choose, has one E and ν (and none is void, unless all are): then no
 // interface inside it separates different stiffnesses, and a tet may

@@ -19,11 +19,6 @@ namespace {
 
 constexpr int kOutside = -1;
 
-unsigned long long edge_key(int a, int b) {
-  if (a > b) std::swap(a, b);
-  return (static_cast<unsigned long long>(a) << 32) | static_cast<unsigned int>(b);
-}
-
 // A triangle of the PLC and the labels on its two sides (kOutside beyond
 // the boundary); triangles with the same pair may merge.
 struct SidedFace {

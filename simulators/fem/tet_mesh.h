@@ -3,6 +3,7 @@
 /// (det[x1−x0, x2−x0, x3−x0] > 0), as TetGen makes them and the FEM solves on.
 
 #include <array>
+#include <utility>
 #include <vector>
 
 #include "geometry/mesh.h"
@@ -11,6 +12,12 @@ namespace spec2fab::fem {
 
 using Tet = std::array<int, 4>;
 using Face = std::array<int, 3>;
+
+/// One key for the edge between nodes a and b, whichever way round.
+inline unsigned long long edge_key(int a, int b) {
+  if (a > b) std::swap(a, b);
+  return (static_cast<unsigned long long>(a) << 32) | static_cast<unsigned int>(b);
+}
 
 struct TetMesh {
   std::vector<Vec3> nodes;  ///< #N rest positions (mm)

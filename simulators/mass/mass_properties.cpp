@@ -50,8 +50,6 @@ bool CentreOffsetOptions::check(std::string* why) const {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
 /// Sums over one material's cells: count, Σx, Σy, Σz, Σxx, Σyy, Σzz, Σxy,
 /// Σxz, Σyz (cell centres, mm, relative to the grid's centre).
 using Moments = std::array<double, 10>;

@@ -24,6 +24,7 @@
 
 #include <array>
 #include <functional>
+#include <limits>
 #include <cstddef>
 #include <memory>
 #include <optional>
@@ -37,6 +38,9 @@
 #include "tuning/parts.h"
 
 namespace spec2fab {
+
+/// An observation entry that is not known (no support polygon, no target given).
+inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 class ReducerTree;
 class Tuner;

@@ -35,7 +35,8 @@ std::vector<std::string> PrintEstimateObservation::write_files(const std::filesy
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+// An entry the printer profile or the budget leaves unknown.
+constexpr double kUnknown = std::numeric_limits<double>::quiet_NaN();
 
 class PrintEstimateSimulator final : public SimulatorFor<PrintEstimateObservation> {
  public:
@@ -91,14 +92,14 @@ class PrintEstimateSimulator final : public SimulatorFor<PrintEstimateObservatio
     PrintCensusSink& sink = *sink_;
     sink.census().voxels = fabricator_->run({&sink});
     const PrintEstimate estimate = estimate_print(sink.census(), printer_, palette_);
-    out.data.assign(PrintEstimateObservation::kSize, kNaN);
+    out.data.assign(PrintEstimateObservation::kSize, kUnknown);
     double mass = 0, model = 0;
     for (const auto& [material, use] : estimate.materials) mass += use.mass_g;
     if (estimate.support) mass += estimate.support->mass_g;
     for (MaterialId id = 1; id < palette_.size(); ++id)
       model += static_cast<double>(sink.census().voxels[id]) * sink.census().grid.voxel_volume_mm3();
-    out.data[PrintEstimateObservation::kCost] = estimate.cost_usd.value_or(kNaN);
-    out.data[PrintEstimateObservation::kHours] = estimate.print_hours.value_or(kNaN);
+    out.data[PrintEstimateObservation::kCost] = estimate.cost_usd.value_or(kUnknown);
+    out.data[PrintEstimateObservation::kHours] = estimate.print_hours.value_or(kUnknown);
     out.data[PrintEstimateObservation::kMass] = mass;
     out.data[PrintEstimateObservation::kModelVolume] = model;
     out.data[PrintEstimateObservation::kSupportVolume] = estimate.support_volume_mm3;
@@ -139,7 +140,7 @@ class PrintBudget final : public GoalFor<PrintEstimateObservation> {
   PrintBudget(const Properties& properties, const PartContext& /*context*/)
       : PrintBudget(read_options<Options>(properties)) {}
   explicit PrintBudget(const Options& options) {
-    target_.data.assign(PrintEstimateObservation::kSize, kNaN);
+    target_.data.assign(PrintEstimateObservation::kSize, kUnknown);
     target_.data[PrintEstimateObservation::kCost] = options.cost_usd;
     target_.data[PrintEstimateObservation::kHours] = options.hours;
   }

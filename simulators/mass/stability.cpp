@@ -18,7 +18,6 @@
 namespace spec2fab {
 
 namespace {
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // Distance from p to the segment [a, b].
 double segment_distance(const Vec2& p, const Vec2& a, const Vec2& b) {

@@ -19,7 +19,7 @@ namespace {
 
 // Cantilever along x: clamped at x = 0, a total force P (-z) spread over
 // the end face x = L.
-constexpr double kLength = 40, kSide = 4, kYoungs = 1000, kPoisson = 0.3;
+constexpr double kLength = 40, kSide = 4, kBeamYoungs = 1000, kBeamPoisson = 0.3;
 constexpr double kInertia = kSide * kSide * kSide * kSide / 12;
 
 struct Cantilever {
@@ -41,7 +41,7 @@ double tip_deflection(const Cantilever& c, bool nonlinear, double* axial = nullp
                       LinearSolver linear_solver = LinearSolver::cholesky) {
   std::vector<double> u;
   const SolveReport report =
-      testing::solve_uniform(c.mesh, c.constraints, kYoungs, kPoisson, nonlinear, u, 10, linear_solver);
+      testing::solve_uniform(c.mesh, c.constraints, kBeamYoungs, kBeamPoisson, nonlinear, u, 10, linear_solver);
   EXPECT_TRUE(report.converged);
   const Vec3 tip = testing::displacement_at(c.mesh, u, Vec3(kLength, kSide / 2, kSide / 2));
   if (axial) *axial = tip.x();
@@ -50,9 +50,9 @@ double tip_deflection(const Cantilever& c, bool nonlinear, double* axial = nullp
 
 TEST(FemReference, CantileverConvergesToTimoshenko) {
   const double force = 1.0;
-  const double euler_bernoulli = force * std::pow(kLength, 3) / (3 * kYoungs * kInertia);
-  const double shear_modulus = kYoungs / (2 * (1 + kPoisson));
-  const double kappa = 10 * (1 + kPoisson) / (12 + 11 * kPoisson);
+  const double euler_bernoulli = force * std::pow(kLength, 3) / (3 * kBeamYoungs * kInertia);
+  const double shear_modulus = kBeamYoungs / (2 * (1 + kBeamPoisson));
+  const double kappa = 10 * (1 + kBeamPoisson) / (12 + 11 * kBeamPoisson);
   const double timoshenko = euler_bernoulli + force * kLength / (kappa * shear_modulus * kSide * kSide);
   // Linear tets are too stiff in bending; the error must shrink steadily
   // (measured: 23 %, 14 %, 6.5 % of the Timoshenko deflection).
@@ -74,7 +74,7 @@ TEST(FemReference, CantileverConvergesToTimoshenko) {
 // Bisshopp & Drucker (1945): a cantilever with an end load P and PL²/EI = 1
 // deflects by 0.3017 L at the tip, against L/3 in linear theory.
 TEST(FemReference, LargeDeflectionMatchesTheElastica) {
-  const double force = kYoungs * kInertia / (kLength * kLength);
+  const double force = kBeamYoungs * kInertia / (kLength * kLength);
   const Cantilever c = cantilever(0.0625, force);
   double axial = 0;
   const double nonlinear = tip_deflection(c, true, &axial);
@@ -95,7 +95,7 @@ TEST(FemReference, LargeDeflectionMatchesTheElastica) {
 // slender, ill-conditioned cantilever: the linear answer and the elastica's
 // Newton path (inexact linear solves inside).
 TEST(FemReference, MultigridSolvesLikeTheDirectSolver) {
-  const Cantilever c = cantilever(0.25, kYoungs * kInertia / (kLength * kLength));
+  const Cantilever c = cantilever(0.25, kBeamYoungs * kInertia / (kLength * kLength));
   for (bool nonlinear : {false, true}) {
     double axial_direct = 0;
     const double direct = tip_deflection(c, nonlinear, &axial_direct, LinearSolver::cholesky);
@@ -119,7 +119,7 @@ TEST(FemReference, MultigridSolvesLikeTheDirectSolver) {
 TEST(FemReference, InverseProductsAgreeWithASolveForEverySolver) {
   const Cantilever c = cantilever(0.25, 1.0);
   std::vector<double> u;
-  ASSERT_TRUE(testing::solve_uniform(c.mesh, c.constraints, kYoungs, kPoisson, false, u, 1).converged);
+  ASSERT_TRUE(testing::solve_uniform(c.mesh, c.constraints, kBeamYoungs, kBeamPoisson, false, u, 1).converged);
   double compliance = 0;
   for (size_t d = 0; d < u.size(); ++d) compliance += c.constraints.force_n[d] * u[d];
   const ProbeLocation tip = locate_probes(c.mesh, {Vec3(kLength, kSide / 2, kSide / 2)}, "tip").front();
@@ -134,8 +134,8 @@ TEST(FemReference, InverseProductsAgreeWithASolveForEverySolver) {
     if (kind == LinearSolver::elastic_multigrid && !GamgSolver::available()) continue;
     ElasticSolver solver(c.mesh, c.constraints.fixed, kind);
     const size_t n = c.mesh.tets.size();
-    solver.set_materials(std::vector<double>(n, lame_lambda(kYoungs, kPoisson)),
-                         std::vector<double>(n, lame_mu(kYoungs, kPoisson)), std::vector<char>(n, 1));
+    solver.set_materials(std::vector<double>(n, lame_lambda(kBeamYoungs, kBeamPoisson)),
+                         std::vector<double>(n, lame_mu(kBeamYoungs, kBeamPoisson)), std::vector<char>(n, 1));
     const auto products = solver.inverse_products(solver.free_rows(vectors));
     ASSERT_TRUE(products) << to_string(kind);
     EXPECT_NEAR(products->with_first(0), compliance, 1e-7 * compliance) << to_string(kind);
@@ -156,13 +156,13 @@ TEST(FemReference, ElasticMultigridNeedsFewIterations) {
   const Cantilever c = cantilever(0.0625, 1.0);
   std::vector<double> u;
   const SolveReport gamg =
-      testing::solve_uniform(c.mesh, c.constraints, kYoungs, kPoisson, false, u, 1, LinearSolver::elastic_multigrid);
+      testing::solve_uniform(c.mesh, c.constraints, kBeamYoungs, kBeamPoisson, false, u, 1, LinearSolver::elastic_multigrid);
   ASSERT_TRUE(gamg.converged);
   std::printf("gamg: %ld CG iterations on %zu tets\n", gamg.cg_iterations, c.mesh.tets.size());
   EXPECT_LE(gamg.cg_iterations, 60);
   if (AmgSolver::available()) {
     const SolveReport amg =
-        testing::solve_uniform(c.mesh, c.constraints, kYoungs, kPoisson, false, u, 1, LinearSolver::multigrid);
+        testing::solve_uniform(c.mesh, c.constraints, kBeamYoungs, kBeamPoisson, false, u, 1, LinearSolver::multigrid);
     std::printf("amg: %ld CG iterations\n", amg.cg_iterations);
     EXPECT_LT(2 * gamg.cg_iterations, amg.cg_iterations);
   }

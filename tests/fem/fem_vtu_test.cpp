@@ -53,25 +53,25 @@ std::vector<double> displacement_of(const TetMesh& mesh, Map map) {
   return u;
 }
 
-constexpr double kYoungs = 1000, kPoisson = 0.3;
+constexpr double kMaterialYoungs = 1000, kMaterialPoisson = 0.3;
 
 std::vector<double> stress_of(const TetMesh& mesh, const std::vector<double>& u, bool corotated,
                               std::vector<char> active = {}) {
   const size_t n = mesh.tets.size();
   if (active.empty()) active.assign(n, 1);
-  return von_mises_stress(mesh, std::vector<double>(n, lame_lambda(kYoungs, kPoisson)),
-                          std::vector<double>(n, lame_mu(kYoungs, kPoisson)), active, u, corotated);
+  return von_mises_stress(mesh, std::vector<double>(n, lame_lambda(kMaterialYoungs, kMaterialPoisson)),
+                          std::vector<double>(n, lame_mu(kMaterialYoungs, kMaterialPoisson)), active, u, corotated);
 }
 
 TEST(VonMises, UniaxialStretchGivesYoungsModulusTimesStrain) {
   const TetMesh mesh = cube_mesh(2.0);
   const double strain = 1e-3;
-  const Eigen::Vector3d stretch(1 + strain, 1 - kPoisson * strain, 1 - kPoisson * strain);
+  const Eigen::Vector3d stretch(1 + strain, 1 - kMaterialPoisson * strain, 1 - kMaterialPoisson * strain);
   const auto u = displacement_of(mesh, [&](const Vec3& x) { return Vec3(stretch.cwiseProduct(x)); });
-  for (double s : stress_of(mesh, u, false)) EXPECT_NEAR(s, kYoungs * strain, 1e-12);
+  for (double s : stress_of(mesh, u, false)) EXPECT_NEAR(s, kMaterialYoungs * strain, 1e-12);
   // Co-rotated: P is the same diag(Eε, 0, 0) (F is symmetric, so R = I), and
   // the Cauchy stress P Fᵀ / J divides by the lateral contraction.
-  const double contracted = kYoungs * strain / std::pow(1 - kPoisson * strain, 2);
+  const double contracted = kMaterialYoungs * strain / std::pow(1 - kMaterialPoisson * strain, 2);
   for (double s : stress_of(mesh, u, true)) EXPECT_NEAR(s, contracted, 1e-12);
 }
 
@@ -81,13 +81,13 @@ TEST(VonMises, PureShearGivesRootThreeTimesTheShearStress) {
   const auto u = displacement_of(mesh, [&](const Vec3& x) {
     return Vec3(x + 0.5 * engineering_shear * Vec3(x.y(), x.x(), 0));
   });
-  const double shear_stress = lame_mu(kYoungs, kPoisson) * engineering_shear;
+  const double shear_stress = lame_mu(kMaterialYoungs, kMaterialPoisson) * engineering_shear;
   for (double s : stress_of(mesh, u, false)) EXPECT_NEAR(s, std::sqrt(3.0) * shear_stress, 1e-12);
 }
 
 TEST(VonMises, CorotatedStressIgnoresARigidRotationOf90Degrees) {
   const TetMesh mesh = cube_mesh(1.5);
-  const Eigen::Vector3d stretch(1.05, 1 - 0.05 * kPoisson, 0.98);  // finite, not uniaxial
+  const Eigen::Vector3d stretch(1.05, 1 - 0.05 * kMaterialPoisson, 0.98);  // finite, not uniaxial
   const Mat3 rotation = Eigen::AngleAxisd(M_PI / 2, Vec3(1, 2, 0.5).normalized()).toRotationMatrix();
   const auto plain = displacement_of(mesh, [&](const Vec3& x) { return Vec3(stretch.cwiseProduct(x)); });
   const auto rotated =

@@ -14,9 +14,12 @@
 #include "materials/material_library.h"
 #include "materials/palette.h"
 #include "materials/printer_profile.h"
+#include "printer_support.h"
 
 namespace spec2fab {
 namespace {
+
+using testing::printer_from;
 
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
@@ -27,13 +30,6 @@ const std::filesystem::path kDatasets(SPEC2FAB_DATASETS_DIR);
 // with the library of their technology.
 const std::map<std::string, std::string> kLibraryOfTechnology = {
     {"polyjet", "materials/polyjet.json"}, {"fdm", "materials/fdm.json"}};
-
-PrinterProfile printer_from(const std::string& text, const std::string& origin = "printer.json") {
-  const Properties properties = Properties::parse(text, origin);
-  PrinterProfile printer = PrinterProfile::from_properties(properties);
-  properties.check_all_read();
-  return printer;
-}
 
 MaterialLibrary polyjet() { return MaterialLibrary::load(kDatasets / "materials/polyjet.json"); }
 

@@ -12,21 +12,17 @@
 #include "core/error.h"
 #include "core/properties.h"
 #include "materials/printer_profile.h"
+#include "printer_support.h"
 
 namespace spec2fab {
 namespace {
+
+using testing::printer_from;
 
 using ::testing::HasSubstr;
 
 const std::filesystem::path kPrintersDir =
     std::filesystem::path(SPEC2FAB_DATASETS_DIR) / "printers";
-
-PrinterProfile printer_from(const std::string& text) {
-  const Properties properties = Properties::parse(text, "printer.json");
-  PrinterProfile printer = PrinterProfile::from_properties(properties);
-  properties.check_all_read();
-  return printer;
-}
 
 std::string printer_error(const std::string& text) {
   try {

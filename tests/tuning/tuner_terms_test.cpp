@@ -12,12 +12,14 @@
 #include "reducer/reducer_tree.h"
 #include "tuning/tuner.h"
 #include "tuning/vector_parts.h"
+#include "tuning_test_parts.h"
 
 namespace spec2fab {
 namespace {
 
 using ::testing::HasSubstr;
 using ::testing::ThrowsMessage;
+using testing::optimizer;
 
 /// The subtree's free parameters' values, in visiting order: a simulator
 /// whose optimum every term's closed form gives.
@@ -37,10 +39,6 @@ class ParametersSimulator final : public SimulatorFor<VectorObservation> {
 };
 
 SPEC2FAB_REGISTER(SimulatorRegistry, ParametersSimulator, "test_parameters")
-
-std::unique_ptr<Optimizer> optimizer(const std::string& json) {
-  return build_optimizer(Properties::parse(json, "optimizer.json"));
-}
 
 class TunerTerms : public ::testing::Test {
  protected:

@@ -20,17 +20,11 @@ namespace {
 
 using ::testing::HasSubstr;
 using ::testing::ThrowsMessage;
+using testing::optimizer;
 
 SPEC2FAB_REGISTER(SimulatorRegistry, testing::ZeroDisplacements, "test_displacements")
 SPEC2FAB_REGISTER(MetricRegistry, testing::ImageMse, "test_image_mse")
 SPEC2FAB_REGISTER(GoalRegistry, testing::BlackImageGoal, "test_black_image")
-
-std::unique_ptr<Optimizer> optimizer(const std::string& json) {
-  const Properties p = Properties::parse(json, "optimizer.json");
-  auto o = build_optimizer(p);
-  p.check_all_read();
-  return o;
-}
 
 std::shared_ptr<MaterialPalette> palette() {
   std::vector<Material> m(2);

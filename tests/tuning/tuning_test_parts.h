@@ -4,11 +4,20 @@
 
 #include "core/properties.h"
 #include "reducer/node.h"
+#include "tuning/optimizer.h"
 #include "tuning/parts.h"
 #include "tuning/vector_parts.h"
 #include "fem/displacements.h"
 
 namespace spec2fab::testing {
+
+/// The optimizer an optimizer.json text describes; every key must be read.
+inline std::unique_ptr<Optimizer> optimizer(const std::string& json) {
+  const Properties p = Properties::parse(json, "optimizer.json");
+  auto o = build_optimizer(p);
+  p.check_all_read();
+  return o;
+}
 
 /// 1 where a Layered node's surface material is `ink`, else 0: the coverage of
 /// one halftone cell.

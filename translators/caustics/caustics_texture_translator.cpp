@@ -50,7 +50,7 @@ namespace spec2fab {
 namespace {
 
 // The texture's keys: "image" is the caustic's.
-TextureOptions texture_options() {
+TextureOptions caustics_texture_options() {
   TextureOptions options{{"texture", "texture_columns", "texture_metric", "texture_optimizer"},
                          {"VeroCyan", "VeroMagenta", "VeroYellow", "VeroWhitePlus"}};
   options.top_row_at_highest_v = true;  // read from the room, above the top face
@@ -113,7 +113,7 @@ class CausticsTextureTranslator final : public TuningTranslator {
 
   CausticsTextureTranslator(const Properties& /*root*/, const Experiment& experiment)
       : settings_(CausticGoalSettings::read(experiment.goal(), experiment)),
-        texture_(experiment.goal(), experiment, texture_options(), settings_.material) {
+        texture_(experiment.goal(), experiment, caustics_texture_options(), settings_.material) {
     const Properties goal = experiment.goal();
     settings_.require_lens_straight_down(goal, "caustics_texture");
     const Options options = read_options<Options>(goal);
@@ -203,7 +203,7 @@ class CausticsTextureTranslator final : public TuningTranslator {
         R"({"translator": "caustics_texture", "goal": {"image": "ring.png", "texture": "logo.png"}})"};
     doc.properties.push_back(
         {"optimizer", "optimizer", "nlopt LD_LBFGS, 1000 evaluations", "the bottom face's optimizer"});
-    for (PropertyDoc& d : TexturePiece::docs(texture_options())) {
+    for (PropertyDoc& d : TexturePiece::docs(caustics_texture_options())) {
       // Black is clear: no ink, and the albedo model sees a dark ground through the slab.
       if (d.name == "goal.texture") d.meaning = "the picture on the top face (sRGB), row 0 at the lowest y; black is clear";
       if (d.name == "goal.max_ink_mm") d.meaning = "thickest layer of each ink; t is their sum";

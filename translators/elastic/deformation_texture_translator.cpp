@@ -29,7 +29,7 @@ namespace spec2fab {
 namespace {
 
 // The texture's keys: the top-level "optimizer" is the cells'.
-TextureOptions texture_options() {
+TextureOptions deformation_texture_options() {
   return {{"image", "columns", "metric", "texture_optimizer"},
           {"VeroCyan", "VeroMagenta", "VeroYellow", "VeroBlackPlus"}};
 }
@@ -103,7 +103,7 @@ class DeformationTextureTranslator final : public TuningTranslator {
 
   DeformationTextureTranslator(const Properties& /*root*/, const Experiment& experiment)
       : options_(read_options<Options>(experiment.goal())),
-        texture_(experiment.goal(), experiment, texture_options(), options_.backing, "backing"),
+        texture_(experiment.goal(), experiment, deformation_texture_options(), options_.backing, "backing"),
         elastic_(experiment.goal(), experiment, elastic_defaults(), options_.cells) {
     const Properties goal = experiment.goal();
     const Bounds solid = experiment.solid().bounds();
@@ -155,7 +155,7 @@ class DeformationTextureTranslator final : public TuningTranslator {
         R"({"translator": "deformation_texture", "goal": {"image": "../images/earth_96x48.png", )"
         R"("reference": ["Agilus30Clear", "Agilus30Clear", "Agilus30Clear", "Agilus30Clear", "VeroWhitePlus", )"
         R"("Agilus30Clear", "Agilus30Clear", "VeroWhitePlus"]}})"};
-    for (PropertyDoc& d : TexturePiece::docs(texture_options())) doc.properties.push_back(std::move(d));
+    for (PropertyDoc& d : TexturePiece::docs(deformation_texture_options())) doc.properties.push_back(std::move(d));
     for (PropertyDoc& d : ElasticPiece::docs(elastic_defaults())) {
       if (d.name == "goal.probes") d.default_value = std::to_string(*elastic_defaults().probes);
       doc.properties.push_back(std::move(d));

@@ -88,7 +88,7 @@ struct StandReport {
 };
 
 // The texture's keys, under goal.texture; its inks lie on the shell's material.
-TextureOptions texture_options() {
+TextureOptions stand_texture_options() {
   TextureOptions options;
   options.offers_lookup = true;
   options.default_inks_text = "the printer's model materials but the shell's and clear ones";
@@ -200,7 +200,7 @@ class StandTranslator final : public TuningTranslator {
                 R"({"translator": "stand", "goal": {"cells": [6, 6, 8], "margin_mm": 1}})"};
     doc.properties.push_back({"goal.texture", "object", "none",
                               "a picture on the shell: the keys below, as the albedo translator's goal has them"});
-    append(doc.properties, prefixed(option_docs(texture_options()), "goal.texture."));
+    append(doc.properties, prefixed(option_docs(stand_texture_options()), "goal.texture."));
     doc.properties.push_back(
         {"optimizer", "optimizer", "annealing, 20000 iterations", "the cells' optimizer (any registered)"});
     append(doc.properties, TreeOutputOptions::docs());
@@ -267,7 +267,7 @@ class StandTranslator final : public TuningTranslator {
     if (texture_goal.has("method") && texture_goal.get<std::string>("method") != "lookup")
       texture_goal.fail("method", "stand prints its texture by lookup (tuners per column would come before the "
                                   "cells' tuner, which is not built)");
-    texture_.emplace(texture_goal, experiment, texture_options(), options_.material);
+    texture_.emplace(texture_goal, experiment, stand_texture_options(), options_.material);
     const double inks_mm = texture_->shell_depth().value();
     if (inks_mm > options_.shell_mm)
       goal.fail("shell_mm", fmt::format("{:g} mm is thinner than the texture's {:g} mm (its thickest stack and a step "
