@@ -128,7 +128,7 @@ inline std::vector<ListedRegistry>& listed_registries() {
 
 #define SPEC2FAB_CONCAT_INNER(a, b) a##b
 #define SPEC2FAB_CONCAT(a, b) SPEC2FAB_CONCAT_INNER(a, b)
-// Names made with __COUNTER__, not __LINE__: a unity build (scripts/build)
+// Names made with __COUNTER__, not __LINE__: a unity build (CMakeLists.txt)
 // compiles several .cpp files as one, where two lines may have one number.
 
 /// Registers `Type` in `RegistryType` under `name`. Use once, at namespace scope

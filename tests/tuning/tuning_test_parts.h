@@ -2,6 +2,9 @@
 // Small real parts for tuning tests, working on reducer trees of Layered
 // nodes: the simulator reads what the subtree assigns, goals are constants.
 
+#include <memory>
+#include <string>
+
 #include "core/properties.h"
 #include "reducer/node.h"
 #include "tuning/optimizer.h"
