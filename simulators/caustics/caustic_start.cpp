@@ -2,12 +2,17 @@
 
 #include <algorithm>
 #include <chrono>
-#include <functional>
 #include <cmath>
+#include <cstdlib>
+#include <functional>
+#include <limits>
 #include <numbers>
 #include <numeric>
+#include <stdexcept>
+#include <unordered_map>
 
 #include <Eigen/SparseCore>
+#include <fmt/format.h>
 
 #include "caustics/optimal_transport.h"
 #include "core/error.h"
@@ -265,6 +270,373 @@ TransportStart transport_start(const CausticSetup& s, std::span<const double> go
   start.relief_mm = *high - *low;
   start.largest_slope = largest_slope(grid, start.heights);
   return start;
+}
+
+namespace {
+
+/// Cell corners merged by position: two cells compute a shared corner of
+/// the power diagram apart (each clips its own polygon), so corners within
+/// `quantum` of one another become one vertex, and edges shorter than that
+/// vanish.
+class CornerWelder {
+ public:
+  explicit CornerWelder(double quantum) : quantum_(quantum) {}
+  int operator()(const Vec2& p, std::vector<Vec2>& points) {
+    const long long ix = std::llround(p.x() / quantum_), iy = std::llround(p.y() / quantum_);
+    for (long long dx = -1; dx <= 1; ++dx)
+      for (long long dy = -1; dy <= 1; ++dy) {
+        const auto [begin, end] = buckets_.equal_range(key(ix + dx, iy + dy));
+        for (auto at = begin; at != end; ++at) {
+          Vec2& kept = points[static_cast<size_t>(at->second)];
+          if ((kept - p).norm() > quantum_) continue;
+          // The footprint's rim stays where it is: a corner on it wins.
+          if (rim_rank(p) > rim_rank(kept)) kept = p;
+          return at->second;
+        }
+      }
+    const int id = static_cast<int>(points.size());
+    points.push_back(p);
+    buckets_.emplace(key(ix, iy), id);
+    return id;
+  }
+
+ private:
+  static long long key(long long ix, long long iy) { return ix * 4'000'000'007LL + iy; }
+  /// 2 on a corner of the footprint [-1, 1]², 1 on an edge, 0 inside.
+  static int rim_rank(const Vec2& p) { return (std::abs(p.x()) == 1.0) + (std::abs(p.y()) == 1.0); }
+  double quantum_;
+  std::unordered_multimap<long long, int> buckets_;
+};
+
+/// How far a flat facet's copy reaches from where the facet is aimed (its
+/// centroid's light), along x or y (corners in receiver pixels): at most
+/// 1/2, the copy of a facet aimed at its pixel's centre stays in the pixel.
+double copy_radius(const Vec2& a, const Vec2& b, const Vec2& c) {
+  const Vec2 centroid = (a + b + c) / 3;
+  return std::max({(a - centroid).cwiseAbs().maxCoeff(), (b - centroid).cwiseAbs().maxCoeff(),
+                   (c - centroid).cwiseAbs().maxCoeff()});
+}
+
+}  // namespace
+
+TransportCellsMesh transport_cells_slab_mesh(const CausticSetup& s, std::span<const double> goal,
+                                             double mean_height_mm, double facet_radius_px) {
+  const int width = s.image_width, height = s.image_height;
+  if (goal.size() != static_cast<size_t>(width) * static_cast<size_t>(height))
+    throw std::invalid_argument("transport_cells_slab_mesh: the goal has the wrong size");
+  if (s.disc_aperture || s.mirror || s.point_light)
+    throw std::invalid_argument("transport_cells_slab_mesh: a lens under collimated light through its whole footprint only");
+  TransportCellsMesh made;
+  auto began = Clock::now();
+  const std::vector<Vec2> source = aperture_outline(s);
+  std::vector<Vec2> sites;
+  const SemiDiscreteTransport transport = solve_multiscale(source, transport_masses(s, goal), width, height, sites);
+  made.newton_steps = transport.newton_steps;
+  made.worst_mass_error = transport.worst_mass_error;
+  made.transport_seconds = seconds_since(began);
+
+  began = Clock::now();
+  // Half-size units (the transport's) to receiver pixels, along x and y.
+  const Vec2 to_px(0.5 * s.width_mm * width / s.receiver_width_mm, 0.5 * s.depth_mm * height / s.receiver_depth_mm);
+  const auto px = [&](const Vec2& u) -> Vec2 { return u.cwiseProduct(to_px); };
+  const double edge_px = 1.5 * facet_radius_px;  // short enough for facets along it to keep the radius
+  const char* weld_env = std::getenv("SPEC2FAB_WELD_PX");
+  const double weld_px = weld_env ? std::atof(weld_env) : 1e-6;
+  std::vector<Vec2> points;  // half-size units
+  CornerWelder weld(weld_px * 2.0 / std::max(width, height));
+  std::vector<std::vector<int>> loops(transport.cells.size());
+  for (size_t i = 0; i < transport.cells.size(); ++i) {
+    std::vector<int>& loop = loops[i];
+    for (const Vec2& p : transport.cells[i]) {
+      const int v = weld(p, points);
+      if (loop.empty() || loop.back() != v) loop.push_back(v);
+    }
+    while (loop.size() > 1 && loop.front() == loop.back()) loop.pop_back();
+    if (loop.size() < 3) loop.clear();
+  }
+  // Edges far shorter than a pixel collapse, in every cell that has them
+  // (a vertex's id replaced by the other's), so that no facet is spent on
+  // them: the diagram of a near-square grid of sites has four-cell corners
+  // split into pairs a hair apart.
+  const char* collapse_env = std::getenv("SPEC2FAB_COLLAPSE_PX");
+  const double collapse_px = collapse_env ? std::atof(collapse_env) : 0.02;
+  std::vector<int> merged(points.size());
+  std::iota(merged.begin(), merged.end(), 0);
+  const auto root = [&](int v) {
+    while (merged[static_cast<size_t>(v)] != v) v = merged[static_cast<size_t>(v)] = merged[static_cast<size_t>(merged[static_cast<size_t>(v)])];
+    return v;
+  };
+  for (const std::vector<int>& loop : loops)
+    for (size_t k = 0; k < loop.size(); ++k) {
+      const int a = root(loop[k]), b = root(loop[(k + 1) % loop.size()]);
+      if (a == b || (px(points[static_cast<size_t>(a)]) - px(points[static_cast<size_t>(b)])).norm() > collapse_px) continue;
+      // The footprint's rim keeps its vertices on it: a rim vertex absorbs the other.
+      const auto rank = [&](int v) { const Vec2& p = points[static_cast<size_t>(v)]; return (std::abs(p.x()) == 1.0) + (std::abs(p.y()) == 1.0); };
+      if (rank(a) >= rank(b)) merged[static_cast<size_t>(b)] = a;
+      else merged[static_cast<size_t>(a)] = b;
+    }
+  int pinched = 0;
+  for (std::vector<int>& loop : loops) {
+    std::vector<int> kept;
+    for (int v : loop) {
+      const int r = root(v);
+      if (kept.empty() || kept.back() != r) kept.push_back(r);
+    }
+    while (kept.size() > 1 && kept.front() == kept.back()) kept.pop_back();
+    std::vector<int> sorted = kept;
+    std::sort(sorted.begin(), sorted.end());
+    if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) ++pinched;
+    loop = kept.size() >= 3 ? kept : std::vector<int>{};
+  }
+  if (pinched) fprintf(stderr, "pinched loops: %d\n", pinched);
+  // Each edge split into pieces at most edge_px long, the same points for
+  // both cells that share it (numbered from its lower vertex).
+  std::unordered_map<long long, std::vector<int>> splits;
+  const auto edge_points = [&](int a, int b) -> const std::vector<int>& {
+    const int low = std::min(a, b), high = std::max(a, b);
+    const auto [at, added] = splits.try_emplace(static_cast<long long>(low) * 0x100000000LL + high);
+    if (added) {
+      const Vec2 p = points[static_cast<size_t>(low)], q = points[static_cast<size_t>(high)];
+      const int pieces = std::max(1, static_cast<int>(std::ceil((px(q) - px(p)).cwiseAbs().maxCoeff() / edge_px)));
+      for (int k = 1; k < pieces; ++k) {
+        at->second.push_back(static_cast<int>(points.size()));
+        points.push_back(p + (q - p) * (static_cast<double>(k) / pieces));
+      }
+    }
+    return at->second;
+  };
+  std::vector<Eigen::Vector3i> top;
+  std::vector<int> cell_of;  // per top triangle
+  std::vector<int> ring;
+  std::vector<long> ring_histogram(10, 0), ring_sides(10, 0);
+  for (size_t i = 0; i < loops.size(); ++i) {
+    if (loops[i].empty()) continue;
+    ++made.cells;
+    ring.clear();
+    for (size_t k = 0; k < loops[i].size(); ++k) {
+      const int a = loops[i][k], b = loops[i][(k + 1) % loops[i].size()];
+      ring.push_back(a);
+      const std::vector<int>& between = edge_points(a, b);
+      if (a < b) ring.insert(ring.end(), between.begin(), between.end());
+      else ring.insert(ring.end(), between.rbegin(), between.rend());
+    }
+    const size_t n = ring.size();
+    const auto at = [&](int v) { return px(points[static_cast<size_t>(v)]); };
+    const auto emit = [&](int a, int b, int c) {
+      top.emplace_back(a, b, c);
+      cell_of.push_back(static_cast<int>(i));
+      made.worst_facet_radius_px = std::max(made.worst_facet_radius_px, copy_radius(at(a), at(b), at(c)));
+    };
+    // A fan from one of its corners if some fan's facets are all small enough.
+    if (n <= 12) {
+      int best = -1;
+      double best_radius = std::numeric_limits<double>::infinity();
+      for (size_t start = 0; start < n; ++start) {
+        double worst = 0;
+        for (size_t k = 1; k + 1 < n; ++k)
+          worst = std::max(worst, copy_radius(at(ring[start]), at(ring[(start + k) % n]), at(ring[(start + k + 1) % n])));
+        if (worst < best_radius) best_radius = worst, best = static_cast<int>(start);
+      }
+      if (best_radius <= facet_radius_px) {
+        for (size_t k = 1; k + 1 < n; ++k)
+          emit(ring[static_cast<size_t>(best)], ring[(static_cast<size_t>(best) + k) % n],
+               ring[(static_cast<size_t>(best) + k + 1) % n]);
+        ring_histogram[0]++;
+        ring_sides[0] += static_cast<long>(n);
+        continue;
+      }
+    }
+    // Else rings about the centroid, as many as keep the facets small.
+    Vec2 centre = Vec2::Zero();
+    for (int v : ring) centre += points[static_cast<size_t>(v)];
+    centre /= static_cast<double>(n);
+    int rings = 1;
+    const auto ring_point = [&](size_t k, int r, int of) {
+      return centre + (points[static_cast<size_t>(ring[k])] - centre) * (static_cast<double>(r) / of);
+    };
+    for (; rings < 64; ++rings) {
+      double worst = 0;
+      for (size_t k = 0; k < n; ++k) {
+        worst = std::max(worst, copy_radius(px(centre), px(ring_point(k, 1, rings)), px(ring_point((k + 1) % n, 1, rings))));
+        for (int r = 2; r <= rings; ++r) {
+          const Vec2 i0 = px(ring_point(k, r - 1, rings)), i1 = px(ring_point((k + 1) % n, r - 1, rings));
+          const Vec2 o0 = px(ring_point(k, r, rings)), o1 = px(ring_point((k + 1) % n, r, rings));
+          if ((o0 - i1).squaredNorm() < (o1 - i0).squaredNorm())
+            worst = std::max({worst, copy_radius(i0, o0, i1), copy_radius(o0, o1, i1)});
+          else
+            worst = std::max({worst, copy_radius(i0, o0, o1), copy_radius(i0, o1, i1)});
+        }
+      }
+      if (worst <= facet_radius_px) break;
+    }
+    ring_histogram[static_cast<size_t>(std::min(rings, 9))]++;
+    ring_sides[static_cast<size_t>(std::min(rings, 9))] += static_cast<long>(n);
+    const int centre_id = static_cast<int>(points.size());
+    points.push_back(centre);
+    std::vector<int> inner(n, centre_id), outer(n);
+    for (int r = 1; r <= rings; ++r) {
+      for (size_t k = 0; k < n; ++k) {
+        if (r == rings) {
+          outer[k] = ring[k];
+        } else {
+          outer[k] = static_cast<int>(points.size());
+          points.push_back(ring_point(k, r, rings));
+        }
+      }
+      for (size_t k = 0; k < n; ++k) {
+        const size_t next = (k + 1) % n;
+        if (r == 1) {
+          emit(centre_id, outer[k], outer[next]);
+        } else if ((at(outer[k]) - at(inner[next])).squaredNorm() < (at(outer[next]) - at(inner[k])).squaredNorm()) {
+          emit(inner[k], outer[k], inner[next]);
+          emit(outer[k], outer[next], inner[next]);
+        } else {
+          emit(inner[k], outer[k], outer[next]);
+          emit(inner[k], outer[next], inner[next]);
+        }
+      }
+      inner = outer;
+    }
+  }
+  made.top_triangles = top.size();
+  for (size_t k = 0; k < 10; ++k) fprintf(stderr, "rings %zu: %ld cells, %ld sides\n", k, ring_histogram[k], ring_sides[k]);
+  made.mesh_seconds = seconds_since(began);
+
+  // Heights: each facet's slope should send its centroid's light to its
+  // pixel's centre; least squares over the facets, weighted by area, three
+  // rounds (the slab's lateral shift depends on the heights).
+  began = Clock::now();
+  const size_t vertex_count = points.size();
+  const Vec2 to_mm(0.5 * s.width_mm, 0.5 * s.depth_mm);
+  std::vector<Vec2> xy(vertex_count);
+  for (size_t v = 0; v < vertex_count; ++v) xy[v] = points[v].cwiseProduct(to_mm);
+  // Each facet's three edges should rise as its aimed slope says:
+  // (h_b - h_a) = slope . (x_b - x_a), weighted by the facet's area over its
+  // edges' squared lengths (for a well-shaped facet the same as its area
+  // times the squared slope error; a sliver's huge ∇ does not take over).
+  struct Facet {
+    double weight = 0, area = 0;
+  };
+  std::vector<Facet> facets(top.size());
+  std::vector<Eigen::Triplet<double>> entries;
+  entries.reserve(12 * top.size() + vertex_count);
+  double total_area = 0;
+  const auto corner = [&](size_t t, int k) { return static_cast<size_t>(top[t][k]); };
+  for (size_t t = 0; t < top.size(); ++t) {
+    const Vec2 a = xy[corner(t, 0)], b = xy[corner(t, 1)], c = xy[corner(t, 2)];
+    Facet& f = facets[t];
+    f.area = 0.5 * std::abs((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x());
+    const double edges = (b - a).squaredNorm() + (c - b).squaredNorm() + (a - c).squaredNorm();
+    f.weight = edges > 0 ? f.area / edges : 0;
+    total_area += f.area;
+    for (int k = 0; k < 3; ++k) {
+      const int p = top[t][k], q = top[t][(k + 1) % 3];
+      entries.emplace_back(p, p, f.weight);
+      entries.emplace_back(q, q, f.weight);
+      entries.emplace_back(p, q, -f.weight);
+      entries.emplace_back(q, p, -f.weight);
+    }
+  }
+  // A whisper of the previous heights pins the level (and vertices only
+  // zero-area facets touch).
+  double trace = 0;
+  for (const Eigen::Triplet<double>& e : entries) trace += e.row() == e.col() ? e.value() : 0;
+  const double tie = 1e-8 * trace / static_cast<double>(vertex_count);
+  for (size_t v = 0; v < vertex_count; ++v) entries.emplace_back(static_cast<int>(v), static_cast<int>(v), tie);
+  Eigen::SparseMatrix<double> normal(static_cast<Eigen::Index>(vertex_count), static_cast<Eigen::Index>(vertex_count));
+  normal.setFromTriplets(entries.begin(), entries.end());
+  entries = {};
+  fem::CholmodFactor solver;
+  if (!solver.analyze_and_factorize(normal)) throw std::runtime_error("transport_cells_slab_mesh: the integration is singular");
+  Eigen::VectorXd h = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(vertex_count), mean_height_mm), rhs;
+  std::vector<Vec2> aims(top.size());
+  for (int round = 0; round < 3; ++round) {
+    rhs = tie * h;
+    for (size_t t = 0; t < top.size(); ++t) {
+      const Facet& f = facets[t];
+      const Vec2 centroid = (xy[corner(t, 0)] + xy[corner(t, 1)] + xy[corner(t, 2)]) / 3;
+      const double here = (h[top[t][0]] + h[top[t][1]] + h[top[t][2]]) / 3;
+      const Vec2& y = sites[static_cast<size_t>(cell_of[t])];
+      const Vec2 target = s.receiver_centre_mm + Vec2(0.5 * s.receiver_width_mm * y.x(), 0.5 * s.receiver_depth_mm * y.y());
+      aims[t] = slope_towards(s, centroid, here, target);
+      for (int k = 0; k < 3; ++k) {
+        const int p = top[t][k], q = top[t][(k + 1) % 3];
+        const double rise = f.weight * aims[t].dot(xy[static_cast<size_t>(q)] - xy[static_cast<size_t>(p)]);
+        rhs[q] += rise;
+        rhs[p] -= rise;
+      }
+    }
+    solver.solve(rhs, h);
+    h.array() += mean_height_mm - h.mean();
+  }
+  // The facets' slopes against their aims, over the top's area.
+  double squared = 0;
+  for (size_t t = 0; t < top.size(); ++t) {
+    const Vec2 a = xy[corner(t, 0)], b = xy[corner(t, 1)], c = xy[corner(t, 2)];
+    const double twice = (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
+    if (!(std::abs(twice) > 0)) continue;
+    const auto perp = [](const Vec2& e) { return Vec2(-e.y(), e.x()); };
+    const Vec2 slope = (h[top[t][0]] * perp(c - b) + h[top[t][1]] * perp(a - c) + h[top[t][2]] * perp(b - a)) / twice;
+    squared += facets[t].area * (slope - aims[t]).squaredNorm();
+  }
+  made.rms_slope_error = std::sqrt(squared / total_area);
+  made.integration_seconds = seconds_since(began);
+
+  // The closed slab: the top, walls down its rim, a bottom fanned from the centre.
+  Mesh& mesh = made.mesh;
+  mesh.vertices.resize(vertex_count);
+  for (size_t v = 0; v < vertex_count; ++v) {
+    if (!(h[static_cast<Eigen::Index>(v)] > 0))
+      throw InputError("caustics: the slab's top surface must stay above its bottom (heights > 0 mm)");
+    mesh.vertices[v] = Vec3(xy[v].x(), xy[v].y(), h[static_cast<Eigen::Index>(v)]);
+  }
+  mesh.triangles = top;
+  std::unordered_map<long long, int> directed;  // (a, b) -> uses
+  const auto edge_key = [](int a, int b) { return static_cast<long long>(a) * 0x100000000LL + b; };
+  for (const Eigen::Vector3i& t : top)
+    for (int k = 0; k < 3; ++k) ++directed[edge_key(t[k], t[(k + 1) % 3])];
+  std::unordered_map<int, int> rim_next;
+  const double rim_tolerance = 1e-9 * (s.width_mm + s.depth_mm);
+  const auto on_rim = [&](int v) {
+    const Vec2& p = xy[static_cast<size_t>(v)];
+    return std::abs(std::abs(p.x()) - 0.5 * s.width_mm) <= rim_tolerance ||
+           std::abs(std::abs(p.y()) - 0.5 * s.depth_mm) <= rim_tolerance;
+  };
+  for (const auto& [key, uses] : directed) {
+    const int a = static_cast<int>(key / 0x100000000LL), b = static_cast<int>(key % 0x100000000LL);
+    if (directed.contains(edge_key(b, a))) continue;
+    if (on_rim(a) && on_rim(b)) rim_next[a] = b;
+    else ++made.open_edges;
+  }
+  if (rim_next.empty()) throw std::runtime_error("transport_cells_slab_mesh: the top has no rim");
+  std::vector<int> rim;
+  int v = rim_next.begin()->first;
+  // Start at the rim vertex nearest the footprint's lowest corner, so that the walk is deterministic.
+  for (const auto& [from, to] : rim_next)
+    if (xy[static_cast<size_t>(from)].sum() < xy[static_cast<size_t>(v)].sum() ||
+        (xy[static_cast<size_t>(from)].sum() == xy[static_cast<size_t>(v)].sum() && from < v))
+      v = from;
+  const int first = v;
+  do {
+    rim.push_back(v);
+    const auto next = rim_next.find(v);
+    if (next == rim_next.end() || rim.size() > rim_next.size())
+      throw std::runtime_error(fmt::format("transport_cells_slab_mesh: the top's rim is not one loop ({} of {} rim edges walked, {} open edges, at ({}, {}))", rim.size(), rim_next.size(), made.open_edges, xy[static_cast<size_t>(v)].x(), xy[static_cast<size_t>(v)].y()));
+    v = next->second;
+  } while (v != first);
+  const int first_low = static_cast<int>(mesh.vertices.size());
+  for (int r : rim) mesh.vertices.emplace_back(mesh.vertices[static_cast<size_t>(r)].x(), mesh.vertices[static_cast<size_t>(r)].y(), 0);
+  const int centre = static_cast<int>(mesh.vertices.size());
+  mesh.vertices.emplace_back(0, 0, 0);
+  const int rim_count = static_cast<int>(rim.size());
+  for (int k = 0; k < rim_count; ++k) {
+    const int next = (k + 1) % rim_count;
+    const int a = rim[static_cast<size_t>(k)], b = rim[static_cast<size_t>(next)];
+    mesh.triangles.emplace_back(a, first_low + k, first_low + next);
+    mesh.triangles.emplace_back(a, first_low + next, b);
+    mesh.triangles.emplace_back(centre, first_low + next, first_low + k);
+  }
+  return made;
 }
 
 }  // namespace spec2fab

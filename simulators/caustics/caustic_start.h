@@ -15,6 +15,7 @@
 
 #include "caustics/caustic_tracer.h"
 #include "caustics/optimal_transport.h"
+#include "geometry/mesh.h"
 
 namespace spec2fab {
 
@@ -45,5 +46,31 @@ std::vector<TransportMoments> transport_square_targets(const CausticSetup& setup
 /// at +y; any scale), its heights averaging `mean_height_mm`. Throws
 /// InputError for a goal with no light.
 TransportStart transport_start(const CausticSetup& setup, std::span<const double> goal, double mean_height_mm);
+
+/// What transport_cells_slab_mesh made.
+struct TransportCellsMesh {
+  Mesh mesh;                  ///< the closed slab, tracer frame (footprint centred on the origin, bottom z = 0)
+  int cells = 0;              ///< transport cells meshed (a pixel each)
+  size_t top_triangles = 0;
+  int newton_steps = 0;
+  double worst_mass_error = 0;
+  double transport_seconds = 0, mesh_seconds = 0, integration_seconds = 0;
+  double worst_facet_radius_px = 0;  ///< largest circumradius of a top facet, in receiver pixels
+  double rms_slope_error = 0;        ///< the facets' slopes against their aims (rms over the top's area)
+  int open_edges = 0;                ///< top edges used once off the rim (0 for a watertight top)
+};
+
+/// The slab whose top is the transport's own cells: each pixel's power cell
+/// on the top becomes a patch of flat facets, all aimed (Snell's law, the
+/// heights integrated by least squares over the facets) at the pixel's
+/// centre, so that the pixel gets its cell's light, which the transport
+/// made equal to the goal's. A flat facet casts a copy of itself, centred
+/// where it is aimed: cells are split into facets whose circumradius is at
+/// most `facet_radius_px` receiver pixels, so that each copy lands inside
+/// its pixel. Neighbouring cells split their shared edge at the same points
+/// (a watertight top); walls and a fanned bottom close the slab. A
+/// rectangle aperture only.
+TransportCellsMesh transport_cells_slab_mesh(const CausticSetup& setup, std::span<const double> goal,
+                                             double mean_height_mm, double facet_radius_px);
 
 }  // namespace spec2fab

@@ -294,7 +294,7 @@ struct CausticSurfaceSettings {
              "receiver (adaptive_caustic_slab_mesh): fine facets where a coarse one's copy would show, coarse "
              "ones where the light gathers; 0: the uniform grid. With print_mesh \"pixels\": how many times a "
              "pixel's quad may be split where the light gathers");
-    d.choice(o.print_mesh, "print_mesh", {"grid", "pixels"},
+    d.choice(o.print_mesh, "print_mesh", {"grid", "pixels", "cells"},
              "how print/surface.stl's top is meshed: grid, a grid over the top (print_vertices_per_span, "
              "print_refinement_levels); pixels, the image's pixel grid pulled back to the top through the smooth "
              "surface (pixel_caustic_slab_mesh), so that each pixel's light comes from its own quad of two flat "

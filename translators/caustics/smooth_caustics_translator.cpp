@@ -22,6 +22,8 @@
 #include "spec/report_fields.h"
 #include "caustic_translation.h"
 #include "caustics/caustic_parts.h"
+#include "caustics/caustic_slab.h"
+#include "caustics/caustic_start.h"
 #include "reducer/nodes/nodes.h"
 #include "reducer/reducer_tree.h"
 #include "spec/tuning_translator.h"
@@ -210,7 +212,19 @@ class SmoothCausticsTranslator final : public TuningTranslator {
     for (const char* file : {"preview/convergence.png", "preview/goal_vs_simulated.png", "preview/height_map.png"})
       previews.push_back(file);
     if (!compared_runs_.empty()) previews.push_back("preview/optimizer_comparison.png");
-    if (outputs_.fabrication.writes("stl"))
+    if (outputs_.fabrication.writes("stl") && surface_.print_mesh == "cells") {
+      const std::vector<double> values = tuner.search_space().values();
+      const double mean_height =
+          std::accumulate(values.begin(), values.end(), 0.0) / static_cast<double>(values.size()) - slab_.origin_mm.z();
+      TransportCellsMesh made = transport_cells_slab_mesh(slab_.setup, target_.pixels, mean_height, 0.5 * surface_.print_copy_pixels);
+      const Eigen::Vector3d offset = slab_offset(slab_.setup, slab_.origin_mm);
+      for (Eigen::Vector3d& p : made.mesh.vertices) p += offset;
+      print_facets_ = fmt::format("the transport's {} cells, {} facets (largest circumradius {:.2f} px; rms slope error {:.2e}; {} open edges; transport {:.1f} s, mesh {:.1f} s, integration {:.1f} s)",
+                                  made.cells, made.top_triangles, made.worst_facet_radius_px, made.rms_slope_error, made.open_edges,
+                                  made.transport_seconds, made.mesh_seconds, made.integration_seconds);
+      spdlog::info("print mesh: {}", print_facets_);
+      print_surfaces_ = {PrintSurface{"surface", std::move(made.mesh)}};
+    } else if (outputs_.fabrication.writes("stl"))
       print_surfaces_ = {caustic_print_surface(slab_, surface_, surface(), {}, print_facets_, print_on_pixels_)};
   }
 
