@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
 #include <functional>
 #include <limits>
 #include <numbers>
@@ -11,6 +10,9 @@
 #include <stdexcept>
 #include <unordered_map>
 
+#include <CGAL/Constrained_Delaunay_triangulation_2.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Triangulation_vertex_base_with_info_2.h>
 #include <Eigen/SparseCore>
 #include <fmt/format.h>
 
@@ -242,7 +244,8 @@ std::vector<TransportMoments> transport_square_targets(const CausticSetup& s, st
   return squares;
 }
 
-TransportStart transport_start(const CausticSetup& s, std::span<const double> goal, double mean_height_mm) {
+TransportStart transport_start(const CausticSetup& s, std::span<const double> goal, double mean_height_mm,
+                               SemiDiscreteTransport* keep) {
   const int width = s.image_width, height = s.image_height;
   if (goal.size() != static_cast<size_t>(width) * static_cast<size_t>(height))
     throw std::invalid_argument("transport_start: the goal has the wrong size");
@@ -253,7 +256,7 @@ TransportStart transport_start(const CausticSetup& s, std::span<const double> go
   const std::vector<Vec2> source = aperture_outline(s);
   const std::vector<double> masses = transport_masses(s, goal);
   std::vector<Vec2> sites;
-  const SemiDiscreteTransport transport = solve_multiscale(source, masses, width, height, sites);
+  SemiDiscreteTransport transport = solve_multiscale(source, masses, width, height, sites);
   start.sites = static_cast<int>(sites.size());
   start.newton_steps = transport.newton_steps;
   start.worst_mass_error = transport.worst_mass_error;
@@ -269,6 +272,7 @@ TransportStart transport_start(const CausticSetup& s, std::span<const double> go
   const auto [low, high] = std::minmax_element(start.heights.begin(), start.heights.end());
   start.relief_mm = *high - *low;
   start.largest_slope = largest_slope(grid, start.heights);
+  if (keep) *keep = std::move(transport);
   return start;
 }
 
@@ -308,13 +312,113 @@ class CornerWelder {
   std::unordered_multimap<long long, int> buckets_;
 };
 
-/// How far a flat facet's copy reaches from where the facet is aimed (its
-/// centroid's light), along x or y (corners in receiver pixels): at most
-/// 1/2, the copy of a facet aimed at its pixel's centre stays in the pixel.
+/// How far a flat facet's copy reaches along x or y from where its centroid's
+/// light lands (corners in receiver pixels): aimed at its pixel's centre,
+/// the copy stays in the pixel at 1/2. (Aiming each facet's box centre
+/// instead, and bounding the box, was tried: more facets for the same
+/// image, benchmarks/RESULTS.md.)
 double copy_radius(const Vec2& a, const Vec2& b, const Vec2& c) {
   const Vec2 centroid = (a + b + c) / 3;
   return std::max({(a - centroid).cwiseAbs().maxCoeff(), (b - centroid).cwiseAbs().maxCoeff(),
                    (c - centroid).cwiseAbs().maxCoeff()});
+}
+
+/// Triangulates the convex polygon `ring` (vertex ids into `points`, counter-
+/// clockwise) by constrained Delaunay, first alone, then with points inside
+/// on square lattices of the given spacings (receiver pixels; `px` maps a
+/// point there), until every facet's copy_radius is at most `radius`; the
+/// lattice points are appended to `points`. False (nothing appended) when
+/// no spacing does.
+template <class ToPx, class Emit>
+bool delaunay_cell(const std::vector<int>& ring, const std::vector<double>& spacings, double radius,
+                   std::vector<Vec2>& points, const ToPx& px, const Emit& emit) {
+  using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+  using VertexBase = CGAL::Triangulation_vertex_base_with_info_2<int, Kernel>;
+  using FaceBase = CGAL::Constrained_triangulation_face_base_2<Kernel>;
+  using Cdt = CGAL::Constrained_Delaunay_triangulation_2<
+      Kernel, CGAL::Triangulation_data_structure_2<VertexBase, FaceBase>, CGAL::Exact_predicates_tag>;
+  const size_t n = ring.size();
+  std::vector<Vec2> corner(n);
+  Vec2 low = Vec2::Constant(std::numeric_limits<double>::infinity()), high = -low;
+  for (size_t k = 0; k < n; ++k) {
+    corner[k] = px(points[static_cast<size_t>(ring[k])]);
+    low = low.cwiseMin(corner[k]);
+    high = high.cwiseMax(corner[k]);
+  }
+  // Signed distance inside each edge (the ring is counter-clockwise).
+  const auto inside_by = [&](const Vec2& p) {
+    double least = std::numeric_limits<double>::infinity();
+    for (size_t k = 0; k < n; ++k) {
+      const Vec2 e = corner[(k + 1) % n] - corner[k];
+      const double length = e.norm();
+      if (!(length > 0)) continue;
+      least = std::min(least, (e.x() * (p - corner[k]).y() - e.y() * (p - corner[k]).x()) / length);
+    }
+    return least;
+  };
+  const Vec2 to_points = (points[static_cast<size_t>(ring[0])].array() / corner[0].array()).matrix();
+  std::vector<Eigen::Vector3i> facets;
+  for (double spacing : spacings) {
+    std::vector<Vec2> inner;
+    if (spacing < 1e8) {
+      const Vec2 centre = 0.5 * (low + high);
+      const int half_x = static_cast<int>(std::ceil(0.5 * (high.x() - low.x()) / spacing)) + 1;
+      const int half_y = static_cast<int>(std::ceil(0.5 * (high.y() - low.y()) / spacing)) + 1;
+      for (int j = -half_y; j <= half_y; ++j)
+        for (int i = -half_x; i <= half_x; ++i) {
+          const Vec2 p = centre + spacing * Vec2(i + 0.5 * (j & 1), j);
+          if (inside_by(p) >= 0.4 * spacing) inner.push_back(p);
+        }
+    }
+    Cdt cdt;
+    std::vector<Cdt::Vertex_handle> handles(n);
+    for (size_t k = 0; k < n; ++k) {
+      handles[k] = cdt.insert(Cdt::Point(corner[k].x(), corner[k].y()));
+      handles[k]->info() = ring[k];
+    }
+    for (size_t k = 0; k < n; ++k) cdt.insert_constraint(handles[k], handles[(k + 1) % n]);
+    for (size_t m = 0; m < inner.size(); ++m) cdt.insert(Cdt::Point(inner[m].x(), inner[m].y()))->info() = -1 - static_cast<int>(m);
+    if (cdt.number_of_vertices() != n + inner.size()) continue;  // a point fell on another
+    // Faces outside the boundary (between it and the hull, where rounding
+    // bent it inwards) are those reached from the infinite face without
+    // crossing a constrained edge.
+    std::unordered_map<Cdt::Face_handle, bool> outside;
+    std::vector<Cdt::Face_handle> stack{cdt.infinite_face()};
+    outside[cdt.infinite_face()] = true;
+    while (!stack.empty()) {
+      const Cdt::Face_handle f = stack.back();
+      stack.pop_back();
+      for (int k = 0; k < 3; ++k) {
+        const Cdt::Face_handle g = f->neighbor(k);
+        if (f->is_constrained(k) || outside.contains(g)) continue;
+        outside[g] = true;
+        stack.push_back(g);
+      }
+    }
+    facets.clear();
+    bool small = true;
+    for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end() && small; ++f) {
+      if (outside.contains(f)) continue;
+      Vec2 v[3];
+      int id[3];
+      for (int k = 0; k < 3; ++k) {
+        v[k] = Vec2(f->vertex(k)->point().x(), f->vertex(k)->point().y());
+        id[k] = f->vertex(k)->info();
+      }
+      small = copy_radius(v[0], v[1], v[2]) <= radius;
+      facets.emplace_back(id[0], id[1], id[2]);
+    }
+    if (!small) continue;
+    const int first = static_cast<int>(points.size());
+    for (const Vec2& p : inner) points.push_back(p.cwiseProduct(to_points));
+    for (Eigen::Vector3i& f : facets) {
+      for (int k = 0; k < 3; ++k)
+        if (f[k] < 0) f[k] = first + (-1 - f[k]);
+    }
+    emit(facets);
+    return true;
+  }
+  return false;
 }
 
 }  // namespace
@@ -324,24 +428,33 @@ TransportCellsMesh transport_cells_slab_mesh(const CausticSetup& s, std::span<co
   const int width = s.image_width, height = s.image_height;
   if (goal.size() != static_cast<size_t>(width) * static_cast<size_t>(height))
     throw std::invalid_argument("transport_cells_slab_mesh: the goal has the wrong size");
-  if (s.disc_aperture || s.mirror || s.point_light)
-    throw std::invalid_argument("transport_cells_slab_mesh: a lens under collimated light through its whole footprint only");
-  TransportCellsMesh made;
-  auto began = Clock::now();
-  const std::vector<Vec2> source = aperture_outline(s);
+  const auto began = Clock::now();
   std::vector<Vec2> sites;
-  const SemiDiscreteTransport transport = solve_multiscale(source, transport_masses(s, goal), width, height, sites);
+  const SemiDiscreteTransport transport =
+      solve_multiscale(aperture_outline(s), transport_masses(s, goal), width, height, sites);
+  const double seconds = seconds_since(began);
+  TransportCellsMesh made = transport_cells_slab_mesh(s, transport, mean_height_mm, facet_radius_px);
+  made.transport_seconds = seconds;
+  return made;
+}
+
+TransportCellsMesh transport_cells_slab_mesh(const CausticSetup& s, const SemiDiscreteTransport& transport,
+                                             double mean_height_mm, double facet_radius_px) {
+  const int width = s.image_width, height = s.image_height;
+  if (transport.cells.size() != static_cast<size_t>(width) * static_cast<size_t>(height))
+    throw std::invalid_argument("transport_cells_slab_mesh: the transport is not to the image's pixels");
+  if (s.disc_aperture || s.mirror || s.point_light)
+    throw InputError("print_mesh \"cells\": a lens under collimated light through its whole footprint only "
+                     "(no disc aperture, mirror or point light)");
+  TransportCellsMesh made;
   made.newton_steps = transport.newton_steps;
   made.worst_mass_error = transport.worst_mass_error;
-  made.transport_seconds = seconds_since(began);
-
-  began = Clock::now();
+  const std::vector<Vec2> sites = pixel_sites(width, height);
+  auto began = Clock::now();
   // Half-size units (the transport's) to receiver pixels, along x and y.
   const Vec2 to_px(0.5 * s.width_mm * width / s.receiver_width_mm, 0.5 * s.depth_mm * height / s.receiver_depth_mm);
   const auto px = [&](const Vec2& u) -> Vec2 { return u.cwiseProduct(to_px); };
-  const double edge_px = 1.5 * facet_radius_px;  // short enough for facets along it to keep the radius
-  const char* weld_env = std::getenv("SPEC2FAB_WELD_PX");
-  const double weld_px = weld_env ? std::atof(weld_env) : 1e-6;
+  constexpr double weld_px = 1e-6;
   std::vector<Vec2> points;  // half-size units
   CornerWelder weld(weld_px * 2.0 / std::max(width, height));
   std::vector<std::vector<int>> loops(transport.cells.size());
@@ -358,8 +471,9 @@ TransportCellsMesh transport_cells_slab_mesh(const CausticSetup& s, std::span<co
   // (a vertex's id replaced by the other's), so that no facet is spent on
   // them: the diagram of a near-square grid of sites has four-cell corners
   // split into pairs a hair apart.
-  const char* collapse_env = std::getenv("SPEC2FAB_COLLAPSE_PX");
-  const double collapse_px = collapse_env ? std::atof(collapse_env) : 0.02;
+  // (0.1 pixel dropped 2,300 of the 240² portrait's dark cells and cost
+  // 0.008 SSIM; 0.02 drops about 100.)
+  constexpr double collapse_px = 0.02;
   std::vector<int> merged(points.size());
   std::iota(merged.begin(), merged.end(), 0);
   const auto root = [&](int v) {
@@ -388,13 +502,16 @@ TransportCellsMesh transport_cells_slab_mesh(const CausticSetup& s, std::span<co
     if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) ++pinched;
     loop = kept.size() >= 3 ? kept : std::vector<int>{};
   }
-  if (pinched) fprintf(stderr, "pinched loops: %d\n", pinched);
-  // Each edge split into pieces at most edge_px long, the same points for
-  // both cells that share it (numbered from its lower vertex).
+  made.pinched_cells = pinched;
+  const auto edge_key_of = [](int a, int b) { return static_cast<long long>(std::min(a, b)) * 0x100000000LL + std::max(a, b); };
+  // Each edge split into pieces at most 1.5 radii long along x and y (a
+  // facet along it can then keep the radius), the same points for both
+  // cells that share it (numbered from its lower vertex).
+  const double edge_px = 1.5 * facet_radius_px;
   std::unordered_map<long long, std::vector<int>> splits;
   const auto edge_points = [&](int a, int b) -> const std::vector<int>& {
     const int low = std::min(a, b), high = std::max(a, b);
-    const auto [at, added] = splits.try_emplace(static_cast<long long>(low) * 0x100000000LL + high);
+    const auto [at, added] = splits.try_emplace(edge_key_of(a, b));
     if (added) {
       const Vec2 p = points[static_cast<size_t>(low)], q = points[static_cast<size_t>(high)];
       const int pieces = std::max(1, static_cast<int>(std::ceil((px(q) - px(p)).cwiseAbs().maxCoeff() / edge_px)));
@@ -408,9 +525,10 @@ TransportCellsMesh transport_cells_slab_mesh(const CausticSetup& s, std::span<co
   std::vector<Eigen::Vector3i> top;
   std::vector<int> cell_of;  // per top triangle
   std::vector<int> ring;
-  std::vector<long> ring_histogram(10, 0), ring_sides(10, 0);
   for (size_t i = 0; i < loops.size(); ++i) {
     if (loops[i].empty()) continue;
+    const double cell_radius = facet_radius_px;
+    const std::vector<double> d_spacings{1e9, 1.4 * cell_radius, 1.1 * cell_radius, 0.8 * cell_radius};
     ++made.cells;
     ring.clear();
     for (size_t k = 0; k < loops[i].size(); ++k) {
@@ -427,6 +545,9 @@ TransportCellsMesh transport_cells_slab_mesh(const CausticSetup& s, std::span<co
       cell_of.push_back(static_cast<int>(i));
       made.worst_facet_radius_px = std::max(made.worst_facet_radius_px, copy_radius(at(a), at(b), at(c)));
     };
+    const auto emit_all = [&](const std::vector<Eigen::Vector3i>& facets) {
+      for (const Eigen::Vector3i& f : facets) emit(f[0], f[1], f[2]);
+    };
     // A fan from one of its corners if some fan's facets are all small enough.
     if (n <= 12) {
       int best = -1;
@@ -437,14 +558,17 @@ TransportCellsMesh transport_cells_slab_mesh(const CausticSetup& s, std::span<co
           worst = std::max(worst, copy_radius(at(ring[start]), at(ring[(start + k) % n]), at(ring[(start + k + 1) % n])));
         if (worst < best_radius) best_radius = worst, best = static_cast<int>(start);
       }
-      if (best_radius <= facet_radius_px) {
+      if (best_radius <= cell_radius) {
         for (size_t k = 1; k + 1 < n; ++k)
           emit(ring[static_cast<size_t>(best)], ring[(static_cast<size_t>(best) + k) % n],
                ring[(static_cast<size_t>(best) + k + 1) % n]);
-        ring_histogram[0]++;
-        ring_sides[0] += static_cast<long>(n);
         continue;
       }
+    }
+    // Else a Delaunay triangulation of the boundary and, if need be, of
+    // points inside on a square lattice, finer until the facets are small.
+    if (delaunay_cell(ring, d_spacings, cell_radius, points, px, emit_all)) {
+      continue;
     }
     // Else rings about the centroid, as many as keep the facets small.
     Vec2 centre = Vec2::Zero();
@@ -454,7 +578,7 @@ TransportCellsMesh transport_cells_slab_mesh(const CausticSetup& s, std::span<co
     const auto ring_point = [&](size_t k, int r, int of) {
       return centre + (points[static_cast<size_t>(ring[k])] - centre) * (static_cast<double>(r) / of);
     };
-    for (; rings < 64; ++rings) {
+    for (; rings < 16; ++rings) {
       double worst = 0;
       for (size_t k = 0; k < n; ++k) {
         worst = std::max(worst, copy_radius(px(centre), px(ring_point(k, 1, rings)), px(ring_point((k + 1) % n, 1, rings))));
@@ -467,10 +591,8 @@ TransportCellsMesh transport_cells_slab_mesh(const CausticSetup& s, std::span<co
             worst = std::max({worst, copy_radius(i0, o0, o1), copy_radius(i0, o1, i1)});
         }
       }
-      if (worst <= facet_radius_px) break;
+      if (worst <= cell_radius) break;
     }
-    ring_histogram[static_cast<size_t>(std::min(rings, 9))]++;
-    ring_sides[static_cast<size_t>(std::min(rings, 9))] += static_cast<long>(n);
     const int centre_id = static_cast<int>(points.size());
     points.push_back(centre);
     std::vector<int> inner(n, centre_id), outer(n);
@@ -499,7 +621,6 @@ TransportCellsMesh transport_cells_slab_mesh(const CausticSetup& s, std::span<co
     }
   }
   made.top_triangles = top.size();
-  for (size_t k = 0; k < 10; ++k) fprintf(stderr, "rings %zu: %ld cells, %ld sides\n", k, ring_histogram[k], ring_sides[k]);
   made.mesh_seconds = seconds_since(began);
 
   // Heights: each facet's slope should send its centroid's light to its
@@ -570,16 +691,20 @@ TransportCellsMesh transport_cells_slab_mesh(const CausticSetup& s, std::span<co
     h.array() += mean_height_mm - h.mean();
   }
   // The facets' slopes against their aims, over the top's area.
-  double squared = 0;
+  double squared = 0, counted_area = 0;
   for (size_t t = 0; t < top.size(); ++t) {
     const Vec2 a = xy[corner(t, 0)], b = xy[corner(t, 1)], c = xy[corner(t, 2)];
     const double twice = (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
-    if (!(std::abs(twice) > 0)) continue;
+    // Slivers (area under 1 % of the longest edge squared) carry almost no
+    // light, and their slopes are ill-defined: left out of the figure.
+    const double longest = std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()});
+    if (!(0.5 * std::abs(twice) >= 0.01 * longest)) continue;
     const auto perp = [](const Vec2& e) { return Vec2(-e.y(), e.x()); };
     const Vec2 slope = (h[top[t][0]] * perp(c - b) + h[top[t][1]] * perp(a - c) + h[top[t][2]] * perp(b - a)) / twice;
     squared += facets[t].area * (slope - aims[t]).squaredNorm();
+    counted_area += facets[t].area;
   }
-  made.rms_slope_error = std::sqrt(squared / total_area);
+  made.rms_slope_error = std::sqrt(squared / std::max(counted_area, 1e-300));
   made.integration_seconds = seconds_since(began);
 
   // The closed slab: the top, walls down its rim, a bottom fanned from the centre.

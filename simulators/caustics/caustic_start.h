@@ -45,7 +45,9 @@ std::vector<TransportMoments> transport_square_targets(const CausticSetup& setup
 /// and `goal` (the irradiance asked for, image_width × image_height, row 0
 /// at +y; any scale), its heights averaging `mean_height_mm`. Throws
 /// InputError for a goal with no light.
-TransportStart transport_start(const CausticSetup& setup, std::span<const double> goal, double mean_height_mm);
+/// `keep`, if given, receives the transport (for transport_cells_slab_mesh).
+TransportStart transport_start(const CausticSetup& setup, std::span<const double> goal, double mean_height_mm,
+                               SemiDiscreteTransport* keep = nullptr);
 
 /// What transport_cells_slab_mesh made.
 struct TransportCellsMesh {
@@ -55,21 +57,32 @@ struct TransportCellsMesh {
   int newton_steps = 0;
   double worst_mass_error = 0;
   double transport_seconds = 0, mesh_seconds = 0, integration_seconds = 0;
-  double worst_facet_radius_px = 0;  ///< largest circumradius of a top facet, in receiver pixels
-  double rms_slope_error = 0;        ///< the facets' slopes against their aims (rms over the top's area)
+  double worst_facet_radius_px = 0;  ///< largest copy_radius of a top facet (receiver pixels)
+  double rms_slope_error = 0;        ///< the facets' slopes against their aims (rms over the area, slivers left out)
   int open_edges = 0;                ///< top edges used once off the rim (0 for a watertight top)
+  int pinched_cells = 0;             ///< cells whose boundary touched itself after short edges collapsed
 };
 
-/// The slab whose top is the transport's own cells: each pixel's power cell
-/// on the top becomes a patch of flat facets, all aimed (Snell's law, the
-/// heights integrated by least squares over the facets) at the pixel's
-/// centre, so that the pixel gets its cell's light, which the transport
-/// made equal to the goal's. A flat facet casts a copy of itself, centred
-/// where it is aimed: cells are split into facets whose circumradius is at
-/// most `facet_radius_px` receiver pixels, so that each copy lands inside
-/// its pixel. Neighbouring cells split their shared edge at the same points
-/// (a watertight top); walls and a fanned bottom close the slab. A
-/// rectangle aperture only.
+/// The slab whose top is the transport's own cells (Schwartzburg et al.
+/// 2014's semi-discrete transport, meshed as it is instead of integrated
+/// into a smooth surface): each pixel's power cell on the top becomes a
+/// patch of flat facets, all aimed by Snell's law at the pixel's centre
+/// (the heights integrated by least squares over the facets' edges, three
+/// rounds for the slab's lateral shift), so that the pixel gets its cell's
+/// light, which the transport made the goal's. A flat facet casts a copy of
+/// itself centred where its centroid's light lands: cells are split
+/// (a corner fan, else constrained Delaunay, with points inside on finer
+/// lattices as needed, else rings about the centroid) until no facet
+/// reaches further than `facet_radius_px` receiver pixels along x or y from
+/// its centroid, so that at 1/2 each copy lands inside its pixel.
+/// Neighbouring cells split their shared edge at the same points and edges
+/// under 0.02 pixel collapse, so the top is watertight; walls and a fanned
+/// bottom close the slab (tracer frame). A lens under collimated light
+/// through its whole footprint only (InputError otherwise); `transport` is
+/// transport_start's, to the image's pixels.
+TransportCellsMesh transport_cells_slab_mesh(const CausticSetup& setup, const SemiDiscreteTransport& transport,
+                                             double mean_height_mm, double facet_radius_px);
+/// The same, solving the transport first (its time in transport_seconds).
 TransportCellsMesh transport_cells_slab_mesh(const CausticSetup& setup, std::span<const double> goal,
                                              double mean_height_mm, double facet_radius_px);
 

@@ -21,6 +21,7 @@
 #include "build_gates.h"
 #include "caustic_check.h"  // tools/caustic_check: independent of the simulators
 #include "caustics/caustic_parts.h"
+#include "caustics/caustic_start.h"
 #include "caustic_support.h"
 #include "caustics/caustic_tracer.h"
 #include "core/distance.h"
@@ -766,6 +767,78 @@ TEST_F(CausticSimulatorTest, PixelMeshCastsTheSmoothSurfacesImageWithFewFacets) 
   RecordProperty("same_size_grid_relative_rms", std::to_string(grid_error));
   EXPECT_LT(pixel_error, 0.02);
   EXPECT_LT(pixel_error, 0.5 * grid_error);
+}
+
+// The transport's cells meshed as they are (transport_cells_slab_mesh):
+// watertight, no facet reaching further than asked from its centroid, and —
+// traced by caustic_check, which shares nothing with the simulator — the
+// goal itself within a few per cent (each pixel gets its cell's light, the
+// goal's), where the same cells split coarsely (copies up to 2 pixels
+// from their centres, spilling into neighbours) are several times further off.
+TEST_F(CausticSimulatorTest, TransportCellsCastTheGoalItself) {
+  constexpr int kPixels = 48;
+  const CausticSlabConfig config = CausticSlabConfig::read(
+      Properties::parse(R"({"size_mm": [30, 30], "origin_mm": [0, 0, 0], "thickness_mm": 8, "vertices": [21, 21],
+                            "distance_mm": 60, "image": [48, 48]})", "options.json"),
+      default_limits());
+  // A lit disc with a bright ring and a dark bar: light to gather, to spread and to keep out.
+  std::vector<double> goal(kPixels * kPixels);
+  for (int row = 0; row < kPixels; ++row)
+    for (int col = 0; col < kPixels; ++col) {
+      const double x = 2 * (col + 0.5) / kPixels - 1, y = 1 - 2 * (row + 0.5) / kPixels;
+      const double r = std::hypot(x, y);
+      double value = 0.4 + 2.0 * std::exp(-std::pow((r - 0.55) / 0.08, 2));
+      if (std::abs(y + 0.1) < 0.08 && std::abs(x) < 0.4) value = 0;
+      goal[static_cast<size_t>(row * kPixels + col)] = value;
+    }
+  const auto trace = [&](double radius, TransportCellsMesh& made) {
+    made = transport_cells_slab_mesh(config.setup, goal, 4.0, radius);
+    const std::filesystem::path file = std::filesystem::path(::testing::TempDir()) / "transport_cells.stl";
+    write_stl(made.mesh, file);
+    caustic_check::Options options;
+    options.stl = file.string();
+    options.goal = std::string(SPEC2FAB_DATASETS_DIR) + "/images/caustic_ring_120.png";  // read, not compared here
+    options.distance_mm = 60;
+    options.image = {kPixels, kPixels};
+    const cv::Mat traced = caustic_check::Print(options).trace({32 * kPixels, 32 * kPixels}).traced.clone();
+    std::filesystem::remove(file);
+    return traced;
+  };
+  // The goal as the transport takes it (2 % of the mean at least), at the
+  // light the footprint passes: irradiance 1 on average.
+  const double mean = std::accumulate(goal.begin(), goal.end(), 0.0) / static_cast<double>(goal.size());
+  cv::Mat expected(kPixels, kPixels, CV_64F);
+  double total = 0;
+  for (int k = 0; k < kPixels * kPixels; ++k) total += std::max(goal[static_cast<size_t>(k)], 0.02 * mean);
+  for (int k = 0; k < kPixels * kPixels; ++k)
+    expected.at<double>(k / kPixels, k % kPixels) = std::max(goal[static_cast<size_t>(k)], 0.02 * mean) * kPixels * kPixels / total;
+  const double scale = cv::norm(expected) / kPixels;
+
+  TransportCellsMesh fine, coarse;
+  const cv::Mat traced = trace(0.5, fine);
+  EXPECT_EQ(fine.open_edges, 0);
+  EXPECT_EQ(fine.pinched_cells, 0);
+  EXPECT_LE(fine.worst_facet_radius_px, 0.5 + 1e-9);
+  EXPECT_GT(fine.cells, kPixels * kPixels - 10);
+  std::map<std::pair<int, int>, int> edges;
+  for (const auto& t : fine.mesh.triangles)
+    for (int k = 0; k < 3; ++k) ++edges[{t[k], t[(k + 1) % 3]}];
+  for (const auto& [edge, count] : edges) {
+    ASSERT_EQ(count, 1) << edge.first << " " << edge.second;
+    ASSERT_EQ(edges.count({edge.second, edge.first}), 1u) << "an open edge " << edge.first << " " << edge.second;
+  }
+  EXPECT_GT(fine.mesh.signed_volume(), 0);
+  cv::Mat traced64;
+  traced.convertTo(traced64, CV_64F);
+  const double error = cv::norm(traced64 - expected) / kPixels / scale;
+  cv::Mat coarse64;
+  trace(2.0, coarse).convertTo(coarse64, CV_64F);
+  const double coarse_error = cv::norm(coarse64 - expected) / kPixels / scale;
+  RecordProperty("cells_relative_rms", std::to_string(error));
+  RecordProperty("coarse_cells_relative_rms", std::to_string(coarse_error));
+  EXPECT_LT(error, 0.03);
+  EXPECT_LT(2 * error, coarse_error);
+  EXPECT_LT(coarse.top_triangles, fine.top_triangles);
 }
 
 }  // namespace

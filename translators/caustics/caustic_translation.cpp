@@ -539,13 +539,14 @@ void explain_headline(PrintHeadline& headline, const HeadlineMeshes& meshes) {
 }
 
 TransportStartReport start_caustic_from_transport(Tuner& tuner, const CausticSlabConfig& slab,
-                                                  const HeightSurface& surface, nlohmann::json* timing) {
+                                                  const HeightSurface& surface, nlohmann::json* timing,
+                                                  SemiDiscreteTransport* keep) {
   const auto& goal = static_cast<const ImageObservation&>(tuner.goal().target());
   const std::vector<double> values = tuner.search_space().values();
   const double mean_height =
       std::accumulate(values.begin(), values.end(), 0.0) / static_cast<double>(values.size()) - slab.origin_mm.z();
   spdlog::info("start: optimal transport from the aperture to the goal's {} x {} pixels", goal.width, goal.height);
-  const TransportStart start = transport_start(slab.setup, goal.pixels, mean_height);
+  const TransportStart start = transport_start(slab.setup, goal.pixels, mean_height, keep);
   int clamped = 0;
   tuner.set_values(fit_slab_surface(slab.setup, slab.origin_mm, surface, tuner.search_space(), start.heights, &clamped));
   spdlog::info("  {} Newton steps, {:.1f} s; relief {:.2f} mm, largest slope {:.3f}{}", start.newton_steps,

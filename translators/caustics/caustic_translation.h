@@ -24,6 +24,7 @@
 #include "reducer/node.h"
 #include "spec/run_report.h"
 #include "caustics/caustic_parts.h"
+#include "caustics/optimal_transport.h"
 #include "tuning/observation.h"
 #include "tuning/parts.h"
 
@@ -299,11 +300,17 @@ struct CausticSurfaceSettings {
              "print_refinement_levels); pixels, the image's pixel grid pulled back to the top through the smooth "
              "surface (pixel_caustic_slab_mesh), so that each pixel's light comes from its own quad of two flat "
              "facets and lands inside the pixel as a halftone dot: about two triangles a pixel where the light "
-             "spreads (the grid is used, with a warning, where the map cannot be pulled back)");
+             "spreads (the grid is used, with a warning, where the map cannot be pulled back); cells, the start's "
+             "optimal transport meshed as it is (transport_cells_slab_mesh): each pixel's power cell a patch of "
+             "flat facets aimed at the pixel's centre, so that each pixel gets the light the transport gave it, "
+             "the goal's, whatever the smooth surface's tuning reached (that tuning then only gives the simulated "
+             "figures; a lens under collimated light through its whole footprint, start \"transport\")");
     d.number(o.print_copy_pixels, "print_copy_pixels", Range::closed(0.25, 16),
              "with print_mesh \"pixels\": where the light gathers, a pixel's quad is split (up to "
              "print_refinement_levels times along each direction) until its facets' copies on the receiver are at "
-             "most this many pixels wide: smaller is closer to the smooth surface's image, larger a smaller file");
+             "most this many pixels wide: smaller is closer to the smooth surface's image, larger a smaller file; "
+             "with print_mesh \"cells\": the cells are split until no facet's copy reaches further than half this "
+             "from its centre along x or y (1: each copy inside its pixel)");
   }
   bool check(std::string* why) const {
     if (static_cast<long long>(control[0]) * control[1] <= 1'000'000) return true;
@@ -422,8 +429,10 @@ bool surface_stl_written(const RunReport& report);
 /// ("start": Newton steps, relief, largest slope, controls held at their
 /// bounds). Its wall times go to `timing` (timing.json), where they do not
 /// break result.json's byte-identity across thread counts.
+/// `keep`, if given, receives the transport (print_mesh "cells").
 TransportStartReport start_caustic_from_transport(Tuner& tuner, const CausticSlabConfig& slab,
-                                                  const HeightSurface& surface, nlohmann::json* timing);
+                                                  const HeightSurface& surface, nlohmann::json* timing,
+                                                  SemiDiscreteTransport* keep = nullptr);
 
 /// "nlopt LD_LBFGS", "ceres numeric", "spsa": an optimizer's type and, for the
 /// adapters, what tells two of its runs apart (algorithm, derivatives).

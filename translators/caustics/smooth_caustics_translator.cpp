@@ -13,6 +13,7 @@
 // benchmarks/RESULTS.md has what each piece contributes.
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <numeric>
 
@@ -105,6 +106,11 @@ class SmoothCausticsTranslator final : public TuningTranslator {
     CausticSlabConfig::Options slab = settings_.slab_options(surface_.vertices());
     slab.estimator = options.estimator;
     slab_ = CausticGoalSettings::slab_config(goal, slab, experiment.limits());
+    if (surface_.print_mesh == "cells") {
+      if (!transport_start_) goal.fail("print_mesh", "\"cells\" meshes the start's transport: needs start \"transport\"");
+      if (slab_.setup.mirror || slab_.setup.disc_aperture || slab_.setup.point_light)
+        goal.fail("print_mesh", "\"cells\": a lens under collimated light through its whole footprint only");
+    }
     // The goal image first: its problems are the user's to fix before an
     // optimizer this build lacks.
     auto image_goal = settings_.image_goal(goal, experiment.limits());
@@ -174,7 +180,7 @@ class SmoothCausticsTranslator final : public TuningTranslator {
     Tuner& tuner = network_.tuner(0);
     if (transport_start_)
       start_report_ = start_caustic_from_transport(tuner, slab_, *tree_->root().height_surface(),
-                                                   context.timing);
+                                                   context.timing, surface_.print_mesh == "cells" ? &transport_ : nullptr);
     slope_limit_.at_start = surface_.limit_slopes(tuner, settings_.slab);
     // The optimizer keeps near the limit (a penalty in units of the start's
     // error); the end is held to it exactly.
@@ -213,16 +219,23 @@ class SmoothCausticsTranslator final : public TuningTranslator {
       previews.push_back(file);
     if (!compared_runs_.empty()) previews.push_back("preview/optimizer_comparison.png");
     if (outputs_.fabrication.writes("stl") && surface_.print_mesh == "cells") {
+      // The start's transport meshed as it is; its mean height the tuned surface's.
       const std::vector<double> values = tuner.search_space().values();
       const double mean_height =
           std::accumulate(values.begin(), values.end(), 0.0) / static_cast<double>(values.size()) - slab_.origin_mm.z();
-      TransportCellsMesh made = transport_cells_slab_mesh(slab_.setup, target_.pixels, mean_height, 0.5 * surface_.print_copy_pixels);
+      const auto began = std::chrono::steady_clock::now();
+      TransportCellsMesh made = transport_cells_slab_mesh(slab_.setup, transport_, mean_height, 0.5 * surface_.print_copy_pixels);
+      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
       const Eigen::Vector3d offset = slab_offset(slab_.setup, slab_.origin_mm);
       for (Eigen::Vector3d& p : made.mesh.vertices) p += offset;
-      print_facets_ = fmt::format("the transport's {} cells, {} facets (largest circumradius {:.2f} px; rms slope error {:.2e}; {} open edges; transport {:.1f} s, mesh {:.1f} s, integration {:.1f} s)",
-                                  made.cells, made.top_triangles, made.worst_facet_radius_px, made.rms_slope_error, made.open_edges,
-                                  made.transport_seconds, made.mesh_seconds, made.integration_seconds);
-      spdlog::info("print mesh: {}", print_facets_);
+      print_facets_ = fmt::format(
+          "the transport's {} cells, each a patch of flat facets aimed at its pixel's centre: {} facets, none "
+          "reaching over {:.2f} pixels from its centroid; facets' slopes {:.1e} rms off their aims; {} open edges, "
+          "{} pinched cells",
+          made.cells, made.top_triangles, made.worst_facet_radius_px, made.rms_slope_error, made.open_edges,
+          made.pinched_cells);
+      spdlog::info("print mesh: {} ({:.1f} s)", print_facets_, seconds);
+      if (context.timing) (*context.timing)["print_mesh_seconds"] = seconds;
       print_surfaces_ = {PrintSurface{"surface", std::move(made.mesh)}};
     } else if (outputs_.fabrication.writes("stl"))
       print_surfaces_ = {caustic_print_surface(slab_, surface_, surface(), {}, print_facets_, print_on_pixels_)};
@@ -287,6 +300,7 @@ class SmoothCausticsTranslator final : public TuningTranslator {
   std::vector<double> initial_;       ///< the image at the start
   bool transport_start_ = true;
   TransportStartReport start_report_;
+  SemiDiscreteTransport transport_;  ///< the start's, kept for print_mesh "cells"
   SlopeLimits slope_limit_;
   std::vector<Summary> compared_runs_;
   ImageObservation target_;      ///< the goal image, for the check of print/surface.stl
