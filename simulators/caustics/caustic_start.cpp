@@ -641,7 +641,6 @@ TransportCellsMesh transport_cells_slab_mesh(const CausticSetup& s, const SemiDi
   std::vector<Facet> facets(top.size());
   std::vector<Eigen::Triplet<double>> entries;
   entries.reserve(12 * top.size() + vertex_count);
-  double total_area = 0;
   const auto corner = [&](size_t t, int k) { return static_cast<size_t>(top[t][k]); };
   for (size_t t = 0; t < top.size(); ++t) {
     const Vec2 a = xy[corner(t, 0)], b = xy[corner(t, 1)], c = xy[corner(t, 2)];
@@ -649,7 +648,6 @@ TransportCellsMesh transport_cells_slab_mesh(const CausticSetup& s, const SemiDi
     f.area = 0.5 * std::abs((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x());
     const double edges = (b - a).squaredNorm() + (c - b).squaredNorm() + (a - c).squaredNorm();
     f.weight = edges > 0 ? f.area / edges : 0;
-    total_area += f.area;
     for (int k = 0; k < 3; ++k) {
       const int p = top[t][k], q = top[t][(k + 1) % 3];
       entries.emplace_back(p, p, f.weight);
