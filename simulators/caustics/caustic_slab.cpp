@@ -145,6 +145,22 @@ Mesh caustic_slab_mesh(const CausticSetup& setup, const HeightSurface& surface,
   return mesh;
 }
 
+void close_slab_below_rim(Mesh& mesh, const std::vector<int>& rim) {
+  const int first_low = static_cast<int>(mesh.vertices.size());
+  for (int v : rim) mesh.vertices.emplace_back(mesh.vertices[static_cast<size_t>(v)].x(), mesh.vertices[static_cast<size_t>(v)].y(), 0);
+  const int centre = static_cast<int>(mesh.vertices.size());
+  mesh.vertices.emplace_back(0, 0, 0);
+  const int rim_count = static_cast<int>(rim.size());
+  for (int k = 0; k < rim_count; ++k) {
+    const int next = (k + 1) % rim_count;
+    const int a = rim[static_cast<size_t>(k)], b = rim[static_cast<size_t>(next)];
+    const int a_low = first_low + k, b_low = first_low + next;
+    mesh.triangles.emplace_back(a, a_low, b_low);
+    mesh.triangles.emplace_back(a, b_low, b);
+    mesh.triangles.emplace_back(centre, b_low, a_low);
+  }
+}
+
 namespace {
 
 /// Raises the coarser of neighbouring cells until no two differ by more
@@ -276,19 +292,7 @@ Mesh quadtree_slab(int cells_x, int cells_y, const CellLevels& levels, int max_l
   for (long long b = 0; b < lattice_y; ++b) add_rim(lattice_x, b);
   for (long long a = lattice_x; a > 0; --a) add_rim(a, lattice_y);
   for (long long b = lattice_y; b > 0; --b) add_rim(0, b);
-  const int first_low = static_cast<int>(mesh.vertices.size());
-  for (int v : rim) mesh.vertices.emplace_back(mesh.vertices[static_cast<size_t>(v)].x(), mesh.vertices[static_cast<size_t>(v)].y(), 0);
-  const int centre = static_cast<int>(mesh.vertices.size());
-  mesh.vertices.emplace_back(0, 0, 0);
-  const int rim_count = static_cast<int>(rim.size());
-  for (int k = 0; k < rim_count; ++k) {
-    const int next = (k + 1) % rim_count;
-    const int a = rim[static_cast<size_t>(k)], b = rim[static_cast<size_t>(next)];
-    const int a_low = first_low + k, b_low = first_low + next;
-    mesh.triangles.emplace_back(a, a_low, b_low);
-    mesh.triangles.emplace_back(a, b_low, b);
-    mesh.triangles.emplace_back(centre, b_low, a_low);
-  }
+  close_slab_below_rim(mesh, rim);
   return mesh;
 }
 

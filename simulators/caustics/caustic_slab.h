@@ -189,6 +189,12 @@ std::optional<Mesh> pixel_caustic_slab_mesh(const CausticSetup& setup, const Hei
                                             const Eigen::Vector3d& origin_mm, int max_level, double copy_pixels = 1,
                                             PixelMeshReport* report = nullptr);
 
+/// Closes a slab whose top (already in `mesh`) has the given boundary
+/// vertices, counter-clockwise seen from above: vertical walls from each
+/// down to z = 0 and a bottom fanned from (0, 0, 0), the footprint's centre
+/// in the tracer's frame.
+void close_slab_below_rim(Mesh& mesh, const std::vector<int>& rim);
+
 /// A slab whose top is nx × ny planar facets over the setup's footprint
 /// (tracer frame: centred on the origin, flat bottom at z = 0), closed by
 /// vertical walls wherever neighbouring facets meet at different heights and

@@ -16,6 +16,7 @@
 #include <Eigen/SparseCore>
 #include <fmt/format.h>
 
+#include "caustics/caustic_slab.h"
 #include "caustics/optimal_transport.h"
 #include "core/error.h"
 #include "fem/cholmod_factor.h"
@@ -747,18 +748,7 @@ TransportCellsMesh transport_cells_slab_mesh(const CausticSetup& s, const SemiDi
       throw std::runtime_error(fmt::format("transport_cells_slab_mesh: the top's rim is not one loop ({} of {} rim edges walked, {} open edges, at ({}, {}))", rim.size(), rim_next.size(), made.open_edges, xy[static_cast<size_t>(v)].x(), xy[static_cast<size_t>(v)].y()));
     v = next->second;
   } while (v != first);
-  const int first_low = static_cast<int>(mesh.vertices.size());
-  for (int r : rim) mesh.vertices.emplace_back(mesh.vertices[static_cast<size_t>(r)].x(), mesh.vertices[static_cast<size_t>(r)].y(), 0);
-  const int centre = static_cast<int>(mesh.vertices.size());
-  mesh.vertices.emplace_back(0, 0, 0);
-  const int rim_count = static_cast<int>(rim.size());
-  for (int k = 0; k < rim_count; ++k) {
-    const int next = (k + 1) % rim_count;
-    const int a = rim[static_cast<size_t>(k)], b = rim[static_cast<size_t>(next)];
-    mesh.triangles.emplace_back(a, first_low + k, first_low + next);
-    mesh.triangles.emplace_back(a, first_low + next, b);
-    mesh.triangles.emplace_back(centre, first_low + next, first_low + k);
-  }
+  close_slab_below_rim(mesh, rim);
   return made;
 }
 
