@@ -487,6 +487,15 @@ void explain_headline(PrintHeadline& headline, const HeadlineMeshes& meshes) {
   }
   const std::string differ = fmt::format("the print's traced SSIM {:.3f} differs from the simulated {:.3f} by {:+.3f}",
                                          traced, headline.simulated_ssim, -headline.ssim_difference);
+  if (meshes.transport_cells && headline.printed_facets_ssim &&
+      std::abs(*headline.printed_facets_ssim - traced) <= kHeadlineAgreement) {
+    headline.agreement = fmt::format(
+        "{}: the file is not the tuned smooth surface but the start's optimal transport meshed as it is ({}). "
+        "The simulator's facet estimator on the file's own facets gives {:.3f}, within {:g} of the trace, while "
+        "the tuned smooth surface gives {:.3f}",
+        differ, meshes.printed, *headline.printed_facets_ssim, kHeadlineAgreement, headline.simulated_ssim);
+    return;
+  }
   if (headline.printed_facets_ssim && std::abs(*headline.printed_facets_ssim - traced) <= kHeadlineAgreement) {
     // A grid's copies leave a moire; the pixels' land on their own pixels.
     const char* copies = meshes.on_pixels ? " onto its own pixel, wider than the pixel where the light gathers"

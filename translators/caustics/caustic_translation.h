@@ -408,6 +408,7 @@ struct HeadlineMeshes {
   std::string printed;    ///< print/surface.stl's facets (print_facets)
   std::string simulated;  ///< the mesh the tuner simulated (simulated_facets), where it is another
   bool on_pixels = false; ///< print/surface.stl's top is the pixels pulled back (print_mesh "pixels")
+  bool transport_cells = false; ///< print/surface.stl's top is the start's transport (print_mesh "cells")
 };
 
 /// Fills headline.agreement: agreeing within kHeadlineAgreement, or why not:

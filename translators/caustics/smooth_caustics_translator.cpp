@@ -254,7 +254,8 @@ class SmoothCausticsTranslator final : public TuningTranslator {
                                                          PrintFrame{context.timing});
       if (std::abs(headline.ssim_difference) > kHeadlineAgreement)
         headline.printed_facets_ssim = printed_facets_errors(slab_, print_surfaces_.front().mesh, target_).ssim;
-      explain_headline(headline, {print_facets_, surface_.simulated_facets(), print_on_pixels_});
+      explain_headline(headline, {print_facets_, surface_.simulated_facets(), print_on_pixels_,
+                                  surface_.print_mesh == "cells" && !print_surfaces_.empty()});
       context.report.files.previews.push_back(headline.preview);
       context.report.add("headline", headline);
     }
