@@ -327,12 +327,12 @@ double copy_radius(const Vec2& a, const Vec2& b, const Vec2& c) {
 /// Triangulates the convex polygon `ring` (vertex ids into `points`, counter-
 /// clockwise) by constrained Delaunay, first alone, then with points inside
 /// on square lattices of the given spacings (receiver pixels; `px` maps a
-/// point there), until every facet's copy_radius is at most `radius`; the
+/// point there, `from_px` scales one back), until every facet's copy_radius is at most `radius`; the
 /// lattice points are appended to `points`. False (nothing appended) when
 /// no spacing does.
 template <class ToPx, class Emit>
 bool delaunay_cell(const std::vector<int>& ring, const std::vector<double>& spacings, double radius,
-                   std::vector<Vec2>& points, const ToPx& px, const Emit& emit) {
+                   std::vector<Vec2>& points, const ToPx& px, const Vec2& from_px, const Emit& emit) {
   using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
   using VertexBase = CGAL::Triangulation_vertex_base_with_info_2<int, Kernel>;
   using FaceBase = CGAL::Constrained_triangulation_face_base_2<Kernel>;
@@ -357,7 +357,6 @@ bool delaunay_cell(const std::vector<int>& ring, const std::vector<double>& spac
     }
     return least;
   };
-  const Vec2 to_points = (points[static_cast<size_t>(ring[0])].array() / corner[0].array()).matrix();
   std::vector<Eigen::Vector3i> facets;
   for (double spacing : spacings) {
     std::vector<Vec2> inner;
@@ -411,7 +410,7 @@ bool delaunay_cell(const std::vector<int>& ring, const std::vector<double>& spac
     }
     if (!small) continue;
     const int first = static_cast<int>(points.size());
-    for (const Vec2& p : inner) points.push_back(p.cwiseProduct(to_points));
+    for (const Vec2& p : inner) points.push_back(p.cwiseProduct(from_px));
     for (Eigen::Vector3i& f : facets) {
       for (int k = 0; k < 3; ++k)
         if (f[k] < 0) f[k] = first + (-1 - f[k]);
@@ -455,6 +454,7 @@ TransportCellsMesh transport_cells_slab_mesh(const CausticSetup& s, const SemiDi
   // Half-size units (the transport's) to receiver pixels, along x and y.
   const Vec2 to_px(0.5 * s.width_mm * width / s.receiver_width_mm, 0.5 * s.depth_mm * height / s.receiver_depth_mm);
   const auto px = [&](const Vec2& u) -> Vec2 { return u.cwiseProduct(to_px); };
+  const Vec2 from_px = to_px.cwiseInverse();
   constexpr double weld_px = 1e-6;
   std::vector<Vec2> points;  // half-size units
   CornerWelder weld(weld_px * 2.0 / std::max(width, height));
@@ -568,7 +568,7 @@ TransportCellsMesh transport_cells_slab_mesh(const CausticSetup& s, const SemiDi
     }
     // Else a Delaunay triangulation of the boundary and, if need be, of
     // points inside on a square lattice, finer until the facets are small.
-    if (delaunay_cell(ring, d_spacings, cell_radius, points, px, emit_all)) {
+    if (delaunay_cell(ring, d_spacings, cell_radius, points, px, from_px, emit_all)) {
       continue;
     }
     // Else rings about the centroid, as many as keep the facets small.
