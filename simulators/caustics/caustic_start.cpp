@@ -318,6 +318,10 @@ class CornerWelder {
 /// the copy stays in the pixel at 1/2. (Aiming each facet's box centre
 /// instead, and bounding the box, was tried: more facets for the same
 /// image, benchmarks/RESULTS.md.)
+/// Edge (a, b) as one integer; (min, max) for an edge either way round.
+long long edge_key(int a, int b) { return static_cast<long long>(a) * 0x100000000LL + b; }
+long long undirected_edge_key(int a, int b) { return edge_key(std::min(a, b), std::max(a, b)); }
+
 double copy_radius(const Vec2& a, const Vec2& b, const Vec2& c) {
   const Vec2 centroid = (a + b + c) / 3;
   return std::max({(a - centroid).cwiseAbs().maxCoeff(), (b - centroid).cwiseAbs().maxCoeff(),
@@ -504,7 +508,6 @@ TransportCellsMesh transport_cells_slab_mesh(const CausticSetup& s, const SemiDi
     loop = kept.size() >= 3 ? kept : std::vector<int>{};
   }
   made.pinched_cells = pinched;
-  const auto edge_key_of = [](int a, int b) { return static_cast<long long>(std::min(a, b)) * 0x100000000LL + std::max(a, b); };
   // Each edge split into pieces at most 1.5 radii long along x and y (a
   // facet along it can then keep the radius), the same points for both
   // cells that share it (numbered from its lower vertex).
@@ -512,7 +515,7 @@ TransportCellsMesh transport_cells_slab_mesh(const CausticSetup& s, const SemiDi
   std::unordered_map<long long, std::vector<int>> splits;
   const auto edge_points = [&](int a, int b) -> const std::vector<int>& {
     const int low = std::min(a, b), high = std::max(a, b);
-    const auto [at, added] = splits.try_emplace(edge_key_of(a, b));
+    const auto [at, added] = splits.try_emplace(undirected_edge_key(a, b));
     if (added) {
       const Vec2 p = points[static_cast<size_t>(low)], q = points[static_cast<size_t>(high)];
       const int pieces = std::max(1, static_cast<int>(std::ceil((px(q) - px(p)).cwiseAbs().maxCoeff() / edge_px)));
@@ -526,10 +529,10 @@ TransportCellsMesh transport_cells_slab_mesh(const CausticSetup& s, const SemiDi
   std::vector<Eigen::Vector3i> top;
   std::vector<int> cell_of;  // per top triangle
   std::vector<int> ring;
+  // Lattice spacings delaunay_cell tries (1e9: the boundary alone).
+  const std::vector<double> lattice_spacings{1e9, 1.4 * facet_radius_px, 1.1 * facet_radius_px, 0.8 * facet_radius_px};
   for (size_t i = 0; i < loops.size(); ++i) {
     if (loops[i].empty()) continue;
-    const double cell_radius = facet_radius_px;
-    const std::vector<double> d_spacings{1e9, 1.4 * cell_radius, 1.1 * cell_radius, 0.8 * cell_radius};
     ++made.cells;
     ring.clear();
     for (size_t k = 0; k < loops[i].size(); ++k) {
@@ -559,7 +562,7 @@ TransportCellsMesh transport_cells_slab_mesh(const CausticSetup& s, const SemiDi
           worst = std::max(worst, copy_radius(at(ring[start]), at(ring[(start + k) % n]), at(ring[(start + k + 1) % n])));
         if (worst < best_radius) best_radius = worst, best = static_cast<int>(start);
       }
-      if (best_radius <= cell_radius) {
+      if (best_radius <= facet_radius_px) {
         for (size_t k = 1; k + 1 < n; ++k)
           emit(ring[static_cast<size_t>(best)], ring[(static_cast<size_t>(best) + k) % n],
                ring[(static_cast<size_t>(best) + k + 1) % n]);
@@ -568,7 +571,7 @@ TransportCellsMesh transport_cells_slab_mesh(const CausticSetup& s, const SemiDi
     }
     // Else a Delaunay triangulation of the boundary and, if need be, of
     // points inside on a square lattice, finer until the facets are small.
-    if (delaunay_cell(ring, d_spacings, cell_radius, points, px, from_px, emit_all)) {
+    if (delaunay_cell(ring, lattice_spacings, facet_radius_px, points, px, from_px, emit_all)) {
       continue;
     }
     // Else rings about the centroid, as many as keep the facets small.
@@ -592,7 +595,7 @@ TransportCellsMesh transport_cells_slab_mesh(const CausticSetup& s, const SemiDi
             worst = std::max({worst, copy_radius(i0, o0, o1), copy_radius(i0, o1, i1)});
         }
       }
-      if (worst <= cell_radius) break;
+      if (worst <= facet_radius_px) break;
     }
     const int centre_id = static_cast<int>(points.size());
     points.push_back(centre);
@@ -625,7 +628,7 @@ TransportCellsMesh transport_cells_slab_mesh(const CausticSetup& s, const SemiDi
   made.mesh_seconds = seconds_since(began);
 
   // Heights: each facet's slope should send its centroid's light to its
-  // pixel's centre; least squares over the facets, weighted by area, three
+  // pixel's centre; least squares over the facets' edges (below), three
   // rounds (the slab's lateral shift depends on the heights).
   began = Clock::now();
   const size_t vertex_count = points.size();
@@ -716,7 +719,6 @@ TransportCellsMesh transport_cells_slab_mesh(const CausticSetup& s, const SemiDi
   }
   mesh.triangles = top;
   std::unordered_map<long long, int> directed;  // (a, b) -> uses
-  const auto edge_key = [](int a, int b) { return static_cast<long long>(a) * 0x100000000LL + b; };
   for (const Eigen::Vector3i& t : top)
     for (int k = 0; k < 3; ++k) ++directed[edge_key(t[k], t[(k + 1) % 3])];
   std::unordered_map<int, int> rim_next;
