@@ -61,6 +61,8 @@ struct TransportCellsMesh {
   double rms_slope_error = 0;        ///< the facets' slopes against their aims (rms over the area, slivers left out)
   int open_edges = 0;                ///< top edges used once off the rim (0 for a watertight top)
   int pinched_cells = 0;             ///< cells whose boundary touched itself after short edges collapsed
+  int collapsed_edges = 0;           ///< edges of the diagram collapsed to a point (short, or across a corner)
+  double worst_area_error = 0;       ///< the worst cell's area off the transport's, over the mean, after the collapses
 };
 
 /// The slab whose top is the transport's own cells (Schwartzburg et al.
@@ -75,8 +77,15 @@ struct TransportCellsMesh {
 /// lattices as needed, else rings about the centroid) until no facet
 /// reaches further than `facet_radius_px` receiver pixels along x or y from
 /// its centroid, so that at 1/2 each copy lands inside its pixel.
-/// Neighbouring cells split their shared edge at the same points and edges
-/// under 0.02 pixel collapse, so the top is watertight; walls and a fanned
+/// Edges under 0.02 pixel collapse, as do those under 0.8 pixel between
+/// cells that meet across a corner of the pixel grid (the diagram's split
+/// four-cell corners: hexagons become quadrilaterals, two facets instead of
+/// four), each unless a cell it touches would be left with under three
+/// corners, turn over or change its area by over 40 %; the corners then move the least
+/// that gives every cell its area back (Gauss-Newton, three rounds), so
+/// that each pixel still gets its light.
+/// Neighbouring cells split their shared edge at the same points, so the
+/// top is watertight; walls and a fanned
 /// bottom close the slab (tracer frame). A lens under collimated light
 /// through its whole footprint only (InputError otherwise); `transport` is
 /// transport_start's, to the image's pixels.

@@ -228,10 +228,11 @@ class SmoothCausticsTranslator final : public TuningTranslator {
       for (Eigen::Vector3d& p : made.mesh.vertices) p += offset;
       print_facets_ = fmt::format(
           "the transport's {} cells, each a patch of flat facets aimed at its pixel's centre: {} facets, none "
-          "reaching over {:.2f} pixels from its centroid; facets' slopes {:.1e} rms off their aims; {} open edges, "
-          "{} pinched cells",
-          made.cells, made.top_triangles, made.worst_facet_radius_px, made.rms_slope_error, made.open_edges,
-          made.pinched_cells);
+          "reaching over {:.2f} pixels from its centroid ({} of the diagram's edges collapsed, the cells' areas then "
+          "restored to within {:.1e} of a mean pixel's light); facets' slopes {:.1e} rms off their aims; {} open "
+          "edges, {} pinched cells",
+          made.cells, made.top_triangles, made.worst_facet_radius_px, made.collapsed_edges, made.worst_area_error,
+          made.rms_slope_error, made.open_edges, made.pinched_cells);
       spdlog::info("print mesh: {} ({:.1f} s)", print_facets_, seconds);
       if (context.timing) (*context.timing)["print_mesh_seconds"] = seconds;
       print_surfaces_ = {PrintSurface{"surface", std::move(made.mesh)}};
