@@ -593,6 +593,16 @@ TransportCellsMesh transport_cells_slab_mesh(const CausticSetup& s, const SemiDi
     while (merged[static_cast<size_t>(v)] != v) v = merged[static_cast<size_t>(v)] = merged[static_cast<size_t>(merged[static_cast<size_t>(v)])];
     return v;
   };
+  // A loop's corners as they stand merged (and `from` taken for `to`), none twice in a row.
+  const auto merged_loop = [&](const std::vector<int>& loop, int from, int to, std::vector<int>& out) {
+    out.clear();
+    for (int v : loop) {
+      int r = root(v);
+      if (r == from) r = to;
+      if (out.empty() || out.back() != r) out.push_back(r);
+    }
+    while (out.size() > 1 && out.front() == out.back()) out.pop_back();
+  };
   // 2 on a corner of the footprint, 1 on a side, 0 inside; the rim's
   // vertices stay on it.
   const auto rim_rank = [&](int v) {
@@ -644,13 +654,7 @@ TransportCellsMesh transport_cells_slab_mesh(const CausticSetup& s, const SemiDi
         continue;
       bool keeps = true;
       const auto check = [&](int cell) {
-        loop_now.clear();
-        for (int v : loops[static_cast<size_t>(cell)]) {
-          int r = root(v);
-          if (r == b) r = a;
-          if (loop_now.empty() || loop_now.back() != r) loop_now.push_back(r);
-        }
-        while (loop_now.size() > 1 && loop_now.front() == loop_now.back()) loop_now.pop_back();
+        merged_loop(loops[static_cast<size_t>(cell)], b, a, loop_now);
         if (loop_now.size() < 3) return false;
         double twice = 0;
         for (size_t k = 0; k < loop_now.size(); ++k) {
@@ -674,13 +678,9 @@ TransportCellsMesh transport_cells_slab_mesh(const CausticSetup& s, const SemiDi
     }
   }
   int pinched = 0;
+  std::vector<int> kept;
   for (std::vector<int>& loop : loops) {
-    std::vector<int> kept;
-    for (int v : loop) {
-      const int r = root(v);
-      if (kept.empty() || kept.back() != r) kept.push_back(r);
-    }
-    while (kept.size() > 1 && kept.front() == kept.back()) kept.pop_back();
+    merged_loop(loop, -1, -1, kept);
     std::vector<int> sorted = kept;
     std::sort(sorted.begin(), sorted.end());
     if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) ++pinched;
