@@ -348,7 +348,7 @@ double loop_area(const std::vector<int>& loop, const std::vector<Vec2>& points, 
 /// along them. Three rounds (each takes the error down about tenfold or
 /// more); returns the largest error left, over the mean area.
 double restore_cell_areas(const std::vector<std::vector<int>>& loops, const std::vector<double>& area_px,
-                                             std::vector<Vec2>& points, const Vec2& to_px) {
+                          std::vector<Vec2>& points, const Vec2& to_px) {
   // Each corner's free coordinates as unknowns (2 inside, 1 on a side, 0 at a corner of the footprint).
   std::vector<std::array<int, 2>> unknown(points.size(), {-1, -1});
   int count = 0;
@@ -805,7 +805,6 @@ TransportCellsMesh transport_cells_slab_mesh(const CausticSetup& s, const SemiDi
     }
   }
   made.top_triangles = top.size();
-
   made.mesh_seconds = seconds_since(began);
 
   // Heights: each facet's slope should send its centroid's light to its

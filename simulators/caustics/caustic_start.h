@@ -81,12 +81,11 @@ struct TransportCellsMesh {
 /// cells that meet across a corner of the pixel grid (the diagram's split
 /// four-cell corners: hexagons become quadrilaterals, two facets instead of
 /// four), each unless a cell it touches would be left with under three
-/// corners, turn over or change its area by over 40 %; the corners then move the least
-/// that gives every cell its area back (Gauss-Newton, three rounds), so
-/// that each pixel still gets its light.
-/// Neighbouring cells split their shared edge at the same points, so the
-/// top is watertight; walls and a fanned
-/// bottom close the slab (tracer frame). A lens under collimated light
+/// corners, turn over or change its area by over 40 %; the corners then
+/// move the least that gives every cell its area back (Gauss-Newton, three
+/// rounds), so that each pixel still gets its light. Neighbouring cells
+/// split their shared edge at the same points, so the top is watertight;
+/// walls and a fanned bottom close the slab (tracer frame). A lens under collimated light
 /// through its whole footprint only (InputError otherwise); `transport` is
 /// transport_start's, to the image's pixels.
 TransportCellsMesh transport_cells_slab_mesh(const CausticSetup& setup, const SemiDiscreteTransport& transport,
