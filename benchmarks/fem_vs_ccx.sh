@@ -12,7 +12,7 @@
 #
 # spec2fab runs `simulate fem` with write_calculix_deck, so ccx gets exactly
 # the mesh, materials, constraints and nodal loads the simulator solved.
-# Each linear solver in $SOLVERS (default "cholesky amg gamg") runs in its own
+# Each linear solver in $SOLVERS (default "cholesky amg gamg block_amg") runs in its own
 # process, so each peak RSS is its own. CCX=0 skips ccx (its figures are
 # then missing). RANKS=N (N > 1) also runs gamg under `mpirun -np N` and
 # compares its displacements with the one-process gamg run.
@@ -68,7 +68,7 @@ cat > "$out/part.json" <<JSON
 JSON
 export OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1
 first=1
-for solver in ${SOLVERS:-cholesky amg gamg}; do
+for solver in ${SOLVERS:-cholesky amg gamg block_amg}; do
   sed "s/\"nonlinear\": false/\"nonlinear\": false, \"linear_solver\": \"$solver\"/" "$out/part.json" > "$out/$solver.json"
   /usr/bin/time -f "%e %M" -o "$out/$solver.time" \
     "$spec2fab" simulate fem "$out/$solver.json" --out "$out/$solver" --repeat "$repeats" -q

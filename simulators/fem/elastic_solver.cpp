@@ -39,6 +39,7 @@ double ElasticSolver::factor_flops() const {
 
 double ElasticSolver::multigrid_complexity() const {
   if (impl_->gamg) return impl_->gamg->operator_complexity();
+  if (impl_->block_amg) return impl_->block_amg->operator_complexity();
   return impl_->amg ? impl_->amg->operator_complexity() : 0.0;
 }
 

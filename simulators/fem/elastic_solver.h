@@ -38,6 +38,7 @@ enum class LinearSolver {
   conjugate_gradient,  ///< CG with an incomplete-Cholesky preconditioner: a fraction of the memory
   multigrid,           ///< CG with an algebraic multigrid preconditioner (hypre BoomerAMG): small memory, fast on big meshes
   elastic_multigrid,   ///< CG with smoothed aggregation on the rigid-body modes (PETSc GAMG): fewest iterations; distributed under mpirun
+  block_multigrid,     ///< the same smoothed aggregation in node blocks (fem/block_amg.h): fastest on one core
 };
 
 struct SolveOptions {

@@ -15,6 +15,7 @@
 #include <Eigen/SparseCholesky>
 
 #include "core/error.h"
+#include "fem/block_amg.h"
 #include "fem/cholmod_factor.h"
 #include "fem/hypre/amg_solver.h"
 #include "fem/petsc/gamg_solver.h"
@@ -52,6 +53,7 @@ struct ElasticSolver::Impl {
   std::unique_ptr<Eigen::ConjugateGradient<SparseMatrix, Eigen::Lower, Preconditioner>> cg;
   std::unique_ptr<AmgSolver> amg;
   std::unique_ptr<GamgSolver> gamg;
+  std::unique_ptr<BlockAmgSolver> block_amg;
 
   std::vector<double> lambda, mu;
   std::vector<char> active;
@@ -143,6 +145,7 @@ struct ElasticSolver::Impl {
     switch (kind) {
       case LinearSolver::multigrid: amg->setup(stiffness); break;
       case LinearSolver::elastic_multigrid: gamg->setup(stiffness); break;
+      case LinearSolver::block_multigrid: block_amg->setup(stiffness); break;
       case LinearSolver::conjugate_gradient:
         cg->compute(stiffness);
         ok = cg->info() == Eigen::Success;
@@ -175,6 +178,10 @@ struct ElasticSolver::Impl {
       case LinearSolver::elastic_multigrid:
         converged = gamg->solve(residual, step);
         report.cg_iterations += gamg->last_iterations();
+        break;
+      case LinearSolver::block_multigrid:
+        converged = block_amg->solve(residual, step);
+        report.cg_iterations += block_amg->last_iterations();
         break;
       case LinearSolver::conjugate_gradient:
         step = cg->solve(residual);
@@ -246,7 +253,8 @@ struct ElasticSolver::Impl {
       cg = std::make_unique<Eigen::ConjugateGradient<SparseMatrix, Eigen::Lower, Preconditioner>>();
       cg->setTolerance(1e-12);
       cg->setMaxIterations(std::max(1000, 10 * static_cast<int>(std::sqrt(static_cast<double>(free_count)))));
-    } else if (kind == LinearSolver::multigrid || kind == LinearSolver::elastic_multigrid) {
+    } else if (kind == LinearSolver::multigrid || kind == LinearSolver::elastic_multigrid ||
+               kind == LinearSolver::block_multigrid) {
       std::vector<int> dof_of_free(static_cast<size_t>(free_count));
       for (size_t d = 0; d < dof_index.size(); ++d) {
         if (const int i = dof_index[d]; i >= 0) dof_of_free[static_cast<size_t>(i)] = static_cast<int>(d);
@@ -254,6 +262,8 @@ struct ElasticSolver::Impl {
       // CG to 1e-10 relative: below Newton's default force tolerance (1e-9).
       if (kind == LinearSolver::multigrid)
         amg = std::make_unique<AmgSolver>(stiffness, std::move(dof_of_free), mesh.nodes.size(), 1e-10, 5000);
+      else if (kind == LinearSolver::block_multigrid)
+        block_amg = std::make_unique<BlockAmgSolver>(stiffness, dof_of_free, mesh.nodes, 1e-10, 5000);
       else
         gamg = std::make_unique<GamgSolver>(stiffness, dof_of_free, mesh.nodes, node_order, 1e-10, 5000, distributed);
     } else {

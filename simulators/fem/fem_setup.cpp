@@ -115,9 +115,9 @@ struct FemOptions {
     d.number(o.tolerance, "tolerance", Range::closed(1e-15, 1e-2), "relative force residual for convergence");
     d.choice(o.linear_solver, "linear_solver", linear_solver_names(),
              "sparse Cholesky (CHOLMOD: exact, fastest on small meshes); conjugate gradients with "
-             "smoothed-aggregation multigrid on the rigid-body modes (gamg, PETSc: fastest on big meshes, "
-             "distributed under mpirun), with algebraic multigrid (amg, hypre BoomerAMG: smallest); or with "
-             "incomplete Cholesky (cg: small, slow)");
+             "smoothed-aggregation multigrid on the rigid-body modes, in node blocks (block_amg: fastest on "
+             "big meshes on one core, no PETSc needed) or PETSc's (gamg: distributed under mpirun), with "
+             "algebraic multigrid (amg, hypre BoomerAMG: smallest); or with incomplete Cholesky (cg: small, slow)");
     d.value(o.spread_over_ranks, "spread_over_ranks",
             "under mpirun, with gamg: spread each solve over the ranks (every rank assembling its own rows); in "
             "`spec2fab run` the tuner must then be in a serial phase, and the outputs match one process to ~1e-8 "
@@ -200,6 +200,7 @@ const char* to_string(LinearSolver solver) {
     case LinearSolver::cholesky: return "cholesky";
     case LinearSolver::multigrid: return "amg";
     case LinearSolver::elastic_multigrid: return "gamg";
+    case LinearSolver::block_multigrid: return "block_amg";
     case LinearSolver::conjugate_gradient: return "cg";
   }
   return "?";

@@ -25,10 +25,10 @@ struct BoxRegion {
   std::string where;          ///< JSON location, for errors
 };
 
-/// The "linear_solver" names: "cholesky", "amg", "gamg", "cg".
+/// The "linear_solver" names: "cholesky", "amg", "gamg", "block_amg", "cg".
 const char* to_string(LinearSolver solver);
 inline constexpr LinearSolver kLinearSolvers[] = {LinearSolver::cholesky, LinearSolver::multigrid,
-                                                  LinearSolver::elastic_multigrid,
+                                                  LinearSolver::elastic_multigrid, LinearSolver::block_multigrid,
                                                   LinearSolver::conjugate_gradient};
 
 struct FemSettings {

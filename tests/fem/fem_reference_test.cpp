@@ -91,7 +91,7 @@ TEST(FemReference, LargeDeflectionMatchesTheElastica) {
 }
 
 // The multigrid-preconditioned CGs (hypre's BoomerAMG, PETSc's GAMG on the
-// rigid-body modes) against the sparse Cholesky (CHOLMOD) on the same
+// rigid-body modes, the same smoothed aggregation in node blocks) against the sparse Cholesky (CHOLMOD) on the same
 // slender, ill-conditioned cantilever: the linear answer and the elastica's
 // Newton path (inexact linear solves inside).
 TEST(FemReference, MultigridSolvesLikeTheDirectSolver) {
@@ -99,7 +99,8 @@ TEST(FemReference, MultigridSolvesLikeTheDirectSolver) {
   for (bool nonlinear : {false, true}) {
     double axial_direct = 0;
     const double direct = tip_deflection(c, nonlinear, &axial_direct, LinearSolver::cholesky);
-    for (LinearSolver solver : {LinearSolver::multigrid, LinearSolver::elastic_multigrid}) {
+    for (LinearSolver solver :
+         {LinearSolver::multigrid, LinearSolver::elastic_multigrid, LinearSolver::block_multigrid}) {
       if (solver == LinearSolver::multigrid && !AmgSolver::available()) continue;
       if (solver == LinearSolver::elastic_multigrid && !GamgSolver::available()) continue;
       double axial_multigrid = 0;
@@ -129,7 +130,7 @@ TEST(FemReference, InverseProductsAgreeWithASolveForEverySolver) {
   const std::vector<std::vector<double>> vectors{c.constraints.force_n, g};
   double cholesky_gg = 0;
   for (LinearSolver kind : {LinearSolver::cholesky, LinearSolver::conjugate_gradient, LinearSolver::multigrid,
-                            LinearSolver::elastic_multigrid}) {
+                            LinearSolver::elastic_multigrid, LinearSolver::block_multigrid}) {
     if (kind == LinearSolver::multigrid && !AmgSolver::available()) continue;
     if (kind == LinearSolver::elastic_multigrid && !GamgSolver::available()) continue;
     ElasticSolver solver(c.mesh, c.constraints.fixed, kind);
@@ -152,9 +153,15 @@ TEST(FemReference, InverseProductsAgreeWithASolveForEverySolver) {
 // (docs/fem-solver-study.md). A regression of the near-nullspace (modes
 // lost, wrong coordinates, wrong block size) shows here as a jump.
 TEST(FemReference, ElasticMultigridNeedsFewIterations) {
-  if (!GamgSolver::available()) GTEST_SKIP() << "built without PETSc";
   const Cantilever c = cantilever(0.0625, 1.0);
   std::vector<double> u;
+  // The node-block smoothed aggregation, which needs no PETSc.
+  const SolveReport blocks =
+      testing::solve_uniform(c.mesh, c.constraints, kBeamYoungs, kBeamPoisson, false, u, 1, LinearSolver::block_multigrid);
+  ASSERT_TRUE(blocks.converged);
+  std::printf("block_amg: %ld CG iterations on %zu tets\n", blocks.cg_iterations, c.mesh.tets.size());
+  EXPECT_LE(blocks.cg_iterations, 60);
+  if (!GamgSolver::available()) GTEST_SKIP() << "built without PETSc";
   const SolveReport gamg =
       testing::solve_uniform(c.mesh, c.constraints, kBeamYoungs, kBeamPoisson, false, u, 1, LinearSolver::elastic_multigrid);
   ASSERT_TRUE(gamg.converged);
@@ -176,14 +183,17 @@ TEST(FemReference, ElasticMultigridNeedsFewIterations) {
 // CG stopped after 3 iterations with DIVERGED_INDEFINITE_PC. The solver sets
 // the smoothers to estimate their own (run this with
 // PETSC_OPTIONS="-spec2fab_fem_pc_gamg_use_sa_esteig 1" to see it fail).
+// The node-block multigrid (block_amg) estimates its eigenvalues anew at
+// every setup; it is held to the same.
 TEST(FemReference, ElasticMultigridFollowsChangingMaterials) {
-  if (!GamgSolver::available()) GTEST_SKIP() << "built without PETSc";
+  for (LinearSolver kind : {LinearSolver::elastic_multigrid, LinearSolver::block_multigrid}) {
+  if (kind == LinearSolver::elastic_multigrid && !GamgSolver::available()) continue;
   TetMesh mesh = testing::box_mesh(Vec3(0, 0, 0), Vec3(100, 10, 10), 5.0);
   FemSettings settings;
   settings.fixed.push_back({Eigen::AlignedBox3d(Vec3(0, 0, 0), Vec3(0, 10, 10)), Vec3::Zero(), "fixed"});
   settings.loads.push_back({Eigen::AlignedBox3d(Vec3(100, 0, 0), Vec3(100, 10, 10)), Vec3(0, 0, -1), "load"});
   const Constraints constraints = make_constraints(mesh, mesh.boundary_faces(), settings);
-  ElasticSolver gamg(mesh, constraints.fixed, LinearSolver::elastic_multigrid);
+  ElasticSolver gamg(mesh, constraints.fixed, kind);
   const size_t n = mesh.tets.size();
   SolveOptions linear;
   linear.nonlinear = false;
@@ -207,9 +217,51 @@ TEST(FemReference, ElasticMultigridFollowsChangingMaterials) {
     ASSERT_NO_THROW(report = gamg.solve(constraints, linear, u_gamg)) << "rubber half " << rubber_half;
     const Vec3 tip_direct = testing::displacement_at(mesh, u_direct, Vec3(100, 5, 5));
     const Vec3 tip_gamg = testing::displacement_at(mesh, u_gamg, Vec3(100, 5, 5));
-    std::printf("rubber half %d: tip %.10f mm (CHOLMOD) vs %.10f mm (gamg, %ld CG iterations)\n", rubber_half,
-                tip_direct.z(), tip_gamg.z(), report.cg_iterations);
-    EXPECT_NEAR(tip_gamg.z() / tip_direct.z(), 1.0, 1e-7) << "rubber half " << rubber_half;
+    std::printf("rubber half %d: tip %.10f mm (CHOLMOD) vs %.10f mm (%s, %ld CG iterations)\n", rubber_half,
+                tip_direct.z(), tip_gamg.z(), to_string(kind), report.cg_iterations);
+    EXPECT_TRUE(report.converged) << to_string(kind) << ", rubber half " << rubber_half;
+    EXPECT_NEAR(tip_gamg.z() / tip_direct.z(), 1.0, 1e-7) << to_string(kind) << ", rubber half " << rubber_half;
+  }
+  }
+}
+
+// Nodes with some of their DOFs prescribed: a block on rollers (x fixed on
+// the face x = 0, y on y = 0, z on z = 0), pressed on x = L by σ. The exact
+// answer is a uniform strain, ε_xx = −σ/E, ε_yy = ε_zz = νσ/E, which linear
+// tets reproduce to rounding. The multigrids keep every node's three rows
+// (a prescribed one as an identity row): the block multigrid must leave
+// the rigid-body modes out of those rows.
+TEST(FemReference, RollersGiveTheUniformStrainForEverySolver) {
+  const double length = 6, side = 2, youngs = 1000, poisson = 0.3, pressure = 0.5;
+  const TetMesh mesh = testing::box_mesh(Vec3(0, 0, 0), Vec3(length, side, side), 0.02);
+  FemSettings settings;
+  settings.loads.push_back({Eigen::AlignedBox3d(Vec3(length, 0, 0), Vec3(length, side, side)),
+                            Vec3(-pressure * side * side, 0, 0), "load"});
+  // make_constraints wants a fixed region (a corner); the rollers replace it below.
+  settings.fixed.push_back({Eigen::AlignedBox3d(Vec3(0, 0, 0), Vec3(0, 0, 0)), Vec3::Zero(), "corner"});
+  Constraints constraints = make_constraints(mesh, mesh.boundary_faces(), settings);
+  std::fill(constraints.fixed.begin(), constraints.fixed.end(), 0);
+  for (size_t v = 0; v < mesh.nodes.size(); ++v)
+    for (int axis = 0; axis < 3; ++axis)
+      if (std::abs(mesh.nodes[v][axis]) < 1e-9) constraints.fixed[3 * v + static_cast<size_t>(axis)] = 1;
+  for (LinearSolver kind : {LinearSolver::cholesky, LinearSolver::multigrid, LinearSolver::elastic_multigrid,
+                            LinearSolver::block_multigrid}) {
+    if (kind == LinearSolver::multigrid && !AmgSolver::available()) continue;
+    if (kind == LinearSolver::elastic_multigrid && !GamgSolver::available()) continue;
+    std::vector<double> u;
+    const SolveReport report = testing::solve_uniform(mesh, constraints, youngs, poisson, false, u, 1, kind);
+    ASSERT_TRUE(report.converged) << to_string(kind);
+    const double strain = pressure / youngs;
+    double worst = 0;
+    for (size_t v = 0; v < mesh.nodes.size(); ++v) {
+      const Vec3& x = mesh.nodes[v];
+      const Vec3 exact(-strain * x.x(), poisson * strain * x.y(), poisson * strain * x.z());
+      for (int axis = 0; axis < 3; ++axis)
+        worst = std::max(worst, std::abs(u[3 * v + static_cast<size_t>(axis)] - exact[axis]));
+    }
+    std::printf("rollers, %s: largest error %.3g of %.3g mm (%ld CG iterations)\n", to_string(kind), worst,
+                strain * length, report.cg_iterations);
+    EXPECT_LT(worst, 1e-8 * strain * length) << to_string(kind);
   }
 }
 
@@ -224,7 +276,8 @@ TEST(FemReference, TwoMaterialBarIsSpringsInSeries) {
   const double force = 2.0, area = 4.0;
   const double exact = force / area * (7.3 / 1000.0 + 12.7 / 100.0);
   for (const auto& [follow, solver] : {std::pair{true, "cholesky"}, std::pair{true, "cg"}, std::pair{true, "amg"},
-                                          std::pair{true, "gamg"}, std::pair{false, "cholesky"}}) {
+                                          std::pair{true, "gamg"}, std::pair{true, "block_amg"},
+                                          std::pair{false, "cholesky"}}) {
     if (std::string(solver) == "amg" && !AmgSolver::available()) continue;
     if (std::string(solver) == "gamg" && !GamgSolver::available()) continue;
     testing::FemRun run(palette, Vec3(0, 0, 0), Vec3(20, 2, 2), tree,
