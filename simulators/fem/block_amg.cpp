@@ -49,6 +49,11 @@ struct BlockMatrix {
   std::vector<int> start{0};
   std::vector<int> column;
   std::vector<double> values;
+  // The values rounded to float, for the multigrid's own products: they
+  // read half the memory (the products are bound by it), and CG keeps the
+  // exact operator in `values`. Rounding keeps the matrix symmetric, so the
+  // multigrid stays a symmetric preconditioner.
+  std::vector<float> single;
   int rows() const { return static_cast<int>(start.size()) - 1; }
   size_t block_size() const { return static_cast<size_t>(block * block); }
   double* at(size_t k) { return values.data() + k * block_size(); }
@@ -65,16 +70,15 @@ struct Prolongator {
   const double* at(size_t k) const { return values.data() + k * block_size(); }
 };
 
-template <int B>
-void multiply(const BlockMatrix& a, const double* x, double* y) {
+template <int B, class Value>
+void multiply(const BlockMatrix& a, const Value* v, const double* x, double* y) {
   const int n = a.rows();
   const int* start = a.start.data();
   const int* column = a.column.data();
-  const double* v = a.values.data();
   for (int i = 0; i < n; ++i) {
     double sum[B] = {};
     for (int k = start[i]; k < start[i + 1]; ++k) {
-      const double* block = v + static_cast<size_t>(k) * B * B;
+      const Value* block = v + static_cast<size_t>(k) * B * B;
       const double* xj = x + static_cast<size_t>(column[k]) * B;
       for (int r = 0; r < B; ++r)
         for (int c = 0; c < B; ++c) sum[r] += block[r * B + c] * xj[c];
@@ -85,9 +89,17 @@ void multiply(const BlockMatrix& a, const double* x, double* y) {
 
 void multiply(const BlockMatrix& a, const Vector& x, Vector& y) {
   if (a.block == 3)
-    multiply<3>(a, x.data(), y.data());
+    multiply<3>(a, a.values.data(), x.data(), y.data());
   else
-    multiply<kModes>(a, x.data(), y.data());
+    multiply<kModes>(a, a.values.data(), x.data(), y.data());
+}
+
+// y = A x with the float values (the multigrid's smoothing and residuals).
+void multiply_single(const BlockMatrix& a, const Vector& x, Vector& y) {
+  if (a.block == 3)
+    multiply<3>(a, a.single.data(), x.data(), y.data());
+  else
+    multiply<kModes>(a, a.single.data(), x.data(), y.data());
 }
 
 // x += P xc
@@ -685,6 +697,10 @@ void BlockAmgSolver::Impl::build_hierarchy() {
     strong *= 0.5;
   }
   levels.back().p = Prolongator{};
+  for (size_t l = 0; l + 1 < levels.size(); ++l) {
+    BlockMatrix& a = levels[l].a;
+    a.single.assign(a.values.begin(), a.values.end());
+  }
   factor_coarsest();
 }
 
@@ -718,14 +734,14 @@ void BlockAmgSolver::Impl::chebyshev(Level& level, bool zero_start) {
     level.x.setZero();
     level.r = level.b;
   } else {
-    multiply(level.a, level.x, level.t);
+    multiply_single(level.a, level.x, level.t);
     level.r = level.b - level.t;
   }
   level.d = level.inverse_diagonal.cwiseProduct(level.r) / theta;
   for (int k = 1;; ++k) {
     level.x += level.d;
     if (k == kChebyshevDegree) break;
-    multiply(level.a, level.d, level.t);
+    multiply_single(level.a, level.d, level.t);
     level.r -= level.t;
     const double rho_next = 1 / (2 * sigma - rho);
     level.d = rho_next * rho * level.d + (2 * rho_next / delta) * level.inverse_diagonal.cwiseProduct(level.r);
@@ -742,7 +758,7 @@ void BlockAmgSolver::Impl::vcycle(size_t l) {
   }
   Level& next = levels[l + 1];
   chebyshev(level, true);
-  multiply(level.a, level.x, level.t);
+  multiply_single(level.a, level.x, level.t);
   level.r = level.b - level.t;
   if (level.a.block == 3)
     restrict_to<3>(level.p, level.r.data(), next.b.data(), next.size());
