@@ -24,8 +24,8 @@
 /// input gives the same bits.
 ///
 /// On one core, side by side with CalculiX on the 321k-tet cantilever: 38
-/// CG iterations, 10.3× ccx's time at 0.37× its memory, where GAMG took
-/// 43 iterations at 4.7× (benchmarks/RESULTS.md). Not distributed: under
+/// CG iterations, 11.8–12.2× ccx's time at 0.40× its memory, where GAMG
+/// took 43 iterations at 3.8–4.1× (benchmarks/RESULTS.md). Not distributed: under
 /// mpirun the `gamg` solver spreads its solves over the ranks.
 ///
 /// Like the other multigrids, the system has every node's three rows (a
