@@ -2,10 +2,10 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdio>
-#include <cstdlib>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <numeric>
 #include <stdexcept>
 
@@ -181,7 +181,9 @@ double largest_eigenvalue(const Level& level) {
     t(k, k) = 1 / alpha[ku] + (k > 0 ? beta[ku - 1] / alpha[ku - 1] : 0.0);
     if (k + 1 < m) t(k, k + 1) = t(k + 1, k) = std::sqrt(beta[ku]) / alpha[ku];
   }
-  return Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(t, Eigen::EigenvaluesOnly).eigenvalues().maxCoeff();
+  return Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(t, Eigen::EigenvaluesOnly)
+      .eigenvalues()
+      .maxCoeff();
 }
 
 }  // namespace block_amg_detail
@@ -191,7 +193,7 @@ struct BlockAmgSolver::Impl {
   double tolerance = 1e-10;
   int max_iterations = 1000;
   // The finest level's node rows.
-  std::vector<int> row_of_free;   // free DOF -> scalar row (3·node + axis)
+  std::vector<int> row_of_free;    // free DOF -> scalar row (3·node + axis)
   std::vector<int> diagonal_slot;  // per node: its diagonal block
   std::vector<char> prescribed;    // per scalar row: an identity row
   std::vector<Vec3> positions;     // per node
@@ -209,8 +211,8 @@ struct BlockAmgSolver::Impl {
   void tentative(Level& level, Level& next, const std::vector<int>& aggregate_of, int aggregates,
                  std::vector<double>& tentative_blocks) const;
   template <int B>
-  void smooth_prolongator(Level& level, const std::vector<int>& aggregate_of, const std::vector<double>& t,
-                          int aggregates) const;
+  void smooth_prolongator(Level& level, const std::vector<int>& aggregate_of,
+                          const std::vector<double>& t, int aggregates) const;
   template <int B>
   void galerkin(const Level& level, BlockMatrix& coarse, int aggregates) const;
   void factor_coarsest();
@@ -218,10 +220,11 @@ struct BlockAmgSolver::Impl {
   void chebyshev(Level& level, bool zero_start);
 };
 
-BlockAmgSolver::BlockAmgSolver(const Matrix& lower, const std::vector<int>& dof_of_free, std::span<const Vec3> nodes,
-                               double tolerance, int max_iterations)
+BlockAmgSolver::BlockAmgSolver(const Matrix& lower, const std::vector<int>& dof_of_free,
+                               std::span<const Vec3> nodes, double tolerance, int max_iterations)
     : impl_(std::make_unique<Impl>()) {
-  if (!lower.isCompressed()) throw std::logic_error("BlockAmgSolver: the matrix must be compressed");
+  if (!lower.isCompressed())
+    throw std::logic_error("BlockAmgSolver: the matrix must be compressed");
   if (dof_of_free.size() != static_cast<size_t>(lower.cols()))
     throw std::logic_error("BlockAmgSolver: one DOF per free row");
   Impl& m = *impl_;
@@ -257,14 +260,16 @@ void BlockAmgSolver::Impl::fine_pattern(const Matrix& lower) {
   const int* inner = lower.innerIndexPtr();
   // Per node, the nodes at or after it that its columns reach.
   std::vector<int> first_column(static_cast<size_t>(n) + 1, 0);
-  for (size_t c = lower.cols(); c-- > 0;) first_column[static_cast<size_t>(row_of_free[c] / 3)] = static_cast<int>(c);
+  for (size_t c = lower.cols(); c-- > 0;)
+    first_column[static_cast<size_t>(row_of_free[c] / 3)] = static_cast<int>(c);
   first_column[static_cast<size_t>(n)] = static_cast<int>(lower.cols());
   std::vector<int> seen(static_cast<size_t>(n), -1);
   std::vector<int> upper_start(static_cast<size_t>(n) + 1, 0), upper;
   std::vector<int> count(static_cast<size_t>(n), 0);
   for (int node = 0; node < n; ++node) {
     const size_t begin = upper.size();
-    for (int c = first_column[static_cast<size_t>(node)]; c < first_column[static_cast<size_t>(node) + 1]; ++c) {
+    for (int c = first_column[static_cast<size_t>(node)];
+         c < first_column[static_cast<size_t>(node) + 1]; ++c) {
       for (int k = outer[c]; k < outer[c + 1]; ++k) {
         const int other = row_of_free[static_cast<size_t>(inner[k])] / 3;
         if (seen[static_cast<size_t>(other)] == node) continue;
@@ -273,7 +278,8 @@ void BlockAmgSolver::Impl::fine_pattern(const Matrix& lower) {
       }
     }
     std::sort(upper.begin() + static_cast<long>(begin), upper.end());
-    if (begin == upper.size() || upper[begin] != node) throw std::logic_error("BlockAmgSolver: a node without its diagonal");
+    if (begin == upper.size() || upper[begin] != node)
+      throw std::logic_error("BlockAmgSolver: a node without its diagonal");
     upper_start[static_cast<size_t>(node) + 1] = static_cast<int>(upper.size());
     for (size_t k = begin; k < upper.size(); ++k) {
       ++count[static_cast<size_t>(node)];
@@ -284,14 +290,18 @@ void BlockAmgSolver::Impl::fine_pattern(const Matrix& lower) {
   BlockMatrix& a = fine.a;
   a.block = 3;
   a.start.assign(static_cast<size_t>(n) + 1, 0);
-  for (int i = 0; i < n; ++i) a.start[static_cast<size_t>(i) + 1] = a.start[static_cast<size_t>(i)] + count[static_cast<size_t>(i)];
+  for (int i = 0; i < n; ++i)
+    a.start[static_cast<size_t>(i) + 1] =
+        a.start[static_cast<size_t>(i)] + count[static_cast<size_t>(i)];
   a.column.resize(static_cast<size_t>(a.start.back()));
   std::vector<int> cursor(a.start.begin(), a.start.end() - 1);
   diagonal_slot.resize(static_cast<size_t>(n));
   for (int node = 0; node < n; ++node) {
-    for (int k = upper_start[static_cast<size_t>(node)]; k < upper_start[static_cast<size_t>(node) + 1]; ++k) {
+    for (int k = upper_start[static_cast<size_t>(node)];
+         k < upper_start[static_cast<size_t>(node) + 1]; ++k) {
       const int other = upper[static_cast<size_t>(k)];
-      if (other == node) diagonal_slot[static_cast<size_t>(node)] = cursor[static_cast<size_t>(node)];
+      if (other == node)
+        diagonal_slot[static_cast<size_t>(node)] = cursor[static_cast<size_t>(node)];
       a.column[static_cast<size_t>(cursor[static_cast<size_t>(node)]++)] = other;
       if (other != node) a.column[static_cast<size_t>(cursor[static_cast<size_t>(other)]++)] = node;
     }
@@ -339,7 +349,8 @@ void BlockAmgSolver::Impl::fine_values(const Matrix& lower) {
 /// neighbours are all free starts an aggregate with them; a node left over
 /// joins the aggregate of its strongest aggregated neighbour; a node with
 /// no strong neighbour stays out (the smoother alone handles it).
-int BlockAmgSolver::Impl::aggregate(const Level& level, double strong, std::vector<int>& aggregate_of) const {
+int BlockAmgSolver::Impl::aggregate(const Level& level, double strong,
+                                    std::vector<int>& aggregate_of) const {
   const BlockMatrix& a = level.a;
   const int n = a.rows();
   const size_t bb = a.block_size();
@@ -363,7 +374,8 @@ int BlockAmgSolver::Impl::aggregate(const Level& level, double strong, std::vect
       const double* block = a.at(static_cast<size_t>(k));
       double sum = 0;
       for (size_t e = 0; e < bb; ++e) sum += block[e] * block[e];
-      const double scale = diagonal_norm[static_cast<size_t>(i)] * diagonal_norm[static_cast<size_t>(j)];
+      const double scale =
+          diagonal_norm[static_cast<size_t>(i)] * diagonal_norm[static_cast<size_t>(j)];
       if (sum > strong * strong * scale && sum > 0) {
         strength[static_cast<size_t>(k)] = static_cast<float>(sum / scale);
         has_strong[static_cast<size_t>(i)] = 1;
@@ -384,7 +396,8 @@ int BlockAmgSolver::Impl::aggregate(const Level& level, double strong, std::vect
       const size_t to = reach.size();
       for (size_t e = from; e < to && free; ++e) {
         const int v = reach[e];
-        for (int k = a.start[static_cast<size_t>(v)]; k < a.start[static_cast<size_t>(v) + 1]; ++k) {
+        for (int k = a.start[static_cast<size_t>(v)]; k < a.start[static_cast<size_t>(v) + 1];
+             ++k) {
           if (!(strength[static_cast<size_t>(k)] > 0)) continue;
           const int j = a.column[static_cast<size_t>(k)];
           if (aggregate_of[static_cast<size_t>(j)] >= 0) {
@@ -411,7 +424,8 @@ int BlockAmgSolver::Impl::aggregate(const Level& level, double strong, std::vect
     changed = false;
     const std::vector<int> before = aggregate_of;
     for (int i = 0; i < n; ++i) {
-      if (aggregate_of[static_cast<size_t>(i)] >= 0 || !has_strong[static_cast<size_t>(i)]) continue;
+      if (aggregate_of[static_cast<size_t>(i)] >= 0 || !has_strong[static_cast<size_t>(i)])
+        continue;
       float best = 0;
       for (int k = a.start[static_cast<size_t>(i)]; k < a.start[static_cast<size_t>(i) + 1]; ++k) {
         const int j = a.column[static_cast<size_t>(k)];
@@ -430,18 +444,21 @@ int BlockAmgSolver::Impl::aggregate(const Level& level, double strong, std::vect
 /// orthonormalised (Gram–Schmidt, twice), are its block of T; the factor R
 /// is the aggregate's near-nullspace on the next level. A mode the aggregate
 /// cannot carry (a single node's rotations) gives a zero column.
-void BlockAmgSolver::Impl::tentative(Level& level, Level& next, const std::vector<int>& aggregate_of,
-                                     int aggregates, std::vector<double>& t) const {
+void BlockAmgSolver::Impl::tentative(Level& level, Level& next,
+                                     const std::vector<int>& aggregate_of, int aggregates,
+                                     std::vector<double>& t) const {
   const int n = level.a.rows();
   const int b = level.a.block;
   // Nodes of each aggregate.
   std::vector<int> start(static_cast<size_t>(aggregates) + 1, 0), member(static_cast<size_t>(n));
   for (int i = 0; i < n; ++i)
-    if (aggregate_of[static_cast<size_t>(i)] >= 0) ++start[static_cast<size_t>(aggregate_of[static_cast<size_t>(i)]) + 1];
+    if (aggregate_of[static_cast<size_t>(i)] >= 0)
+      ++start[static_cast<size_t>(aggregate_of[static_cast<size_t>(i)]) + 1];
   std::partial_sum(start.begin(), start.end(), start.begin());
   std::vector<int> fill(start.begin(), start.end() - 1);
   for (int i = 0; i < n; ++i)
-    if (const int g = aggregate_of[static_cast<size_t>(i)]; g >= 0) member[static_cast<size_t>(fill[static_cast<size_t>(g)]++)] = i;
+    if (const int g = aggregate_of[static_cast<size_t>(i)]; g >= 0)
+      member[static_cast<size_t>(fill[static_cast<size_t>(g)]++)] = i;
 
   t.assign(static_cast<size_t>(n) * static_cast<size_t>(b) * kModes, 0.0);
   next.modes.assign(static_cast<size_t>(aggregates) * kModes * kModes, 0.0);
@@ -454,21 +471,24 @@ void BlockAmgSolver::Impl::tentative(Level& level, Level& next, const std::vecto
     if (finest) {
       // Rigid-body modes about the aggregate's centre (better conditioned).
       Vec3 centre = Vec3::Zero();
-      for (int k = first; k < end; ++k) centre += positions[static_cast<size_t>(member[static_cast<size_t>(k)])];
+      for (int k = first; k < end; ++k)
+        centre += positions[static_cast<size_t>(member[static_cast<size_t>(k)])];
       centre /= end - first;
       for (int k = first; k < end; ++k) {
         const int i = member[static_cast<size_t>(k)];
         const Vec3 x = positions[static_cast<size_t>(i)] - centre;
         const long r = 3L * (k - first);
         q.block(r, 0, 3, kModes) << 1, 0, 0, 0, x.z(), -x.y(),  //
-            0, 1, 0, -x.z(), 0, x.x(),                           //
+            0, 1, 0, -x.z(), 0, x.x(),                          //
             0, 0, 1, x.y(), -x.x(), 0;
         for (int d = 0; d < 3; ++d)
-          if (prescribed[3 * static_cast<size_t>(i) + static_cast<size_t>(d)]) q.row(r + d).setZero();
+          if (prescribed[3 * static_cast<size_t>(i) + static_cast<size_t>(d)])
+            q.row(r + d).setZero();
       }
     } else {
       for (int k = first; k < end; ++k) {
-        const double* modes = level.modes.data() + static_cast<size_t>(member[static_cast<size_t>(k)]) * b * kModes;
+        const double* modes =
+            level.modes.data() + static_cast<size_t>(member[static_cast<size_t>(k)]) * b * kModes;
         for (int r = 0; r < b; ++r)
           for (int c = 0; c < kModes; ++c) q((k - first) * b + r, c) = modes[r * kModes + c];
       }
@@ -535,7 +555,10 @@ void BlockAmgSolver::Impl::smooth_prolongator(Level& level, const std::vector<in
           Eigen::Map<const BlockP>(t.data() + static_cast<size_t>(j) * B * kModes);
     }
     for (size_t s = 0; s < row.size(); ++s) {
-      BlockP block = -omega * (level.inverse_diagonal.template segment<B>(static_cast<long>(i) * B).asDiagonal() * row[s]);
+      BlockP block =
+          -omega *
+          (level.inverse_diagonal.template segment<B>(static_cast<long>(i) * B).asDiagonal() *
+           row[s]);
       if (row_columns[s] == aggregate_of[static_cast<size_t>(i)])
         block += Eigen::Map<const BlockP>(t.data() + static_cast<size_t>(i) * B * kModes);
       p.column.push_back(row_columns[s]);
@@ -562,7 +585,8 @@ void BlockAmgSolver::Impl::galerkin(const Level& level, BlockMatrix& coarse, int
     std::vector<int> fill(t_start.begin(), t_start.end() - 1);
     for (int i = 0; i < n; ++i)
       for (int k = p.start[static_cast<size_t>(i)]; k < p.start[static_cast<size_t>(i) + 1]; ++k)
-        t_row[static_cast<size_t>(fill[static_cast<size_t>(p.column[static_cast<size_t>(k)])]++)] = i;
+        t_row[static_cast<size_t>(fill[static_cast<size_t>(p.column[static_cast<size_t>(k)])]++)] =
+            i;
   }
   coarse.block = kModes;
   coarse.start.assign(static_cast<size_t>(aggregates) + 1, 0);
@@ -572,9 +596,11 @@ void BlockAmgSolver::Impl::galerkin(const Level& level, BlockMatrix& coarse, int
     const size_t begin = coarse.column.size();
     for (int k = t_start[static_cast<size_t>(g)]; k < t_start[static_cast<size_t>(g) + 1]; ++k) {
       const int i = t_row[static_cast<size_t>(k)];
-      for (int ka = a.start[static_cast<size_t>(i)]; ka < a.start[static_cast<size_t>(i) + 1]; ++ka) {
+      for (int ka = a.start[static_cast<size_t>(i)]; ka < a.start[static_cast<size_t>(i) + 1];
+           ++ka) {
         const int j = a.column[static_cast<size_t>(ka)];
-        for (int kp = p.start[static_cast<size_t>(j)]; kp < p.start[static_cast<size_t>(j) + 1]; ++kp) {
+        for (int kp = p.start[static_cast<size_t>(j)]; kp < p.start[static_cast<size_t>(j) + 1];
+             ++kp) {
           const int h = p.column[static_cast<size_t>(kp)];
           if (mark[static_cast<size_t>(h)] == g) continue;
           mark[static_cast<size_t>(h)] = g;
@@ -600,7 +626,8 @@ void BlockAmgSolver::Impl::galerkin(const Level& level, BlockMatrix& coarse, int
     int count = 0;
     for (int ka = a.start[static_cast<size_t>(i)]; ka < a.start[static_cast<size_t>(i) + 1]; ++ka) {
       const int j = a.column[static_cast<size_t>(ka)];
-      for (int kp = p.start[static_cast<size_t>(j)]; kp < p.start[static_cast<size_t>(j) + 1]; ++kp) {
+      for (int kp = p.start[static_cast<size_t>(j)]; kp < p.start[static_cast<size_t>(j) + 1];
+           ++kp) {
         const int h = p.column[static_cast<size_t>(kp)];
         if (local[static_cast<size_t>(h)] < 0) {
           local[static_cast<size_t>(h)] = count++;
@@ -613,7 +640,8 @@ void BlockAmgSolver::Impl::galerkin(const Level& level, BlockMatrix& coarse, int
     for (int ka = a.start[static_cast<size_t>(i)]; ka < a.start[static_cast<size_t>(i) + 1]; ++ka) {
       const int j = a.column[static_cast<size_t>(ka)];
       const Eigen::Map<const BlockB> aij(a.at(static_cast<size_t>(ka)));
-      for (int kp = p.start[static_cast<size_t>(j)]; kp < p.start[static_cast<size_t>(j) + 1]; ++kp) {
+      for (int kp = p.start[static_cast<size_t>(j)]; kp < p.start[static_cast<size_t>(j) + 1];
+           ++kp) {
         const int h = p.column[static_cast<size_t>(kp)];
         ap.template middleCols<kModes>(kModes * local[static_cast<size_t>(h)]).noalias() +=
             aij * Eigen::Map<const BlockP>(p.at(static_cast<size_t>(kp)));
@@ -631,7 +659,8 @@ void BlockAmgSolver::Impl::galerkin(const Level& level, BlockMatrix& coarse, int
       const int* row_end = coarse.column.data() + coarse.start[static_cast<size_t>(g) + 1];
       for (int w = 0; w < count; ++w) {
         const int h = ap_columns[static_cast<size_t>(w)];
-        const auto at = static_cast<size_t>(std::lower_bound(row_begin, row_end, h) - coarse.column.data());
+        const auto at =
+            static_cast<size_t>(std::lower_bound(row_begin, row_end, h) - coarse.column.data());
         Eigen::Map<Block6>(coarse.at(at)) += product.block<kModes, kModes>(kModes * s, kModes * w);
       }
     }
@@ -640,13 +669,20 @@ void BlockAmgSolver::Impl::galerkin(const Level& level, BlockMatrix& coarse, int
   // A mode no aggregate carries leaves a zero row: an identity row instead.
   double largest = 0;
   for (int g = 0; g < aggregates; ++g) {
-    const double* block = coarse.at(static_cast<size_t>(std::lower_bound(coarse.column.begin() + coarse.start[static_cast<size_t>(g)], coarse.column.begin() + coarse.start[static_cast<size_t>(g) + 1], g) - coarse.column.begin()));
+    const double* block = coarse.at(static_cast<size_t>(
+        std::lower_bound(coarse.column.begin() + coarse.start[static_cast<size_t>(g)],
+                         coarse.column.begin() + coarse.start[static_cast<size_t>(g) + 1], g) -
+        coarse.column.begin()));
     for (int d = 0; d < kModes; ++d) largest = std::max(largest, block[d * (kModes + 1)]);
   }
   for (int g = 0; g < aggregates; ++g) {
-    double* block = coarse.at(static_cast<size_t>(std::lower_bound(coarse.column.begin() + coarse.start[static_cast<size_t>(g)], coarse.column.begin() + coarse.start[static_cast<size_t>(g) + 1], g) - coarse.column.begin()));
+    double* block = coarse.at(static_cast<size_t>(
+        std::lower_bound(coarse.column.begin() + coarse.start[static_cast<size_t>(g)],
+                         coarse.column.begin() + coarse.start[static_cast<size_t>(g) + 1], g) -
+        coarse.column.begin()));
     for (int d = 0; d < kModes; ++d)
-      if (!(block[d * (kModes + 1)] > 1e-12 * largest)) block[d * (kModes + 1)] = largest > 0 ? largest : 1.0;
+      if (!(block[d * (kModes + 1)] > 1e-12 * largest))
+        block[d * (kModes + 1)] = largest > 0 ? largest : 1.0;
   }
 }
 
@@ -668,17 +704,22 @@ void BlockAmgSolver::Impl::build_hierarchy() {
       level.inverse_diagonal.resize(size);
       const int b = level.a.block;
       for (int i = 0; i < level.a.rows(); ++i) {
-        const double* block = level.a.at(static_cast<size_t>(std::lower_bound(
-            level.a.column.begin() + level.a.start[static_cast<size_t>(i)],
-            level.a.column.begin() + level.a.start[static_cast<size_t>(i) + 1], i) - level.a.column.begin()));
+        const double* block = level.a.at(static_cast<size_t>(
+            std::lower_bound(level.a.column.begin() + level.a.start[static_cast<size_t>(i)],
+                             level.a.column.begin() + level.a.start[static_cast<size_t>(i) + 1],
+                             i) -
+            level.a.column.begin()));
         for (int d = 0; d < b; ++d) {
           const double diagonal = block[d * (b + 1)];
-          if (!(diagonal > 0)) throw std::runtime_error("BlockAmgSolver: a diagonal entry is not positive");
+          if (!(diagonal > 0))
+            throw std::runtime_error("BlockAmgSolver: a diagonal entry is not positive");
           level.inverse_diagonal[static_cast<long>(i) * b + d] = 1 / diagonal;
         }
       }
       const int direct_rows = l == 0 ? kDirectRows : kCoarsestRows;
-      if (level.size() <= static_cast<size_t>(direct_rows) || levels.size() == static_cast<size_t>(kMaxLevels)) break;
+      if (level.size() <= static_cast<size_t>(direct_rows) ||
+          levels.size() == static_cast<size_t>(kMaxLevels))
+        break;
       level.lambda = largest_eigenvalue(level);
     }
     const int aggregates = aggregate(levels[l], strong, aggregate_of);
@@ -723,7 +764,8 @@ void BlockAmgSolver::Impl::factor_coarsest() {
   lower.setFromTriplets(entries.begin(), entries.end());
   lower.makeCompressed();
   coarsest.analyze(lower);
-  if (!coarsest.factorize(lower)) throw std::runtime_error("BlockAmgSolver: the coarsest level is not positive definite");
+  if (!coarsest.factorize(lower))
+    throw std::runtime_error("BlockAmgSolver: the coarsest level is not positive definite");
 }
 
 void BlockAmgSolver::Impl::chebyshev(Level& level, bool zero_start) {
@@ -744,7 +786,8 @@ void BlockAmgSolver::Impl::chebyshev(Level& level, bool zero_start) {
     multiply_single(level.a, level.d, level.t);
     level.r -= level.t;
     const double rho_next = 1 / (2 * sigma - rho);
-    level.d = rho_next * rho * level.d + (2 * rho_next / delta) * level.inverse_diagonal.cwiseProduct(level.r);
+    level.d = rho_next * rho * level.d +
+              (2 * rho_next / delta) * level.inverse_diagonal.cwiseProduct(level.r);
     rho = rho_next;
   }
 }
@@ -774,16 +817,20 @@ void BlockAmgSolver::Impl::vcycle(size_t l) {
 
 void BlockAmgSolver::setup(const Matrix& lower) {
   Impl& m = *impl_;
-  if (lower.cols() != static_cast<long>(m.row_of_free.size())) throw std::logic_error("BlockAmgSolver: another matrix");
+  if (lower.cols() != static_cast<long>(m.row_of_free.size()))
+    throw std::logic_error("BlockAmgSolver: another matrix");
   const auto start = std::chrono::steady_clock::now();
   m.fine_values(lower);
   const auto values_done = std::chrono::steady_clock::now();
   m.build_hierarchy();
   if (std::getenv("SPEC2FAB_FEM_TRACE")) {
     const auto end = std::chrono::steady_clock::now();
-    std::fprintf(stderr, "block_amg: values %.3f s, hierarchy %.3f s, levels", std::chrono::duration<double>(values_done - start).count(),
+    std::fprintf(stderr, "block_amg: values %.3f s, hierarchy %.3f s, levels",
+                 std::chrono::duration<double>(values_done - start).count(),
                  std::chrono::duration<double>(end - values_done).count());
-    for (const Level& level : m.levels) std::fprintf(stderr, " %zu (%zu blocks, lambda %.3f)", level.size(), level.a.column.size(), level.lambda);
+    for (const Level& level : m.levels)
+      std::fprintf(stderr, " %zu (%zu blocks, lambda %.3f)", level.size(), level.a.column.size(),
+                   level.lambda);
     std::fprintf(stderr, ", complexity %.3f\n", operator_complexity());
   }
   const auto n = static_cast<long>(m.levels.front().size());
@@ -795,11 +842,13 @@ void BlockAmgSolver::setup(const Matrix& lower) {
 
 bool BlockAmgSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   Impl& m = *impl_;
-  if (m.levels.size() < 1 || m.cg_r.size() == 0) throw std::logic_error("BlockAmgSolver: solve before setup");
+  if (m.levels.size() < 1 || m.cg_r.size() == 0)
+    throw std::logic_error("BlockAmgSolver: solve before setup");
   Level& fine = m.levels.front();
   Vector solution = Vector::Zero(m.cg_r.size());
   m.cg_r.setZero();
-  for (size_t i = 0; i < m.row_of_free.size(); ++i) m.cg_r[m.row_of_free[i]] = b[static_cast<long>(i)];
+  for (size_t i = 0; i < m.row_of_free.size(); ++i)
+    m.cg_r[m.row_of_free[i]] = b[static_cast<long>(i)];
   const double norm_b = m.cg_r.norm();
   m.iterations = 0;
   m.relative_residual = 0;
@@ -832,9 +881,11 @@ bool BlockAmgSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
     }
   }
   x.resize(static_cast<long>(m.row_of_free.size()));
-  for (size_t i = 0; i < m.row_of_free.size(); ++i) x[static_cast<long>(i)] = solution[m.row_of_free[i]];
+  for (size_t i = 0; i < m.row_of_free.size(); ++i)
+    x[static_cast<long>(i)] = solution[m.row_of_free[i]];
   if (std::getenv("SPEC2FAB_FEM_TRACE"))
-    std::fprintf(stderr, "block_amg: %d CG iterations to %.3g\n", m.iterations, m.relative_residual);
+    std::fprintf(stderr, "block_amg: %d CG iterations to %.3g\n", m.iterations,
+                 m.relative_residual);
   return converged;
 }
 
@@ -845,7 +896,8 @@ int BlockAmgSolver::levels() const { return static_cast<int>(impl_->levels.size(
 double BlockAmgSolver::operator_complexity() const {
   double total = 0;
   for (const Level& level : impl_->levels) total += static_cast<double>(level.a.values.size());
-  return impl_->levels.empty() ? 0.0 : total / static_cast<double>(impl_->levels.front().a.values.size());
+  return impl_->levels.empty() ? 0.0
+                               : total / static_cast<double>(impl_->levels.front().a.values.size());
 }
 
 std::vector<long> BlockAmgSolver::level_rows() const {

@@ -51,8 +51,8 @@ class BlockAmgSolver {
   /// whose pattern every later matrix shares; `dof_of_free`: the node DOF
   /// (3·node + axis) of each free row, a node's free rows consecutive;
   /// `nodes`: rest positions (the rigid-body modes).
-  BlockAmgSolver(const Matrix& lower, const std::vector<int>& dof_of_free, std::span<const Vec3> nodes,
-                 double tolerance, int max_iterations);
+  BlockAmgSolver(const Matrix& lower, const std::vector<int>& dof_of_free,
+                 std::span<const Vec3> nodes, double tolerance, int max_iterations);
   ~BlockAmgSolver();
   BlockAmgSolver(const BlockAmgSolver&) = delete;
   BlockAmgSolver& operator=(const BlockAmgSolver&) = delete;
