@@ -202,11 +202,12 @@ struct BlockAmgSolver::Impl {
   Vector cg_r, cg_z, cg_p, cg_q;
   int iterations = 0;
   double relative_residual = 0;
+  bool ready = false;  // the last setup built a hierarchy
 
   void fine_pattern(const Matrix& lower);
   void fine_values(const Matrix& lower);
-  void build_hierarchy();
-  // The steps of one coarsening; false when it cannot coarsen.
+  bool build_hierarchy();
+  // The steps of one coarsening.
   int aggregate(const Level& level, double strong, std::vector<int>& aggregate_of) const;
   void tentative(Level& level, Level& next, const std::vector<int>& aggregate_of, int aggregates,
                  std::vector<double>& tentative_blocks) const;
@@ -215,7 +216,7 @@ struct BlockAmgSolver::Impl {
                           const std::vector<double>& t, int aggregates) const;
   template <int B>
   void galerkin(const Level& level, BlockMatrix& coarse, int aggregates) const;
-  void factor_coarsest();
+  bool factor_coarsest();
   void vcycle(size_t l);
   void chebyshev(Level& level, bool zero_start);
 };
@@ -233,11 +234,13 @@ BlockAmgSolver::BlockAmgSolver(const Matrix& lower, const std::vector<int>& dof_
   // Node rows in the order of the free DOFs.
   m.row_of_free.resize(dof_of_free.size());
   int last_node = -1, node_rows = 0;
+  std::vector<char> seen(nodes.size(), 0);
   for (size_t i = 0; i < dof_of_free.size(); ++i) {
     const int node = dof_of_free[i] / 3;
     if (node != last_node) {
-      if (i > 0 && dof_of_free[i] <= dof_of_free[i - 1] && node == dof_of_free[i - 1] / 3)
+      if (seen[static_cast<size_t>(node)])
         throw std::logic_error("BlockAmgSolver: a node's free DOFs must be consecutive");
+      seen[static_cast<size_t>(node)] = 1;
       last_node = node;
       ++node_rows;
       m.positions.push_back(nodes[static_cast<size_t>(node)]);
@@ -319,11 +322,9 @@ void BlockAmgSolver::Impl::fine_values(const Matrix& lower) {
   const int* outer = lower.outerIndexPtr();
   const int* inner = lower.innerIndexPtr();
   const double* value = lower.valuePtr();
-  int column_node = -1;
   for (int c = 0; c < static_cast<int>(lower.cols()); ++c) {
     const int cj = row_of_free[static_cast<size_t>(c)];
     const int node = cj / 3, dj = cj % 3;
-    if (node != column_node) column_node = node;
     int upper = diagonal_slot[static_cast<size_t>(node)];
     for (int k = outer[c]; k < outer[c + 1]; ++k) {
       const int ri = row_of_free[static_cast<size_t>(inner[k])];
@@ -686,7 +687,7 @@ void BlockAmgSolver::Impl::galerkin(const Level& level, BlockMatrix& coarse, int
   }
 }
 
-void BlockAmgSolver::Impl::build_hierarchy() {
+bool BlockAmgSolver::Impl::build_hierarchy() {
   levels.resize(1);
   double strong = kStrongFinest;
   std::vector<int> aggregate_of;
@@ -711,8 +712,7 @@ void BlockAmgSolver::Impl::build_hierarchy() {
             level.a.column.begin()));
         for (int d = 0; d < b; ++d) {
           const double diagonal = block[d * (b + 1)];
-          if (!(diagonal > 0))
-            throw std::runtime_error("BlockAmgSolver: a diagonal entry is not positive");
+          if (!(diagonal > 0)) return false;  // not positive definite
           level.inverse_diagonal[static_cast<long>(i) * b + d] = 1 / diagonal;
         }
       }
@@ -742,10 +742,10 @@ void BlockAmgSolver::Impl::build_hierarchy() {
     BlockMatrix& a = levels[l].a;
     a.single.assign(a.values.begin(), a.values.end());
   }
-  factor_coarsest();
+  return factor_coarsest();
 }
 
-void BlockAmgSolver::Impl::factor_coarsest() {
+bool BlockAmgSolver::Impl::factor_coarsest() {
   const Level& level = levels.back();
   const BlockMatrix& a = level.a;
   const int b = a.block;
@@ -764,8 +764,7 @@ void BlockAmgSolver::Impl::factor_coarsest() {
   lower.setFromTriplets(entries.begin(), entries.end());
   lower.makeCompressed();
   coarsest.analyze(lower);
-  if (!coarsest.factorize(lower))
-    throw std::runtime_error("BlockAmgSolver: the coarsest level is not positive definite");
+  return coarsest.factorize(lower);
 }
 
 void BlockAmgSolver::Impl::chebyshev(Level& level, bool zero_start) {
@@ -815,14 +814,15 @@ void BlockAmgSolver::Impl::vcycle(size_t l) {
   chebyshev(level, false);
 }
 
-void BlockAmgSolver::setup(const Matrix& lower) {
+bool BlockAmgSolver::setup(const Matrix& lower) {
   Impl& m = *impl_;
   if (lower.cols() != static_cast<long>(m.row_of_free.size()))
     throw std::logic_error("BlockAmgSolver: another matrix");
   const auto start = std::chrono::steady_clock::now();
   m.fine_values(lower);
   const auto values_done = std::chrono::steady_clock::now();
-  m.build_hierarchy();
+  m.ready = m.build_hierarchy();
+  if (!m.ready) return false;
   if (std::getenv("SPEC2FAB_FEM_TRACE")) {
     const auto end = std::chrono::steady_clock::now();
     std::fprintf(stderr, "block_amg: values %.3f s, hierarchy %.3f s, levels",
@@ -838,12 +838,12 @@ void BlockAmgSolver::setup(const Matrix& lower) {
   m.cg_z.resize(n);
   m.cg_p.resize(n);
   m.cg_q.resize(n);
+  return true;
 }
 
 bool BlockAmgSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   Impl& m = *impl_;
-  if (m.levels.size() < 1 || m.cg_r.size() == 0)
-    throw std::logic_error("BlockAmgSolver: solve before setup");
+  if (!m.ready) return false;
   Level& fine = m.levels.front();
   Vector solution = Vector::Zero(m.cg_r.size());
   m.cg_r.setZero();

@@ -58,8 +58,10 @@ class BlockAmgSolver {
   BlockAmgSolver& operator=(const BlockAmgSolver&) = delete;
 
   /// Takes the values of `lower` into node blocks and builds the hierarchy
-  /// (the analogue of a numeric factorisation).
-  void setup(const Matrix& lower);
+  /// (the analogue of a numeric factorisation). False when the matrix is
+  /// not positive definite (a diagonal entry ≤ 0, or the coarsest level's
+  /// factor fails): a solve then fails too.
+  bool setup(const Matrix& lower);
   /// x = A⁻¹ b to relative residual ‖b − Ax‖ / ‖b‖ ≤ `tolerance`, from
   /// x = 0; false when CG did not get there in `max_iterations` (or broke
   /// down: the preconditioner or the matrix not positive definite).

@@ -145,7 +145,7 @@ struct ElasticSolver::Impl {
     switch (kind) {
       case LinearSolver::multigrid: amg->setup(stiffness); break;
       case LinearSolver::elastic_multigrid: gamg->setup(stiffness); break;
-      case LinearSolver::block_multigrid: block_amg->setup(stiffness); break;
+      case LinearSolver::block_multigrid: ok = block_amg->setup(stiffness); break;
       case LinearSolver::conjugate_gradient:
         cg->compute(stiffness);
         ok = cg->info() == Eigen::Success;
