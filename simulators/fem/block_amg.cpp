@@ -347,9 +347,10 @@ void BlockAmgSolver::Impl::fine_values(const Matrix& lower) {
 }
 
 /// Aggregates on the strong graph (Vaněk et al.): a node whose strong
-/// neighbours are all free starts an aggregate with them; a node left over
-/// joins the aggregate of its strongest aggregated neighbour; a node with
-/// no strong neighbour stays out (the smoother alone handles it).
+/// neighbourhood (one step, or kFinestRadius steps on the finest level) is
+/// all free starts an aggregate with it; a node left over joins the
+/// aggregate of its strongest aggregated neighbour, sweep after sweep; a
+/// node with no strong neighbour stays out (the smoother alone handles it).
 int BlockAmgSolver::Impl::aggregate(const Level& level, double strong,
                                     std::vector<int>& aggregate_of) const {
   const BlockMatrix& a = level.a;
@@ -391,6 +392,7 @@ int BlockAmgSolver::Impl::aggregate(const Level& level, double strong,
     if (!has_strong[static_cast<size_t>(i)] || aggregate_of[static_cast<size_t>(i)] >= 0) continue;
     // The strong neighbourhood of radius `radius`, all free, or no aggregate here.
     reach.assign(1, i);
+    aggregate_of[static_cast<size_t>(i)] = aggregates;  // reached
     bool free = true;
     size_t from = 0;
     for (int step = 0; step < radius && free; ++step) {
@@ -406,13 +408,12 @@ int BlockAmgSolver::Impl::aggregate(const Level& level, double strong,
             free = false;
             break;
           }
-          aggregate_of[static_cast<size_t>(j)] = aggregates;  // marks it reached
+          aggregate_of[static_cast<size_t>(j)] = aggregates;  // reached
           reach.push_back(j);
         }
       }
       from = to;
     }
-    aggregate_of[static_cast<size_t>(i)] = aggregates;
     if (!free) {
       for (int v : reach) aggregate_of[static_cast<size_t>(v)] = -1;
       continue;
