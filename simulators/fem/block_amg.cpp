@@ -10,7 +10,6 @@
 #include <stdexcept>
 
 #include <Eigen/Dense>
-#include <Eigen/SparseCholesky>
 
 #include "fem/cholmod_factor.h"
 
@@ -58,6 +57,13 @@ struct BlockMatrix {
   size_t block_size() const { return static_cast<size_t>(block * block); }
   double* at(size_t k) { return values.data() + k * block_size(); }
   const double* at(size_t k) const { return values.data() + k * block_size(); }
+  // Row i's diagonal block (every row has one).
+  size_t diagonal(int i) const {
+    const auto row = column.begin() + start[static_cast<size_t>(i)];
+    return static_cast<size_t>(
+        std::lower_bound(row, column.begin() + start[static_cast<size_t>(i) + 1], i) -
+        column.begin());
+  }
 };
 
 // The prolongator: rows of B × 6 blocks (row-major), columns unsorted.
@@ -199,7 +205,7 @@ struct BlockAmgSolver::Impl {
   std::vector<Vec3> positions;     // per node
   std::vector<Level> levels;
   CholmodFactor coarsest;
-  Vector cg_r, cg_z, cg_p, cg_q;
+  Vector cg_x, cg_r, cg_p, cg_q;  // CG's solution, residual, direction, A·direction
   int iterations = 0;
   double relative_residual = 0;
   bool ready = false;  // the last setup built a hierarchy
@@ -358,13 +364,10 @@ int BlockAmgSolver::Impl::aggregate(const Level& level, double strong,
   const size_t bb = a.block_size();
   std::vector<double> diagonal_norm(static_cast<size_t>(n));
   for (int i = 0; i < n; ++i) {
-    for (int k = a.start[static_cast<size_t>(i)]; k < a.start[static_cast<size_t>(i) + 1]; ++k) {
-      if (a.column[static_cast<size_t>(k)] != i) continue;
-      const double* block = a.at(static_cast<size_t>(k));
-      double sum = 0;
-      for (size_t e = 0; e < bb; ++e) sum += block[e] * block[e];
-      diagonal_norm[static_cast<size_t>(i)] = std::sqrt(sum);
-    }
+    const double* block = a.at(a.diagonal(i));
+    double sum = 0;
+    for (size_t e = 0; e < bb; ++e) sum += block[e] * block[e];
+    diagonal_norm[static_cast<size_t>(i)] = std::sqrt(sum);
   }
   // The strength of each off-diagonal block (0: weak).
   std::vector<float> strength(a.column.size(), 0.0f);
@@ -671,17 +674,11 @@ void BlockAmgSolver::Impl::galerkin(const Level& level, BlockMatrix& coarse, int
   // A mode no aggregate carries leaves a zero row: an identity row instead.
   double largest = 0;
   for (int g = 0; g < aggregates; ++g) {
-    const double* block = coarse.at(static_cast<size_t>(
-        std::lower_bound(coarse.column.begin() + coarse.start[static_cast<size_t>(g)],
-                         coarse.column.begin() + coarse.start[static_cast<size_t>(g) + 1], g) -
-        coarse.column.begin()));
+    const double* block = coarse.at(coarse.diagonal(g));
     for (int d = 0; d < kModes; ++d) largest = std::max(largest, block[d * (kModes + 1)]);
   }
   for (int g = 0; g < aggregates; ++g) {
-    double* block = coarse.at(static_cast<size_t>(
-        std::lower_bound(coarse.column.begin() + coarse.start[static_cast<size_t>(g)],
-                         coarse.column.begin() + coarse.start[static_cast<size_t>(g) + 1], g) -
-        coarse.column.begin()));
+    double* block = coarse.at(coarse.diagonal(g));
     for (int d = 0; d < kModes; ++d)
       if (!(block[d * (kModes + 1)] > 1e-12 * largest))
         block[d * (kModes + 1)] = largest > 0 ? largest : 1.0;
@@ -706,11 +703,7 @@ bool BlockAmgSolver::Impl::build_hierarchy() {
       level.inverse_diagonal.resize(size);
       const int b = level.a.block;
       for (int i = 0; i < level.a.rows(); ++i) {
-        const double* block = level.a.at(static_cast<size_t>(
-            std::lower_bound(level.a.column.begin() + level.a.start[static_cast<size_t>(i)],
-                             level.a.column.begin() + level.a.start[static_cast<size_t>(i) + 1],
-                             i) -
-            level.a.column.begin()));
+        const double* block = level.a.at(level.a.diagonal(i));
         for (int d = 0; d < b; ++d) {
           const double diagonal = block[d * (b + 1)];
           if (!(diagonal > 0)) return false;  // not positive definite
@@ -835,8 +828,8 @@ bool BlockAmgSolver::setup(const Matrix& lower) {
     std::fprintf(stderr, ", complexity %.3f\n", operator_complexity());
   }
   const auto n = static_cast<long>(m.levels.front().size());
+  m.cg_x.resize(n);
   m.cg_r.resize(n);
-  m.cg_z.resize(n);
   m.cg_p.resize(n);
   m.cg_q.resize(n);
   return true;
@@ -846,7 +839,8 @@ bool BlockAmgSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   Impl& m = *impl_;
   if (!m.ready) return false;
   Level& fine = m.levels.front();
-  Vector solution = Vector::Zero(m.cg_r.size());
+  const Vector& z = fine.x;  // the V-cycle's answer: the preconditioned residual
+  m.cg_x.setZero();
   m.cg_r.setZero();
   for (size_t i = 0; i < m.row_of_free.size(); ++i)
     m.cg_r[m.row_of_free[i]] = b[static_cast<long>(i)];
@@ -857,15 +851,14 @@ bool BlockAmgSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   if (!converged) {
     fine.b = m.cg_r;
     m.vcycle(0);
-    m.cg_z = fine.x;
-    m.cg_p = m.cg_z;
-    double rz = m.cg_r.dot(m.cg_z);
+    m.cg_p = z;
+    double rz = m.cg_r.dot(z);
     while (m.iterations < m.max_iterations) {
       multiply(fine.a, m.cg_p, m.cg_q);
       const double pq = m.cg_p.dot(m.cg_q);
       if (!(pq > 0) || !(rz > 0)) break;
       const double alpha = rz / pq;
-      solution += alpha * m.cg_p;
+      m.cg_x += alpha * m.cg_p;
       m.cg_r -= alpha * m.cg_q;
       ++m.iterations;
       m.relative_residual = m.cg_r.norm() / norm_b;
@@ -875,15 +868,14 @@ bool BlockAmgSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
       }
       fine.b = m.cg_r;
       m.vcycle(0);
-      m.cg_z = fine.x;
-      const double rz_next = m.cg_r.dot(m.cg_z);
-      m.cg_p = m.cg_z + (rz_next / rz) * m.cg_p;
+      const double rz_next = m.cg_r.dot(z);
+      m.cg_p = z + (rz_next / rz) * m.cg_p;
       rz = rz_next;
     }
   }
   x.resize(static_cast<long>(m.row_of_free.size()));
   for (size_t i = 0; i < m.row_of_free.size(); ++i)
-    x[static_cast<long>(i)] = solution[m.row_of_free[i]];
+    x[static_cast<long>(i)] = m.cg_x[m.row_of_free[i]];
   if (std::getenv("SPEC2FAB_FEM_TRACE"))
     std::fprintf(stderr, "block_amg: %d CG iterations to %.3g\n", m.iterations,
                  m.relative_residual);
@@ -892,19 +884,12 @@ bool BlockAmgSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
 
 int BlockAmgSolver::last_iterations() const { return impl_->iterations; }
 double BlockAmgSolver::last_relative_residual() const { return impl_->relative_residual; }
-int BlockAmgSolver::levels() const { return static_cast<int>(impl_->levels.size()); }
 
 double BlockAmgSolver::operator_complexity() const {
   double total = 0;
   for (const Level& level : impl_->levels) total += static_cast<double>(level.a.values.size());
   return impl_->levels.empty() ? 0.0
                                : total / static_cast<double>(impl_->levels.front().a.values.size());
-}
-
-std::vector<long> BlockAmgSolver::level_rows() const {
-  std::vector<long> rows;
-  for (const Level& level : impl_->levels) rows.push_back(static_cast<long>(level.size()));
-  return rows;
 }
 
 }  // namespace spec2fab::fem

@@ -71,9 +71,6 @@ class BlockAmgSolver {
   double last_relative_residual() const;
   /// Σ scalar nonzeros over all levels / those of the finest.
   double operator_complexity() const;
-  int levels() const;
-  /// Scalar rows of each level, finest first.
-  std::vector<long> level_rows() const;
 
  private:
   struct Impl;
